@@ -1,0 +1,77 @@
+#pragma once
+
+// The coarse room description of the paper (§4.1): a floorplan polygon and a
+// ceiling height. The room is the polygon extruded from the floor (world y = 0)
+// up to the ceiling (world y = ceiling_height_m).
+
+#include "room_types.h"
+
+#include <string>
+#include <vector>
+
+namespace roomprobe {
+
+// Coordinates: floorplan point p maps to world (p.x, 0, p.y) on the floor and
+// (p.x, ceiling_height_m, p.y) at the ceiling, i.e. Vec2::y holds world Z.
+//
+// Orientation convention: a *normalized* floorplan lists its points
+// counter-clockwise in the 2-D (x, z) plane as CGAL sees the coordinates
+// (x to the right, z upwards on paper), so the room interior lies to the LEFT
+// of every edge points[i] -> points[i + 1]. Beware: seen from above in Godot's
+// right-handed Y-up world (camera at +Y looking down, X to the right, so +Z
+// points down the screen) the same polygon appears CLOCKWISE.
+//
+// Edges and walls are numbered like the points: edge i runs from points[i] to
+// points[(i + 1) % n]. All indices in messages are 0-based.
+struct Floorplan {
+	std::vector<Vec2> points; // Polygon corners, metres; implicitly closed (last connects to first).
+	double ceiling_height_m = 0.0; // Floor-to-ceiling height, metres; must be > 0.
+};
+
+// Result of check_floorplan(). When ok is true, problem is None and message is empty.
+struct FloorplanCheck {
+	enum class Problem {
+		None,
+		TooFewPoints, // Fewer than 3 points.
+		SelfIntersecting, // Edges cross, touch, fold back, or have zero length (repeated point).
+		ZeroArea, // All points collinear (or the polygon otherwise encloses no area).
+		CeilingNotPositive, // ceiling_height_m <= 0.
+		NonFinite, // A coordinate or the ceiling height is NaN or infinite.
+	};
+
+	bool ok = true;
+	Problem problem = Problem::None;
+	std::string message; // Human-readable: names the offending points/edges/values.
+};
+
+// Checks that the floorplan describes a buildable room: finite numbers, at
+// least 3 points, a positive ceiling, no repeated consecutive points, a simple
+// (non-self-intersecting) polygon with non-zero area. Either orientation is
+// accepted. Reports only the first problem found, checking in this order:
+// NonFinite, TooFewPoints, CeilingNotPositive, repeated consecutive points
+// (SelfIntersecting), all points collinear (ZeroArea), crossing/touching edges
+// (SelfIntersecting). Never throws (the core is exception-free at its API).
+FloorplanCheck check_floorplan(const Floorplan &p_floorplan);
+
+// Readable name of a problem, e.g. "SelfIntersecting" (for logs and tests).
+const char *floorplan_problem_name(FloorplanCheck::Problem p_problem);
+
+// Signed polygon area in square metres in the (x, z) plane: positive when the
+// points are counter-clockwise (the normalized convention), negative when clockwise.
+double floorplan_signed_area_m2(const Floorplan &p_floorplan);
+
+// Length of the closed polygon boundary in metres (sum of all wall widths).
+double floorplan_perimeter_m(const Floorplan &p_floorplan);
+
+// True if the points are counter-clockwise in the (x, z) plane (see above).
+// Meaningful for floorplans that pass check_floorplan().
+bool is_counter_clockwise(const Floorplan &p_floorplan);
+
+// Returns the floorplan in the normalized (counter-clockwise) orientation.
+// A clockwise polygon is reversed while keeping points[0] first, so that the
+// result is points[0], points[n-1], ..., points[1]; an already counter-clockwise
+// one is returned unchanged. Wall indices refer to the normalized order.
+// Meant for floorplans that pass check_floorplan().
+Floorplan normalized(const Floorplan &p_floorplan);
+
+} // namespace roomprobe

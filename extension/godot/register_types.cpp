@@ -1,0 +1,39 @@
+// RoomProbe's entry point: which classes the extension registers, at which level.
+#include "nodes/coarse_room_model.h"
+#include "nodes/dense_slam.h"
+#include "nodes/rig_capture.h"
+#include "nodes/room_probe.h"
+
+#include <rp_godot/godot.h>
+
+namespace roomprobe {
+extern const char *const doc_xml[];
+extern const size_t doc_xml_count;
+} // namespace roomprobe
+
+namespace {
+
+void initialize_roomprobe(GDExtensionInitializationLevel p_level) {
+	if (p_level != GDEXTENSION_INITIALIZATION_SCENE) {
+		return;
+	}
+	// In pipeline order: frames, tracking, the coarse room, and the probes that read them.
+	godot::ClassDB::register_class<roomprobe::RigCapture>();
+	godot::ClassDB::register_class<roomprobe::DenseSLAM>();
+	godot::ClassDB::register_class<roomprobe::CoarseRoomModel>();
+	godot::ClassDB::register_class<roomprobe::RoomProbe>();
+}
+
+void uninitialize_roomprobe(GDExtensionInitializationLevel) {}
+
+} // namespace
+
+extern "C" GDE_EXPORT GDExtensionBool roomprobe_library_init(GDExtensionInterfaceGetProcAddress p_get_proc_address, GDExtensionClassLibraryPtr p_library, GDExtensionInitialization *r_initialization) {
+	godot::ExtensionSetup setup;
+	setup.minimum_level = GDEXTENSION_INITIALIZATION_SCENE;
+	setup.initialize = &initialize_roomprobe;
+	setup.deinitialize = &uninitialize_roomprobe;
+	setup.doc_xml = roomprobe::doc_xml;
+	setup.doc_xml_count = roomprobe::doc_xml_count;
+	return godot::internal::initialize_library(p_get_proc_address, p_library, r_initialization, setup);
+}

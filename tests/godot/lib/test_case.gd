@@ -1,0 +1,233 @@
+class_name RoomProbeTestCase
+extends RefCounted
+## Base class of RoomProbe's GDScript tests.
+##
+## A test file is res://tests/test_*.gd (tests/godot/ in the repository); it extends
+## RoomProbeTestCase and defines methods named test_*, run in the order they are written.
+## A test may `await` (frames, signals); `tree` is the running SceneTree.
+## Every test must assert something, call fail() or call skip(): a test that does none of
+## these fails with "test asserted nothing". See tests/README.md.
+
+## The SceneTree the tests run in. Add nodes under tree.root and free them in after_each().
+var tree: SceneTree
+## True when the run has a real renderer (the "rendering" suite, user argument --rendering).
+var rendering := false
+## Folder where tests may write artefacts (screenshots); empty when none was given.
+var artifacts_dir := ""
+## Seconds a single test may take before the runner gives up on it. Override in _init().
+var timeout_s := 60.0
+
+var _assertions := 0
+var _failures: Array[String] = []
+var _skip_reason := ""
+var _skipped := false
+var _expected_errors: Array[String] = []
+
+
+## Called before every test. Override; may await.
+func before_each() -> void:
+	pass
+
+
+## Called after every test, also after a failed one. Override; may await.
+func after_each() -> void:
+	pass
+
+
+# --- assertions ---------------------------------------------------------------------------
+
+
+func assert_true(cond: Variant, msg: String = "") -> bool:
+	_assertions += 1
+	if cond:
+		return true
+	_record_failure(_join(msg, "expected true, got %s" % _repr(cond)))
+	return false
+
+
+func assert_false(cond: Variant, msg: String = "") -> bool:
+	_assertions += 1
+	if not cond:
+		return true
+	_record_failure(_join(msg, "expected false, got %s" % _repr(cond)))
+	return false
+
+
+func assert_eq(actual: Variant, expected: Variant, msg: String = "") -> bool:
+	_assertions += 1
+	if _equal(actual, expected):
+		return true
+	_record_failure(_join(msg, "expected %s, got %s" % [_repr(expected), _repr(actual)]))
+	return false
+
+
+func assert_ne(actual: Variant, unexpected: Variant, msg: String = "") -> bool:
+	_assertions += 1
+	if not _equal(actual, unexpected):
+		return true
+	_record_failure(_join(msg, "expected a value other than %s" % _repr(unexpected)))
+	return false
+
+
+## Floats (and ints) within tol; Vector2/3/4, Color, Quaternion and float/int arrays
+## componentwise within tol.
+func assert_near(actual: Variant, expected: Variant, tol: float, msg: String = "") -> bool:
+	_assertions += 1
+	var a := _components(actual)
+	var e := _components(expected)
+	if a.is_empty() and not _is_empty_array(actual) or e.is_empty() and not _is_empty_array(expected):
+		_record_failure(_join(msg, "assert_near cannot compare %s with %s" % [type_string(typeof(actual)), type_string(typeof(expected))]))
+		return false
+	if a.size() != e.size():
+		_record_failure(_join(msg, "expected %s (%d components), got %s (%d components)" % [_repr(expected), e.size(), _repr(actual), a.size()]))
+		return false
+	for i in a.size():
+		if is_nan(a[i]) or is_nan(e[i]) or absf(a[i] - e[i]) > tol:
+			_record_failure(_join(msg, "expected %s within %s, got %s" % [_repr(expected), tol, _repr(actual)]))
+			return false
+	return true
+
+
+func assert_null(value: Variant, msg: String = "") -> bool:
+	_assertions += 1
+	if value == null:
+		return true
+	_record_failure(_join(msg, "expected null, got %s" % _repr(value)))
+	return false
+
+
+func assert_not_null(value: Variant, msg: String = "") -> bool:
+	_assertions += 1
+	if value != null:
+		return true
+	_record_failure(_join(msg, "expected a value, got null"))
+	return false
+
+
+## Always fails the test with msg.
+func fail(msg: String) -> void:
+	_assertions += 1
+	_record_failure(msg)
+
+
+## Marks the test as skipped. Return right after it: `return skip("needs a renderer")`.
+func skip(reason: String) -> void:
+	_skipped = true
+	_skip_reason = reason
+
+
+## Declares that the current test will log an engine error whose text contains
+## substring; the runner then neither fails the test nor prints the error as a failure.
+## Each expected error must occur, or the test fails.
+## Godot still prints the error line itself; the Python runner knows which ones were
+## expected from the "[EXPECTED-ERROR]" lines the runner prints.
+func expect_error(substring: String) -> void:
+	_expected_errors.append(substring)
+
+
+## Declares that an engine bug makes Godot report "count RIDs of type rid_type were leaked"
+## at exit because of what this test did (e.g. "Texture"). tools/run_tests.py adds up these
+## declarations and tolerates exactly that many such RIDs; any other count still fails.
+## Name the engine issue in reason, and remove the call once the engine is fixed.
+func known_engine_leak(count: int, rid_type: String, reason: String) -> void:
+	print("[KNOWN-ENGINE-LEAK] %d %s: %s" % [count, rid_type, reason])
+
+
+## Adds node under tree.root and returns it. Free it in after_each() (or in the test).
+func add_to_tree(node: Node) -> Node:
+	tree.root.add_child(node)
+	return node
+
+
+## Waits n process frames.
+func wait_frames(n: int) -> void:
+	for i in n:
+		await tree.process_frame
+
+
+# --- runner interface (not for tests) ------------------------------------------------------
+
+
+func _rp_reset() -> void:
+	_assertions = 0
+	_failures.clear()
+	_skip_reason = ""
+	_skipped = false
+	_expected_errors.clear()
+
+
+func _record_failure(msg: String) -> void:
+	var line := _caller_line()
+	_failures.append(msg + (" (line %d)" % line if line > 0 else ""))
+
+
+# First stack frame outside this file: the test's own line.
+func _caller_line() -> int:
+	var stack := get_stack()
+	if stack.is_empty():
+		return -1
+	var me: String = stack[0].source  # this file (get_script() would name the test's file)
+	for frame in stack:
+		if frame.source != me:
+			return frame.line
+	return -1
+
+
+static func _join(msg: String, detail: String) -> String:
+	return detail if msg.is_empty() else "%s: %s" % [msg, detail]
+
+
+static func _is_numeric(v: Variant) -> bool:
+	return typeof(v) == TYPE_INT or typeof(v) == TYPE_FLOAT
+
+
+static func _equal(a: Variant, b: Variant) -> bool:
+	if typeof(a) != typeof(b) and not (_is_numeric(a) and _is_numeric(b)):
+		# StringName and String compare equal in GDScript; keep that.
+		if (typeof(a) == TYPE_STRING or typeof(a) == TYPE_STRING_NAME) and (typeof(b) == TYPE_STRING or typeof(b) == TYPE_STRING_NAME):
+			return String(a) == String(b)
+		return false
+	return a == b
+
+
+static func _is_empty_array(v: Variant) -> bool:
+	return typeof(v) >= TYPE_ARRAY and typeof(v) != TYPE_DICTIONARY and v.is_empty()
+
+
+static func _components(v: Variant) -> PackedFloat64Array:
+	match typeof(v):
+		TYPE_INT, TYPE_FLOAT:
+			return PackedFloat64Array([float(v)])
+		TYPE_VECTOR2, TYPE_VECTOR2I:
+			return PackedFloat64Array([v.x, v.y])
+		TYPE_VECTOR3, TYPE_VECTOR3I:
+			return PackedFloat64Array([v.x, v.y, v.z])
+		TYPE_VECTOR4, TYPE_VECTOR4I, TYPE_QUATERNION:
+			return PackedFloat64Array([v.x, v.y, v.z, v.w])
+		TYPE_COLOR:
+			return PackedFloat64Array([v.r, v.g, v.b, v.a])
+		TYPE_PACKED_FLOAT32_ARRAY, TYPE_PACKED_FLOAT64_ARRAY, TYPE_PACKED_INT32_ARRAY, TYPE_PACKED_INT64_ARRAY, TYPE_PACKED_BYTE_ARRAY:
+			return PackedFloat64Array(Array(v))
+		TYPE_PACKED_VECTOR2_ARRAY, TYPE_PACKED_VECTOR3_ARRAY, TYPE_PACKED_VECTOR4_ARRAY, TYPE_PACKED_COLOR_ARRAY, TYPE_ARRAY:
+			var out := PackedFloat64Array()
+			for item in v:
+				var c := _components(item)
+				if c.is_empty():
+					return PackedFloat64Array()
+				out.append_array(c)
+			return out
+	return PackedFloat64Array()
+
+
+static func _repr(v: Variant) -> String:
+	match typeof(v):
+		TYPE_STRING:
+			return '"%s"' % v
+		TYPE_STRING_NAME:
+			return '&"%s"' % v
+		TYPE_NIL:
+			return "null"
+		TYPE_OBJECT:
+			return str(v) if is_instance_valid(v) else "<freed object>"
+	var s := str(v)
+	return s if s.length() <= 200 else s.substr(0, 200) + "..."

@@ -1,0 +1,452 @@
+#!/usr/bin/env python3
+"""RoomProbe's test runner: ./roomprobe test [OPTIONS] runs it inside the toolchain.
+
+Suites, in order (see tests/README.md):
+  build      scons -j<nproc> tests=yes (or the arguments in $ROOMPROBE_SCONS_ARGS / --scons-args)
+  core       every build/tests/*_tests (doctest) program
+  editor     godot --headless --editor --quit: a fresh copy of the project and the project itself
+             import, and the extension loads and unloads, without errors
+  godot      tests/godot/test_*.gd, headless
+  rendering  tests/godot/test_rendering_*.gd under xvfb-run with Vulkan (when xvfb-run exists)
+
+The last line printed is exactly "N passed, N failed" (", N skipped" appended when some were
+skipped); the exit status is 0 only when nothing failed. Raw logs: build/test-logs/.
+"""
+
+import argparse
+import glob
+import os
+import re
+import shlex
+import shutil
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import rp_godot as rp  # noqa: E402
+
+SUITES = ["build", "core", "editor", "godot", "rendering"]
+LOGS = os.path.join(rp.BUILD, "test-logs")
+
+BUILD_TIMEOUT = 3600
+CORE_TIMEOUT = 900      # per test program
+IMPORT_TIMEOUT = 300
+GODOT_TIMEOUT = 900
+RENDERING_TIMEOUT = 900
+
+# Lines that fail the editor suite (after the known noise is filtered out).
+EDITOR_BAD = re.compile(r"ERROR|SCRIPT ERROR|Failed to|leaked")
+# Lines that fail the godot and rendering suites, wherever they appear.
+GODOT_BAD = re.compile(r"ERROR:|SCRIPT ERROR|leaked|Leaked|ObjectDB instances leaked|Orphan StringName|resources still in use at exit")
+# The runner's own lines (they may contain "leaked" in a failure message; those count as results).
+RUNNER_LINE = re.compile(r"^\[(PASS|FAIL|SKIP|EXPECTED-ERROR|KNOWN-ENGINE-LEAK)\] ")
+RESULT = re.compile(r"^\[(PASS|FAIL|SKIP)\] (\S+)(?:: (.*))?$")
+SUMMARY = re.compile(r"^GODOT_TESTS (\d+) passed, (\d+) failed, (\d+) skipped$")
+EXPECTED_ERROR = re.compile(r"^\[EXPECTED-ERROR\] (.*)$")
+KNOWN_LEAK = re.compile(r"^\[KNOWN-ENGINE-LEAK\] (\d+) (\S+): (.*)$")
+RD_LEAK = re.compile(r'^WARNING: (\d+) RIDs of type "([^"]+)" were leaked\.')
+ERROR_DETAILS = re.compile(r"^(?:USER )?(?:SCRIPT )?ERROR: (.*)$")
+DOCTEST = re.compile(r"\[doctest\] test cases:\s*(\d+)\s*\|\s*(\d+) passed\s*\|\s*(\d+) failed\s*\|\s*(\d+) skipped")
+
+
+class Suite:
+    def __init__(self, name):
+        self.name = name
+        self.passed = 0
+        self.failed = 0
+        self.skipped = 0
+        self.seconds = 0.0
+        self.notes = []      # one-line remarks shown in the summary
+        self.failures = []   # names of failed tests
+        self.logs = []
+        self.ran = False
+
+    def fail(self, what):
+        self.failed += 1
+        self.failures.append(what)
+
+
+def main():
+    ap = argparse.ArgumentParser(prog="./roomprobe test", description=__doc__.split("\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 epilog="suites: " + ", ".join(SUITES))
+    ap.add_argument("--suite", action="append", choices=SUITES,
+                    help="run only this suite (repeatable); the build and the editor import still run first as "
+                         "prerequisites, counted only when they fail")
+    ap.add_argument("--filter", metavar="SUBSTRING", help="godot suites: run only tests whose 'file::test' contains SUBSTRING")
+    ap.add_argument("-k", metavar="PATTERN", help="core suite: doctest -tc=PATTERN (test case names, wildcards * ?)")
+    ap.add_argument("--no-build", action="store_true", help="skip the build (use what is built)")
+    ap.add_argument("--scons-args", metavar="ARGS",
+                    help="arguments for scons instead of '-j<nproc> tests=yes' (also $ROOMPROBE_SCONS_ARGS)")
+    ap.add_argument("-v", "--verbose", action="store_true", help="show every output line of every step")
+    opts = ap.parse_args()
+
+    os.makedirs(LOGS, exist_ok=True)
+    selected = opts.suite or SUITES
+    results = []
+    start = time.monotonic()
+
+    def counted(name):
+        return name in selected
+
+    # build
+    if not opts.no_build:
+        s = suite_build(opts)
+        if counted("build") or s.failed:
+            results.append(s)
+        if s.failed:
+            return finish(results, start)
+
+    if counted("core"):
+        results.append(suite_core(opts))
+
+    needs_import = any(counted(n) for n in ("editor", "godot", "rendering"))
+    if needs_import:
+        s = suite_editor(opts, judged=counted("editor"))
+        if counted("editor") or s.failed:
+            results.append(s)
+        if s.failed and not os.path.isdir(os.path.join(rp.PROJECT, ".godot")):
+            return finish(results, start)
+
+    # With --filter and more than one Godot suite, a suite whose files hold no matching test
+    # is not a failure; no match in any of them is (checked below).
+    godot_suites = [n for n in ("godot", "rendering") if counted(n)]
+    allow_empty = bool(opts.filter) and len(godot_suites) > 1
+    ran_godot = []
+    if counted("godot"):
+        ran_godot.append(suite_godot(opts, rendering=False, allow_empty=allow_empty))
+    if counted("rendering"):
+        ran_godot.append(suite_godot(opts, rendering=True, allow_empty=allow_empty))
+    results += ran_godot
+    ran = [s for s in ran_godot if s.ran]
+    if allow_empty and ran and sum(s.passed + s.failed + s.skipped for s in ran) == 0:
+        ran[0].fail(f"no test matched --filter '{opts.filter}'")
+    return finish(results, start)
+
+
+# ---------------------------------------------------------------------------------- build
+
+
+def suite_build(opts):
+    s = Suite("build")
+    s.logs.append(os.path.join(LOGS, "build.log"))
+    cmd = rp.scons_command(["tests=yes"], opts.scons_args)
+    rp.header(f"build: {shlex.join(cmd)}")
+    if rp.sconstruct_missing():
+        s.fail("build")
+        s.notes.append("no SConstruct in the repository root: nothing to build")
+        with open(s.logs[0], "w") as f:
+            f.write("no SConstruct in the repository root\n")
+        print(f"FAILED: there is no SConstruct in {rp.REPO}")
+        s.ran = True
+        return s
+    echo = (lambda line: print("    " + line, flush=True)) if opts.verbose else None
+    r = rp.run(cmd, s.logs[0], BUILD_TIMEOUT, echo=echo)
+    s.seconds = r.seconds
+    s.ran = True
+    if r.rc == 0:
+        s.passed = 1
+        print(f"ok ({rp.fmt_duration(r.seconds)})")
+    else:
+        s.fail("build")
+        why = rp.describe_exit(r)
+        s.notes.append(f"scons failed: {why}")
+        print(f"FAILED: scons {why} ({rp.fmt_duration(r.seconds)}); the end of its output:")
+        rp.tail(r.lines, 40)
+    return s
+
+
+# ---------------------------------------------------------------------------------- core
+
+
+def suite_core(opts):
+    s = Suite("core")
+    s.logs.append(os.path.join(LOGS, "core.log"))
+    programs = sorted(p for p in glob.glob(os.path.join(rp.BUILD, "tests", "*_tests"))
+                      if os.path.isfile(p) and os.access(p, os.X_OK))
+    rp.header("core: " + (", ".join(rp.relpath(p) for p in programs) or "no build/tests/*_tests programs"))
+    s.ran = True
+    if not programs:
+        s.notes.append("no test programs in build/tests/")
+        print("no test programs (the build made none)")
+        return s
+    with open(s.logs[0], "w") as combined:
+        for prog in programs:
+            name = os.path.basename(prog)
+            log = os.path.join(LOGS, f"core-{name}.log")
+            cmd = [prog] + ([f"-tc={opts.k}"] if opts.k else [])
+            echo = (lambda line: print("    " + line, flush=True)) if opts.verbose else None
+            r = rp.run(cmd, log, CORE_TIMEOUT, echo=echo)
+            combined.write(f"# {name}: see {rp.relpath(log)}\n")
+            s.logs.append(log)
+            s.seconds += r.seconds
+            summary = None
+            for line in r.lines:
+                m = DOCTEST.search(line)
+                if m:
+                    summary = tuple(int(x) for x in m.groups())
+            if summary is None:
+                why = rp.describe_exit(r) + ", no doctest summary (crashed?)"
+                s.fail(f"{name}: {why}")
+                print(f"FAILED {name}: {why} ({rp.fmt_duration(r.seconds)}); the end of its output:")
+                rp.tail(r.lines, 30)
+                continue
+            total, passed, failed, skipped = summary
+            s.passed += passed
+            s.failed += failed
+            if not opts.k:  # with -tc, doctest counts the filtered-out cases as skipped
+                s.skipped += skipped
+            failed_cases = failed_doctest_cases(r.lines)
+            s.failures += [f"{name}: {c}" for c in failed_cases] or ([f"{name}: {failed} test case(s)"] if failed else [])
+            extra = ""
+            if r.rc != 0 and failed == 0:
+                extra = f"; {rp.describe_exit(r)} although no test case failed"
+                s.fail(name + extra)
+            status = "ok" if failed == 0 and r.rc == 0 else "FAILED"
+            print(f"{status} {name}: {passed} passed, {failed} failed, {skipped} skipped{extra} ({rp.fmt_duration(r.seconds)})")
+            if status != "ok" and not opts.verbose:
+                show_doctest_failures(r.lines)
+    return s
+
+
+def failed_doctest_cases(lines):
+    cases = []
+    current = None
+    for line in lines:
+        m = re.match(r"^TEST CASE:\s+(.*)$", line)
+        if m:
+            current = m.group(1).strip()
+        elif current and re.search(r"\bERROR\b|FATAL ERROR|TEST CASE FAILED|THREW exception", line) and current not in cases:
+            cases.append(current)
+    return cases
+
+
+def show_doctest_failures(lines, limit=120):
+    """doctest's failure reports: the blocks between its '=====' separators."""
+    shown = 0
+    block = []
+    for line in lines:
+        if line.startswith("=" * 20):
+            if block:
+                for b in block:
+                    if shown < limit:
+                        print("    " + b)
+                        shown += 1
+            block = []
+        elif not line.startswith("[doctest]"):
+            block.append(line)
+    if shown >= limit:
+        print("    ... (see the log)")
+
+
+# ---------------------------------------------------------------------------------- editor
+
+
+def suite_editor(opts, judged=True):
+    """Two checks, one test each.
+
+    fresh-import: a scratch copy of godot_project/ without .godot/ is imported, as on a fresh
+      clone. There the editor finds the extension during its first scan and loads it at run
+      time, a path that later runs (which load it from .godot/extension_list.cfg) never take.
+    import: the project itself; this also makes the .godot/ the Godot suites need.
+    """
+    s = Suite("editor")
+    scratch = os.path.join(rp.BUILD, "godot-fresh-import")
+    s.logs.append(os.path.join(LOGS, "editor.log"))
+    s.ran = True
+    rp.header(f"editor{'' if judged else ' (prerequisite)'}: fresh import of a scratch copy, then the project's own import")
+    checks = []
+    if judged:
+        scratch = os.path.join(rp.BUILD, "godot-fresh-import")
+        shutil.rmtree(scratch, ignore_errors=True)
+        shutil.copytree(rp.PROJECT, scratch, symlinks=False, ignore=shutil.ignore_patterns(".godot"))
+        checks.insert(0, ("fresh-import", None, os.path.join(LOGS, "editor-fresh-import.log")))
+        # Then the plain `godot --headless --editor --quit` on that freshly imported copy.
+        checks.insert(1, ("fresh-reopen", None, os.path.join(LOGS, "editor-fresh-reopen.log")))
+        s.logs += [checks[0][2], checks[1][2]]
+    checks.append(("import", None, s.logs[0]))
+    for name, _, log in checks:
+        # Chosen at run time: the command depends on whether the previous check imported it.
+        cmd = rp.import_command(scratch if name.startswith("fresh") else rp.PROJECT)
+        r = rp.run(cmd, log, IMPORT_TIMEOUT)
+        s.seconds += r.seconds
+        kept, dropped = rp.filter_noise(r.lines)
+        bad = [line for line in kept if EDITOR_BAD.search(line)]
+        if r.rc == 0 and not bad and not r.timed_out:
+            s.passed += 1
+            print(f"ok {name} ({rp.fmt_duration(r.seconds)}){noise_note(dropped)}")
+            continue
+        why = rp.describe_exit(r) if r.rc or r.timed_out or r.error else f"{len(bad)} error line(s)"
+        s.fail(f"editor::{name}: {why}")
+        print(f"FAILED {name}: {why} ({rp.fmt_duration(r.seconds)}): {shlex.join(cmd)}")
+        show_with_context(kept, bad)
+        if not bad:
+            print("    (no error line; the end of its output:)")
+            rp.tail([line for line in kept if line.strip() and not line.startswith("[")], 8)
+    return s
+
+
+def noise_note(dropped):
+    return f"; {len(dropped)} known noise line(s) ignored" if dropped else ""
+
+
+def show_with_context(lines, bad, limit=60):
+    """Prints each bad line with the indented 'at:'/backtrace lines that follow it."""
+    shown = 0
+    bad_set = set(id(b) for b in bad)
+    i = 0
+    while i < len(lines) and shown < limit:
+        if id(lines[i]) in bad_set:
+            print("    " + lines[i])
+            shown += 1
+            j = i + 1
+            while j < len(lines) and lines[j].startswith(" ") and j - i <= 8:
+                print("    " + lines[j])
+                j += 1
+            i = j
+        else:
+            i += 1
+    if len(bad) > shown:
+        print(f"    ... {len(bad) - shown} more")
+
+
+# ---------------------------------------------------------------------------------- godot
+
+
+def suite_godot(opts, rendering, allow_empty):
+    name = "rendering" if rendering else "godot"
+    s = Suite(name)
+    s.logs.append(os.path.join(LOGS, f"{name}.log"))
+    user = []
+    if opts.filter:
+        user += ["--filter", opts.filter]
+    if allow_empty:
+        user += ["--allow-empty"]
+    if rendering:
+        if not rp.have("xvfb-run"):
+            rp.header("rendering: skipped, no xvfb-run")
+            s.notes.append("not run: no xvfb-run")
+            return s
+        artifacts = os.path.join(LOGS, "rendering")
+        user += ["--rendering", "--files", "test_rendering_*.gd", "--artifacts", artifacts]
+        cmd = rp.xvfb_prefix() + rp.godot_base_args(rendering=True)
+    else:
+        cmd = rp.godot_base_args(rendering=False)
+    cmd += ["-s", "res://tests/run_tests.gd"]
+    if user:
+        cmd += ["--"] + user
+    rp.header(f"{name}: {shlex.join(cmd)}")
+
+    def echo(line):
+        if opts.verbose or RESULT.match(line):
+            print("    " + line, flush=True)
+
+    r = rp.run(cmd, s.logs[0], RENDERING_TIMEOUT if rendering else GODOT_TIMEOUT, echo=echo)
+    s.seconds = r.seconds
+    s.ran = True
+    kept, dropped = rp.filter_noise(r.lines)
+
+    summary = None
+    for line in kept:
+        m = RESULT.match(line)
+        if m:
+            kind, test = m.group(1), m.group(2)
+            if kind == "PASS":
+                s.passed += 1
+            elif kind == "FAIL":
+                s.fail(test)
+            else:
+                s.skipped += 1
+        m = SUMMARY.match(line)
+        if m:
+            summary = tuple(int(x) for x in m.groups())
+
+    if summary is None:
+        why = rp.describe_exit(r)
+        s.fail(f"{name}: no GODOT_TESTS line ({why}; crashed or hung?)")
+        print(f"FAILED: Godot ended without the GODOT_TESTS line ({why}); the end of its output:")
+        rp.tail(kept, 30)
+    elif summary != (s.passed, len(s.failures), s.skipped):
+        s.fail(f"{name}: GODOT_TESTS says {summary}, the result lines say {(s.passed, len(s.failures), s.skipped)}")
+    elif r.rc != (0 if summary[1] == 0 else 1):
+        s.fail(f"{name}: {rp.describe_exit(r)} with {summary[1]} failed")
+
+    bad, tolerated = unexpected_error_lines(kept)
+    if bad:
+        s.fail(f"{name}: error/leak lines in output")
+        print(f"FAILED: {len(bad)} error/leak line(s) in Godot's output:")
+        show_with_context(kept, bad)
+        if any("ObjectDB instances leaked" in b for b in bad):
+            print("    (objects that were never freed: rerun the command above with --verbose after --path to list them)")
+    for t in tolerated:
+        print(f"    note: tolerated {t}")
+    s.notes += [f"tolerated {t}" for t in tolerated]
+    if dropped:
+        s.notes.append(f"{len(dropped)} known noise line(s) ignored")
+    status = "ok" if s.failed == 0 else "FAILED"
+    print(f"{status}: {s.passed} passed, {s.failed} failed, {s.skipped} skipped ({rp.fmt_duration(r.seconds)})")
+    return s
+
+
+def unexpected_error_lines(lines):
+    """The error and leak lines that no test declared; returns (bad lines, tolerated notes).
+
+    A test declares the engine errors it provokes with expect_error() (the runner prints
+    "[EXPECTED-ERROR] details" for each that occurred), and engine bugs that leak RIDs at exit
+    with known_engine_leak() ("[KNOWN-ENGINE-LEAK] count type: reason").
+    """
+    expected = [m.group(1) for m in map(EXPECTED_ERROR.match, lines) if m]
+    known = {}
+    reasons = {}
+    for m in map(KNOWN_LEAK.match, lines):
+        if m:
+            known[m.group(2)] = known.get(m.group(2), 0) + int(m.group(1))
+            reasons.setdefault(m.group(2), set()).add(m.group(3))
+    bad = []
+    tolerated = []
+    for line in lines:
+        if RUNNER_LINE.match(line) or not GODOT_BAD.search(line):
+            continue
+        m = ERROR_DETAILS.match(line)
+        if m and m.group(1) in expected:
+            expected.remove(m.group(1))
+            continue
+        m = RD_LEAK.match(line)
+        if m and known.get(m.group(2)) == int(m.group(1)):
+            tolerated.append(f"{line.strip()} ({'; '.join(sorted(reasons[m.group(2)]))})")
+            continue
+        bad.append(line)
+    return bad, tolerated
+
+
+# ---------------------------------------------------------------------------------- summary
+
+
+def finish(results, start):
+    print("\n=== summary")
+    width = max([len(s.name) for s in results] + [5])
+    for s in results:
+        status = "FAILED" if s.failed else "ok" if s.ran else "not run"
+        line = f"{s.name:<{width}}  {status:<7} {s.passed} passed, {s.failed} failed, {s.skipped} skipped  ({rp.fmt_duration(s.seconds)})"
+        print(line)
+        for f in s.failures:
+            print(f"{'':<{width}}    failed: {f}")
+        for n in s.notes:
+            print(f"{'':<{width}}    {n}")
+    passed = sum(s.passed for s in results)
+    failed = sum(s.failed for s in results)
+    skipped = sum(s.skipped for s in results)
+    print(f"total time {rp.fmt_duration(time.monotonic() - start)}")
+    if failed:
+        logs = sorted({rp.relpath(log) for s in results if s.failed for log in s.logs})
+        print(f"logs: {rp.relpath(LOGS)}/ (failed: {', '.join(logs)})")
+    print(f"{passed} passed, {failed} failed" + (f", {skipped} skipped" if skipped else ""), flush=True)
+    return 0 if failed == 0 else 1
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:
+        print("\ninterrupted", file=sys.stderr)
+        sys.exit(130)

@@ -1,0 +1,144 @@
+# shellcheck shell=bash
+# RoomProbe's toolchain: the host's own Godot 4 and libraries where it has them,
+# otherwise a Debian sid root (debootstrap) kept in a cache folder outside the clone.
+#
+# Sourced by ./roomprobe. Public entry point: rp_toolchain_run CMD [ARGS...]
+# runs CMD inside the toolchain with the current directory unchanged.
+#
+# The root is entered in a private mount namespace (unshare, as root) or with
+# bubblewrap (without root). Every mount lives in that namespace only, so it goes
+# away with the last process in it, whichever way the command ends (Ctrl-C included).
+#
+# Environment:
+#   ROOMPROBE_TOOLCHAIN   auto (default) | host | sysroot
+#   ROOMPROBE_CACHE       cache folder (default: $XDG_CACHE_HOME/roomprobe or ~/.cache/roomprobe)
+#   ROOMPROBE_MIRROR      Debian mirror for the root (default: the host's own apt mirror)
+
+RP_TOOLCHAIN_DIR=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+RP_REPO=$(cd "$RP_TOOLCHAIN_DIR/../.." && pwd)
+RP_SHARED=$(cd "$RP_REPO/.." && pwd)/shared
+RP_PACKAGES_FILE="$RP_TOOLCHAIN_DIR/packages.txt"
+RP_CACHE=${ROOMPROBE_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/roomprobe}
+RP_ROOT="$RP_CACHE/sid-root"
+RP_STAMP_NAME=.roomprobe-packages.sha256
+RP_APT_OPTS=(-o Acquire::Check-Valid-Until=false -o Dpkg::Use-Pty=0 -o APT::Install-Recommends=false)
+
+rp_log() { printf 'roomprobe: %s\n' "$*" >&2; }
+rp_die() { printf 'roomprobe: error: %s\n' "$*" >&2; exit 1; }
+
+rp_packages() { sed -e 's/#.*//' -e 's/[[:space:]]//g' "$RP_PACKAGES_FILE" | grep -v '^$'; }
+rp_packages_hash() { rp_packages | sha256sum | cut -d' ' -f1; }
+
+# True when the host itself has Godot >= 4.4, scons and the development packages.
+rp_host_has_toolchain() {
+	command -v godot >/dev/null 2>&1 || return 1
+	command -v scons >/dev/null 2>&1 || return 1
+	command -v pkg-config >/dev/null 2>&1 || return 1
+	local version major minor
+	version=$(godot --version 2>/dev/null | head -n1) || return 1
+	major=${version%%.*}
+	minor=${version#*.}; minor=${minor%%.*}
+	[[ $major =~ ^[0-9]+$ && $minor =~ ^[0-9]+$ ]] || return 1
+	((major > 4 || (major == 4 && minor >= 4))) || return 1
+	pkg-config --exists opencv4 OpenEXR aravis-0.8 libopenni2 2>/dev/null || return 1
+	[[ -f /usr/include/CGAL/version.h && -f /usr/include/embree4/rtcore.h && -d /usr/include/glm ]] || return 1
+}
+
+# The Debian mirror the host's apt already uses, so that no address is hard-coded here.
+rp_mirror() {
+	if [[ -n ${ROOMPROBE_MIRROR:-} ]]; then
+		echo "$ROOMPROBE_MIRROR"
+		return
+	fi
+	local uri
+	uri=$(cat /etc/apt/sources.list.d/*.sources 2>/dev/null | awk '/^URIs:/ {for (i = 2; i <= NF; i++) print $i}' | grep -E '/debian/?$' | head -n1)
+	[[ -n $uri ]] || uri=$(awk '$1 == "deb" {print $2}' /etc/apt/sources.list 2>/dev/null | grep -E '/debian/?$' | head -n1)
+	[[ -n $uri ]] || rp_die "no Debian mirror found in /etc/apt; set ROOMPROBE_MIRROR"
+	echo "${uri%/}"
+}
+
+# Runs a command inside root $1 as root, with proc, dev, sys and the clone and shared/ at their own paths.
+rp_enter_root() {
+	local root=$1
+	shift
+	[[ $EUID -eq 0 ]] || rp_die "entering the sid root for set-up needs root"
+	unshare --mount --propagation private -- bash "$RP_TOOLCHAIN_DIR/enter.sh" "$root" "$RP_REPO" "$RP_SHARED" "$PWD" "$@"
+}
+
+# Creates or updates the cached root so that it holds every package in packages.txt.
+rp_ensure_root() {
+	local want have
+	want=$(rp_packages_hash)
+	have=$(cat "$RP_ROOT/$RP_STAMP_NAME" 2>/dev/null || true)
+	[[ $want == "$have" ]] && return 0
+	[[ $EUID -eq 0 ]] || rp_die "the toolchain root at $RP_ROOT is missing or out of date, and building it needs root (or install Godot >= 4.4 and the packages in $RP_PACKAGES_FILE on the host)"
+
+	mkdir -p "$RP_CACHE"
+	exec 9>"$RP_CACHE/lock"
+	flock 9
+	have=$(cat "$RP_ROOT/$RP_STAMP_NAME" 2>/dev/null || true)
+	if [[ $want == "$have" ]]; then
+		exec 9>&-
+		return 0
+	fi
+
+	local start=$SECONDS target=$RP_ROOT
+	if [[ ! -x $RP_ROOT/usr/bin/apt-get ]]; then
+		command -v debootstrap >/dev/null 2>&1 || {
+			rp_log "installing debootstrap on the host"
+			apt-get update -qq >&2 && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq debootstrap >&2
+		} || rp_die "could not install debootstrap on the host"
+		target="$RP_CACHE/sid-root.partial"
+		rm -rf "$target"
+		local mirror
+		mirror=$(rp_mirror)
+		rp_log "creating a Debian sid root in $target (debootstrap, about 30 s)"
+		debootstrap --variant=minbase --include=ca-certificates sid "$target" "$mirror" >"$RP_CACHE/debootstrap.log" 2>&1 ||
+			rp_die "debootstrap failed; see $RP_CACHE/debootstrap.log"
+		printf 'Acquire::Check-Valid-Until "false";\nAPT::Install-Recommends "false";\n' >"$target/etc/apt/apt.conf.d/90roomprobe"
+	fi
+	cp /etc/resolv.conf "$target/etc/resolv.conf" 2>/dev/null || true
+	rp_log "installing $(rp_packages | wc -l) packages into the root (about 2 minutes the first time)"
+	# The list reaches the root as a file: the root sees the clone only once enter.sh binds it.
+	rp_packages >"$target/tmp/roomprobe-packages"
+	rp_enter_root "$target" env DEBIAN_FRONTEND=noninteractive sh -c \
+		'apt-get "$@" update -qq && apt-get "$@" install -y -qq $(cat /tmp/roomprobe-packages)' \
+		sh "${RP_APT_OPTS[@]}" >"$RP_CACHE/apt.log" 2>&1 ||
+		rp_die "installing packages into the root failed; see $RP_CACHE/apt.log"
+	echo "$want" >"$target/$RP_STAMP_NAME"
+	if [[ $target != "$RP_ROOT" ]]; then
+		rm -rf "$RP_ROOT"
+		mv "$target" "$RP_ROOT"
+	fi
+	rp_log "toolchain root ready in $((SECONDS - start)) s: $RP_ROOT"
+	exec 9>&-
+}
+
+# Which toolchain to use: prints 'host' or 'sysroot'.
+rp_toolchain_kind() {
+	case ${ROOMPROBE_TOOLCHAIN:-auto} in
+	host) echo host ;;
+	sysroot) echo sysroot ;;
+	auto) if rp_host_has_toolchain; then echo host; else echo sysroot; fi ;;
+	*) rp_die "ROOMPROBE_TOOLCHAIN must be auto, host or sysroot, not '$ROOMPROBE_TOOLCHAIN'" ;;
+	esac
+}
+
+# Runs CMD in the toolchain, from the current directory.
+rp_toolchain_run() {
+	if [[ $(rp_toolchain_kind) == host ]]; then
+		"$@"
+		return
+	fi
+	rp_ensure_root
+	if [[ $EUID -eq 0 ]]; then
+		rp_enter_root "$RP_ROOT" "$@"
+	else
+		command -v bwrap >/dev/null 2>&1 || rp_die "without root, entering $RP_ROOT needs bubblewrap (apt-get install bubblewrap)"
+		local binds=(--bind "$RP_REPO" "$RP_REPO")
+		[[ -d $RP_SHARED ]] && binds+=(--bind "$RP_SHARED" "$RP_SHARED")
+		bwrap --bind "$RP_ROOT" / --proc /proc --dev /dev --ro-bind /sys /sys --tmpfs /tmp \
+			--ro-bind /etc/resolv.conf /etc/resolv.conf "${binds[@]}" --chdir "$PWD" \
+			--setenv HOME /tmp --setenv PATH /usr/local/bin:/usr/bin:/bin -- "$@"
+	fi
+}
