@@ -229,6 +229,23 @@ def xvfb_prefix(screen=XVFB_SCREEN):
     return ["xvfb-run", "-a", "-s", screen]
 
 
+def extensions_known(project):
+    """True when .godot/extension_list.cfg lists every .gdextension file of the project."""
+    listed_path = os.path.join(project, ".godot", "extension_list.cfg")
+    if not os.path.exists(listed_path):
+        return False
+    with open(listed_path) as f:
+        listed = {line.strip() for line in f if line.strip()}
+    for d, dirs, files in os.walk(project, followlinks=True):
+        dirs[:] = [x for x in dirs if x != ".godot"]
+        for name in files:
+            if name.endswith(".gdextension"):
+                rel = os.path.relpath(os.path.join(d, name), project).replace(os.sep, "/")
+                if "res://" + rel not in listed:
+                    return False
+    return True
+
+
 def import_command(project=PROJECT):
     """The editor import: generates godot_project/.godot/ (class cache, extension_list.cfg).
 
@@ -237,7 +254,7 @@ def import_command(project=PROJECT):
     crashes Godot 4.5/4.6 on exit (upstream godotengine/godot#111048). That first import runs
     for 60 frames instead, which lets the doc generation finish; later opens use --quit.
     """
-    first = not os.path.exists(os.path.join(project, ".godot", "extension_list.cfg"))
+    first = not extensions_known(project)
     quit_args = ["--quit-after", "60"] if first else ["--quit"]
     return [godot(), "--headless", "--editor", *quit_args, "--path", project]
 

@@ -121,11 +121,15 @@ void report_error(const char *p_function, const char *p_file, int p_line, const 
 }
 
 std::string dotted_enum_name(const char *p_cpp_name) {
+	// "ns::Class::Enum" -> "Class.Enum": the engine knows classes by name, not by C++ namespace.
 	std::string name = p_cpp_name ? p_cpp_name : "";
-	for (size_t p = name.find("::"); p != std::string::npos; p = name.find("::")) {
-		name.replace(p, 2, ".");
+	size_t last = name.rfind("::");
+	if (last == std::string::npos) {
+		return name;
 	}
-	return name;
+	size_t before = name.rfind("::", last - 1);
+	size_t start = (before == std::string::npos || last == 0) ? 0 : before + 2;
+	return name.substr(start, last - start) + "." + name.substr(last + 2);
 }
 
 } // namespace godot::internal

@@ -57,6 +57,11 @@ Variant::Variant(double p_value) { internal::from_type[GDEXTENSION_VARIANT_TYPE_
 Variant::Variant(const char *p_utf8) : Variant(String(p_utf8)) {}
 Variant::Variant(const Wrapped *p_object) {
 	GDExtensionObjectPtr owner = internal::owner_of(p_object);
+	if (!owner) {
+		// A null object is Nil, as in GDScript; an Object-typed null would read as a freed object.
+		gdi.variant_new_nil(_opaque);
+		return;
+	}
 	internal::from_type[GDEXTENSION_VARIANT_TYPE_OBJECT](_opaque, &owner);
 }
 

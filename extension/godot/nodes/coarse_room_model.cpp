@@ -99,7 +99,7 @@ Vector2i CoarseRoomModel::get_atlas_size() const {
 	return result.ok ? Vector2i(result.mesh.atlas_width, result.mesh.atlas_height) : Vector2i();
 }
 
-PackedStringArray CoarseRoomModel::_get_configuration_warnings() const {
+PackedStringArray CoarseRoomModel::get_warnings() const {
 	PackedStringArray warnings;
 	if (!result.ok) {
 		warnings.push_back(String(("The room cannot be built: " + result.error).c_str()));
@@ -109,6 +109,7 @@ PackedStringArray CoarseRoomModel::_get_configuration_warnings() const {
 }
 
 void CoarseRoomModel::_bind_methods() {
+	ClassDB::bind_method(D_METHOD("get_warnings"), &CoarseRoomModel::get_warnings);
 	ClassDB::bind_method(D_METHOD("set_floorplan", "points"), &CoarseRoomModel::set_floorplan);
 	ClassDB::bind_method(D_METHOD("get_floorplan"), &CoarseRoomModel::get_floorplan);
 	ClassDB::bind_method(D_METHOD("set_ceiling_height", "metres"), &CoarseRoomModel::set_ceiling_height);

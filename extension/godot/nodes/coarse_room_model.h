@@ -26,7 +26,9 @@ public:
 	godot::Ref<godot::ArrayMesh> get_mesh() const;
 	godot::Vector2i get_atlas_size() const;
 
-	godot::PackedStringArray _get_configuration_warnings() const;
+	// What the node cannot do as configured; the editor shows these as configuration warnings.
+	godot::PackedStringArray get_warnings() const;
+	godot::PackedStringArray _get_configuration_warnings() const { return get_warnings(); }
 
 protected:
 	static void _bind_methods();

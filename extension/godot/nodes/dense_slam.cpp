@@ -16,7 +16,7 @@ void DenseSLAM::set_truncation_distance(double p_metres) { truncation_distance =
 double DenseSLAM::get_truncation_distance() const { return truncation_distance; }
 DenseSLAM::TrackingState DenseSLAM::get_tracking_state() const { return tracking_state; }
 
-PackedStringArray DenseSLAM::_get_configuration_warnings() const {
+PackedStringArray DenseSLAM::get_warnings() const {
 	PackedStringArray warnings;
 	warnings.push_back("Tracking and the dense model are not implemented yet (issue #5): DenseSLAM gives no pose.");
 	if (capture_path.is_empty()) {
@@ -26,6 +26,7 @@ PackedStringArray DenseSLAM::_get_configuration_warnings() const {
 }
 
 void DenseSLAM::_bind_methods() {
+	ClassDB::bind_method(D_METHOD("get_warnings"), &DenseSLAM::get_warnings);
 	ClassDB::bind_method(D_METHOD("set_capture", "path"), &DenseSLAM::set_capture_path);
 	ClassDB::bind_method(D_METHOD("get_capture"), &DenseSLAM::get_capture_path);
 	ClassDB::bind_method(D_METHOD("set_voxel_size", "metres"), &DenseSLAM::set_voxel_size);

@@ -24,7 +24,9 @@ public:
 	double get_truncation_distance() const;
 	TrackingState get_tracking_state() const;
 
-	godot::PackedStringArray _get_configuration_warnings() const;
+	// What the node cannot do as configured; the editor shows these as configuration warnings.
+	godot::PackedStringArray get_warnings() const;
+	godot::PackedStringArray _get_configuration_warnings() const { return get_warnings(); }
 
 protected:
 	static void _bind_methods();

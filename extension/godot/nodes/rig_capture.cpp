@@ -16,7 +16,7 @@ RigCapture::Pacing RigCapture::get_pacing() const { return pacing; }
 void RigCapture::set_loop(bool p_loop) { loop = p_loop; }
 bool RigCapture::get_loop() const { return loop; }
 
-PackedStringArray RigCapture::_get_configuration_warnings() const {
+PackedStringArray RigCapture::get_warnings() const {
 	PackedStringArray warnings;
 	warnings.push_back("Playback is not implemented yet (issue #3): RigCapture delivers no frames.");
 	if (recording_path.is_empty()) {
@@ -26,6 +26,7 @@ PackedStringArray RigCapture::_get_configuration_warnings() const {
 }
 
 void RigCapture::_bind_methods() {
+	ClassDB::bind_method(D_METHOD("get_warnings"), &RigCapture::get_warnings);
 	ClassDB::bind_method(D_METHOD("set_recording_path", "path"), &RigCapture::set_recording_path);
 	ClassDB::bind_method(D_METHOD("get_recording_path"), &RigCapture::get_recording_path);
 	ClassDB::bind_method(D_METHOD("set_pacing", "pacing"), &RigCapture::set_pacing);

@@ -22,7 +22,9 @@ public:
 	void set_loop(bool p_loop);
 	bool get_loop() const;
 
-	godot::PackedStringArray _get_configuration_warnings() const;
+	// What the node cannot do as configured; the editor shows these as configuration warnings.
+	godot::PackedStringArray get_warnings() const;
+	godot::PackedStringArray _get_configuration_warnings() const { return get_warnings(); }
 
 protected:
 	static void _bind_methods();

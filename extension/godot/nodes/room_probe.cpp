@@ -16,7 +16,7 @@ NodePath RoomProbe::get_coarse_model_path() const { return coarse_model_path; }
 void RoomProbe::set_dense_slam_path(const NodePath &p_path) { dense_slam_path = p_path; }
 NodePath RoomProbe::get_dense_slam_path() const { return dense_slam_path; }
 
-PackedStringArray RoomProbe::_get_configuration_warnings() const {
+PackedStringArray RoomProbe::get_warnings() const {
 	PackedStringArray warnings;
 	warnings.push_back("Environment-map synthesis is not implemented yet (issue #4): RoomProbe outputs no cubemap.");
 	if (coarse_model_path.is_empty()) {
@@ -26,6 +26,7 @@ PackedStringArray RoomProbe::_get_configuration_warnings() const {
 }
 
 void RoomProbe::_bind_methods() {
+	ClassDB::bind_method(D_METHOD("get_warnings"), &RoomProbe::get_warnings);
 	ClassDB::bind_method(D_METHOD("set_resolution", "texels"), &RoomProbe::set_resolution);
 	ClassDB::bind_method(D_METHOD("get_resolution"), &RoomProbe::get_resolution);
 	ClassDB::bind_method(D_METHOD("set_coarse_model", "path"), &RoomProbe::set_coarse_model_path);

@@ -17,7 +17,9 @@ public:
 	void set_dense_slam_path(const godot::NodePath &p_path);
 	godot::NodePath get_dense_slam_path() const;
 
-	godot::PackedStringArray _get_configuration_warnings() const;
+	// What the node cannot do as configured; the editor shows these as configuration warnings.
+	godot::PackedStringArray get_warnings() const;
+	godot::PackedStringArray _get_configuration_warnings() const { return get_warnings(); }
 
 protected:
 	static void _bind_methods();
