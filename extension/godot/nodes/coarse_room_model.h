@@ -41,6 +41,7 @@ private:
 	double ceiling_height = 2.5;
 	double texel_size = 0.02;
 
+	FloorplanCheck check;
 	RoomMeshResult result;
 	godot::Ref<godot::ArrayMesh> mesh;
 	godot::MeshInstance3D *mesh_instance = nullptr;
