@@ -217,7 +217,8 @@ TEST_CASE("clockwise floorplans are normalized to counter-clockwise, keeping poi
 }
 
 TEST_CASE("problem names") {
-	CHECK(std::string(floorplan_problem_name(Problem::None)) == "None");
-	CHECK(std::string(floorplan_problem_name(Problem::SelfIntersecting)) == "SelfIntersecting");
-	CHECK(std::string(floorplan_problem_name(Problem::NonFinite)) == "NonFinite");
+	CHECK(std::string(floorplan_problem_summary(Problem::SelfIntersecting)).find("self-intersecting") != std::string::npos);
+	CHECK(std::string(floorplan_problem_summary(Problem::TooFewPoints)).find("fewer than 3 points") != std::string::npos);
+	CHECK(std::string(floorplan_problem_summary(Problem::ZeroArea)).find("zero area") != std::string::npos);
+	CHECK(std::string(floorplan_problem_summary(Problem::CeilingNotPositive)).find("at or below") != std::string::npos);
 }

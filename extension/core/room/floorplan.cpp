@@ -160,22 +160,22 @@ FloorplanCheck check_floorplan(const Floorplan &p_floorplan) {
 	}
 }
 
-const char *floorplan_problem_name(FloorplanCheck::Problem p_problem) {
+const char *floorplan_problem_summary(FloorplanCheck::Problem p_problem) {
 	switch (p_problem) {
 		case FloorplanCheck::Problem::None:
-			return "None";
+			return "The floorplan is valid";
 		case FloorplanCheck::Problem::TooFewPoints:
-			return "TooFewPoints";
+			return "The floorplan has fewer than 3 points";
 		case FloorplanCheck::Problem::SelfIntersecting:
-			return "SelfIntersecting";
+			return "The floorplan is self-intersecting";
 		case FloorplanCheck::Problem::ZeroArea:
-			return "ZeroArea";
+			return "The floorplan encloses zero area";
 		case FloorplanCheck::Problem::CeilingNotPositive:
-			return "CeilingNotPositive";
+			return "The ceiling is at or below the floor (ceiling height <= 0)";
 		case FloorplanCheck::Problem::NonFinite:
-			return "NonFinite";
+			return "The floorplan or ceiling height is not a finite number";
 	}
-	return "Unknown";
+	return "The floorplan is invalid";
 }
 
 double floorplan_signed_area_m2(const Floorplan &p_floorplan) {

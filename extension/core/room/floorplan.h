@@ -53,8 +53,9 @@ struct FloorplanCheck {
 // (SelfIntersecting). Never throws (the core is exception-free at its API).
 FloorplanCheck check_floorplan(const Floorplan &p_floorplan);
 
-// Readable name of a problem, e.g. "SelfIntersecting" (for logs and tests).
-const char *floorplan_problem_name(FloorplanCheck::Problem p_problem);
+// The problem in a sentence for the user, e.g. "The floorplan is self-intersecting"; the
+// check's message adds which points or edges.
+const char *floorplan_problem_summary(FloorplanCheck::Problem p_problem);
 
 // Signed polygon area in square metres in the (x, z) plane: positive when the
 // points are counter-clockwise (the normalized convention), negative when clockwise.

@@ -37,29 +37,13 @@ Array to_surface_arrays(const RoomMesh &p_mesh) {
 	return arrays;
 }
 
-// The kind of problem in the words the editor shows first; the core's message adds the detail.
-const char *problem_phrase(FloorplanCheck::Problem p_problem) {
-	switch (p_problem) {
-		case FloorplanCheck::Problem::TooFewPoints:
-			return "The floorplan has fewer than 3 points";
-		case FloorplanCheck::Problem::SelfIntersecting:
-			return "The floorplan is self-intersecting";
-		case FloorplanCheck::Problem::ZeroArea:
-			return "The floorplan encloses zero area";
-		case FloorplanCheck::Problem::CeilingNotPositive:
-			return "The ceiling is at or below the floor (ceiling_height <= 0)";
-		case FloorplanCheck::Problem::NonFinite:
-			return "The floorplan or ceiling height is not a finite number";
-		case FloorplanCheck::Problem::None:
-			break;
-	}
-	return "The room cannot be built";
-}
 
 } // namespace
 
 CoarseRoomModel::CoarseRoomModel() {
 	mesh.instantiate();
+	// Built at once, so that a new node already reports why its (empty) floorplan is no room.
+	rebuild();
 }
 
 void CoarseRoomModel::_notification(int p_what) {
@@ -123,7 +107,7 @@ PackedStringArray CoarseRoomModel::get_warnings() const {
 	PackedStringArray warnings;
 	if (!result.ok) {
 		// A valid floorplan can still fail to build (e.g. an atlas beyond the size limit).
-		const char *phrase = check.ok ? "The room cannot be built" : problem_phrase(check.problem);
+		const char *phrase = check.ok ? "The room cannot be built" : floorplan_problem_summary(check.problem);
 		warnings.push_back(String((std::string(phrase) + ": " + result.error).c_str()));
 	}
 	warnings.push_back("Texturing from the fisheye is not implemented yet (issue #4): the room shows its mesh only.");

@@ -20,7 +20,7 @@ PackedStringArray RigCapture::get_warnings() const {
 	PackedStringArray warnings;
 	warnings.push_back("Playback is not implemented yet (issue #3): RigCapture delivers no frames.");
 	if (recording_path.is_empty()) {
-		warnings.push_back("Set recording_path to a recording folder (see docs/recording-format.md).");
+		warnings.push_back("Set recording_path to a recording folder (the recording format comes with issue #3).");
 	}
 	return warnings;
 }

@@ -12,7 +12,7 @@ class RigCapture : public godot::Node {
 public:
 	enum Pacing {
 		PACING_REAL_TIME, // Frames follow their timestamps.
-		PACING_STEP, // One frame per step() call: deterministic, for tests.
+		PACING_STEP, // One frame per request, deterministic, for tests (the stepping call comes with playback, #3).
 	};
 
 	void set_recording_path(const godot::String &p_path);
