@@ -229,34 +229,38 @@ def xvfb_prefix(screen=XVFB_SCREEN):
     return ["xvfb-run", "-a", "-s", screen]
 
 
-def extensions_known(project):
-    """True when .godot/extension_list.cfg lists every .gdextension file of the project."""
-    listed_path = os.path.join(project, ".godot", "extension_list.cfg")
-    if not os.path.exists(listed_path):
-        return False
-    with open(listed_path) as f:
-        listed = {line.strip() for line in f if line.strip()}
+def project_extensions(project):
+    """The project's .gdextension files as res:// paths, symlinked folders included."""
+    found = []
     for d, dirs, files in os.walk(project, followlinks=True):
-        dirs[:] = [x for x in dirs if x != ".godot"]
-        for name in files:
+        dirs[:] = sorted(x for x in dirs if x != ".godot")
+        for name in sorted(files):
             if name.endswith(".gdextension"):
-                rel = os.path.relpath(os.path.join(d, name), project).replace(os.sep, "/")
-                if "res://" + rel not in listed:
-                    return False
-    return True
+                found.append("res://" + os.path.relpath(os.path.join(d, name), project).replace(os.sep, "/"))
+    return found
 
 
 def import_command(project=PROJECT):
-    """The editor import: generates godot_project/.godot/ (class cache, extension_list.cfg).
+    """The editor import: generates godot_project/.godot/ (class cache, import data).
 
-    On a project the editor has not seen (no .godot/extension_list.cfg), the editor loads the
-    extension during its first scan and generates its class docs; quitting in that same frame
-    crashes Godot 4.5/4.6 on exit (upstream godotengine/godot#111048). That first import runs
-    for 60 frames instead, which lets the doc generation finish; later opens use --quit.
+    When the editor finds a GDExtension during its first scan, it loads it at run time and
+    generates its class docs on a thread; quitting while that runs crashes Godot 4.5/4.6 on
+    exit (upstream godotengine/godot#111048), and how long it runs depends on the machine.
+    So .godot/extension_list.cfg, the list the editor itself writes after that scan, is
+    written first when it lacks an extension: the editor then loads every extension at start-up,
+    the path every later run takes, and `--editor --quit` is safe.
     """
-    first = not extensions_known(project)
-    quit_args = ["--quit-after", "60"] if first else ["--quit"]
-    return [godot(), "--headless", "--editor", *quit_args, "--path", project]
+    listed_path = os.path.join(project, ".godot", "extension_list.cfg")
+    wanted = project_extensions(project)
+    listed = []
+    if os.path.exists(listed_path):
+        with open(listed_path) as f:
+            listed = [line.strip() for line in f if line.strip()]
+    if set(wanted) - set(listed):
+        os.makedirs(os.path.dirname(listed_path), exist_ok=True)
+        with open(listed_path, "w") as f:
+            f.write("".join(p + "\n" for p in wanted))
+    return [godot(), "--headless", "--editor", "--quit", "--path", project]
 
 
 def tail(lines, n=40, indent="    "):

@@ -243,21 +243,20 @@ def show_doctest_failures(lines, limit=120):
 
 
 def suite_editor(opts, judged=True):
-    """Two checks, one test each.
+    """Three checks, one test each; each is `godot --headless --editor --quit` (see
+    rp_godot.import_command for the extension list written before a first import).
 
-    fresh-import: a scratch copy of godot_project/ without .godot/ is imported, as on a fresh
-      clone. There the editor finds the extension during its first scan and loads it at run
-      time, a path that later runs (which load it from .godot/extension_list.cfg) never take.
+    fresh-import: a scratch copy of godot_project/ without .godot/, as on a fresh clone.
+    fresh-reopen: the same copy opened again, now imported.
     import: the project itself; this also makes the .godot/ the Godot suites need.
     """
     s = Suite("editor")
-    scratch = os.path.join(rp.BUILD, "godot-fresh-import")
     s.logs.append(os.path.join(LOGS, "editor.log"))
     s.ran = True
     rp.header(f"editor{'' if judged else ' (prerequisite)'}: fresh import of a scratch copy, then the project's own import")
     checks = []
+    scratch = os.path.join(rp.BUILD, "godot-fresh-import")
     if judged:
-        scratch = os.path.join(rp.BUILD, "godot-fresh-import")
         shutil.rmtree(scratch, ignore_errors=True)
         shutil.copytree(rp.PROJECT, scratch, symlinks=False, ignore=shutil.ignore_patterns(".godot"))
         checks.insert(0, ("fresh-import", None, os.path.join(LOGS, "editor-fresh-import.log")))

@@ -1,0 +1,73 @@
+#pragma once
+
+// GenICam cameras (GigE Vision, USB3 Vision) through Aravis 0.8: the rig's
+// fisheye. Aravis types stay in the .cpp, so this header needs no GLib.
+//
+// Not thread-safe: use one AravisCamera from one thread at a time. Aravis'
+// device list is process-wide; the functions here serialise their own use of it.
+
+#include "device_types.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace roomprobe::drivers {
+
+// Lists the cameras Aravis finds (backend "aravis"). Takes about a second:
+// GigE discovery waits for answers. Aravis' built-in test camera (id "Fake_1")
+// is listed only when p_include_fake is true.
+std::vector<DeviceInfo> list_aravis_devices(bool p_include_fake);
+
+class AravisCamera {
+public:
+	// Opens a camera by Aravis device id (as listed), or a GigE camera by its IP
+	// address. Ids starting with "Fake_" open Aravis' test camera. Takes control
+	// of the camera; acquisition starts with the first grab().
+	static DriverResult<std::unique_ptr<AravisCamera>> open(const std::string &p_device_id);
+
+	// Waits up to p_timeout_ms for a frame and returns a current one: the newest
+	// frame received since the last call, or, when frames piled up in every
+	// buffer (the camera then drops newer ones), the next frame to arrive. So a
+	// slow caller gets a current image, never a backlog. Acquisition runs
+	// continuously into a pool of 4 buffers from the first grab: starting and
+	// stopping per frame (arv_camera_acquisition) costs a stream set-up each time
+	// and cannot keep up with the camera's frame rate.
+	// Only 8-bit formats (Mono8, Bayer*8) are accepted. A camera that stopped
+	// answering (unplugged) gives an error, here and on every later call.
+	DriverResult<GrayFrame> grab(int p_timeout_ms);
+
+	const std::string &get_device_id() const;
+	DeviceInfo get_info() const;
+	int get_sensor_width() const; // Full sensor, pixels.
+	int get_sensor_height() const;
+	int get_width() const; // The region grab() returns, pixels.
+	int get_height() const;
+	std::string get_pixel_format() const; // GenICam name, e.g. "Mono8".
+	bool is_streaming() const;
+
+	// Exposure in microseconds and gain in the camera's unit (usually dB). Each
+	// setter switches the matching auto mode off and fails, naming the valid
+	// range, when the value is out of bounds or the camera lacks the feature.
+	bool has_exposure_time() const;
+	DriverResult<double> get_exposure_time_us() const;
+	DriverStatus set_exposure_time_us(double p_exposure_us);
+	bool has_gain() const;
+	DriverResult<double> get_gain() const;
+	DriverStatus set_gain(double p_gain);
+
+	// Stops acquisition (unless the camera is gone) and releases Aravis' objects.
+	~AravisCamera();
+
+	AravisCamera(const AravisCamera &) = delete;
+	AravisCamera &operator=(const AravisCamera &) = delete;
+
+private:
+	struct State; // Aravis objects, defined in the .cpp.
+
+	explicit AravisCamera(std::unique_ptr<State> p_state);
+
+	std::unique_ptr<State> state;
+};
+
+} // namespace roomprobe::drivers
