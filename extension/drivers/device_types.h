@@ -79,4 +79,16 @@ struct RgbdFrame {
 	ColorFrame color;
 };
 
+// "3 devices listed: a, b, c" (or "no devices listed"), for errors about a device not found.
+inline std::string describe_listed(const std::vector<DeviceInfo> &p_devices) {
+	if (p_devices.empty()) {
+		return "no devices listed";
+	}
+	std::string listed = std::to_string(p_devices.size()) + (p_devices.size() == 1 ? " device" : " devices") + " listed: ";
+	for (size_t i = 0; i < p_devices.size(); i++) {
+		listed += (i ? ", " : "") + p_devices[i].id;
+	}
+	return listed;
+}
+
 } // namespace roomprobe::drivers

@@ -72,17 +72,6 @@ std::vector<DeviceInfo> list_devices_locked(bool p_include_fake) {
 	return devices;
 }
 
-std::string describe_listed(const std::vector<DeviceInfo> &p_devices) {
-	if (p_devices.empty()) {
-		return "no devices listed";
-	}
-	std::string listed = std::to_string(p_devices.size()) + (p_devices.size() == 1 ? " device" : " devices") + " listed: ";
-	for (size_t i = 0; i < p_devices.size(); i++) {
-		listed += (i ? ", " : "") + p_devices[i].id;
-	}
-	return listed;
-}
-
 const char *buffer_status_name(ArvBufferStatus p_status) {
 	switch (p_status) {
 		case ARV_BUFFER_STATUS_SUCCESS:

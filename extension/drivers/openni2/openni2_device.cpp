@@ -80,17 +80,6 @@ std::vector<DeviceInfo> enumerate_devices() {
 	return devices;
 }
 
-std::string describe_listed(const std::vector<DeviceInfo> &p_devices) {
-	if (p_devices.empty()) {
-		return "no devices listed";
-	}
-	std::string listed = std::to_string(p_devices.size()) + (p_devices.size() == 1 ? " device" : " devices") + " listed: ";
-	for (size_t i = 0; i < p_devices.size(); i++) {
-		listed += (i ? ", " : "") + p_devices[i].id;
-	}
-	return listed;
-}
-
 bool ends_with_oni(const std::string &p_path) {
 	if (p_path.size() < 4) {
 		return false;
