@@ -312,10 +312,35 @@ def show_with_context(lines, bad, limit=60):
 # ---------------------------------------------------------------------------------- godot
 
 
+# The synthetic recording the Godot tests play (tests/godot/test_nodes_rig_capture.gd).
+FIXTURE_RECORDING = os.path.join(rp.BUILD, "test-data", "living_room_1s")
+
+
+def make_fixture_recording():
+    """Renders a 1-second living_room recording with the synth tool, once per tool build."""
+    tool = os.path.join(rp.BUILD, "bin", "roomprobe_synth")
+    stamp = os.path.join(FIXTURE_RECORDING, ".made-by")
+    if not os.path.exists(tool):
+        return
+    made_by = f"{os.path.getmtime(tool)}"
+    if os.path.exists(stamp) and open(stamp).read() == made_by:
+        return
+    shutil.rmtree(FIXTURE_RECORDING, ignore_errors=True)
+    log = os.path.join(LOGS, "fixture-recording.log")
+    r = rp.run([tool, "--scene", "living_room", "--out", FIXTURE_RECORDING, "--seconds", "1", "--seed", "7"], log, 600)
+    if r.rc == 0:
+        with open(stamp, "w") as f:
+            f.write(made_by)
+    else:
+        print(f"    (the fixture recording could not be made; see {log})")
+
+
 def suite_godot(opts, rendering, allow_empty):
     name = "rendering" if rendering else "godot"
     s = Suite(name)
     s.logs.append(os.path.join(LOGS, f"{name}.log"))
+    if not rendering:
+        make_fixture_recording()
     user = []
     if opts.filter:
         user += ["--filter", opts.filter]

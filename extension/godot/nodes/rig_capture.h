@@ -1,8 +1,14 @@
 #pragma once
-// RigCapture: where the rig's frames come from (RGB-D plus fisheye). Plays recordings now;
-// live devices (extension/drivers) come later.
+// RigCapture: where the rig's frames come from: the RGB-D camera and the upward fisheye, two
+// unsynchronised streams (paper §3.2, §4.3). Plays a recording (docs/recording-format.md) in
+// real time by its timestamps, or one frame per step() call for deterministic tests. Live
+// devices (extension/drivers) come later.
+
+#include <recording/recording_reader.h>
 
 #include <rp_godot/godot.h>
+
+#include <memory>
 
 namespace roomprobe {
 
@@ -12,7 +18,11 @@ class RigCapture : public godot::Node {
 public:
 	enum Pacing {
 		PACING_REAL_TIME, // Frames follow their timestamps.
-		PACING_STEP, // One frame per request, deterministic, for tests (the stepping call comes with playback, #3).
+		PACING_STEP, // One frame per step() call: deterministic, for tests.
+	};
+	enum Stream {
+		STREAM_RGBD,
+		STREAM_FISHEYE,
 	};
 
 	void set_recording_path(const godot::String &p_path);
@@ -21,20 +31,71 @@ public:
 	Pacing get_pacing() const;
 	void set_loop(bool p_loop);
 	bool get_loop() const;
+	void set_autoplay(bool p_autoplay);
+	bool get_autoplay() const;
 
-	// What the node cannot do as configured; the editor shows these as configuration warnings.
+	bool open();
+	void close();
+	bool is_open() const;
+	void play();
+	void stop();
+	bool is_playing() const;
+	bool step();
+	void rewind();
+
+	int64_t get_frame_count(Stream p_stream) const;
+	int64_t get_event_count() const;
+	int64_t get_event_position() const;
+	double get_time() const;
+	int64_t get_frame_index(Stream p_stream) const;
+	double get_frame_timestamp(Stream p_stream) const;
+	int64_t get_dropped_frame_count() const;
+	godot::Ref<godot::ImageTexture> get_rgb_texture() const;
+	godot::Ref<godot::ImageTexture> get_depth_texture() const;
+	godot::Ref<godot::ImageTexture> get_fisheye_texture() const;
+	// The same frames as images in memory, for scripts that read pixels.
+	godot::Ref<godot::Image> get_rgb_image() const;
+	godot::Ref<godot::Image> get_depth_image() const;
+	godot::Ref<godot::Image> get_fisheye_image() const;
+	godot::PackedStringArray get_issues() const;
+	godot::String get_last_error() const;
+
+	// For the nodes that consume frames in C++ (DenseSLAM, CoarseRoomModel).
+	const RecordingReader *get_reader() const { return reader.get(); }
+	const RgbdFrame &get_rgbd_frame() const { return rgbd_frame; }
+	const FisheyeFrame &get_fisheye_frame() const { return fisheye_frame; }
+
 	godot::PackedStringArray get_warnings() const;
 	godot::PackedStringArray _get_configuration_warnings() const { return get_warnings(); }
+	void _ready();
+	void _process(double p_delta);
 
 protected:
 	static void _bind_methods();
 
 private:
+	bool deliver(size_t p_event, bool p_decode);
+	void fail(const std::string &p_message);
+
 	godot::String recording_path;
 	Pacing pacing = PACING_REAL_TIME;
 	bool loop = false;
+	bool autoplay = true;
+
+	std::unique_ptr<RecordingReader> reader;
+	size_t next_event = 0;
+	bool playing = false;
+	double clock_s = 0.0; // playback time since the first event, seconds
+	int64_t frame_index[2] = { -1, -1 };
+	int64_t dropped = 0;
+	RgbdFrame rgbd_frame;
+	FisheyeFrame fisheye_frame;
+	godot::Ref<godot::ImageTexture> rgb_texture, depth_texture, fisheye_texture;
+	godot::Ref<godot::Image> rgb_image, depth_image, fisheye_image;
+	std::string last_error;
 };
 
 } // namespace roomprobe
 
 VARIANT_ENUM_CAST(roomprobe::RigCapture::Pacing)
+VARIANT_ENUM_CAST(roomprobe::RigCapture::Stream)

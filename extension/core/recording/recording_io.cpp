@@ -1,0 +1,484 @@
+#include "recording_io.h"
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImathBox.h>
+#include <half.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <exception>
+#include <fstream>
+#include <system_error>
+#include <tuple>
+
+namespace roomprobe {
+
+namespace recording_io {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr uint8_t PNG_SIGNATURE[8] = { 0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n' };
+// An IEND chunk: length 0, type, CRC. Every complete PNG ends with these 12 bytes.
+constexpr uint8_t PNG_IEND[12] = { 0, 0, 0, 0, 'I', 'E', 'N', 'D', 0xae, 0x42, 0x60, 0x82 };
+constexpr size_t PNG_HEADER_SIZE = 8 + 8 + 13 + 4; // signature, IHDR chunk
+
+uint32_t read_be32(const uint8_t *p_bytes) {
+	return (uint32_t(p_bytes[0]) << 24) | (uint32_t(p_bytes[1]) << 16) | (uint32_t(p_bytes[2]) << 8) | uint32_t(p_bytes[3]);
+}
+
+std::string_view trim(std::string_view p_text) {
+	const char *space = " \t\r\n\v\f";
+	const size_t first = p_text.find_first_not_of(space);
+	if (first == std::string_view::npos) {
+		return std::string_view();
+	}
+	const size_t last = p_text.find_last_not_of(space);
+	return p_text.substr(first, last - first + 1);
+}
+
+bool file_exists(const std::string &p_path) {
+	std::error_code error;
+	return fs::is_regular_file(p_path, error);
+}
+
+// Checks the signature and IHDR of the first PNG_HEADER_SIZE bytes.
+std::string parse_png_header(const uint8_t *p_bytes, size_t p_size, PngInfo *r_info) {
+	if (p_size < 8 || std::memcmp(p_bytes, PNG_SIGNATURE, 8) != 0) {
+		return "not a PNG file (no PNG signature)";
+	}
+	if (p_size < PNG_HEADER_SIZE) {
+		return "truncated: the PNG ends inside its header";
+	}
+	if (read_be32(p_bytes + 8) != 13 || std::memcmp(p_bytes + 12, "IHDR", 4) != 0) {
+		return "corrupt PNG: no IHDR chunk after the signature";
+	}
+	PngInfo info;
+	info.width = int(std::min<uint32_t>(read_be32(p_bytes + 16), 0x7fffffff));
+	info.height = int(std::min<uint32_t>(read_be32(p_bytes + 20), 0x7fffffff));
+	info.bit_depth = p_bytes[24];
+	info.color_type = p_bytes[25];
+	if (info.width == 0 || info.height == 0) {
+		return "corrupt PNG: zero width or height";
+	}
+	*r_info = info;
+	return std::string();
+}
+
+// Walks the chunks from the signature to IEND; p_read(offset, 8 bytes) gives a chunk header.
+template <class ReadHeader>
+std::string walk_png_chunks(uint64_t p_size, ReadHeader p_read) {
+	uint64_t offset = 8;
+	while (true) {
+		uint8_t header[8];
+		if (offset + 8 > p_size || !p_read(offset, header)) {
+			return "truncated: the PNG ends at byte " + std::to_string(p_size) + ", before its IEND chunk";
+		}
+		const uint64_t length = read_be32(header);
+		const uint64_t end = offset + 8 + length + 4;
+		if (end > p_size) {
+			return "truncated: the PNG ends at byte " + std::to_string(p_size) + ", inside a chunk ('" +
+					std::string(reinterpret_cast<const char *>(header + 4), 4) + "') that needs " + std::to_string(end) + " bytes";
+		}
+		if (std::memcmp(header + 4, "IEND", 4) == 0) {
+			return std::string();
+		}
+		offset = end;
+	}
+}
+
+template <class Function>
+std::string catch_all(const std::string &p_path, Function p_function) {
+	try {
+		return p_function();
+	} catch (const std::exception &e) {
+		return p_path + ": " + e.what();
+	} catch (...) {
+		return p_path + ": unknown error";
+	}
+}
+
+} // namespace
+
+std::string format_number(double p_value) {
+	char buffer[512];
+	const std::to_chars_result result = std::to_chars(buffer, buffer + sizeof(buffer), p_value, std::chars_format::fixed);
+	if (result.ec != std::errc()) {
+		const std::to_chars_result general = std::to_chars(buffer, buffer + sizeof(buffer), p_value);
+		return std::string(buffer, general.ptr);
+	}
+	return std::string(buffer, result.ptr);
+}
+
+bool parse_number(std::string_view p_text, double *r_value) {
+	p_text = trim(p_text);
+	if (p_text.empty()) {
+		return false;
+	}
+	double value = 0.0;
+	const std::from_chars_result result = std::from_chars(p_text.data(), p_text.data() + p_text.size(), value);
+	if (result.ec != std::errc() || result.ptr != p_text.data() + p_text.size() || !std::isfinite(value)) {
+		return false;
+	}
+	*r_value = value;
+	return true;
+}
+
+bool parse_int(std::string_view p_text, int *r_value) {
+	p_text = trim(p_text);
+	if (p_text.empty()) {
+		return false;
+	}
+	int value = 0;
+	const std::from_chars_result result = std::from_chars(p_text.data(), p_text.data() + p_text.size(), value);
+	if (result.ec != std::errc() || result.ptr != p_text.data() + p_text.size()) {
+		return false;
+	}
+	*r_value = value;
+	return true;
+}
+
+std::string join(const fs::path &p_folder, const std::string &p_relative) {
+	if (p_folder.empty()) {
+		return p_relative;
+	}
+	return (p_folder / p_relative).string();
+}
+
+std::string describe_type(int p_cv_type) {
+	const int depth = CV_MAT_DEPTH(p_cv_type);
+	const int channels = CV_MAT_CN(p_cv_type);
+	std::string bits;
+	switch (depth) {
+		case CV_8U:
+		case CV_8S:
+			bits = "8-bit";
+			break;
+		case CV_16U:
+		case CV_16S:
+			bits = "16-bit";
+			break;
+		case CV_16F:
+			bits = "16-bit float";
+			break;
+		case CV_32S:
+			bits = "32-bit integer";
+			break;
+		case CV_32F:
+			bits = "32-bit float";
+			break;
+		case CV_64F:
+			bits = "64-bit float";
+			break;
+		default:
+			bits = "unknown-depth";
+			break;
+	}
+	return bits + " " + std::to_string(channels) + "-channel";
+}
+
+std::string read_index_lines(const std::string &p_path, std::vector<IndexLine> *r_lines) {
+	r_lines->clear();
+	if (!file_exists(p_path)) {
+		return p_path + ": missing";
+	}
+	std::ifstream file(p_path, std::ios::binary);
+	if (!file) {
+		return p_path + ": cannot be opened for reading";
+	}
+	std::string text;
+	int number = 0;
+	while (std::getline(file, text)) {
+		number++;
+		const std::string_view line = trim(text);
+		if (line.empty() || line.front() == '#') {
+			continue;
+		}
+		r_lines->push_back(IndexLine{ number, std::string(line) });
+	}
+	if (file.bad()) {
+		return p_path + ": read error after line " + std::to_string(number);
+	}
+	return std::string();
+}
+
+std::string read_frame_index(const std::string &p_path, std::vector<FrameRef> *r_frames, std::vector<RecordingIssue> *r_issues) {
+	r_frames->clear();
+	std::vector<IndexLine> lines;
+	const std::string error = read_index_lines(p_path, &lines);
+	if (!error.empty()) {
+		return error;
+	}
+	for (const IndexLine &line : lines) {
+		const std::string_view text = line.text;
+		const size_t space = text.find_first_of(" \t");
+		const std::string_view path = space == std::string_view::npos ? std::string_view() : trim(text.substr(space));
+		const std::string_view stamp = text.substr(0, space);
+		double timestamp = 0.0;
+		if (path.empty()) {
+			r_issues->push_back({ p_path, line.line, "expected 'timestamp_s relative/path', got '" + line.text + "'; line skipped" });
+			continue;
+		}
+		if (!parse_number(stamp, &timestamp)) {
+			r_issues->push_back({ p_path, line.line, "'" + std::string(stamp) + "' is not a finite timestamp in seconds; line skipped" });
+			continue;
+		}
+		if (fs::path(std::string(path)).is_absolute()) {
+			r_issues->push_back({ p_path, line.line, "'" + std::string(path) + "' is an absolute path; frame paths are relative to the recording folder; frame skipped" });
+			continue;
+		}
+		if (!r_frames->empty() && !(timestamp > r_frames->back().timestamp_s)) {
+			const bool repeats = timestamp == r_frames->back().timestamp_s;
+			r_issues->push_back({ p_path, line.line,
+					"timestamp " + format_number(timestamp) + (repeats ? " repeats line " : " goes backwards (before line ") +
+							std::to_string(r_frames->back().line) + (repeats ? "'s" : "'s " + format_number(r_frames->back().timestamp_s) + ")") +
+							"; timestamps must increase; frame " + std::string(path) + " skipped" });
+			continue;
+		}
+		r_frames->push_back(FrameRef{ timestamp, std::string(path), line.line });
+	}
+	return std::string();
+}
+
+std::string check_png_bytes(const std::vector<uint8_t> &p_bytes) {
+	PngInfo info;
+	const std::string error = parse_png_header(p_bytes.data(), p_bytes.size(), &info);
+	if (!error.empty()) {
+		return error;
+	}
+	return walk_png_chunks(p_bytes.size(), [&](uint64_t p_offset, uint8_t *r_header) {
+		std::memcpy(r_header, p_bytes.data() + p_offset, 8);
+		return true;
+	});
+}
+
+std::string read_png_info(const std::string &p_path, PngInfo *r_info) {
+	if (!file_exists(p_path)) {
+		return p_path + ": missing";
+	}
+	std::ifstream file(p_path, std::ios::binary);
+	if (!file) {
+		return p_path + ": cannot be opened for reading";
+	}
+	file.seekg(0, std::ios::end);
+	const std::streamoff size = file.tellg();
+	if (size < 0) {
+		return p_path + ": cannot be read";
+	}
+	file.seekg(0);
+	uint8_t header[PNG_HEADER_SIZE] = {};
+	file.read(reinterpret_cast<char *>(header), std::streamsize(std::min<std::streamoff>(size, PNG_HEADER_SIZE)));
+	std::string error = parse_png_header(header, size_t(std::min<std::streamoff>(size, PNG_HEADER_SIZE)), r_info);
+	if (!error.empty()) {
+		return p_path + ": " + error;
+	}
+	// The common case: the file ends with IEND. Otherwise walk the chunks, which tells data after
+	// IEND (allowed) from a file cut short.
+	uint8_t tail[12] = {};
+	if (size >= std::streamoff(PNG_HEADER_SIZE + 12)) {
+		file.seekg(size - 12);
+		file.read(reinterpret_cast<char *>(tail), 12);
+		if (file && std::memcmp(tail, PNG_IEND, 12) == 0) {
+			return std::string();
+		}
+	}
+	file.clear();
+	error = walk_png_chunks(uint64_t(size), [&](uint64_t p_offset, uint8_t *r_header) {
+		file.clear();
+		file.seekg(std::streamoff(p_offset));
+		file.read(reinterpret_cast<char *>(r_header), 8);
+		return bool(file);
+	});
+	return error.empty() ? error : p_path + ": " + error;
+}
+
+std::string decode_png(const std::string &p_path, cv::Mat *r_image) {
+	if (!file_exists(p_path)) {
+		return p_path + ": missing";
+	}
+	std::ifstream file(p_path, std::ios::binary);
+	if (!file) {
+		return p_path + ": cannot be opened for reading";
+	}
+	std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+	if (file.bad()) {
+		return p_path + ": read error";
+	}
+	const std::string error = check_png_bytes(bytes);
+	if (!error.empty()) {
+		return p_path + ": " + error;
+	}
+	return catch_all(p_path, [&]() -> std::string {
+		cv::Mat image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+		if (image.empty()) {
+			return p_path + ": corrupt PNG (OpenCV could not decode it)";
+		}
+		*r_image = image;
+		return std::string();
+	});
+}
+
+std::string write_png(const std::string &p_path, const cv::Mat &p_image) {
+	return catch_all(p_path, [&]() -> std::string {
+		if (!cv::imwrite(p_path, p_image)) {
+			return p_path + ": could not be written";
+		}
+		return std::string();
+	});
+}
+
+std::string write_exr_rgb(const std::string &p_path, const cv::Mat &p_rgb, bool p_full_float) {
+	if (p_rgb.empty() || p_rgb.type() != CV_32FC3) {
+		return p_path + ": an HDR image must be CV_32FC3 (linear R, G, B); got " + (p_rgb.empty() ? std::string("an empty image") : describe_type(p_rgb.type()));
+	}
+	const cv::Mat rgb = p_rgb.isContinuous() ? p_rgb : p_rgb.clone();
+	const float *values = rgb.ptr<float>();
+	const size_t count = rgb.total() * 3;
+	const float limit = p_full_float ? std::numeric_limits<float>::max() : 65504.0f; // half's largest finite value
+	for (size_t i = 0; i < count; i++) {
+		if (!std::isfinite(values[i]) || std::abs(values[i]) > limit) {
+			const size_t pixel = i / 3;
+			return p_path + ": value " + format_number(values[i]) + " at pixel (" + std::to_string(pixel % rgb.cols) + ", " +
+					std::to_string(pixel / rgb.cols) + ") is " + (std::isfinite(values[i]) ? "beyond half's range (65504); write full float" : "not finite");
+		}
+	}
+	return catch_all(p_path, [&]() -> std::string {
+		Imf::Header header(rgb.cols, rgb.rows);
+		header.compression() = Imf::ZIP_COMPRESSION;
+		const Imf::PixelType stored = p_full_float ? Imf::FLOAT : Imf::HALF;
+		const char *names[3] = { "R", "G", "B" };
+		for (const char *name : names) {
+			header.channels().insert(name, Imf::Channel(stored));
+		}
+		// OpenEXR converts pixel types when reading, not when writing: the buffer is in the stored type.
+		Imf::FrameBuffer buffer;
+		std::vector<half> halves;
+		char *base = const_cast<char *>(reinterpret_cast<const char *>(values));
+		size_t element = sizeof(float);
+		if (!p_full_float) {
+			halves.assign(values, values + count);
+			base = reinterpret_cast<char *>(halves.data());
+			element = sizeof(half);
+		}
+		const size_t x_stride = 3 * element;
+		const size_t y_stride = x_stride * size_t(rgb.cols);
+		for (int c = 0; c < 3; c++) {
+			buffer.insert(names[c], Imf::Slice(stored, base + c * element, x_stride, y_stride));
+		}
+		Imf::OutputFile file(p_path.c_str(), header);
+		file.setFrameBuffer(buffer);
+		file.writePixels(rgb.rows);
+		return std::string();
+	});
+}
+
+std::string read_exr_size(const std::string &p_path, int *r_width, int *r_height) {
+	if (!file_exists(p_path)) {
+		return p_path + ": missing";
+	}
+	return catch_all(p_path, [&]() -> std::string {
+		Imf::InputFile file(p_path.c_str());
+		const Imath::Box2i window = file.header().dataWindow();
+		*r_width = window.max.x - window.min.x + 1;
+		*r_height = window.max.y - window.min.y + 1;
+		return std::string();
+	});
+}
+
+std::string read_exr_rgb(const std::string &p_path, cv::Mat *r_rgb) {
+	if (!file_exists(p_path)) {
+		return p_path + ": missing";
+	}
+	return catch_all(p_path, [&]() -> std::string {
+		Imf::InputFile file(p_path.c_str());
+		const Imf::ChannelList &channels = file.header().channels();
+		const char *names[3] = { "R", "G", "B" };
+		for (const char *name : names) {
+			if (channels.findChannel(name) == nullptr) {
+				std::string present;
+				for (Imf::ChannelList::ConstIterator it = channels.begin(); it != channels.end(); ++it) {
+					present += (present.empty() ? "" : ", ") + std::string(it.name());
+				}
+				return p_path + ": no '" + name + "' channel (an HDR image needs R, G and B; it has " + (present.empty() ? "none" : present) + ")";
+			}
+		}
+		const Imath::Box2i window = file.header().dataWindow();
+		const int width = window.max.x - window.min.x + 1;
+		const int height = window.max.y - window.min.y + 1;
+		if (width <= 0 || height <= 0) {
+			return p_path + ": empty data window";
+		}
+		cv::Mat rgb(height, width, CV_32FC3);
+		Imf::FrameBuffer buffer;
+		for (int c = 0; c < 3; c++) {
+			buffer.insert(names[c], Imf::Slice::Make(Imf::FLOAT, rgb.ptr<float>() + c, window, 3 * sizeof(float), 3 * sizeof(float) * size_t(width)));
+		}
+		file.setFrameBuffer(buffer);
+		file.readPixels(window.min.y, window.max.y);
+		*r_rgb = rgb;
+		return std::string();
+	});
+}
+
+// An error "<path>:<line>: problem" from load_tum_trajectory, as an issue.
+RecordingIssue issue_from_error(const std::string &p_path, const std::string &p_error, const std::string &p_suffix) {
+	RecordingIssue issue{ p_path, 0, p_error };
+	if (p_error.rfind(p_path + ":", 0) == 0) {
+		std::string rest = p_error.substr(p_path.size() + 1);
+		size_t digits = 0;
+		while (digits < rest.size() && std::isdigit(static_cast<unsigned char>(rest[digits]))) {
+			digits++;
+		}
+		if (digits > 0 && digits < rest.size() && rest[digits] == ':') {
+			parse_int(rest.substr(0, digits), &issue.line);
+			rest = rest.substr(digits + 1);
+		}
+		while (!rest.empty() && rest.front() == ' ') {
+			rest.erase(rest.begin());
+		}
+		issue.message = rest;
+	}
+	issue.message += p_suffix;
+	return issue;
+}
+
+void associate(const std::vector<double> &p_a, const std::vector<double> &p_b, double p_max_difference_s,
+		std::vector<std::pair<size_t, size_t>> *r_pairs) {
+	r_pairs->clear();
+	std::vector<std::tuple<double, size_t, size_t>> candidates;
+	size_t first_b = 0;
+	for (size_t i = 0; i < p_a.size(); i++) {
+		while (first_b < p_b.size() && !(p_b[first_b] > p_a[i] - p_max_difference_s)) {
+			first_b++;
+		}
+		for (size_t j = first_b; j < p_b.size() && p_b[j] < p_a[i] + p_max_difference_s; j++) {
+			const double difference = std::abs(p_a[i] - p_b[j]);
+			if (difference < p_max_difference_s) {
+				candidates.emplace_back(difference, i, j);
+			}
+		}
+	}
+	std::sort(candidates.begin(), candidates.end());
+	std::vector<bool> used_a(p_a.size(), false);
+	std::vector<bool> used_b(p_b.size(), false);
+	for (const auto &[difference, i, j] : candidates) {
+		if (!used_a[i] && !used_b[j]) {
+			used_a[i] = true;
+			used_b[j] = true;
+			r_pairs->emplace_back(i, j);
+		}
+	}
+	std::sort(r_pairs->begin(), r_pairs->end());
+}
+
+} // namespace recording_io
+
+} // namespace roomprobe

@@ -1,0 +1,130 @@
+#pragma once
+// Plain data of RoomProbe recordings (docs/recording-format.md): the frames of the two
+// unsynchronised streams (paper §3.2, §4.3), the room, ground truth, and the results and
+// non-fatal issues of reading and writing. No Godot; copyable values only (cv::Mat copies share
+// pixels: clone() before writing into a frame someone else holds).
+
+#include <math/pose.h>
+#include <room/floorplan.h>
+
+#include <glm/vec3.hpp>
+#include "recording_opencv.h"
+
+#include <array>
+#include <cstddef>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace roomprobe {
+
+// The two streams of a recording. Each has its own frame index and its own clock: the RGB-D
+// camera's, and the fisheye's (add Rig::fisheye_time_offset_s to get RGB-D clock time).
+enum class RecordingStream {
+	Rgbd,
+	Fisheye,
+};
+
+// "rgbd" or "fisheye", for messages.
+const char *recording_stream_name(RecordingStream p_stream);
+
+// One line of a frame index (rgb.txt, depth.txt, fisheye.txt).
+struct FrameRef {
+	double timestamp_s = 0.0; // seconds, on the clock of the stream's camera
+	std::string path; // as written in the index: relative to the recording folder, '/' separated
+	int line = 0; // 1-based line of the index that lists it (0: not from a file)
+};
+
+// An RGB image and the depth image registered to it (one RGB-D frame).
+struct RgbdFrame {
+	double timestamp_s = 0.0; // the RGB image's timestamp, seconds on the RGB-D clock
+	// The depth image's timestamp, seconds on the RGB-D clock. NaN when writing means "the same
+	// as timestamp_s"; a reader always fills it in.
+	double depth_timestamp_s = std::numeric_limits<double>::quiet_NaN();
+	cv::Mat rgb; // CV_8UC3 in R, G, B order (not OpenCV's usual BGR), the rig's rgb size
+	// CV_32FC1, metres along the optical axis (z, not ray length), NaN where there is no reading;
+	// registered to rgb (same size, same pixels). The writer also takes CV_16UC1 holding the
+	// raw values already in units of Rig::depth_scale_m (0 = no reading).
+	cv::Mat depth_m;
+};
+
+// One image of the upward fisheye.
+struct FisheyeFrame {
+	double timestamp_s = 0.0; // seconds on the fisheye's own clock
+	// 8-bit: CV_8UC1 (gray) or CV_8UC3 (R, G, B order); HDR: CV_32FC3 linear R, G, B.
+	// The rig's fisheye size.
+	cv::Mat image;
+	bool hdr = false; // true exactly when image is CV_32FC3 (stored as EXR)
+};
+
+// The room of a recording (room.yaml).
+struct RoomInfo {
+	Floorplan floorplan; // metres, floor plane y = 0; Vec2::y is world z
+	Pose initial_rgb_pose; // world_from_rgb at the first RGB-D frame (world: Y up, metres)
+	std::vector<glm::dvec3> probes; // probe positions, world metres; GT cubemaps refer to these by index
+};
+
+// A problem found while reading that did not stop the reading: the frame, line or file named is
+// skipped and the rest plays on.
+struct RecordingIssue {
+	std::string file; // the file the problem is in (an index, a YAML file, an image), as a path
+	int line = 0; // 1-based line in file, or 0 where there is none
+	std::string message; // what is wrong and what was done about it, naming any image involved
+};
+
+// "file:line: message" (or "file: message" without a line).
+std::string to_string(const RecordingIssue &p_issue);
+
+// The six faces of a cubemap in the order +X, -X, +Y, -Y, +Z, -Z (the OpenGL and Godot layer
+// order), each square, all the same size. See cubemap_layout.h for how pixels map to directions.
+using CubemapFaces = std::array<cv::Mat, 6>;
+
+// One line of groundtruth/cubemaps.txt.
+struct CubemapRef {
+	double timestamp_s = 0.0; // seconds on the RGB-D clock
+	int probe_index = 0; // into RoomInfo::probes
+	std::string path; // the EXR, relative to the recording folder
+	int line = 0; // 1-based line in cubemaps.txt
+};
+
+// A ground-truth environment map at one probe and instant.
+struct GroundTruthCubemap {
+	double timestamp_s = 0.0; // seconds on the RGB-D clock
+	int probe_index = 0; // into RoomInfo::probes
+	glm::dvec3 position = glm::dvec3(0.0); // RoomInfo::probes[probe_index], world metres
+	CubemapFaces faces; // CV_32FC3 linear R, G, B (radiance, the renderer's units)
+	CubemapFaces ldr_faces; // CV_8UC3 R, G, B (the 8-bit view), or all empty when none was stored
+};
+
+// One event of playback: the next frame of one stream, in time order across both.
+struct PlaybackEvent {
+	RecordingStream stream = RecordingStream::Rgbd;
+	size_t index = 0; // frame index in that stream: read_rgbd(index) or read_fisheye(index)
+	double time_s = 0.0; // on the RGB-D clock (fisheye timestamp + Rig::fisheye_time_offset_s)
+};
+
+// The outcome of an operation without a value.
+struct RecordingStatus {
+	bool ok = false;
+	std::string error; // empty when ok; otherwise names the file (and field or line)
+};
+
+struct RgbdFrameResult {
+	bool ok = false;
+	std::string error; // names the image file: "rec/rgb/000003.png: missing"
+	RgbdFrame frame;
+};
+
+struct FisheyeFrameResult {
+	bool ok = false;
+	std::string error; // names the image file
+	FisheyeFrame frame;
+};
+
+struct GroundTruthCubemapResult {
+	bool ok = false;
+	std::string error; // names the EXR or PNG file
+	GroundTruthCubemap cubemap;
+};
+
+} // namespace roomprobe

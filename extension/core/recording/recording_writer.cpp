@@ -1,0 +1,432 @@
+#include "recording_writer.h"
+
+#include "cubemap_layout.h"
+#include "recording_io.h"
+#include "room_file.h"
+
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <utility>
+
+namespace roomprobe {
+
+namespace fs = std::filesystem;
+using recording_io::describe_type;
+using recording_io::format_number;
+
+namespace {
+
+constexpr const char *TRAJECTORY_FILES[2] = { "groundtruth/rgb_trajectory.txt", "groundtruth/fisheye_trajectory.txt" };
+
+std::string numbered(const char *p_folder, size_t p_number, const char *p_extension) {
+	char name[64];
+	std::snprintf(name, sizeof(name), "%s/%06zu%s", p_folder, p_number, p_extension);
+	return name;
+}
+
+std::string size_text(int p_width, int p_height) {
+	return std::to_string(p_width) + "x" + std::to_string(p_height);
+}
+
+bool create_folder(const std::string &p_path, std::string *r_error) {
+	std::error_code ec;
+	fs::create_directories(p_path, ec);
+	if (ec || !fs::is_directory(p_path, ec)) {
+		*r_error = p_path + ": cannot create the folder" + (ec ? " (" + ec.message() + ")" : std::string());
+		return false;
+	}
+	return true;
+}
+
+// Depth in metres (CV_32FC1) or raw units (CV_16UC1) as the 16-bit raw image.
+std::string depth_to_raw(const cv::Mat &p_depth, double p_scale_m, const std::string &p_path, cv::Mat *r_raw) {
+	if (p_depth.type() == CV_16UC1) {
+		*r_raw = p_depth;
+		return std::string();
+	}
+	if (p_depth.type() != CV_32FC1) {
+		return p_path + ": depth must be CV_32FC1 metres or CV_16UC1 raw units; got " +
+				(p_depth.empty() ? std::string("an empty image") : describe_type(p_depth.type()));
+	}
+	cv::Mat raw(p_depth.rows, p_depth.cols, CV_16UC1);
+	for (int y = 0; y < p_depth.rows; y++) {
+		const float *in = p_depth.ptr<float>(y);
+		uint16_t *out = raw.ptr<uint16_t>(y);
+		for (int x = 0; x < p_depth.cols; x++) {
+			const double metres = in[x];
+			if (!std::isfinite(metres) || metres <= 0.0) {
+				out[x] = 0; // no reading
+				continue;
+			}
+			const double units = std::round(metres / p_scale_m);
+			if (units > 65535.0) {
+				return p_path + ": depth " + format_number(metres) + " m at pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+						") is beyond what 16 bits hold at depth_scale_m " + format_number(p_scale_m) + " (" + format_number(65535.0 * p_scale_m) + " m)";
+			}
+			out[x] = uint16_t(units);
+		}
+	}
+	*r_raw = raw;
+	return std::string();
+}
+
+} // namespace
+
+RecordingWriter::~RecordingWriter() {
+	close();
+}
+
+RecordingStatus RecordingWriter::fail(std::string p_error) const {
+	RecordingStatus status;
+	status.error = std::move(p_error);
+	return status;
+}
+
+std::string RecordingWriter::path(const std::string &p_relative) const {
+	return recording_io::join(folder, p_relative);
+}
+
+std::string RecordingWriter::append_line(std::ofstream &p_index, const std::string &p_index_name, const std::string &p_line) {
+	p_index << p_line << '\n';
+	p_index.flush();
+	if (!p_index) {
+		return path(p_index_name) + ": write failed";
+	}
+	return std::string();
+}
+
+RecordingStatus RecordingWriter::open(const std::string &p_folder, const Rig &p_rig, const RoomInfo &p_room, const RecordingWriteOptions &p_options) {
+	if (opened) {
+		return fail(p_folder + ": this writer is already writing " + folder + "; close() it first");
+	}
+	folder = p_folder;
+	std::string problem = check_rig(p_rig);
+	if (!problem.empty()) {
+		return fail(path("rig.yaml") + ": " + problem);
+	}
+	problem = check_room(p_room);
+	if (!problem.empty()) {
+		return fail(path("room.yaml") + ": " + problem);
+	}
+	std::error_code ec;
+	if (fs::exists(p_folder, ec)) {
+		if (!fs::is_directory(p_folder, ec)) {
+			return fail(p_folder + ": exists and is not a folder");
+		}
+		if (fs::directory_iterator(p_folder, ec) != fs::directory_iterator() && !p_options.allow_non_empty_folder) {
+			return fail(p_folder + ": the folder is not empty; a recording is only written into a new or empty folder "
+									"(nothing was overwritten; RecordingWriteOptions::allow_non_empty_folder overrides this)");
+		}
+		if (ec) {
+			return fail(p_folder + ": cannot list the folder (" + ec.message() + ")");
+		}
+	}
+	// Into a used folder (allowed by the options): a previous recording's ground truth must not pass
+	// for this one's, as it would if this one wrote none.
+	for (const char *stale : { TRAJECTORY_FILES[0], TRAJECTORY_FILES[1], "groundtruth/cubemaps.txt" }) {
+		fs::remove(path(stale), ec);
+		if (ec) {
+			return fail(path(stale) + ": cannot remove the previous recording's file (" + ec.message() + ")");
+		}
+	}
+	std::string error;
+	for (const char *sub : { "rgb", "depth", "fisheye" }) {
+		if (!create_folder(path(sub), &error)) {
+			return fail(error);
+		}
+	}
+	error = save_rig(path("rig.yaml"), p_rig);
+	if (!error.empty()) {
+		return fail(error);
+	}
+	error = save_room_file(path("room.yaml"), p_room);
+	if (!error.empty()) {
+		return fail(error);
+	}
+	struct Index {
+		std::ofstream *stream;
+		const char *name;
+		const char *header;
+	};
+	const Index indexes[3] = {
+		{ &rgb_index, "rgb.txt", "# RoomProbe recording: RGB images (8-bit RGB PNG), RGB-D camera clock\n# timestamp_s filename\n" },
+		{ &depth_index, "depth.txt",
+				"# RoomProbe recording: depth images (16-bit PNG, value x rig depth_scale_m = metres, 0 = no reading), RGB-D camera clock\n"
+				"# timestamp_s filename\n" },
+		{ &fisheye_index, "fisheye.txt", "# RoomProbe recording: fisheye images (8-bit PNG or linear HDR EXR), fisheye camera clock\n# timestamp_s filename\n" },
+	};
+	for (const Index &index : indexes) {
+		index.stream->close();
+		index.stream->clear();
+		index.stream->open(path(index.name), std::ios::out | std::ios::trunc | std::ios::binary);
+		*index.stream << index.header;
+		index.stream->flush();
+		if (!*index.stream) {
+			for (const Index &other : indexes) {
+				other.stream->close();
+			}
+			return fail(path(index.name) + ": cannot be written");
+		}
+	}
+	rig = p_rig;
+	room = p_room;
+	options = p_options;
+	rgbd_count = 0;
+	fisheye_count = 0;
+	cubemap_count = 0;
+	has_rgb_time = false;
+	has_fisheye_time = false;
+	has_cubemap_time = false;
+	ground_truth[0].clear();
+	ground_truth[1].clear();
+	opened = true;
+	RecordingStatus status;
+	status.ok = true;
+	return status;
+}
+
+RecordingStatus RecordingWriter::add_rgbd(const RgbdFrame &p_frame) {
+	if (!opened) {
+		return fail("RecordingWriter::add_rgbd: no recording is open");
+	}
+	const std::string rgb_name = numbered("rgb", rgbd_count, ".png");
+	const std::string depth_name = numbered("depth", rgbd_count, ".png");
+	const std::string rgb_path = path(rgb_name);
+	const std::string depth_path = path(depth_name);
+	const double rgb_time = p_frame.timestamp_s;
+	const double depth_time = std::isnan(p_frame.depth_timestamp_s) ? rgb_time : p_frame.depth_timestamp_s;
+	if (!std::isfinite(rgb_time) || !std::isfinite(depth_time)) {
+		return fail(path("rgb.txt") + ": the frame's timestamps must be finite (got " + format_number(rgb_time) + ", depth " + format_number(depth_time) + ")");
+	}
+	if (has_rgb_time && !(rgb_time > last_rgb_time_s)) {
+		return fail(path("rgb.txt") + ": timestamp " + format_number(rgb_time) + " is not after the previous frame's " + format_number(last_rgb_time_s));
+	}
+	if (has_rgb_time && !(depth_time > last_depth_time_s)) {
+		return fail(path("depth.txt") + ": timestamp " + format_number(depth_time) + " is not after the previous frame's " + format_number(last_depth_time_s));
+	}
+	if (p_frame.rgb.type() != CV_8UC3) {
+		return fail(rgb_path + ": the RGB image must be CV_8UC3 (R, G, B); got " +
+				(p_frame.rgb.empty() ? std::string("an empty image") : describe_type(p_frame.rgb.type())));
+	}
+	if (p_frame.rgb.cols != rig.rgb.width || p_frame.rgb.rows != rig.rgb.height) {
+		return fail(rgb_path + ": the RGB image is " + size_text(p_frame.rgb.cols, p_frame.rgb.rows) + ", the rig's RGB-D camera " +
+				size_text(rig.rgb.width, rig.rgb.height));
+	}
+	if (p_frame.depth_m.cols != rig.rgb.width || p_frame.depth_m.rows != rig.rgb.height) {
+		return fail(depth_path + ": the depth image is " + size_text(p_frame.depth_m.cols, p_frame.depth_m.rows) +
+				", the rig's RGB-D camera (depth is registered to it) " + size_text(rig.rgb.width, rig.rgb.height));
+	}
+	cv::Mat raw;
+	std::string error = depth_to_raw(p_frame.depth_m, rig.depth_scale_m, depth_path, &raw);
+	if (!error.empty()) {
+		return fail(error);
+	}
+	cv::Mat bgr;
+	cv::cvtColor(p_frame.rgb, bgr, cv::COLOR_RGB2BGR);
+	error = recording_io::write_png(rgb_path, bgr);
+	if (error.empty()) {
+		error = recording_io::write_png(depth_path, raw);
+	}
+	if (error.empty()) {
+		error = append_line(rgb_index, "rgb.txt", format_number(rgb_time) + " " + rgb_name);
+	}
+	if (error.empty()) {
+		error = append_line(depth_index, "depth.txt", format_number(depth_time) + " " + depth_name);
+	}
+	if (!error.empty()) {
+		return fail(error);
+	}
+	has_rgb_time = true;
+	last_rgb_time_s = rgb_time;
+	last_depth_time_s = depth_time;
+	rgbd_count++;
+	RecordingStatus status;
+	status.ok = true;
+	return status;
+}
+
+RecordingStatus RecordingWriter::add_fisheye(const FisheyeFrame &p_frame) {
+	if (!opened) {
+		return fail("RecordingWriter::add_fisheye: no recording is open");
+	}
+	const cv::Mat &image = p_frame.image;
+	const bool hdr_type = image.type() == CV_32FC3;
+	const bool ldr_type = image.type() == CV_8UC1 || image.type() == CV_8UC3;
+	const std::string name = numbered("fisheye", fisheye_count, hdr_type ? ".exr" : ".png");
+	const std::string file = path(name);
+	if (!std::isfinite(p_frame.timestamp_s)) {
+		return fail(path("fisheye.txt") + ": the frame's timestamp must be finite (got " + format_number(p_frame.timestamp_s) + ")");
+	}
+	if (has_fisheye_time && !(p_frame.timestamp_s > last_fisheye_time_s)) {
+		return fail(path("fisheye.txt") + ": timestamp " + format_number(p_frame.timestamp_s) + " is not after the previous frame's " +
+				format_number(last_fisheye_time_s));
+	}
+	if (!hdr_type && !ldr_type) {
+		return fail(file + ": a fisheye image must be CV_8UC1, CV_8UC3 (R, G, B) or CV_32FC3 (HDR); got " +
+				(image.empty() ? std::string("an empty image") : describe_type(image.type())));
+	}
+	if (p_frame.hdr != hdr_type) {
+		return fail(file + ": hdr is " + (p_frame.hdr ? "set" : "not set") + " but the image is " + describe_type(image.type()));
+	}
+	if (image.cols != rig.fisheye.width || image.rows != rig.fisheye.height) {
+		return fail(file + ": the fisheye image is " + size_text(image.cols, image.rows) + ", the rig's fisheye " +
+				size_text(rig.fisheye.width, rig.fisheye.height));
+	}
+	std::string error;
+	if (hdr_type) {
+		error = recording_io::write_exr_rgb(file, image, options.exr_full_float);
+	} else if (image.channels() == 3) {
+		cv::Mat bgr;
+		cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);
+		error = recording_io::write_png(file, bgr);
+	} else {
+		error = recording_io::write_png(file, image);
+	}
+	if (error.empty()) {
+		error = append_line(fisheye_index, "fisheye.txt", format_number(p_frame.timestamp_s) + " " + name);
+	}
+	if (!error.empty()) {
+		return fail(error);
+	}
+	has_fisheye_time = true;
+	last_fisheye_time_s = p_frame.timestamp_s;
+	fisheye_count++;
+	RecordingStatus status;
+	status.ok = true;
+	return status;
+}
+
+RecordingStatus RecordingWriter::add_ground_truth_pose(RecordingStream p_stream, double p_t_s, const Pose &p_world_from_camera) {
+	const int stream = int(p_stream);
+	if (!opened) {
+		return fail("RecordingWriter::add_ground_truth_pose: no recording is open");
+	}
+	if (stream < 0 || stream > 1) {
+		return fail("RecordingWriter::add_ground_truth_pose: unknown stream " + std::to_string(stream));
+	}
+	std::string error;
+	if (!ground_truth[stream].append(TimedPose{ p_t_s, p_world_from_camera }, &error)) {
+		return fail(path(TRAJECTORY_FILES[stream]) + ": " + error);
+	}
+	RecordingStatus status;
+	status.ok = true;
+	return status;
+}
+
+RecordingStatus RecordingWriter::add_ground_truth_cubemap(double p_t_s, int p_probe_index, const CubemapFaces &p_faces, const CubemapFaces &p_ldr_faces) {
+	if (!opened) {
+		return fail("RecordingWriter::add_ground_truth_cubemap: no recording is open");
+	}
+	const std::string index_path = path("groundtruth/cubemaps.txt");
+	const std::string name = numbered("groundtruth/cubemaps", cubemap_count, ".exr");
+	const std::string ldr_name = numbered("groundtruth/cubemaps", cubemap_count, ".png");
+	const std::string file = path(name);
+	if (!std::isfinite(p_t_s)) {
+		return fail(index_path + ": the cubemap's timestamp must be finite (got " + format_number(p_t_s) + ")");
+	}
+	if (has_cubemap_time && p_t_s < last_cubemap_time_s) {
+		return fail(index_path + ": timestamp " + format_number(p_t_s) + " is before the previous cubemap's " + format_number(last_cubemap_time_s));
+	}
+	if (p_probe_index < 0 || size_t(p_probe_index) >= room.probes.size()) {
+		return fail(index_path + ": probe index " + std::to_string(p_probe_index) + " is not one of the room's " + std::to_string(room.probes.size()) + " probes");
+	}
+	if (p_faces[0].type() != CV_32FC3) {
+		return fail(file + ": cubemap faces must be CV_32FC3 (linear R, G, B); got " +
+				(p_faces[0].empty() ? std::string("an empty face") : describe_type(p_faces[0].type())));
+	}
+	const cv::Mat strip = cubemap_faces_to_strip(p_faces);
+	if (strip.empty()) {
+		return fail(file + ": the six cubemap faces must be square, all the same size and type");
+	}
+	bool has_ldr = false;
+	for (const cv::Mat &face : p_ldr_faces) {
+		has_ldr = has_ldr || !face.empty();
+	}
+	cv::Mat ldr_strip;
+	if (has_ldr) {
+		ldr_strip = cubemap_faces_to_strip(p_ldr_faces);
+		if (ldr_strip.empty() || ldr_strip.type() != CV_8UC3 || ldr_strip.size() != strip.size()) {
+			return fail(path(ldr_name) + ": the 8-bit faces must be six CV_8UC3 (R, G, B) faces the size of the HDR ones (" +
+					size_text(strip.cols, strip.cols) + ")");
+		}
+	}
+	std::string error;
+	if (!create_folder(path("groundtruth/cubemaps"), &error)) {
+		return fail(error);
+	}
+	error = recording_io::write_exr_rgb(file, strip, options.exr_full_float);
+	if (error.empty() && has_ldr) {
+		cv::Mat bgr;
+		cv::cvtColor(ldr_strip, bgr, cv::COLOR_RGB2BGR);
+		error = recording_io::write_png(path(ldr_name), bgr);
+	}
+	if (error.empty() && !cubemap_index.is_open()) {
+		cubemap_index.clear();
+		cubemap_index.open(index_path, std::ios::out | std::ios::trunc | std::ios::binary);
+		cubemap_index << "# RoomProbe recording: ground-truth cubemaps (EXR, N x 6N strip +X -X +Y -Y +Z -Z), RGB-D camera clock\n"
+						 "# timestamp_s probe_index filename\n";
+		if (!cubemap_index) {
+			error = index_path + ": cannot be written";
+		}
+	}
+	if (error.empty()) {
+		error = append_line(cubemap_index, "groundtruth/cubemaps.txt", format_number(p_t_s) + " " + std::to_string(p_probe_index) + " " + name);
+	}
+	if (!error.empty()) {
+		return fail(error);
+	}
+	has_cubemap_time = true;
+	last_cubemap_time_s = p_t_s;
+	cubemap_count++;
+	RecordingStatus status;
+	status.ok = true;
+	return status;
+}
+
+RecordingStatus RecordingWriter::close() {
+	RecordingStatus status;
+	status.ok = true;
+	if (!opened) {
+		return status;
+	}
+	std::string error;
+	for (int stream = 0; stream < 2; stream++) {
+		if (ground_truth[stream].is_empty()) {
+			continue;
+		}
+		std::string problem;
+		if (create_folder(path("groundtruth"), &problem)) {
+			problem = save_tum_trajectory(path(TRAJECTORY_FILES[stream]), ground_truth[stream]);
+		}
+		if (error.empty()) {
+			error = problem;
+		}
+		ground_truth[stream].clear();
+	}
+	struct Index {
+		std::ofstream *stream;
+		const char *name;
+	};
+	const Index indexes[4] = { { &rgb_index, "rgb.txt" }, { &depth_index, "depth.txt" }, { &fisheye_index, "fisheye.txt" },
+		{ &cubemap_index, "groundtruth/cubemaps.txt" } };
+	for (const Index &index : indexes) {
+		if (!index.stream->is_open()) {
+			continue;
+		}
+		index.stream->close();
+		if (!*index.stream && error.empty()) {
+			error = path(index.name) + ": write failed on closing";
+		}
+		index.stream->clear();
+	}
+	opened = false;
+	if (!error.empty()) {
+		status.ok = false;
+		status.error = error;
+	}
+	return status;
+}
+
+} // namespace roomprobe

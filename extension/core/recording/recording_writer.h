@@ -1,0 +1,96 @@
+#pragma once
+// Writes a RoomProbe recording (docs/recording-format.md): rig.yaml and room.yaml at open(),
+// each frame's images as it is added (with its index line, flushed, so that a recording cut off
+// by a crash still reads up to its last frame), ground-truth trajectories at close().
+//
+// Every call returns a status whose error names the file (and what is wrong); a failed call
+// writes no index line, so the recording stays readable. Not thread-safe: one thread writes.
+
+#include "recording_types.h"
+
+#include <rig/rig.h>
+#include <rig/trajectory.h>
+
+#include <fstream>
+#include <string>
+
+namespace roomprobe {
+
+struct RecordingWriteOptions {
+	// open() refuses a folder that exists and holds anything, so no one's data is overwritten.
+	// With this set it writes into such a folder, replacing files that have the recording's
+	// names (rig.yaml, rgb/000000.png, ...); other files are left as they are.
+	bool allow_non_empty_folder = false;
+	// EXR channels (HDR fisheye frames, ground-truth cubemaps) as 32-bit float rather than half.
+	// Half keeps 11 significant bits and values up to 65504; larger values are an error with half.
+	bool exr_full_float = false;
+};
+
+class RecordingWriter {
+public:
+	RecordingWriter() = default;
+	RecordingWriter(const RecordingWriter &) = delete;
+	RecordingWriter &operator=(const RecordingWriter &) = delete;
+	// Closes the recording (as close(), ignoring its errors).
+	~RecordingWriter();
+
+	// Creates p_folder (and its parents) if need be, writes rig.yaml and room.yaml, and starts
+	// the three frame indexes. The rig and room must pass check_rig() and check_room().
+	RecordingStatus open(const std::string &p_folder, const Rig &p_rig, const RoomInfo &p_room,
+			const RecordingWriteOptions &p_options = RecordingWriteOptions());
+	bool is_open() const { return opened; }
+
+	// Writes rgb/NNNNNN.png and depth/NNNNNN.png and their index lines. rgb: CV_8UC3 R, G, B, the
+	// rig's rgb size. depth_m: CV_32FC1 metres (NaN, infinite or <= 0: no reading; stored as
+	// round(metres / depth_scale_m), an error when beyond 65535 units) or CV_16UC1 raw units, same
+	// size. Timestamps must be finite and increase strictly within rgb.txt and within depth.txt.
+	RecordingStatus add_rgbd(const RgbdFrame &p_frame);
+	// Writes fisheye/NNNNNN.png (CV_8UC1 or CV_8UC3 R, G, B) or fisheye/NNNNNN.exr (CV_32FC3,
+	// hdr set) and its index line; the rig's fisheye size; strictly increasing timestamps.
+	RecordingStatus add_fisheye(const FisheyeFrame &p_frame);
+	// Appends a ground-truth pose (world_from_camera) of one stream's camera at p_t_s on that
+	// camera's clock; strictly increasing per stream. Written at close().
+	RecordingStatus add_ground_truth_pose(RecordingStream p_stream, double p_t_s, const Pose &p_world_from_camera);
+	// Writes groundtruth/cubemaps/NNNNNN.exr (the six CV_32FC3 N x N faces as an N x 6N strip,
+	// cubemap_layout.h), with NNNNNN.png next to it when p_ldr_faces are given (six CV_8UC3
+	// R, G, B faces of the same size; all empty for none), and its line in cubemaps.txt.
+	// p_probe_index must be one of the room's probes; timestamps (RGB-D clock) must not decrease.
+	RecordingStatus add_ground_truth_cubemap(double p_t_s, int p_probe_index, const CubemapFaces &p_faces,
+			const CubemapFaces &p_ldr_faces = CubemapFaces());
+
+	// Writes the ground-truth trajectories and closes every file. The first error is returned;
+	// the writer is closed either way. Closing a closed writer does nothing.
+	RecordingStatus close();
+
+	const std::string &get_folder() const { return folder; }
+	size_t get_rgbd_count() const { return rgbd_count; }
+	size_t get_fisheye_count() const { return fisheye_count; }
+
+private:
+	RecordingStatus fail(std::string p_error) const;
+	std::string append_line(std::ofstream &p_index, const std::string &p_index_name, const std::string &p_line);
+	std::string path(const std::string &p_relative) const;
+
+	bool opened = false;
+	std::string folder;
+	Rig rig;
+	RoomInfo room;
+	RecordingWriteOptions options;
+	std::ofstream rgb_index;
+	std::ofstream depth_index;
+	std::ofstream fisheye_index;
+	std::ofstream cubemap_index; // opened with the first cubemap
+	size_t rgbd_count = 0;
+	size_t fisheye_count = 0;
+	size_t cubemap_count = 0;
+	bool has_rgb_time = false;
+	double last_rgb_time_s = 0.0;
+	double last_depth_time_s = 0.0;
+	bool has_fisheye_time = false;
+	double last_fisheye_time_s = 0.0;
+	bool has_cubemap_time = false;
+	double last_cubemap_time_s = 0.0;
+	Trajectory ground_truth[2]; // indexed by RecordingStream
+};
+
+} // namespace roomprobe

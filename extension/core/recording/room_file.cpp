@@ -1,0 +1,305 @@
+#include "room_file.h"
+
+#include "recording_io.h"
+
+#include <rig/trajectory.h>
+
+#include "recording_opencv.h"
+
+#include <glm/gtc/quaternion.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+namespace roomprobe {
+
+namespace {
+
+using recording_io::format_number;
+
+constexpr double WRITE_UNIT_TOLERANCE = 1e-6; // what check_room allows (in memory)
+constexpr const char *KEY_VERSION = "roomprobe_room";
+constexpr const char *KEY_FLOORPLAN = "floorplan_m";
+constexpr const char *KEY_CEILING = "ceiling_height_m";
+constexpr const char *KEY_POSE = "initial_rgb_pose";
+constexpr const char *KEY_PROBES = "probes";
+
+bool finite(const glm::dvec3 &p_value) {
+	return std::isfinite(p_value.x) && std::isfinite(p_value.y) && std::isfinite(p_value.z);
+}
+
+// Reads typed fields out of cv::FileStorage nodes; the error names the field's full path.
+class FieldReader {
+public:
+	std::string error;
+
+	bool fail(const std::string &p_field, const std::string &p_problem) {
+		error = p_field + ": " + p_problem;
+		return false;
+	}
+
+	bool number(const cv::FileNode &p_node, const std::string &p_field, double *r_value) {
+		if (p_node.empty() || p_node.isNone()) {
+			return fail(p_field, "missing");
+		}
+		if (!p_node.isInt() && !p_node.isReal()) {
+			return fail(p_field, "must be a number");
+		}
+		const double value = static_cast<double>(p_node);
+		if (!std::isfinite(value)) {
+			return fail(p_field, "must be finite (got " + format_number(value) + ")");
+		}
+		*r_value = value;
+		return true;
+	}
+
+	bool numbers(const cv::FileNode &p_node, const std::string &p_field, size_t p_count, double *r_values) {
+		if (p_node.empty() || p_node.isNone()) {
+			return fail(p_field, "missing");
+		}
+		if (!p_node.isSeq() || p_node.size() != p_count) {
+			return fail(p_field, "must be a list of " + std::to_string(p_count) + " numbers");
+		}
+		for (size_t i = 0; i < p_count; i++) {
+			if (!number(p_node[int(i)], p_field + "[" + std::to_string(i) + "]", &r_values[i])) {
+				return false;
+			}
+		}
+		return true;
+	}
+
+	// Every key of p_map is one of p_allowed, once; p_required ones are there.
+	bool check_keys(const cv::FileNode &p_map, const std::string &p_prefix, std::initializer_list<const char *> p_allowed,
+			std::initializer_list<const char *> p_required) {
+		std::set<std::string> seen;
+		for (cv::FileNodeIterator it = p_map.begin(); it != p_map.end(); ++it) {
+			const std::string key = (*it).name();
+			bool known = false;
+			for (const char *allowed : p_allowed) {
+				known = known || key == allowed;
+			}
+			if (!known) {
+				return fail(p_prefix + key, "unknown field");
+			}
+			if (!seen.insert(key).second) {
+				return fail(p_prefix + key, "given twice");
+			}
+		}
+		for (const char *key : p_required) {
+			if (!seen.count(key)) {
+				return fail(p_prefix + key, "missing");
+			}
+		}
+		return true;
+	}
+};
+
+bool read_room(FieldReader &p_reader, const cv::FileNode &p_root, RoomInfo *r_room) {
+	if (!p_root.isMap()) {
+		return p_reader.fail(KEY_VERSION, "missing (the file is not a map of fields; is it a RoomProbe room file?)");
+	}
+	const cv::FileNode version_node = p_root[KEY_VERSION];
+	if (version_node.empty() || version_node.isNone()) {
+		return p_reader.fail(KEY_VERSION, "missing (is this a RoomProbe room file?)");
+	}
+	if (!version_node.isInt()) {
+		return p_reader.fail(KEY_VERSION, "must be an integer");
+	}
+	const int version = int(version_node);
+	if (version != ROOM_FILE_VERSION) {
+		return p_reader.fail(KEY_VERSION, "unknown version " + std::to_string(version) + " (this build reads version " +
+						std::to_string(ROOM_FILE_VERSION) + ")");
+	}
+	if (!p_reader.check_keys(p_root, "", { KEY_VERSION, KEY_FLOORPLAN, KEY_CEILING, KEY_POSE, KEY_PROBES },
+				{ KEY_VERSION, KEY_FLOORPLAN, KEY_CEILING, KEY_POSE })) {
+		return false;
+	}
+
+	const cv::FileNode floorplan = p_root[KEY_FLOORPLAN];
+	if (!floorplan.isSeq()) {
+		return p_reader.fail(KEY_FLOORPLAN, "must be a list of [x, z] points");
+	}
+	RoomInfo room;
+	for (size_t i = 0; i < floorplan.size(); i++) {
+		double xz[2];
+		if (!p_reader.numbers(floorplan[int(i)], std::string(KEY_FLOORPLAN) + "[" + std::to_string(i) + "]", 2, xz)) {
+			return false;
+		}
+		room.floorplan.points.push_back(Vec2{ xz[0], xz[1] });
+	}
+	if (!p_reader.number(p_root[KEY_CEILING], KEY_CEILING, &room.floorplan.ceiling_height_m)) {
+		return false;
+	}
+
+	const cv::FileNode pose = p_root[KEY_POSE];
+	const std::string pose_prefix = std::string(KEY_POSE) + ".";
+	if (!pose.isMap()) {
+		return p_reader.fail(KEY_POSE, "must be a map with rotation_xyzw and translation_m");
+	}
+	double q[4];
+	double t[3];
+	if (!p_reader.check_keys(pose, pose_prefix, { "rotation_xyzw", "translation_m" }, { "rotation_xyzw", "translation_m" }) ||
+			!p_reader.numbers(pose["rotation_xyzw"], pose_prefix + "rotation_xyzw", 4, q) ||
+			!p_reader.numbers(pose["translation_m"], pose_prefix + "translation_m", 3, t)) {
+		return false;
+	}
+	const glm::dquat rotation(q[3], q[0], q[1], q[2]); // glm's constructor takes (w, x, y, z)
+	const double norm = glm::length(rotation);
+	// A hand-written file may round its quaternion (as TUM files do): normalised, like theirs.
+	if (!(std::abs(norm - 1.0) <= TUM_UNIT_TOLERANCE)) {
+		return p_reader.fail(pose_prefix + "rotation_xyzw", "not a unit quaternion (norm " + format_number(norm) + ", allowed 1 +- " +
+						format_number(TUM_UNIT_TOLERANCE) + ")");
+	}
+	room.initial_rgb_pose.rotation = rotation / norm;
+	room.initial_rgb_pose.translation = glm::dvec3(t[0], t[1], t[2]);
+
+	const cv::FileNode probes = p_root[KEY_PROBES];
+	if (!probes.empty() && !probes.isNone()) {
+		if (!probes.isSeq()) {
+			return p_reader.fail(KEY_PROBES, "must be a list of [x, y, z] positions");
+		}
+		for (size_t i = 0; i < probes.size(); i++) {
+			double xyz[3];
+			if (!p_reader.numbers(probes[int(i)], std::string(KEY_PROBES) + "[" + std::to_string(i) + "]", 3, xyz)) {
+				return false;
+			}
+			room.probes.emplace_back(xyz[0], xyz[1], xyz[2]);
+		}
+	}
+	const std::string problem = check_room(room);
+	if (!problem.empty()) {
+		p_reader.error = problem;
+		return false;
+	}
+	*r_room = room;
+	return true;
+}
+
+// cv::FileStorage's parse errors carry "<file>(<line>): <what>" in the exception's func field;
+// this rewrites it as "line <line>: <what>" (the caller names the file).
+std::string describe_parse_error(const cv::Exception &p_exception, const std::string &p_path) {
+	std::string detail = p_exception.code == cv::Error::StsParseError ? p_exception.func : p_exception.err;
+	if (detail.rfind(p_path + "(", 0) == 0) {
+		const size_t close = detail.find("): ", p_path.size());
+		if (close != std::string::npos) {
+			detail = "line " + detail.substr(p_path.size() + 1, close - p_path.size() - 1) + ": " + detail.substr(close + 3);
+		}
+	}
+	return detail;
+}
+
+} // namespace
+
+std::string check_room(const RoomInfo &p_room) {
+	const FloorplanCheck check = check_floorplan(p_room.floorplan);
+	if (!check.ok) {
+		const bool ceiling = check.problem == FloorplanCheck::Problem::CeilingNotPositive;
+		return std::string(ceiling ? KEY_CEILING : KEY_FLOORPLAN) + ": " + floorplan_problem_summary(check.problem) + ": " + check.message;
+	}
+	const glm::dquat &q = p_room.initial_rgb_pose.rotation;
+	if (!(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w))) {
+		return std::string(KEY_POSE) + ".rotation_xyzw: must be finite";
+	}
+	if (!(std::abs(glm::length(q) - 1.0) <= WRITE_UNIT_TOLERANCE)) {
+		return std::string(KEY_POSE) + ".rotation_xyzw: not a unit quaternion (norm " + format_number(glm::length(q)) + ")";
+	}
+	if (!finite(p_room.initial_rgb_pose.translation)) {
+		return std::string(KEY_POSE) + ".translation_m: must be finite";
+	}
+	for (size_t i = 0; i < p_room.probes.size(); i++) {
+		if (!finite(p_room.probes[i])) {
+			return std::string(KEY_PROBES) + "[" + std::to_string(i) + "]: must be finite";
+		}
+	}
+	return std::string();
+}
+
+RoomLoadResult load_room_file(const std::string &p_path) {
+	RoomLoadResult result;
+	std::error_code ec;
+	if (!std::filesystem::is_regular_file(p_path, ec)) {
+		result.error = p_path + ": " + (std::filesystem::exists(p_path, ec) ? "not a regular file" : "missing");
+		return result;
+	}
+	{
+		std::ifstream file(p_path);
+		std::string first_line;
+		if (!file || !std::getline(file, first_line)) {
+			result.error = p_path + ": cannot read the room file (empty or unreadable)";
+			return result;
+		}
+		if (first_line.rfind("%YAML", 0) != 0) {
+			result.error = p_path + ": malformed YAML: the first line must be '%YAML:1.0' (cv::FileStorage's header)";
+			return result;
+		}
+	}
+	FieldReader reader;
+	RoomInfo room;
+	try {
+		cv::FileStorage storage(p_path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
+		if (!storage.isOpened()) {
+			result.error = p_path + ": cannot open the room file";
+			return result;
+		}
+		if (!read_room(reader, storage.root(), &room)) {
+			result.error = p_path + ": " + reader.error;
+			return result;
+		}
+	} catch (const cv::Exception &e) {
+		result.error = p_path + ": malformed YAML: " + describe_parse_error(e, p_path);
+		return result;
+	} catch (const std::exception &e) {
+		result.error = p_path + ": " + e.what();
+		return result;
+	}
+	result.room = room;
+	result.ok = true;
+	return result;
+}
+
+std::string save_room_file(const std::string &p_path, const RoomInfo &p_room) {
+	const std::string problem = check_room(p_room);
+	if (!problem.empty()) {
+		return p_path + ": " + problem;
+	}
+	const glm::dquat q = glm::normalize(p_room.initial_rgb_pose.rotation);
+	const glm::dvec3 &t = p_room.initial_rgb_pose.translation;
+	try {
+		cv::FileStorage storage(p_path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
+		if (!storage.isOpened()) {
+			return p_path + ": cannot open for writing";
+		}
+		storage.writeComment(" RoomProbe room; the fields are described in docs/recording-format.md.");
+		storage << KEY_VERSION << ROOM_FILE_VERSION;
+		storage.writeComment(" Floorplan corners [x, z], metres, on the floor (world y = 0); the room is this polygon extruded to the ceiling.");
+		storage << KEY_FLOORPLAN << "[";
+		for (const Vec2 &point : p_room.floorplan.points) {
+			storage << "[:" << point.x << point.y << "]";
+		}
+		storage << "]";
+		storage << KEY_CEILING << p_room.floorplan.ceiling_height_m;
+		storage.writeComment(" world_from_rgb at the first RGB-D frame (world: Y up, metres; camera: x right, y down, z forward).");
+		storage << KEY_POSE << "{";
+		storage << "rotation_xyzw" << "[:" << q.x << q.y << q.z << q.w << "]";
+		storage << "translation_m" << "[:" << t.x << t.y << t.z << "]";
+		storage << "}";
+		if (!p_room.probes.empty()) {
+			storage.writeComment(" Probe positions [x, y, z], world metres; groundtruth/cubemaps.txt refers to them by index.");
+			storage << KEY_PROBES << "[";
+			for (const glm::dvec3 &probe : p_room.probes) {
+				storage << "[:" << probe.x << probe.y << probe.z << "]";
+			}
+			storage << "]";
+		}
+		storage.release();
+	} catch (const cv::Exception &e) {
+		return p_path + ": cannot write: " + e.err;
+	} catch (const std::exception &e) {
+		return p_path + ": cannot write: " + e.what();
+	}
+	return std::string();
+}
+
+} // namespace roomprobe

@@ -1,0 +1,459 @@
+#include "rig.h"
+
+// OpenCV's headers mix enumeration types in arithmetic, which C++20 deprecates; they are not ours.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wdeprecated-enum-enum-conversion"
+#include <opencv2/core.hpp>
+#pragma GCC diagnostic pop
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <numbers>
+#include <set>
+#include <stdexcept>
+#include <sstream>
+
+namespace roomprobe {
+
+namespace {
+
+constexpr const char *RGB_MODEL = "pinhole_radtan";
+constexpr const char *FISHEYE_MODEL = "unified_omni";
+
+std::string format_double(double p_value) {
+	char buffer[64];
+	const std::to_chars_result result = std::to_chars(buffer, buffer + sizeof(buffer), p_value);
+	return std::string(buffer, result.ptr);
+}
+
+// ------------------------------------------------------------------------------ value checks
+
+// Collects the first problem, as "field: problem".
+struct Checker {
+	std::string error;
+
+	void fail(const std::string &p_field, const std::string &p_problem) {
+		if (error.empty()) {
+			error = p_field + ": " + p_problem;
+		}
+	}
+	void finite(const std::string &p_field, double p_value) {
+		if (!std::isfinite(p_value)) {
+			fail(p_field, "must be finite (got " + format_double(p_value) + ")");
+		}
+	}
+	void positive(const std::string &p_field, double p_value) {
+		if (!(std::isfinite(p_value) && p_value > 0.0)) {
+			fail(p_field, "must be positive (got " + format_double(p_value) + ")");
+		}
+	}
+	void positive(const std::string &p_field, int p_value) {
+		if (p_value <= 0) {
+			fail(p_field, "must be positive (got " + std::to_string(p_value) + ")");
+		}
+	}
+	void non_negative(const std::string &p_field, double p_value) {
+		if (!(std::isfinite(p_value) && p_value >= 0.0)) {
+			fail(p_field, "must be zero or positive (got " + format_double(p_value) + ")");
+		}
+	}
+};
+
+std::string quaternion_problem(const glm::dquat &p_rotation) {
+	return "not a unit quaternion (norm " + format_double(glm::length(p_rotation)) + ", allowed 1 +- " +
+			format_double(RIG_UNIT_TOLERANCE) + ")";
+}
+
+} // namespace
+
+std::string check_rig(const Rig &p_rig) {
+	Checker c;
+	const PinholeParams &rgb = p_rig.rgb;
+	c.positive("rgb.width", rgb.width);
+	c.positive("rgb.height", rgb.height);
+	c.positive("rgb.fx", rgb.fx);
+	c.positive("rgb.fy", rgb.fy);
+	c.finite("rgb.cx", rgb.cx);
+	c.finite("rgb.cy", rgb.cy);
+	c.finite("rgb.k1", rgb.k1);
+	c.finite("rgb.k2", rgb.k2);
+	c.finite("rgb.p1", rgb.p1);
+	c.finite("rgb.p2", rgb.p2);
+	c.finite("rgb.k3", rgb.k3);
+	c.positive("depth_scale_m", p_rig.depth_scale_m);
+
+	const OmniParams &fisheye = p_rig.fisheye;
+	c.positive("fisheye.width", fisheye.width);
+	c.positive("fisheye.height", fisheye.height);
+	c.non_negative("fisheye.xi", fisheye.xi);
+	c.positive("fisheye.fx", fisheye.fx);
+	c.positive("fisheye.fy", fisheye.fy);
+	c.finite("fisheye.cx", fisheye.cx);
+	c.finite("fisheye.cy", fisheye.cy);
+	c.finite("fisheye.skew", fisheye.skew);
+	c.finite("fisheye.k1", fisheye.k1);
+	c.finite("fisheye.k2", fisheye.k2);
+	c.finite("fisheye.p1", fisheye.p1);
+	c.finite("fisheye.p2", fisheye.p2);
+	c.finite("fisheye.circle_cx", fisheye.circle_cx);
+	c.finite("fisheye.circle_cy", fisheye.circle_cy);
+	c.non_negative("fisheye.circle_radius", fisheye.circle_radius);
+	if (!(std::isfinite(fisheye.max_angle_deg) && fisheye.max_angle_deg >= 0.0 && fisheye.max_angle_deg <= 180.0)) {
+		c.fail("fisheye.max_angle_deg", "must be in [0, 180] (got " + format_double(fisheye.max_angle_deg) + ")");
+	} else if (fisheye.max_angle_deg > 0.0 && std::isfinite(fisheye.xi) &&
+			std::cos(fisheye.max_angle_deg * std::numbers::pi / 180.0) + fisheye.xi <= 0.0) {
+		// The unified model divides by cos(angle) + xi: rays beyond acos(-xi) have no pixel.
+		const double limit_deg = fisheye.xi >= 1.0 ? 180.0 : std::acos(-fisheye.xi) * 180.0 / std::numbers::pi;
+		c.fail("fisheye.max_angle_deg", format_double(fisheye.max_angle_deg) + " is beyond what xi = " +
+				format_double(fisheye.xi) + " can project (less than " + format_double(limit_deg) + ")");
+	}
+
+	const Pose &extrinsic = p_rig.rgb_from_fisheye;
+	const glm::dquat &q = extrinsic.rotation;
+	if (!(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w))) {
+		c.fail("rgb_from_fisheye.rotation_xyzw", "must be finite");
+	} else if (!(std::abs(glm::length(q) - 1.0) <= RIG_UNIT_TOLERANCE)) {
+		c.fail("rgb_from_fisheye.rotation_xyzw", quaternion_problem(q));
+	}
+	c.finite("rgb_from_fisheye.translation_m[0]", extrinsic.translation.x);
+	c.finite("rgb_from_fisheye.translation_m[1]", extrinsic.translation.y);
+	c.finite("rgb_from_fisheye.translation_m[2]", extrinsic.translation.z);
+	c.finite("fisheye_time_offset_s", p_rig.fisheye_time_offset_s);
+	return c.error;
+}
+
+// ---------------------------------------------------------------------------------- reading
+
+namespace {
+
+// Reads typed fields out of cv::FileStorage nodes; every error names the field's full path.
+class FieldReader {
+public:
+	std::string error; // "field: problem"
+
+	// A map's keys must be exactly p_keys (each once): a misspelt key is an error, not a default.
+	bool check_keys(const cv::FileNode &p_map, const std::string &p_prefix, std::initializer_list<const char *> p_keys) {
+		std::set<std::string> seen;
+		for (cv::FileNodeIterator it = p_map.begin(); it != p_map.end(); ++it) {
+			const std::string key = (*it).name();
+			bool known = false;
+			for (const char *allowed : p_keys) {
+				known = known || key == allowed;
+			}
+			if (!known) {
+				return fail(p_prefix + key, "unknown field");
+			}
+			if (!seen.insert(key).second) {
+				return fail(p_prefix + key, "given twice");
+			}
+		}
+		for (const char *key : p_keys) {
+			if (!seen.count(key)) {
+				return fail(p_prefix + key, "missing");
+			}
+		}
+		return true;
+	}
+
+	bool map(const cv::FileNode &p_parent, const std::string &p_prefix, const char *p_key, cv::FileNode *r_map) {
+		const cv::FileNode node = p_parent[p_key];
+		if (node.empty() || node.isNone()) {
+			return fail(p_prefix + p_key, "missing");
+		}
+		if (!node.isMap()) {
+			return fail(p_prefix + p_key, "must be a map of fields");
+		}
+		*r_map = node;
+		return true;
+	}
+
+	bool integer(const cv::FileNode &p_parent, const std::string &p_prefix, const char *p_key, int *r_value) {
+		const cv::FileNode node = p_parent[p_key];
+		if (node.empty() || node.isNone()) {
+			return fail(p_prefix + p_key, "missing");
+		}
+		if (!node.isInt()) {
+			return fail(p_prefix + p_key, "must be an integer");
+		}
+		*r_value = static_cast<int>(node);
+		return true;
+	}
+
+	bool real(const cv::FileNode &p_parent, const std::string &p_prefix, const char *p_key, double *r_value) {
+		return number(p_parent[p_key], p_prefix + p_key, r_value);
+	}
+
+	bool text(const cv::FileNode &p_parent, const std::string &p_prefix, const char *p_key, std::string *r_value) {
+		const cv::FileNode node = p_parent[p_key];
+		if (node.empty() || node.isNone()) {
+			return fail(p_prefix + p_key, "missing");
+		}
+		if (!node.isString()) {
+			return fail(p_prefix + p_key, "must be a string");
+		}
+		*r_value = static_cast<std::string>(node);
+		return true;
+	}
+
+	bool reals(const cv::FileNode &p_parent, const std::string &p_prefix, const char *p_key, size_t p_count, double *r_values) {
+		const std::string field = p_prefix + p_key;
+		const cv::FileNode node = p_parent[p_key];
+		if (node.empty() || node.isNone()) {
+			return fail(field, "missing");
+		}
+		if (!node.isSeq() || node.size() != p_count) {
+			return fail(field, "must be a list of " + std::to_string(p_count) + " numbers");
+		}
+		for (size_t i = 0; i < p_count; i++) {
+			if (!number(node[static_cast<int>(i)], field + "[" + std::to_string(i) + "]", &r_values[i])) {
+				return false;
+			}
+		}
+		return true;
+	}
+
+	bool fail(const std::string &p_field, const std::string &p_problem) {
+		error = p_field + ": " + p_problem;
+		return false;
+	}
+
+private:
+	bool number(const cv::FileNode &p_node, const std::string &p_field, double *r_value) {
+		if (p_node.empty() || p_node.isNone()) {
+			return fail(p_field, "missing");
+		}
+		if (!p_node.isInt() && !p_node.isReal()) {
+			return fail(p_field, "must be a number");
+		}
+		*r_value = static_cast<double>(p_node);
+		return true;
+	}
+};
+
+bool read_rgb(FieldReader &p_reader, const cv::FileNode &p_root, PinholeParams *r_rgb) {
+	cv::FileNode node;
+	std::string model;
+	const std::string prefix = "rgb.";
+	if (!p_reader.map(p_root, "", "rgb", &node) ||
+			!p_reader.check_keys(node, prefix, { "model", "width", "height", "fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3" }) ||
+			!p_reader.text(node, prefix, "model", &model)) {
+		return false;
+	}
+	if (model != RGB_MODEL) {
+		return p_reader.fail("rgb.model", "'" + model + "' is not a model RoomProbe knows (expected '" + RGB_MODEL + "')");
+	}
+	return p_reader.integer(node, prefix, "width", &r_rgb->width) && p_reader.integer(node, prefix, "height", &r_rgb->height) &&
+			p_reader.real(node, prefix, "fx", &r_rgb->fx) && p_reader.real(node, prefix, "fy", &r_rgb->fy) &&
+			p_reader.real(node, prefix, "cx", &r_rgb->cx) && p_reader.real(node, prefix, "cy", &r_rgb->cy) &&
+			p_reader.real(node, prefix, "k1", &r_rgb->k1) && p_reader.real(node, prefix, "k2", &r_rgb->k2) &&
+			p_reader.real(node, prefix, "p1", &r_rgb->p1) && p_reader.real(node, prefix, "p2", &r_rgb->p2) &&
+			p_reader.real(node, prefix, "k3", &r_rgb->k3);
+}
+
+bool read_fisheye(FieldReader &p_reader, const cv::FileNode &p_root, OmniParams *r_fisheye) {
+	cv::FileNode node;
+	std::string model;
+	const std::string prefix = "fisheye.";
+	if (!p_reader.map(p_root, "", "fisheye", &node) ||
+			!p_reader.check_keys(node, prefix,
+					{ "model", "width", "height", "xi", "fx", "fy", "cx", "cy", "skew", "k1", "k2", "p1", "p2", "circle_cx",
+							"circle_cy", "circle_radius", "max_angle_deg" }) ||
+			!p_reader.text(node, prefix, "model", &model)) {
+		return false;
+	}
+	if (model != FISHEYE_MODEL) {
+		return p_reader.fail("fisheye.model", "'" + model + "' is not a model RoomProbe knows (expected '" + FISHEYE_MODEL + "')");
+	}
+	return p_reader.integer(node, prefix, "width", &r_fisheye->width) &&
+			p_reader.integer(node, prefix, "height", &r_fisheye->height) && p_reader.real(node, prefix, "xi", &r_fisheye->xi) &&
+			p_reader.real(node, prefix, "fx", &r_fisheye->fx) && p_reader.real(node, prefix, "fy", &r_fisheye->fy) &&
+			p_reader.real(node, prefix, "cx", &r_fisheye->cx) && p_reader.real(node, prefix, "cy", &r_fisheye->cy) &&
+			p_reader.real(node, prefix, "skew", &r_fisheye->skew) && p_reader.real(node, prefix, "k1", &r_fisheye->k1) &&
+			p_reader.real(node, prefix, "k2", &r_fisheye->k2) && p_reader.real(node, prefix, "p1", &r_fisheye->p1) &&
+			p_reader.real(node, prefix, "p2", &r_fisheye->p2) &&
+			p_reader.real(node, prefix, "circle_cx", &r_fisheye->circle_cx) &&
+			p_reader.real(node, prefix, "circle_cy", &r_fisheye->circle_cy) &&
+			p_reader.real(node, prefix, "circle_radius", &r_fisheye->circle_radius) &&
+			p_reader.real(node, prefix, "max_angle_deg", &r_fisheye->max_angle_deg);
+}
+
+bool read_extrinsic(FieldReader &p_reader, const cv::FileNode &p_root, Pose *r_rgb_from_fisheye) {
+	cv::FileNode node;
+	const std::string prefix = "rgb_from_fisheye.";
+	double q[4];
+	double t[3];
+	if (!p_reader.map(p_root, "", "rgb_from_fisheye", &node) ||
+			!p_reader.check_keys(node, prefix, { "rotation_xyzw", "translation_m" }) ||
+			!p_reader.reals(node, prefix, "rotation_xyzw", 4, q) || !p_reader.reals(node, prefix, "translation_m", 3, t)) {
+		return false;
+	}
+	glm::dquat rotation(q[3], q[0], q[1], q[2]); // glm's constructor takes (w, x, y, z)
+	if (!normalize_rotation(&rotation, RIG_UNIT_TOLERANCE)) {
+		return p_reader.fail("rgb_from_fisheye.rotation_xyzw", quaternion_problem(rotation));
+	}
+	r_rgb_from_fisheye->rotation = rotation;
+	r_rgb_from_fisheye->translation = glm::dvec3(t[0], t[1], t[2]);
+	return true;
+}
+
+bool read_rig(FieldReader &p_reader, const cv::FileNode &p_root, Rig *r_rig) {
+	if (!p_root.isMap()) {
+		return p_reader.fail("roomprobe_rig", "missing (the file is not a map of fields; is it a RoomProbe rig file?)");
+	}
+	int version = 0;
+	const cv::FileNode version_node = p_root["roomprobe_rig"];
+	if (version_node.empty() || version_node.isNone()) {
+		return p_reader.fail("roomprobe_rig", "missing (is this a RoomProbe rig file?)");
+	}
+	if (!p_reader.integer(p_root, "", "roomprobe_rig", &version)) {
+		return false;
+	}
+	if (version != RIG_FILE_VERSION) {
+		return p_reader.fail("roomprobe_rig", "unknown version " + std::to_string(version) + " (this build reads version " +
+						std::to_string(RIG_FILE_VERSION) + ")");
+	}
+	return p_reader.check_keys(p_root, "",
+				   { "roomprobe_rig", "rgb", "depth_scale_m", "fisheye", "rgb_from_fisheye", "fisheye_time_offset_s" }) &&
+			read_rgb(p_reader, p_root, &r_rig->rgb) && p_reader.real(p_root, "", "depth_scale_m", &r_rig->depth_scale_m) &&
+			read_fisheye(p_reader, p_root, &r_rig->fisheye) && read_extrinsic(p_reader, p_root, &r_rig->rgb_from_fisheye) &&
+			p_reader.real(p_root, "", "fisheye_time_offset_s", &r_rig->fisheye_time_offset_s);
+}
+
+// cv::FileStorage's parse errors (reading from memory) carry "(<line>): <what>" in the exception's
+// func field and the parser's function in err; this gives "line <line>: <what>".
+std::string describe_parse_error(const cv::Exception &p_exception) {
+	if (p_exception.code != cv::Error::StsParseError) {
+		return p_exception.err;
+	}
+	const std::string &detail = p_exception.func;
+	const size_t close = detail.find("): ");
+	if (detail.rfind("(", 0) == 0 && close != std::string::npos) {
+		return "line " + detail.substr(1, close - 1) + ": " + detail.substr(close + 3);
+	}
+	return detail;
+}
+
+} // namespace
+
+RigLoadResult load_rig(const std::string &p_path) {
+	RigLoadResult result;
+	// Read here, parsed from memory: the errors are ours to word, and OpenCV logs nothing.
+	std::error_code ec;
+	if (!std::filesystem::exists(p_path, ec)) {
+		result.error = p_path + ": no such rig file";
+		return result;
+	}
+	if (!std::filesystem::is_regular_file(p_path, ec)) {
+		result.error = p_path + ": not a regular file";
+		return result;
+	}
+	std::ifstream file(p_path, std::ios::binary);
+	std::stringstream buffer;
+	buffer << file.rdbuf();
+	if (!file) {
+		result.error = p_path + ": cannot read the rig file";
+		return result;
+	}
+	const std::string text = buffer.str();
+	if (text.empty()) {
+		result.error = p_path + ": the rig file is empty";
+		return result;
+	}
+	// cv::FileStorage tells YAML from XML and JSON by this header; say so rather than "invalid".
+	if (text.rfind("%YAML", 0) != 0) {
+		result.error = p_path + ": malformed YAML: the first line must be '%YAML:1.0' (cv::FileStorage's header)";
+		return result;
+	}
+	Rig rig;
+	FieldReader reader;
+	try {
+		cv::FileStorage storage(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+		if (!storage.isOpened()) {
+			result.error = p_path + ": malformed YAML";
+			return result;
+		}
+		if (!read_rig(reader, storage.root(), &rig)) {
+			result.error = p_path + ": " + reader.error;
+			return result;
+		}
+	} catch (const cv::Exception &e) {
+		result.error = p_path + ": malformed YAML: " + describe_parse_error(e);
+		return result;
+	} catch (const std::exception &e) {
+		// OpenCV's parser throws std::length_error on some inputs (e.g. a key that starts with ':').
+		result.error = p_path + ": malformed YAML (" + e.what() + ")";
+		return result;
+	}
+	const std::string problem = check_rig(rig);
+	if (!problem.empty()) {
+		result.error = p_path + ": " + problem;
+		return result;
+	}
+	result.rig = rig;
+	result.ok = true;
+	return result;
+}
+
+// ---------------------------------------------------------------------------------- writing
+
+std::string save_rig(const std::string &p_path, const Rig &p_rig) {
+	// Never write a file that load_rig would refuse.
+	const std::string problem = check_rig(p_rig);
+	if (!problem.empty()) {
+		return p_path + ": " + problem;
+	}
+	const glm::dquat q = glm::normalize(p_rig.rgb_from_fisheye.rotation);
+	const glm::dvec3 &t = p_rig.rgb_from_fisheye.translation;
+	const PinholeParams &rgb = p_rig.rgb;
+	const OmniParams &fisheye = p_rig.fisheye;
+	std::string text;
+	try {
+		// Built in memory, YAML whatever the file's extension, and written below: OpenCV logs
+		// nothing and the errors are ours to word.
+		cv::FileStorage storage(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+		storage.writeComment("RoomProbe rig calibration; the fields are described in calib/README.md.");
+		storage << "roomprobe_rig" << RIG_FILE_VERSION;
+		storage.writeComment("RGB-D camera (depth registered to it): pixels; distortion as cv::projectPoints.");
+		storage << "rgb" << "{";
+		storage << "model" << RGB_MODEL << "width" << rgb.width << "height" << rgb.height;
+		storage << "fx" << rgb.fx << "fy" << rgb.fy << "cx" << rgb.cx << "cy" << rgb.cy;
+		storage << "k1" << rgb.k1 << "k2" << rgb.k2 << "p1" << rgb.p1 << "p2" << rgb.p2 << "k3" << rgb.k3;
+		storage << "}";
+		storage << "depth_scale_m" << p_rig.depth_scale_m;
+		storage.writeComment("Fisheye, unified omnidirectional model (cv::omnidir): pixels, xi unitless, degrees.");
+		storage << "fisheye" << "{";
+		storage << "model" << FISHEYE_MODEL << "width" << fisheye.width << "height" << fisheye.height;
+		storage << "xi" << fisheye.xi << "fx" << fisheye.fx << "fy" << fisheye.fy << "cx" << fisheye.cx << "cy" << fisheye.cy;
+		storage << "skew" << fisheye.skew << "k1" << fisheye.k1 << "k2" << fisheye.k2 << "p1" << fisheye.p1 << "p2" << fisheye.p2;
+		storage << "circle_cx" << fisheye.circle_cx << "circle_cy" << fisheye.circle_cy;
+		storage << "circle_radius" << fisheye.circle_radius << "max_angle_deg" << fisheye.max_angle_deg;
+		storage << "}";
+		storage.writeComment("x_rgb = R * x_fisheye + t, both frames OpenCV's (x right, y down, z forward); metres.");
+		storage << "rgb_from_fisheye" << "{";
+		storage << "rotation_xyzw" << "[:" << q.x << q.y << q.z << q.w << "]";
+		storage << "translation_m" << "[:" << t.x << t.y << t.z << "]";
+		storage << "}";
+		storage.writeComment("Seconds to add to a fisheye timestamp to get RGB-D clock time.");
+		storage << "fisheye_time_offset_s" << p_rig.fisheye_time_offset_s;
+		text = storage.releaseAndGetString();
+	} catch (const cv::Exception &e) {
+		return p_path + ": cannot write the rig file: " + e.err;
+	} catch (const std::exception &e) {
+		return p_path + ": cannot write the rig file: " + e.what();
+	}
+	std::ofstream file(p_path, std::ios::binary | std::ios::trunc);
+	if (!file) {
+		return p_path + ": cannot open for writing";
+	}
+	file << text;
+	file.flush();
+	if (!file) {
+		return p_path + ": write error";
+	}
+	return std::string();
+}
+
+} // namespace roomprobe

@@ -1,0 +1,39 @@
+#pragma once
+// The rig: the RGB-D camera and the upward fisheye on one bracket, and its calibration file
+// (YAML through cv::FileStorage; the schema is in calib/README.md).
+
+#include <camera/camera_params.h>
+#include <math/pose.h>
+
+#include <string>
+
+namespace roomprobe {
+
+struct Rig {
+	PinholeParams rgb; // the RGB-D camera; depth is registered to it
+	double depth_scale_m = 0.001; // metres per unit of the 16-bit depth images
+	OmniParams fisheye;
+	Pose rgb_from_fisheye; // fixed extrinsic: fisheye frame -> RGB-D camera frame
+	double fisheye_time_offset_s = 0.0; // add to a fisheye timestamp to get RGB-D clock time
+};
+
+struct RigLoadResult {
+	bool ok = false;
+	std::string error; // names the file and the field, e.g. "calib/rig.yaml: fisheye.xi: missing"
+	Rig rig;
+};
+
+RigLoadResult load_rig(const std::string &p_path);
+// Writes the rig file; returns an empty string, or the error naming the file.
+std::string save_rig(const std::string &p_path, const Rig &p_rig);
+
+// The version of the schema that load_rig reads and save_rig writes (the roomprobe_rig field).
+inline constexpr int RIG_FILE_VERSION = 1;
+// A rotation in a rig file may be this far off unit norm (it is then normalised).
+inline constexpr double RIG_UNIT_TOLERANCE = 1e-6;
+// Checks the values (positive sizes and focal lengths, finite numbers, a unit rotation, a lens
+// angle the unified model can project): an empty string, or "field: problem", e.g.
+// "fisheye.fx: must be positive (got -1)". load_rig and save_rig both apply it.
+std::string check_rig(const Rig &p_rig);
+
+} // namespace roomprobe

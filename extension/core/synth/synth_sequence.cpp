@@ -1,0 +1,614 @@
+#include "synth_opencv.h"
+
+#include "synth_sequence.h"
+
+#include <camera/omni_camera.h>
+#include <camera/pinhole_camera.h>
+#include <recording/recording_writer.h>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/mat3x3.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <mutex>
+#include <numbers>
+#include <thread>
+
+namespace roomprobe::synth {
+
+namespace {
+
+constexpr double PI = std::numbers::pi;
+
+double seconds_since(std::chrono::steady_clock::time_point p_start) {
+	return std::chrono::duration<double>(std::chrono::steady_clock::now() - p_start).count();
+}
+
+double uniform_from(uint64_t p_seed, uint64_t p_index) {
+	return static_cast<double>(mix_seed(p_seed, p_index) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+// world_from_camera for a camera at p_position looking along p_forward with world +Y up,
+// turned by p_roll about the optical axis (OpenCV frame: x right, y down, z forward).
+glm::dquat look_rotation(const glm::dvec3 &p_forward, double p_roll) {
+	const glm::dvec3 z = glm::normalize(p_forward);
+	glm::dvec3 x = glm::cross(z, glm::dvec3(0.0, 1.0, 0.0));
+	if (glm::length(x) < 1e-9) {
+		x = glm::dvec3(1.0, 0.0, 0.0);
+	}
+	x = glm::normalize(x);
+	glm::dvec3 y = glm::cross(z, x);
+	const double c = std::cos(p_roll), s = std::sin(p_roll);
+	const glm::dvec3 xr = c * x + s * y, yr = -s * x + c * y;
+	return glm::normalize(glm::quat_cast(glm::dmat3(xr, yr, z)));
+}
+
+// A rotation whose z axis is p_z; p_x_hint gives the x axis (made orthogonal).
+glm::dquat frame_rotation(const glm::dvec3 &p_z, const glm::dvec3 &p_x_hint) {
+	const glm::dvec3 z = glm::normalize(p_z);
+	glm::dvec3 x = p_x_hint - glm::dot(p_x_hint, z) * z;
+	if (glm::length(x) < 1e-9) {
+		x = std::abs(z.x) < 0.9 ? glm::dvec3(1.0, 0.0, 0.0) : glm::dvec3(0.0, 1.0, 0.0);
+		x = x - glm::dot(x, z) * z;
+	}
+	x = glm::normalize(x);
+	const glm::dvec3 y = glm::cross(z, x);
+	return glm::normalize(glm::quat_cast(glm::dmat3(x, y, z)));
+}
+
+// A board posed with its centre at p_center and its z axis along p_z (x along p_x_hint).
+Pose board_pose(const CheckerboardSpec &p_board, const glm::dvec3 &p_center, const glm::dvec3 &p_z, const glm::dvec3 &p_x_hint) {
+	Pose pose;
+	pose.rotation = frame_rotation(p_z, p_x_hint);
+	const glm::dvec3 half(0.5 * p_board.squares_x * p_board.square_m, 0.5 * p_board.squares_y * p_board.square_m, 0.0);
+	pose.translation = p_center - glm::mat3_cast(pose.rotation) * half;
+	return pose;
+}
+
+// Writes through RecordingWriter on a thread of its own, in the order given, so that encoding
+// overlaps rendering. A bounded queue: push() waits while it is full.
+class WriterThread {
+public:
+	using Job = std::function<RecordingStatus()>;
+
+	explicit WriterThread(size_t p_capacity) :
+			capacity(p_capacity), thread([this] { run(); }) {}
+	~WriterThread() { finish(); }
+
+	// False once a job has failed (error() says why): stop rendering.
+	bool push(Job p_job, double *r_wait_s) {
+		const auto start = std::chrono::steady_clock::now();
+		std::unique_lock lock(mutex);
+		space.wait(lock, [&] { return jobs.size() < capacity || !first_error.empty(); });
+		*r_wait_s += seconds_since(start);
+		if (!first_error.empty()) {
+			return false;
+		}
+		jobs.push_back(std::move(p_job));
+		ready.notify_one();
+		return true;
+	}
+	// Waits for every job; returns the first error or "".
+	std::string finish() {
+		{
+			std::lock_guard lock(mutex);
+			stopping = true;
+			ready.notify_one();
+		}
+		if (thread.joinable()) {
+			thread.join();
+		}
+		return first_error;
+	}
+	std::string error() {
+		std::lock_guard lock(mutex);
+		return first_error;
+	}
+
+private:
+	void run() {
+		for (;;) {
+			Job job;
+			{
+				std::unique_lock lock(mutex);
+				ready.wait(lock, [&] { return !jobs.empty() || stopping; });
+				if (jobs.empty()) {
+					return;
+				}
+				job = std::move(jobs.front());
+				jobs.pop_front();
+				space.notify_one();
+			}
+			if (!error().empty()) {
+				continue;
+			}
+			const RecordingStatus status = job();
+			if (!status.ok) {
+				std::lock_guard lock(mutex);
+				if (first_error.empty()) {
+					first_error = status.error.empty() ? "writing failed" : status.error;
+				}
+				space.notify_all();
+			}
+		}
+	}
+
+	size_t capacity;
+	std::mutex mutex;
+	std::condition_variable ready, space;
+	std::deque<Job> jobs;
+	bool stopping = false;
+	std::string first_error;
+	std::thread thread;
+};
+
+std::array<cv::Mat, 6> to_srgb8_faces(const std::array<cv::Mat, 6> &p_faces, double p_exposure) {
+	std::array<cv::Mat, 6> out;
+	for (int f = 0; f < 6; ++f) {
+		out[f] = to_srgb8(p_faces[f], p_exposure);
+	}
+	return out;
+}
+
+std::string write_png_rgb(const std::string &p_path, const cv::Mat &p_rgb) {
+	cv::Mat bgr;
+	cv::cvtColor(p_rgb, bgr, cv::COLOR_RGB2BGR);
+	try {
+		if (!cv::imwrite(p_path, bgr)) {
+			return p_path + ": cannot write the image";
+		}
+	} catch (const cv::Exception &e) {
+		return p_path + ": cannot write the image (" + e.what() + ")";
+	}
+	return "";
+}
+
+void write_pose(cv::FileStorage &p_fs, const std::string &p_name, const Pose &p_pose) {
+	p_fs << p_name << "{";
+	p_fs << "rotation_xyzw" << "[:" << p_pose.rotation.x << p_pose.rotation.y << p_pose.rotation.z << p_pose.rotation.w << "]";
+	p_fs << "translation_m" << "[:" << p_pose.translation.x << p_pose.translation.y << p_pose.translation.z << "]";
+	p_fs << "}";
+}
+
+} // namespace
+
+// ---------------------------------------------------------------- trajectory
+
+HandheldTrajectory make_handheld_trajectory(const Scene &p_scene, uint64_t p_seed) {
+	HandheldTrajectory trajectory;
+	trajectory.target = p_scene.look_target;
+	trajectory.radius_m = p_scene.orbit_radius_m;
+	trajectory.height_m = p_scene.camera_height_m;
+	trajectory.start_angle_rad = 2.0 * PI * uniform_from(p_seed, 1);
+	const double speed = 0.3 + 0.15 * uniform_from(p_seed, 2);
+	trajectory.angular_speed_rad_s = uniform_from(p_seed, 3) < 0.5 ? speed : -speed;
+	for (size_t i = 0; i < trajectory.phases.size(); ++i) {
+		trajectory.phases[i] = 2.0 * PI * uniform_from(p_seed, 10 + i);
+	}
+	return trajectory;
+}
+
+Pose HandheldTrajectory::world_from_rgb(double p_t_s) const {
+	const double t = p_t_s;
+	const auto &p = phases;
+	auto wave = [&](double p_period_s, int p_phase) { return std::sin(2.0 * PI * t / p_period_s + p[p_phase]); };
+	const double angle = start_angle_rad + angular_speed_rad_s * t + 0.08 * wave(3.7, 0);
+	const double radius = radius_m + 0.08 * wave(5.3, 1);
+	const double height = height_m + 0.1 * wave(4.1, 2) + 0.015 * wave(1.3, 3);
+	const glm::dvec3 position(target.x + radius * std::cos(angle), height, target.z + radius * std::sin(angle));
+	// Where the hand points: the target, wandering by a few degrees, plus a little tremor.
+	const glm::dvec3 look = target + glm::dvec3(0.1 * wave(2.9, 4) + 0.01 * wave(0.37, 8), 0.06 * wave(3.3, 5) + 0.008 * wave(0.41, 9), 0.1 * wave(3.1, 6));
+	const double roll = 0.05 * wave(2.3, 7) + 0.004 * wave(0.29, 8);
+	Pose pose;
+	pose.rotation = look_rotation(look - position, roll);
+	pose.translation = position;
+	return pose;
+}
+
+// ---------------------------------------------------------------- checkerboards
+
+std::vector<glm::dvec3> checkerboard_corners(const CheckerboardSpec &p_board) {
+	std::vector<glm::dvec3> corners;
+	for (int j = 0; j + 1 < p_board.squares_y; ++j) {
+		for (int i = 0; i + 1 < p_board.squares_x; ++i) {
+			corners.emplace_back((i + 1) * p_board.square_m, (j + 1) * p_board.square_m, 0.0);
+		}
+	}
+	return corners;
+}
+
+Scene make_checkerboard_scene(const CheckerboardSpec &p_board, const Pose &p_camera_from_board) {
+	Scene scene;
+	scene.name = "checkerboard";
+	Material squares;
+	squares.name = "checkerboard";
+	squares.albedo.pattern = Pattern::Checker;
+	squares.albedo.a = Color(0.03f); // the first square is black
+	squares.albedo.b = Color(0.85f);
+	squares.albedo.scale_m = p_board.square_m;
+	squares.unlit = true;
+	Material margin;
+	margin.name = "checkerboard_margin";
+	margin.albedo.a = Color(0.85f);
+	margin.unlit = true;
+	const int squares_material = add_material(&scene, squares);
+	const int margin_material = add_material(&scene, margin);
+	const glm::dmat3 r = glm::mat3_cast(p_camera_from_board.rotation);
+	const glm::dvec3 t = p_camera_from_board.translation;
+	const double w = p_board.squares_x * p_board.square_m, h = p_board.squares_y * p_board.square_m;
+	Quad board;
+	board.corner = t;
+	board.edge_u = r * glm::dvec3(w, 0.0, 0.0);
+	board.edge_v = r * glm::dvec3(0.0, h, 0.0);
+	board.material = squares_material;
+	scene.quads.push_back(board);
+	// The white margin, 1 mm behind the squares.
+	Quad back;
+	back.corner = t + r * glm::dvec3(-p_board.margin_m, -p_board.margin_m, 0.001);
+	back.edge_u = r * glm::dvec3(w + 2.0 * p_board.margin_m, 0.0, 0.0);
+	back.edge_v = r * glm::dvec3(0.0, h + 2.0 * p_board.margin_m, 0.0);
+	back.material = margin_material;
+	scene.quads.push_back(back);
+	scene.background = Color(0.25f);
+	return scene;
+}
+
+std::vector<Pose> pinhole_board_poses(const CheckerboardSpec &p_board) {
+	// Centre, distance and tilt (degrees about the board's x and y) of each view.
+	struct View {
+		double x, y, z, tilt_x_deg, tilt_y_deg, spin_deg;
+	};
+	const View views[] = {
+		{ 0.0, 0.0, 0.6, 0.0, 0.0, 0.0 },
+		{ -0.12, -0.08, 0.55, 25.0, -20.0, 5.0 },
+		{ 0.12, 0.08, 0.65, -25.0, 20.0, -5.0 },
+		{ 0.14, -0.1, 0.7, 15.0, 30.0, 10.0 },
+		{ -0.15, 0.1, 0.75, -20.0, -30.0, -10.0 },
+		{ 0.0, 0.0, 0.9, 35.0, 0.0, 0.0 },
+		{ 0.05, -0.02, 0.5, 0.0, 35.0, 20.0 },
+		{ -0.05, 0.05, 0.8, -35.0, 10.0, -15.0 },
+	};
+	std::vector<Pose> poses;
+	for (const View &v : views) {
+		const double ax = v.tilt_x_deg * PI / 180.0, ay = v.tilt_y_deg * PI / 180.0, az = v.spin_deg * PI / 180.0;
+		// The board's normal (z) points away from the camera, tilted; x mostly along the camera's x.
+		const glm::dvec3 z = glm::normalize(glm::dvec3(std::sin(ay), -std::sin(ax), std::cos(ax) * std::cos(ay)));
+		const glm::dvec3 x_hint(std::cos(az), std::sin(az), 0.0);
+		poses.push_back(board_pose(p_board, { v.x, v.y, v.z }, z, x_hint));
+	}
+	return poses;
+}
+
+std::vector<Pose> fisheye_board_poses(const CheckerboardSpec &p_board) {
+	// Off-axis angle and azimuth of the board's centre, distance, and extra tilt.
+	struct View {
+		double theta_deg, phi_deg, distance_m, tilt_deg;
+	};
+	const View views[] = {
+		{ 0.0, 0.0, 0.35, 0.0 },
+		{ 30.0, 0.0, 0.35, 10.0 },
+		{ 35.0, 120.0, 0.4, -10.0 },
+		{ 40.0, 240.0, 0.35, 15.0 },
+		{ 55.0, 60.0, 0.4, 0.0 },
+		{ 60.0, 180.0, 0.4, 10.0 },
+		{ 65.0, 300.0, 0.45, -10.0 },
+		{ 20.0, 270.0, 0.3, 20.0 },
+	};
+	std::vector<Pose> poses;
+	for (const View &v : views) {
+		const double theta = v.theta_deg * PI / 180.0, phi = v.phi_deg * PI / 180.0, tilt = v.tilt_deg * PI / 180.0;
+		const glm::dvec3 direction(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+		// Facing the camera (normal along the line of sight), tilted about the board's x.
+		const glm::dvec3 across = glm::normalize(glm::cross(direction, glm::dvec3(0.0, 0.0, 1.0)) + glm::dvec3(1e-9, 0.0, 0.0));
+		const glm::dvec3 up = glm::cross(direction, across);
+		const glm::dvec3 z = glm::normalize(std::cos(tilt) * direction + std::sin(tilt) * up);
+		poses.push_back(board_pose(p_board, direction * v.distance_m, z, across));
+	}
+	return poses;
+}
+
+CalibrationResult write_calibration_views(const std::string &p_folder, const Rig &p_rig, const CheckerboardSpec &p_board, int p_samples_per_axis) {
+	CalibrationResult result;
+	namespace fs = std::filesystem;
+	const fs::path root = fs::path(p_folder) / "calibration";
+	std::error_code ec;
+	for (const char *sub : { "rgb", "fisheye" }) {
+		fs::create_directories(root / sub, ec);
+		if (ec) {
+			result.error = (root / sub).string() + ": cannot create the folder (" + ec.message() + ")";
+			return result;
+		}
+	}
+	const std::string yaml_path = (root / "boards.yaml").string();
+	cv::FileStorage fs_out;
+	try {
+		if (!fs_out.open(yaml_path, cv::FileStorage::WRITE)) {
+			result.error = yaml_path + ": cannot write";
+			return result;
+		}
+	} catch (const cv::Exception &e) {
+		result.error = yaml_path + ": cannot write (" + e.what() + ")";
+		return result;
+	}
+	fs_out << "roomprobe_calibration_views" << 1;
+	fs_out << "board" << "{";
+	fs_out << "squares_x" << p_board.squares_x << "squares_y" << p_board.squares_y;
+	fs_out << "inner_corners_x" << p_board.squares_x - 1 << "inner_corners_y" << p_board.squares_y - 1;
+	fs_out << "square_m" << p_board.square_m << "margin_m" << p_board.margin_m;
+	fs_out << "frame" << "origin at the outer top-left corner of the squares (the first square is black); x along squares_x, y along squares_y, z away from the printed face; inner corner (i, j) at ((i + 1) square_m, (j + 1) square_m, 0), i fastest";
+	fs_out << "}";
+	fs_out << "views" << "[";
+	const std::vector<glm::dvec3> corners = checkerboard_corners(p_board);
+	for (int camera = 0; camera < 2; ++camera) {
+		const bool is_rgb = camera == 0;
+		const std::vector<Pose> poses = is_rgb ? pinhole_board_poses(p_board) : fisheye_board_poses(p_board);
+		for (size_t v = 0; v < poses.size(); ++v) {
+			const Scene scene = make_checkerboard_scene(p_board, poses[v]);
+			const SynthRenderer renderer(scene);
+			if (!renderer.ok()) {
+				result.error = "checkerboard scene: " + renderer.error();
+				return result;
+			}
+			cv::Mat image;
+			if (is_rgb) {
+				RgbdOptions options;
+				options.samples_per_axis = p_samples_per_axis;
+				image = render_rgbd(renderer, p_rig.rgb, p_rig.depth_scale_m, Pose(), 0.0, options).rgb;
+			} else {
+				FisheyeOptions options;
+				options.samples_per_axis = p_samples_per_axis;
+				image = render_fisheye(renderer, p_rig.fisheye, Pose(), 0.0, options).image;
+			}
+			char name[64];
+			std::snprintf(name, sizeof(name), "calibration/%s/%03zu.png", is_rgb ? "rgb" : "fisheye", v);
+			const std::string error = write_png_rgb((fs::path(p_folder) / name).string(), image);
+			if (!error.empty()) {
+				result.error = error;
+				return result;
+			}
+			fs_out << "{";
+			fs_out << "camera" << (is_rgb ? "rgb" : "fisheye");
+			fs_out << "image" << std::string(name);
+			write_pose(fs_out, "camera_from_board", poses[v]);
+			// The true pixel of every inner corner; -1, -1 where the model cannot see it.
+			fs_out << "corners_px" << "[:";
+			for (const glm::dvec3 &corner : corners) {
+				const glm::dvec3 p = transform_point(poses[v], corner);
+				glm::dvec2 pixel(-1.0);
+				const bool seen = is_rgb ? project_pinhole(p_rig.rgb, p, &pixel) : project_omni(p_rig.fisheye, p, &pixel);
+				if (!seen) {
+					pixel = glm::dvec2(-1.0);
+				}
+				fs_out << pixel.x << pixel.y;
+			}
+			fs_out << "]";
+			fs_out << "}";
+			++result.views;
+		}
+	}
+	fs_out << "]";
+	fs_out.release();
+	result.ok = true;
+	return result;
+}
+
+// ---------------------------------------------------------------- the recording
+
+std::vector<double> rgbd_frame_times(const SequenceOptions &p_options) {
+	std::vector<double> times;
+	if (!(p_options.rgbd_rate_hz > 0.0)) {
+		return times;
+	}
+	for (int64_t i = 0;; ++i) {
+		const double t = static_cast<double>(i) / p_options.rgbd_rate_hz;
+		if (t >= p_options.duration_s) {
+			break;
+		}
+		times.push_back(t);
+	}
+	return times;
+}
+
+std::vector<double> fisheye_frame_times(const SequenceOptions &p_options, double p_fisheye_time_offset_s) {
+	std::vector<double> times;
+	const std::vector<double> rgbd = rgbd_frame_times(p_options);
+	if (rgbd.empty() || !(p_options.fisheye_rate_hz > 0.0)) {
+		return times;
+	}
+	const double first = rgbd.front(), last = rgbd.back();
+	const int64_t k0 = static_cast<int64_t>(std::ceil((first - p_fisheye_time_offset_s) * p_options.fisheye_rate_hz - 1e-9));
+	for (int64_t k = std::max<int64_t>(k0, 0);; ++k) {
+		const double t = static_cast<double>(k) / p_options.fisheye_rate_hz;
+		const double on_rgbd_clock = t + p_fisheye_time_offset_s;
+		if (on_rgbd_clock > last + 1e-12) {
+			break;
+		}
+		if (on_rgbd_clock >= first) {
+			times.push_back(t);
+		}
+	}
+	return times;
+}
+
+SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, const Scene &p_scene, const SequenceOptions &p_options) {
+	SequenceResult result;
+	SequenceTimings &timings = result.timings;
+	const auto start = std::chrono::steady_clock::now();
+	auto progress = [&](const std::string &p_line) {
+		if (p_options.progress) {
+			p_options.progress(p_line);
+		}
+	};
+	if (!(p_options.duration_s > 0.0) || !(p_options.rgbd_rate_hz > 0.0) || !(p_options.fisheye_rate_hz > 0.0) || p_options.cubemap_face_size <= 0) {
+		result.error = "the duration, both frame rates and the cubemap size must be positive";
+		return result;
+	}
+
+	auto scene_start = std::chrono::steady_clock::now();
+	const SynthRenderer renderer(p_scene);
+	if (!renderer.ok()) {
+		result.error = "scene '" + p_scene.name + "': " + renderer.error();
+		return result;
+	}
+	timings.scene_s = seconds_since(scene_start);
+
+	const HandheldTrajectory trajectory = make_handheld_trajectory(p_scene, p_options.seed);
+	const std::vector<double> rgbd_times = rgbd_frame_times(p_options);
+	const std::vector<double> fisheye_times = fisheye_frame_times(p_options, p_rig.fisheye_time_offset_s);
+
+	RoomInfo room;
+	room.floorplan = p_scene.room.floorplan;
+	room.initial_rgb_pose = trajectory.world_from_rgb(rgbd_times.front());
+	room.probes = { p_scene.probe_position };
+	RecordingWriter writer;
+	RecordingWriteOptions write_options;
+	write_options.exr_full_float = p_options.exr_full_float;
+	RecordingStatus status = writer.open(p_folder, p_rig, room, write_options);
+	if (!status.ok) {
+		result.error = status.error;
+		return result;
+	}
+	progress("scene '" + p_scene.name + "': " + std::to_string(renderer.triangle_count()) + " triangles; " + std::to_string(rgbd_times.size()) +
+			" RGB-D frames, " + std::to_string(fisheye_times.size()) + " fisheye frames");
+
+	// Both streams in time order on the RGB-D clock (RGB-D first at equal times).
+	struct Event {
+		double time_s; // RGB-D clock
+		bool fisheye;
+		size_t index;
+	};
+	std::vector<Event> events;
+	for (size_t i = 0; i < rgbd_times.size(); ++i) {
+		events.push_back({ rgbd_times[i], false, i });
+	}
+	for (size_t k = 0; k < fisheye_times.size(); ++k) {
+		events.push_back({ fisheye_times[k] + p_rig.fisheye_time_offset_s, true, k });
+	}
+	std::stable_sort(events.begin(), events.end(), [](const Event &a, const Event &b) { return a.time_s < b.time_s; });
+
+	WriterThread thread(4);
+	bool stopped = false;
+	size_t done = 0;
+	for (const Event &event : events) {
+		const Pose world_from_rgb = trajectory.world_from_rgb(event.time_s);
+		if (!event.fisheye) {
+			const auto t0 = std::chrono::steady_clock::now();
+			RgbdOptions options = p_options.rgbd;
+			options.noise_seed = mix_seed(p_options.seed, 0x10000000ULL + event.index);
+			RgbdImage image = render_rgbd(renderer, p_rig.rgb, p_rig.depth_scale_m, world_from_rgb, event.time_s, options);
+			timings.rgbd_s += seconds_since(t0);
+			auto frame = std::make_shared<RgbdFrame>();
+			frame->timestamp_s = rgbd_times[event.index];
+			frame->rgb = image.rgb;
+			frame->depth_m = image.depth;
+			const double t = rgbd_times[event.index];
+			stopped = !thread.push([&writer, frame, t, world_from_rgb]() {
+				RecordingStatus s = writer.add_rgbd(*frame);
+				if (s.ok) {
+					s = writer.add_ground_truth_pose(RecordingStream::Rgbd, t, world_from_rgb);
+				}
+				return s;
+			}, &timings.write_wait_s);
+			++timings.rgbd_frames;
+		} else {
+			const double t_fisheye = fisheye_times[event.index];
+			const Pose world_from_fisheye = compose(world_from_rgb, p_rig.rgb_from_fisheye);
+			auto t0 = std::chrono::steady_clock::now();
+			FisheyeImage image = render_fisheye(renderer, p_rig.fisheye, world_from_fisheye, event.time_s, p_options.fisheye);
+			timings.fisheye_s += seconds_since(t0);
+			t0 = std::chrono::steady_clock::now();
+			auto faces = std::make_shared<CubemapFaces>(render_cubemap(renderer, p_scene.probe_position, event.time_s, p_options.cubemap_face_size));
+			auto ldr = std::make_shared<CubemapFaces>(to_srgb8_faces(*faces, p_options.cubemap_ldr_exposure));
+			timings.cubemap_s += seconds_since(t0);
+			auto frame = std::make_shared<FisheyeFrame>();
+			frame->timestamp_s = t_fisheye;
+			frame->hdr = p_options.fisheye_hdr;
+			frame->image = p_options.fisheye_hdr ? image.radiance : image.image;
+			const double t_rgbd = event.time_s;
+			stopped = !thread.push([&writer, frame, faces, ldr, t_fisheye, t_rgbd, world_from_fisheye]() {
+				RecordingStatus s = writer.add_fisheye(*frame);
+				if (s.ok) {
+					s = writer.add_ground_truth_pose(RecordingStream::Fisheye, t_fisheye, world_from_fisheye);
+				}
+				if (s.ok) {
+					s = writer.add_ground_truth_cubemap(t_rgbd, 0, *faces, *ldr);
+				}
+				return s;
+			}, &timings.write_wait_s);
+			++timings.fisheye_frames;
+			++timings.cubemaps;
+		}
+		if (stopped) {
+			break;
+		}
+		++done;
+		if (done % 60 == 0) {
+			char line[128];
+			std::snprintf(line, sizeof(line), "%zu/%zu frames, %.1f s", done, events.size(), seconds_since(start));
+			progress(line);
+		}
+	}
+	const auto wait_start = std::chrono::steady_clock::now();
+	std::string error = thread.finish();
+	timings.write_wait_s += seconds_since(wait_start);
+	status = writer.close();
+	if (error.empty() && !status.ok) {
+		error = status.error;
+	}
+	if (!error.empty()) {
+		result.error = error;
+		return result;
+	}
+
+	// What made this recording, for evaluations that need to know (e.g. when the light switches).
+	const std::string info_path = (std::filesystem::path(p_folder) / "synth.yaml").string();
+	try {
+		cv::FileStorage info(info_path, cv::FileStorage::WRITE);
+		if (!info.isOpened()) {
+			result.error = info_path + ": cannot write";
+			return result;
+		}
+		info << "roomprobe_synth" << 1;
+		info << "scene" << p_scene.name;
+		info << "seed" << std::to_string(p_options.seed);
+		info << "duration_s" << p_options.duration_s;
+		info << "rgbd_rate_hz" << p_options.rgbd_rate_hz;
+		info << "fisheye_rate_hz" << p_options.fisheye_rate_hz;
+		info << "light_switch_s" << (std::isfinite(p_scene.light_switch_s) ? p_scene.light_switch_s : -1.0);
+		if (p_scene.ceiling_light_half_size_m > 0.0) {
+			info << "switched_light_center_m" << "[:" << p_scene.ceiling_light_center.x << p_scene.ceiling_light_center.y << p_scene.ceiling_light_center.z << "]";
+			info << "switched_light_half_size_m" << p_scene.ceiling_light_half_size_m;
+		}
+		info << "fisheye_vignetting_edge_gain" << p_options.fisheye.vignetting_edge_gain;
+		info << "fisheye_exposure" << p_options.fisheye.exposure;
+		info << "rgb_exposure" << p_options.rgbd.exposure;
+		info << "depth_noise" << (p_options.rgbd.depth_noise ? 1 : 0);
+		info << "cubemap_ldr_exposure" << p_options.cubemap_ldr_exposure;
+	} catch (const cv::Exception &e) {
+		result.error = info_path + ": cannot write (" + e.what() + ")";
+		return result;
+	}
+
+	if (p_options.calibration_views) {
+		const auto t0 = std::chrono::steady_clock::now();
+		const CalibrationResult calibration = write_calibration_views(p_folder, p_rig, CheckerboardSpec(), p_options.calibration_samples_per_axis);
+		timings.calibration_s = seconds_since(t0);
+		if (!calibration.ok) {
+			result.error = calibration.error;
+			return result;
+		}
+		timings.calibration_views = calibration.views;
+	}
+	timings.total_s = seconds_since(start);
+	result.ok = true;
+	return result;
+}
+
+} // namespace roomprobe::synth

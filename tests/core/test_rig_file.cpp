@@ -1,0 +1,289 @@
+// The rig calibration file (rig/rig.h, calib/README.md): calib/synthetic_rig.yaml's values, the
+// save/load round trip, and an error naming the file and the field for each bad file.
+
+#include "rig/rig.h"
+
+#include <doctest/doctest.h>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <string>
+
+using namespace roomprobe;
+namespace fs = std::filesystem;
+
+namespace {
+
+bool contains(const std::string &p_text, const std::string &p_part) {
+	return p_text.find(p_part) != std::string::npos;
+}
+
+// The repository's calib/ from this source file's path (relative to the build's directory, the
+// repository root, where the test runner also runs the tests).
+std::string synthetic_rig_path() {
+	return (fs::path(__FILE__).parent_path().parent_path().parent_path() / "calib" / "synthetic_rig.yaml").string();
+}
+
+std::string read_text(const std::string &p_path) {
+	std::ifstream file(p_path);
+	std::stringstream text;
+	text << file.rdbuf();
+	return text.str();
+}
+
+// Replaces the one occurrence of p_old.
+std::string replace_once(std::string p_text, const std::string &p_old, const std::string &p_new) {
+	const size_t at = p_text.find(p_old);
+	REQUIRE_MESSAGE(at != std::string::npos, p_old);
+	REQUIRE_MESSAGE(p_text.find(p_old, at + 1) == std::string::npos, p_old);
+	return p_text.replace(at, p_old.size(), p_new);
+}
+
+// Replaces the text from p_begin up to (not including) p_end.
+std::string replace_block(std::string p_text, const std::string &p_begin, const std::string &p_end, const std::string &p_new) {
+	const size_t begin = p_text.find(p_begin);
+	REQUIRE_MESSAGE(begin != std::string::npos, p_begin);
+	const size_t end = p_text.find(p_end, begin);
+	REQUIRE_MESSAGE(end != std::string::npos, p_end);
+	return p_text.replace(begin, end - begin, p_new);
+}
+
+struct TempDir {
+	fs::path path;
+	explicit TempDir(const std::string &p_name) :
+			path(fs::temp_directory_path() / ("roomprobe_" + std::to_string(getpid()) + "_" + p_name)) {
+		fs::create_directories(path);
+	}
+	~TempDir() {
+		std::error_code ec;
+		fs::remove_all(path, ec);
+	}
+	std::string write(const std::string &p_name, const std::string &p_text) const {
+		const fs::path file = path / p_name;
+		std::ofstream(file) << p_text;
+		return file.string();
+	}
+};
+
+void check_same_rig(const Rig &p_a, const Rig &p_b) {
+	CHECK(p_a.rgb.width == p_b.rgb.width);
+	CHECK(p_a.rgb.height == p_b.rgb.height);
+	CHECK(p_a.rgb.fx == p_b.rgb.fx);
+	CHECK(p_a.rgb.fy == p_b.rgb.fy);
+	CHECK(p_a.rgb.cx == p_b.rgb.cx);
+	CHECK(p_a.rgb.cy == p_b.rgb.cy);
+	CHECK(p_a.rgb.k1 == p_b.rgb.k1);
+	CHECK(p_a.rgb.k2 == p_b.rgb.k2);
+	CHECK(p_a.rgb.p1 == p_b.rgb.p1);
+	CHECK(p_a.rgb.p2 == p_b.rgb.p2);
+	CHECK(p_a.rgb.k3 == p_b.rgb.k3);
+	CHECK(p_a.depth_scale_m == p_b.depth_scale_m);
+	const OmniParams &f = p_a.fisheye;
+	const OmniParams &g = p_b.fisheye;
+	CHECK(f.width == g.width);
+	CHECK(f.height == g.height);
+	CHECK(f.xi == g.xi);
+	CHECK(f.fx == g.fx);
+	CHECK(f.fy == g.fy);
+	CHECK(f.cx == g.cx);
+	CHECK(f.cy == g.cy);
+	CHECK(f.skew == g.skew);
+	CHECK(f.k1 == g.k1);
+	CHECK(f.k2 == g.k2);
+	CHECK(f.p1 == g.p1);
+	CHECK(f.p2 == g.p2);
+	CHECK(f.circle_cx == g.circle_cx);
+	CHECK(f.circle_cy == g.circle_cy);
+	CHECK(f.circle_radius == g.circle_radius);
+	CHECK(f.max_angle_deg == g.max_angle_deg);
+	CHECK(glm::length(p_a.rgb_from_fisheye.rotation - p_b.rgb_from_fisheye.rotation) < 1e-15);
+	CHECK(p_a.rgb_from_fisheye.translation == p_b.rgb_from_fisheye.translation);
+	CHECK(p_a.fisheye_time_offset_s == p_b.fisheye_time_offset_s);
+}
+
+} // namespace
+
+TEST_CASE("rig file: calib/synthetic_rig.yaml has the synthetic recordings' rig") {
+	const RigLoadResult loaded = load_rig(synthetic_rig_path());
+	REQUIRE_MESSAGE(loaded.ok, loaded.error);
+	const Rig &rig = loaded.rig;
+	CHECK(rig.rgb.width == 640);
+	CHECK(rig.rgb.height == 480);
+	CHECK(rig.rgb.fx == 525.0);
+	CHECK(rig.rgb.fy == 525.0);
+	CHECK(rig.rgb.cx == 319.5);
+	CHECK(rig.rgb.cy == 239.5);
+	CHECK((rig.rgb.k1 == 0.0 && rig.rgb.k2 == 0.0 && rig.rgb.p1 == 0.0 && rig.rgb.p2 == 0.0 && rig.rgb.k3 == 0.0));
+	CHECK(rig.depth_scale_m == 0.001);
+
+	const OmniParams &fisheye = rig.fisheye;
+	CHECK(fisheye.width == 1024);
+	CHECK(fisheye.height == 1024);
+	CHECK(fisheye.xi == 1.0);
+	CHECK(fisheye.fx == fisheye.fy);
+	CHECK((fisheye.cx == 511.5 && fisheye.cy == 511.5 && fisheye.circle_cx == 511.5 && fisheye.circle_cy == 511.5));
+	CHECK(fisheye.circle_radius == 500.0);
+	CHECK(fisheye.max_angle_deg == 92.5);
+	CHECK((fisheye.skew == 0.0 && fisheye.k1 == 0.0 && fisheye.k2 == 0.0 && fisheye.p1 == 0.0 && fisheye.p2 == 0.0));
+	// The ray at the edge of the 185-degree field lands on the image circle: r = f sin t / (cos t + xi).
+	const double theta = fisheye.max_angle_deg * std::numbers::pi / 180.0;
+	CHECK(std::abs(fisheye.fx * std::sin(theta) / (std::cos(theta) + fisheye.xi) - fisheye.circle_radius) < 1e-9);
+
+	// The fisheye looks up (the RGB camera's -y), its image x along the RGB camera's x, and sits
+	// 8 cm above and 2 cm ahead of it.
+	const Pose &extrinsic = rig.rgb_from_fisheye;
+	CHECK(glm::length(extrinsic.rotation * glm::dvec3(0, 0, 1) - glm::dvec3(0, -1, 0)) < 1e-15);
+	CHECK(glm::length(extrinsic.rotation * glm::dvec3(1, 0, 0) - glm::dvec3(1, 0, 0)) < 1e-15);
+	CHECK(glm::length(extrinsic.rotation * glm::dvec3(0, 1, 0) - glm::dvec3(0, 0, 1)) < 1e-15);
+	CHECK(extrinsic.translation == glm::dvec3(0.0, -0.08, 0.02));
+	CHECK(rig.fisheye_time_offset_s == 0.0137);
+	CHECK(check_rig(rig) == "");
+}
+
+TEST_CASE("rig file: save then load gives the same rig") {
+	TempDir dir("rig_roundtrip");
+	const RigLoadResult synthetic = load_rig(synthetic_rig_path());
+	REQUIRE_MESSAGE(synthetic.ok, synthetic.error);
+	const std::string path = (dir.path / "synthetic_copy.yaml").string();
+	REQUIRE(save_rig(path, synthetic.rig) == "");
+	const RigLoadResult again = load_rig(path);
+	REQUIRE_MESSAGE(again.ok, again.error);
+	check_same_rig(again.rig, synthetic.rig);
+
+	// Every field distinct and not round in decimal, so a swapped or truncated field shows.
+	Rig rig;
+	rig.rgb = { 1280, 720, 911.123456789012, 910.987654321098, 641.3, 359.7, 0.1234, -0.0567, 1.2e-4, -3.4e-5, 0.00789 };
+	rig.depth_scale_m = 1.0 / 3000.0;
+	rig.fisheye = { 1280, 960, 1.0712345678, 345.6789, 344.321, 640.25, 479.75, 0.0123,
+		-0.011, 0.0022, 1e-5, -2e-5, 641.0, 480.5, 455.5, 95.0 };
+	rig.rgb_from_fisheye.rotation = glm::normalize(glm::dquat(0.71, 0.69, -0.05, 0.1));
+	rig.rgb_from_fisheye.translation = glm::dvec3(0.0031, -0.0812345, 0.0199);
+	rig.fisheye_time_offset_s = -0.004321;
+	const std::string other = (dir.path / "other.rig").string(); // not .yaml: still YAML
+	REQUIRE(save_rig(other, rig) == "");
+	CHECK(read_text(other).rfind("%YAML:1.0", 0) == 0);
+	const RigLoadResult other_again = load_rig(other);
+	REQUIRE_MESSAGE(other_again.ok, other_again.error);
+	check_same_rig(other_again.rig, rig);
+}
+
+TEST_CASE("rig file: each bad file gives an error naming the file and the field") {
+	TempDir dir("rig_bad");
+	const std::string good = read_text(synthetic_rig_path());
+	REQUIRE(contains(good, "roomprobe_rig: 1"));
+
+	struct Case {
+		const char *name;
+		std::string text;
+		const char *field; // expected in the error, after the file's path
+		const char *hint;
+	};
+	const Case cases[] = {
+		{ "missing_xi", replace_once(good, "  xi: 1.0\n", ""), "fisheye.xi", "missing" },
+		{ "wrong_fisheye_model", replace_once(good, "model: unified_omni", "model: kannala_brandt"), "fisheye.model", "kannala_brandt" },
+		{ "wrong_rgb_model", replace_once(good, "model: pinhole_radtan", "model: pinhole"), "rgb.model", "pinhole_radtan" },
+		{ "negative_fx", replace_once(good, "  fx: 525.0", "  fx: -525.0"), "rgb.fx", "must be positive" },
+		{ "zero_fisheye_fy", replace_once(good, "  fy: 478.645871127404", "  fy: 0"), "fisheye.fy", "must be positive" },
+		{ "zero_width", replace_once(good, "  width: 640", "  width: 0"), "rgb.width", "must be positive" },
+		{ "fractional_height", replace_once(good, "  height: 1024", "  height: 1024.5"), "fisheye.height", "integer" },
+		{ "bad_quaternion", replace_once(good, "[0.7071067811865476, 0.0, 0.0, 0.7071067811865476]", "[0.5, 0.0, 0.0, 0.5]"),
+				"rgb_from_fisheye.rotation_xyzw", "unit quaternion" },
+		{ "short_quaternion", replace_once(good, "[0.7071067811865476, 0.0, 0.0, 0.7071067811865476]", "[0.0, 0.0, 1.0]"),
+				"rgb_from_fisheye.rotation_xyzw", "4 numbers" },
+		{ "text_translation", replace_once(good, "[0.0, -0.08, 0.02]", "[0.0, up, 0.02]"), "rgb_from_fisheye.translation_m[1]", "number" },
+		{ "unknown_version", replace_once(good, "roomprobe_rig: 1", "roomprobe_rig: 2"), "roomprobe_rig", "unknown version 2" },
+		{ "no_version", replace_once(good, "roomprobe_rig: 1\n", ""), "roomprobe_rig", "missing" },
+		{ "misspelt_field", replace_once(good, "circle_radius:", "circle_radious:"), "fisheye.circle_radious", "unknown field" },
+		{ "missing_offset", replace_once(good, "fisheye_time_offset_s: 0.0137\n", ""), "fisheye_time_offset_s", "missing" },
+		{ "nan_cx", replace_once(good, "  cx: 319.5", "  cx: .nan"), "rgb.cx", "finite" },
+		{ "negative_depth_scale", replace_once(good, "depth_scale_m: 0.001", "depth_scale_m: -0.001"), "depth_scale_m", "positive" },
+		{ "angle_beyond_xi", replace_once(good, "  xi: 1.0", "  xi: 0.0"), "fisheye.max_angle_deg", "xi = 0 can project" },
+		{ "angle_over_180", replace_once(good, "max_angle_deg: 92.5", "max_angle_deg: 200"), "fisheye.max_angle_deg", "[0, 180]" },
+		{ "rgb_not_a_map", replace_block(good, "\nrgb:\n", "\n# 16-bit", "\nrgb: [640, 480]\n"), "rgb", "map" },
+	};
+	for (const Case &c : cases) {
+		const std::string case_name = c.name;
+		CAPTURE(case_name);
+		const std::string path = dir.write(std::string(c.name) + ".yaml", c.text);
+		const RigLoadResult loaded = load_rig(path);
+		CHECK_FALSE(loaded.ok);
+		CAPTURE(loaded.error);
+		CHECK(contains(loaded.error, path + ": " + c.field + ":"));
+		CHECK(contains(loaded.error, c.hint));
+	}
+
+	// A rotation off unit norm by less than 1e-6 is normalised, not refused.
+	const std::string nearly = dir.write("nearly_unit.yaml",
+			replace_once(good, "[0.7071067811865476, 0.0, 0.0, 0.7071067811865476]", "[0.70710712, 0.0, 0.0, 0.70710712]"));
+	const RigLoadResult normalised = load_rig(nearly);
+	REQUIRE_MESSAGE(normalised.ok, normalised.error);
+	CHECK(std::abs(glm::length(normalised.rig.rgb_from_fisheye.rotation) - 1.0) < 1e-15);
+}
+
+TEST_CASE("rig file: missing, empty and malformed files give an error naming the file") {
+	TempDir dir("rig_malformed");
+	const std::string good = read_text(synthetic_rig_path());
+
+	const std::string missing = (dir.path / "no_such_rig.yaml").string();
+	const RigLoadResult not_there = load_rig(missing);
+	CHECK_FALSE(not_there.ok);
+	CHECK(contains(not_there.error, missing + ": "));
+	CHECK(contains(not_there.error, "no such rig file"));
+
+	const RigLoadResult directory = load_rig(dir.path.string());
+	CHECK_FALSE(directory.ok);
+	CHECK(contains(directory.error, dir.path.string() + ": "));
+
+	struct Case {
+		const char *name;
+		std::string text;
+		const char *hint;
+	};
+	const Case cases[] = {
+		{ "empty", "", "empty" },
+		{ "no_header", replace_once(good, "%YAML:1.0\n", ""), "%YAML:1.0" },
+		{ "bad_indentation", replace_once(good, "  width: 640\n", "      width: 640\n"), "malformed YAML: line" },
+		{ "unclosed_list", replace_once(good, "[0.0, -0.08, 0.02]", "[0.0, -0.08, 0.02"), "malformed YAML" },
+		{ "only_text", "%YAML:1.0\n---\njust some words\n", "malformed YAML" },
+		{ "a_list", "%YAML:1.0\n---\n- 1\n- 2\n", "roomprobe_rig" },
+		{ "only_header", "%YAML:1.0\n---\n", "roomprobe_rig" },
+		{ "binary", std::string("%YAML:1.0\n---\n\x01\x02\xff\xfe: [\x7f\n", 20), "" },
+	};
+	for (const Case &c : cases) {
+		const std::string case_name = c.name;
+		CAPTURE(case_name);
+		const std::string path = dir.write(std::string(c.name) + ".yaml", c.text);
+		const RigLoadResult loaded = load_rig(path);
+		CHECK_FALSE(loaded.ok);
+		CAPTURE(loaded.error);
+		CHECK(contains(loaded.error, path + ": "));
+		CHECK(contains(loaded.error, c.hint));
+	}
+}
+
+TEST_CASE("rig file: save_rig refuses an invalid rig or an unwritable path, naming the file") {
+	TempDir dir("rig_save");
+	const RigLoadResult synthetic = load_rig(synthetic_rig_path());
+	REQUIRE_MESSAGE(synthetic.ok, synthetic.error);
+
+	Rig bad = synthetic.rig;
+	bad.fisheye.fx = -1.0;
+	const std::string path = (dir.path / "bad.yaml").string();
+	const std::string error = save_rig(path, bad);
+	CHECK(contains(error, path + ": fisheye.fx: must be positive"));
+	CHECK_FALSE(fs::exists(path)); // nothing written
+
+	bad = synthetic.rig;
+	bad.rgb_from_fisheye.rotation = glm::dquat(2.0, 0.0, 0.0, 0.0);
+	CHECK(contains(save_rig(path, bad), path + ": rgb_from_fisheye.rotation_xyzw: not a unit quaternion"));
+
+	const std::string unwritable = (dir.path / "no_such_dir" / "rig.yaml").string();
+	CHECK(contains(save_rig(unwritable, synthetic.rig), unwritable + ": "));
+}

@@ -1,0 +1,111 @@
+extends RoomProbeTestCase
+## RigCapture plays the synthetic living-room recording (1 s, rendered by the test runner with
+## build/bin/roomprobe_synth) in step mode: frame counts, timestamps and pixel values are
+## checked against the recording's own files, read here without RoomProbe.
+
+var _rig  # RigCapture
+var _dir := ""
+
+
+func before_each() -> void:
+	_dir = ProjectSettings.globalize_path("res://").path_join("../build/test-data/living_room_1s").simplify_path()
+	_rig = ClassDB.instantiate("RigCapture")
+	_rig.autoplay = false
+	_rig.pacing = 1  # PACING_STEP
+
+
+func after_each() -> void:
+	if is_instance_valid(_rig):
+		_rig.free()
+	_rig = null
+
+
+# The "timestamp path" lines of a frame index, without comments.
+func _index(file_name: String) -> Array:
+	var rows: Array = []
+	var f := FileAccess.open(_dir.path_join(file_name), FileAccess.READ)
+	while f and not f.eof_reached():
+		var line := f.get_line().strip_edges()
+		if line.is_empty() or line.begins_with("#"):
+			continue
+		var parts := line.split(" ", false)
+		rows.append([float(parts[0]), parts[1]])
+	return rows
+
+
+func _need_recording() -> bool:
+	if not FileAccess.file_exists(_dir.path_join("rgb.txt")):
+		skip("no synthetic recording at %s (the runner makes it with build/bin/roomprobe_synth)" % _dir)
+		return false
+	return true
+
+
+func test_plays_every_frame_in_step_mode() -> void:
+	if not _need_recording():
+		return
+	var rgb := _index("rgb.txt")
+	var fisheye := _index("fisheye.txt")
+	_rig.recording_path = _dir
+	assert_true(_rig.open(), "opens: %s" % _rig.get_last_error())
+	assert_eq(_rig.get_frame_count(0), rgb.size(), "RGB-D frames")
+	assert_eq(_rig.get_frame_count(1), fisheye.size(), "fisheye frames")
+	assert_eq(_rig.get_event_count(), rgb.size() + fisheye.size(), "events of both streams")
+	var seen := {0: [], 1: []}
+	var finished := [0]
+	_rig.frame_captured.connect(func(stream, index, timestamp): seen[stream].append([index, timestamp]))
+	_rig.finished.connect(func(): finished[0] += 1)
+	var last_time := -1.0
+	while _rig.step():
+		assert_true(_rig.get_time() >= last_time, "playback time never goes back")
+		last_time = _rig.get_time()
+	assert_eq(finished[0], 1, "finished once at the end")
+	assert_false(_rig.step(), "no frame after the end without loop")
+	assert_eq(seen[0].size(), rgb.size())
+	assert_eq(seen[1].size(), fisheye.size())
+	for i in seen[0].size():
+		assert_eq(seen[0][i][0], i, "RGB-D frames in order")
+		assert_near(seen[0][i][1], rgb[i][0], 1e-9, "RGB-D timestamp %d" % i)
+	for i in seen[1].size():
+		assert_near(seen[1][i][1], fisheye[i][0], 1e-9, "fisheye timestamp %d" % i)
+
+
+func _step_to(stream: int, index: int) -> void:
+	while _rig.get_frame_index(stream) != index and _rig.step():
+		pass
+
+
+func test_pixels_of_a_known_frame() -> void:
+	if not _need_recording():
+		return
+	_rig.recording_path = _dir
+	assert_true(_rig.open())
+	_step_to(0, 5)
+	assert_eq(_rig.get_frame_index(0), 5)
+	var expected := Image.load_from_file(_dir.path_join(_index("rgb.txt")[5][1]))
+	expected.convert(Image.FORMAT_RGB8)
+	var shown: Image = _rig.get_rgb_image()
+	assert_eq(_rig.get_rgb_texture().get_size(), Vector2(640, 480), "the texture shows it")
+	assert_eq(shown.get_size(), Vector2i(640, 480))
+	assert_eq(shown.get_format(), Image.FORMAT_RGB8)
+	assert_true(shown.get_data() == expected.get_data(), "RGB frame 5 equals rgb/%s decoded by Godot" % _index("rgb.txt")[5][1])
+	var depth: Image = _rig.get_depth_image()
+	assert_eq(depth.get_format(), Image.FORMAT_RF, "depth in metres as floats")
+	var centre := depth.get_pixel(320, 240).r
+	assert_true(centre > 0.3 and centre < 8.0, "depth at the centre is inside the room: %f m" % centre)
+	_step_to(1, 3)
+	var fish_expected := Image.load_from_file(_dir.path_join(_index("fisheye.txt")[3][1]))
+	var fish: Image = _rig.get_fisheye_image()
+	fish_expected.convert(fish.get_format())
+	assert_eq(fish.get_size(), Vector2i(1024, 1024))
+	assert_true(fish.get_data() == fish_expected.get_data(), "fisheye frame 3 equals its PNG")
+
+
+func test_missing_recording_is_a_clear_error() -> void:
+	# open() reports it, and step() tries to open once more.
+	expect_error("no_such_recording")
+	expect_error("no_such_recording")
+	_rig.recording_path = _dir.path_join("no_such_recording")
+	assert_false(_rig.open())
+	assert_true(_rig.get_last_error().contains("no_such_recording"), "the error names the folder: %s" % _rig.get_last_error())
+	assert_true(" ".join(_rig.get_warnings()).contains("cannot be played"), "and shows as a warning")
+	assert_false(_rig.step(), "nothing plays")

@@ -1,0 +1,226 @@
+// roomprobe_synth: renders a synthetic RoomProbe recording with ground truth (extension/core/synth/).
+//
+//   roomprobe_synth --scene two_rooms|living_room --out DIR [--seconds 10] [--seed N]
+//                   [--rig calib/synthetic_rig.yaml] [--hdri PATH|none] [--cubemap-size 128]
+//                   [--fisheye-rate 12] [--rgbd-rate 30] [--fisheye-hdr] [--exr-float] [--no-calibration]
+//                   [--threads N]
+
+#include <synth/synth_opencv.h>
+
+#include <rig/rig.h>
+#include <synth/synth_sequence.h>
+
+#include <tbb/global_control.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace {
+
+constexpr const char *DEFAULT_HDRI = "../shared/data/hdri/lebombo_1k.hdr";
+
+void usage(std::FILE *p_out) {
+	std::fprintf(p_out,
+			"usage: roomprobe_synth --scene two_rooms|living_room --out DIR [options]\n"
+			"  --scene NAME        two_rooms (the paper's Figure 4) or living_room\n"
+			"  --out DIR           the recording folder; must not exist or be empty\n"
+			"  --seconds S         length of the recording (default 10)\n"
+			"  --seed N            trajectory and noise seed, an unsigned integer (default 1)\n"
+			"  --rig PATH          rig file (default calib/synthetic_rig.yaml)\n"
+			"  --hdri PATH|none    living_room's window view (default %s; none: a procedural sky)\n"
+			"  --cubemap-size N    ground-truth cubemap face size in pixels (default 128)\n"
+			"  --rgbd-rate HZ      RGB-D frame rate (default 30)\n"
+			"  --fisheye-rate HZ   fisheye frame rate (default 12)\n"
+			"  --fisheye-hdr       write fisheye frames as linear EXR instead of 8-bit PNG\n"
+			"  --exr-float         write EXRs (cubemaps, HDR fisheye) as 32-bit float rather than half\n"
+			"  --no-calibration    skip the checkerboard views (calibration/)\n"
+			"  --threads N         use at most N threads (default: all cores)\n"
+			"  -h, --help          this text\n",
+			DEFAULT_HDRI);
+}
+
+int fail(const std::string &p_message) {
+	std::fprintf(stderr, "roomprobe_synth: %s\n", p_message.c_str());
+	return 2;
+}
+
+bool parse_double(const std::string &p_text, double *r_value) {
+	try {
+		size_t used = 0;
+		const double value = std::stod(p_text, &used);
+		if (used != p_text.size() || !std::isfinite(value)) {
+			return false;
+		}
+		*r_value = value;
+		return true;
+	} catch (...) {
+		return false;
+	}
+}
+
+bool parse_u64(const std::string &p_text, uint64_t *r_value) {
+	if (p_text.empty() || p_text[0] == '-' || p_text[0] == '+') {
+		return false;
+	}
+	try {
+		size_t used = 0;
+		const unsigned long long value = std::stoull(p_text, &used, 10);
+		if (used != p_text.size()) {
+			return false;
+		}
+		*r_value = value;
+		return true;
+	} catch (...) {
+		return false;
+	}
+}
+
+} // namespace
+
+int main(int argc, char **argv) {
+	using namespace roomprobe;
+	std::string scene_name, out, rig_path = "calib/synthetic_rig.yaml", hdri;
+	bool hdri_given = false;
+	synth::SequenceOptions options;
+	double cubemap_size = 128.0;
+	double threads = 0.0;
+	for (int i = 1; i < argc; ++i) {
+		const std::string arg = argv[i];
+		auto value = [&](std::string *r_value) {
+			if (i + 1 >= argc) {
+				return false;
+			}
+			*r_value = argv[++i];
+			return true;
+		};
+		std::string text;
+		if (arg == "-h" || arg == "--help") {
+			usage(stdout);
+			return 0;
+		} else if (arg == "--scene") {
+			if (!value(&scene_name)) {
+				return fail("--scene needs a value (two_rooms or living_room)");
+			}
+		} else if (arg == "--out") {
+			if (!value(&out) || out.empty()) {
+				return fail("--out needs a folder");
+			}
+		} else if (arg == "--rig") {
+			if (!value(&rig_path)) {
+				return fail("--rig needs a file");
+			}
+		} else if (arg == "--hdri") {
+			if (!value(&hdri)) {
+				return fail("--hdri needs a file (or none)");
+			}
+			hdri_given = true;
+		} else if (arg == "--seconds") {
+			if (!value(&text) || !parse_double(text, &options.duration_s) || options.duration_s <= 0.0 || options.duration_s > 3600.0) {
+				return fail("--seconds needs a number of seconds in (0, 3600], got '" + text + "'");
+			}
+		} else if (arg == "--seed") {
+			if (!value(&text) || !parse_u64(text, &options.seed)) {
+				return fail("--seed needs an unsigned integer, got '" + text + "'");
+			}
+		} else if (arg == "--cubemap-size") {
+			if (!value(&text) || !parse_double(text, &cubemap_size) || cubemap_size != std::floor(cubemap_size) || cubemap_size < 1 || cubemap_size > 4096) {
+				return fail("--cubemap-size needs a whole number of pixels in [1, 4096], got '" + text + "'");
+			}
+		} else if (arg == "--rgbd-rate") {
+			if (!value(&text) || !parse_double(text, &options.rgbd_rate_hz) || options.rgbd_rate_hz <= 0.0 || options.rgbd_rate_hz > 1000.0) {
+				return fail("--rgbd-rate needs a rate in (0, 1000] Hz, got '" + text + "'");
+			}
+		} else if (arg == "--fisheye-rate") {
+			if (!value(&text) || !parse_double(text, &options.fisheye_rate_hz) || options.fisheye_rate_hz <= 0.0 || options.fisheye_rate_hz > 1000.0) {
+				return fail("--fisheye-rate needs a rate in (0, 1000] Hz, got '" + text + "'");
+			}
+		} else if (arg == "--fisheye-hdr") {
+			options.fisheye_hdr = true;
+		} else if (arg == "--exr-float") {
+			options.exr_full_float = true;
+		} else if (arg == "--threads") {
+			if (!value(&text) || !parse_double(text, &threads) || threads != std::floor(threads) || threads < 1 || threads > 1024) {
+				return fail("--threads needs a whole number in [1, 1024], got '" + text + "'");
+			}
+		} else if (arg == "--no-calibration") {
+			options.calibration_views = false;
+		} else {
+			usage(stderr);
+			return fail("unknown argument '" + arg + "'");
+		}
+	}
+	options.cubemap_face_size = static_cast<int>(cubemap_size);
+	if (scene_name.empty() || out.empty()) {
+		usage(stderr);
+		return fail(scene_name.empty() ? "--scene is required" : "--out is required");
+	}
+	bool known = false;
+	for (const std::string &name : synth::scene_names()) {
+		known = known || name == scene_name;
+	}
+	if (!known) {
+		return fail("unknown scene '" + scene_name + "' (known: two_rooms, living_room)");
+	}
+	namespace fs = std::filesystem;
+	std::error_code ec;
+	if (fs::exists(out, ec)) {
+		if (!fs::is_directory(out, ec)) {
+			return fail(out + ": exists and is not a folder");
+		}
+		if (!fs::is_empty(out, ec)) {
+			return fail(out + ": the output folder exists and is not empty; choose another --out or remove it");
+		}
+	}
+
+	const RigLoadResult rig = load_rig(rig_path);
+	if (!rig.ok) {
+		return fail(rig.error);
+	}
+	synth::SceneOptions scene_options;
+	scene_options.duration_s = options.duration_s;
+	if (scene_name == "living_room") {
+		if (!hdri_given) {
+			hdri = DEFAULT_HDRI;
+			if (!fs::exists(hdri, ec)) {
+				return fail(std::string("living_room shows a panorama in its window, and ") + DEFAULT_HDRI +
+						" is missing: pass --hdri PATH (or --hdri none for a procedural sky)");
+			}
+		}
+		scene_options.panorama_path = hdri == "none" ? "" : hdri;
+	}
+	std::unique_ptr<tbb::global_control> thread_limit;
+	if (threads > 0.0) {
+		thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+	}
+	const auto start = std::chrono::steady_clock::now();
+	const synth::SceneResult scene = synth::make_scene(scene_name, scene_options);
+	if (!scene.ok) {
+		return fail(scene.error);
+	}
+	options.progress = [](const std::string &p_line) {
+		std::printf("  %s\n", p_line.c_str());
+		std::fflush(stdout);
+	};
+	std::printf("roomprobe_synth: %s, %.3g s, seed %llu, %d threads -> %s\n", scene_name.c_str(), options.duration_s,
+			static_cast<unsigned long long>(options.seed),
+			static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)), out.c_str());
+	const synth::SequenceResult result = synth::write_sequence(out, rig.rig, scene.scene, options);
+	if (!result.ok) {
+		return fail(result.error);
+	}
+	const synth::SequenceTimings &t = result.timings;
+	const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+	std::printf("wrote %zu RGB-D frames, %zu fisheye frames, %zu ground-truth cubemaps (%d px faces), %zu calibration views\n",
+			t.rgbd_frames, t.fisheye_frames, t.cubemaps, options.cubemap_face_size, t.calibration_views);
+	std::printf("timings: scene %.2f s, RGB-D %.2f s (%.1f ms/frame), fisheye %.2f s (%.1f ms/frame), cubemaps %.2f s (%.1f ms each),\n"
+				"         waiting for writes %.2f s, calibration %.2f s; total %.2f s\n",
+			t.scene_s, t.rgbd_s, t.rgbd_frames ? 1000.0 * t.rgbd_s / t.rgbd_frames : 0.0, t.fisheye_s,
+			t.fisheye_frames ? 1000.0 * t.fisheye_s / t.fisheye_frames : 0.0, t.cubemap_s, t.cubemaps ? 1000.0 * t.cubemap_s / t.cubemaps : 0.0,
+			t.write_wait_s, t.calibration_s, total);
+	return 0;
+}
