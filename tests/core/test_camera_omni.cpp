@@ -2,7 +2,7 @@
 // on a 185-degree lens with xi near 1 that sees beyond 90 degrees off its axis.
 
 #include "camera/omni_camera.h"
-#include "camera/opencv_headers.h"
+#include "io/opencv.h"
 
 #include <doctest/doctest.h>
 

@@ -1,7 +1,7 @@
 // The pinhole camera with OpenCV's radial-tangential distortion (camera/pinhole_camera.h), against
 // cv::projectPoints, which defines the model.
 
-#include "camera/opencv_headers.h"
+#include "io/opencv.h"
 #include "camera/pinhole_camera.h"
 
 #include <doctest/doctest.h>

@@ -4,7 +4,7 @@
 
 #include "camera/least_squares.h"
 #include "camera/omni_camera.h"
-#include "camera/opencv_headers.h"
+#include "io/opencv.h"
 #include "camera/scaramuzza.h"
 
 #include <doctest/doctest.h>

@@ -2,7 +2,7 @@
 // planes and its noise model, holes, the fisheye's image circle, the same wall point seen by both
 // cameras, the light switch, determinism.
 
-#include "synth/synth_opencv.h"
+#include "io/opencv.h"
 
 #include "camera/omni_camera.h"
 #include "camera/pinhole_camera.h"
@@ -10,6 +10,7 @@
 #include "synth/synth_renderer.h"
 #include "synth/synth_scene.h"
 #include "synth/synth_sequence.h"
+#include "synth_test_rig.h"
 
 #include <doctest/doctest.h>
 
@@ -25,30 +26,6 @@ using namespace roomprobe;
 using namespace roomprobe::synth;
 
 namespace {
-
-// The synthetic rig of calib/synthetic_rig.yaml, spelt out so that the tests do not depend on the
-// working directory.
-Rig test_rig() {
-	Rig rig;
-	rig.rgb.width = 640;
-	rig.rgb.height = 480;
-	rig.rgb.fx = rig.rgb.fy = 525.0;
-	rig.rgb.cx = 319.5;
-	rig.rgb.cy = 239.5;
-	rig.depth_scale_m = 0.001;
-	OmniParams &f = rig.fisheye;
-	f.width = f.height = 1024;
-	f.xi = 1.0;
-	f.fx = f.fy = 478.645871127404;
-	f.cx = f.cy = 511.5;
-	f.circle_cx = f.circle_cy = 511.5;
-	f.circle_radius = 500.0;
-	f.max_angle_deg = 92.5;
-	rig.rgb_from_fisheye.rotation = glm::dquat(std::sqrt(0.5), std::sqrt(0.5), 0.0, 0.0); // (w, x, y, z)
-	rig.rgb_from_fisheye.translation = glm::dvec3(0.0, -0.08, 0.02);
-	rig.fisheye_time_offset_s = 0.0137;
-	return rig;
-}
 
 // A scene holding one flat-lit quad, a plane through p_point with normal p_normal, 20 m wide.
 Scene plane_scene(const glm::dvec3 &p_point, const glm::dvec3 &p_normal) {

@@ -1,7 +1,7 @@
 // The synthetic recording (extension/core/synth/synth_sequence.h): the hand-held trajectory, the
 // two clocks, what is written and that it reads back, determinism, the calibration views.
 
-#include "synth/synth_opencv.h"
+#include "io/opencv.h"
 
 #include "camera/pinhole_camera.h"
 #include "recording/recording_reader.h"
@@ -10,6 +10,7 @@
 #include "synth/synth_renderer.h"
 #include "synth/synth_scene.h"
 #include "synth/synth_sequence.h"
+#include "synth_test_rig.h"
 
 #include <doctest/doctest.h>
 
@@ -33,28 +34,6 @@ using namespace roomprobe::synth;
 namespace fs = std::filesystem;
 
 namespace {
-
-Rig test_rig() {
-	Rig rig;
-	rig.rgb.width = 640;
-	rig.rgb.height = 480;
-	rig.rgb.fx = rig.rgb.fy = 525.0;
-	rig.rgb.cx = 319.5;
-	rig.rgb.cy = 239.5;
-	rig.depth_scale_m = 0.001;
-	OmniParams &f = rig.fisheye;
-	f.width = f.height = 1024;
-	f.xi = 1.0;
-	f.fx = f.fy = 478.645871127404;
-	f.cx = f.cy = 511.5;
-	f.circle_cx = f.circle_cy = 511.5;
-	f.circle_radius = 500.0;
-	f.max_angle_deg = 92.5;
-	rig.rgb_from_fisheye.rotation = glm::dquat(std::sqrt(0.5), std::sqrt(0.5), 0.0, 0.0);
-	rig.rgb_from_fisheye.translation = glm::dvec3(0.0, -0.08, 0.02);
-	rig.fisheye_time_offset_s = 0.0137;
-	return rig;
-}
 
 // The same rig at a quarter of the resolution: cheap recordings for tests of what is written.
 Rig small_rig() {

@@ -5,7 +5,7 @@
 //                   [--fisheye-rate 12] [--rgbd-rate 30] [--fisheye-hdr] [--exr-float] [--no-calibration]
 //                   [--threads N]
 
-#include <synth/synth_opencv.h>
+#include <io/opencv.h>
 
 #include <rig/rig.h>
 #include <synth/synth_sequence.h>

@@ -1,6 +1,6 @@
 #include "least_squares.h"
 
-#include "opencv_headers.h"
+#include <io/opencv.h>
 
 #include <algorithm>
 #include <cmath>

@@ -4,7 +4,8 @@
 // through the model (paper §4.3).
 
 #include "camera_params.h"
-#include "opencv_headers.h"
+
+#include <io/opencv.h>
 
 #include <glm/mat3x3.hpp>
 #include <glm/vec2.hpp>

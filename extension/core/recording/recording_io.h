@@ -8,7 +8,7 @@
 
 #include "recording_types.h"
 
-#include "recording_opencv.h"
+#include <io/opencv.h>
 
 #include <cstdint>
 #include <filesystem>

@@ -4,11 +4,11 @@
 // non-fatal issues of reading and writing. No Godot; copyable values only (cv::Mat copies share
 // pixels: clone() before writing into a frame someone else holds).
 
+#include <io/opencv.h>
 #include <math/pose.h>
 #include <room/floorplan.h>
 
 #include <glm/vec3.hpp>
-#include "recording_opencv.h"
 
 #include <array>
 #include <cstddef>

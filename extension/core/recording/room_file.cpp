@@ -4,14 +4,14 @@
 
 #include <rig/trajectory.h>
 
-#include "recording_opencv.h"
+#include <io/opencv.h>
+#include <io/yaml_fields.h>
 
 #include <glm/gtc/quaternion.hpp>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <set>
 
 namespace roomprobe {
 
@@ -30,73 +30,7 @@ bool finite(const glm::dvec3 &p_value) {
 	return std::isfinite(p_value.x) && std::isfinite(p_value.y) && std::isfinite(p_value.z);
 }
 
-// Reads typed fields out of cv::FileStorage nodes; the error names the field's full path.
-class FieldReader {
-public:
-	std::string error;
-
-	bool fail(const std::string &p_field, const std::string &p_problem) {
-		error = p_field + ": " + p_problem;
-		return false;
-	}
-
-	bool number(const cv::FileNode &p_node, const std::string &p_field, double *r_value) {
-		if (p_node.empty() || p_node.isNone()) {
-			return fail(p_field, "missing");
-		}
-		if (!p_node.isInt() && !p_node.isReal()) {
-			return fail(p_field, "must be a number");
-		}
-		const double value = static_cast<double>(p_node);
-		if (!std::isfinite(value)) {
-			return fail(p_field, "must be finite (got " + format_number(value) + ")");
-		}
-		*r_value = value;
-		return true;
-	}
-
-	bool numbers(const cv::FileNode &p_node, const std::string &p_field, size_t p_count, double *r_values) {
-		if (p_node.empty() || p_node.isNone()) {
-			return fail(p_field, "missing");
-		}
-		if (!p_node.isSeq() || p_node.size() != p_count) {
-			return fail(p_field, "must be a list of " + std::to_string(p_count) + " numbers");
-		}
-		for (size_t i = 0; i < p_count; i++) {
-			if (!number(p_node[int(i)], p_field + "[" + std::to_string(i) + "]", &r_values[i])) {
-				return false;
-			}
-		}
-		return true;
-	}
-
-	// Every key of p_map is one of p_allowed, once; p_required ones are there.
-	bool check_keys(const cv::FileNode &p_map, const std::string &p_prefix, std::initializer_list<const char *> p_allowed,
-			std::initializer_list<const char *> p_required) {
-		std::set<std::string> seen;
-		for (cv::FileNodeIterator it = p_map.begin(); it != p_map.end(); ++it) {
-			const std::string key = (*it).name();
-			bool known = false;
-			for (const char *allowed : p_allowed) {
-				known = known || key == allowed;
-			}
-			if (!known) {
-				return fail(p_prefix + key, "unknown field");
-			}
-			if (!seen.insert(key).second) {
-				return fail(p_prefix + key, "given twice");
-			}
-		}
-		for (const char *key : p_required) {
-			if (!seen.count(key)) {
-				return fail(p_prefix + key, "missing");
-			}
-		}
-		return true;
-	}
-};
-
-bool read_room(FieldReader &p_reader, const cv::FileNode &p_root, RoomInfo *r_room) {
+bool read_room(YamlFieldReader &p_reader, const cv::FileNode &p_root, RoomInfo *r_room) {
 	if (!p_root.isMap()) {
 		return p_reader.fail(KEY_VERSION, "missing (the file is not a map of fields; is it a RoomProbe room file?)");
 	}
@@ -140,7 +74,7 @@ bool read_room(FieldReader &p_reader, const cv::FileNode &p_root, RoomInfo *r_ro
 	}
 	double q[4];
 	double t[3];
-	if (!p_reader.check_keys(pose, pose_prefix, { "rotation_xyzw", "translation_m" }, { "rotation_xyzw", "translation_m" }) ||
+	if (!p_reader.check_keys(pose, pose_prefix, { "rotation_xyzw", "translation_m" }) ||
 			!p_reader.numbers(pose["rotation_xyzw"], pose_prefix + "rotation_xyzw", 4, q) ||
 			!p_reader.numbers(pose["translation_m"], pose_prefix + "translation_m", 3, t)) {
 		return false;
@@ -235,7 +169,7 @@ RoomLoadResult load_room_file(const std::string &p_path) {
 			return result;
 		}
 	}
-	FieldReader reader;
+	YamlFieldReader reader(YamlFieldReader::NonFinite::Refuse);
 	RoomInfo room;
 	try {
 		cv::FileStorage storage(p_path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);

@@ -1,18 +1,13 @@
 #include "rig.h"
 
-// OpenCV's headers mix enumeration types in arithmetic, which C++20 deprecates; they are not ours.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wdeprecated-enum-enum-conversion"
-#include <opencv2/core.hpp>
-#pragma GCC diagnostic pop
+#include <io/opencv.h>
+#include <io/yaml_fields.h>
 
 #include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <initializer_list>
 #include <numbers>
-#include <set>
 #include <stdexcept>
 #include <sstream>
 
@@ -129,111 +124,7 @@ std::string check_rig(const Rig &p_rig) {
 
 namespace {
 
-// Reads typed fields out of cv::FileStorage nodes; every error names the field's full path.
-class FieldReader {
-public:
-	std::string error; // "field: problem"
-
-	// A map's keys must be exactly p_keys (each once): a misspelt key is an error, not a default.
-	bool check_keys(const cv::FileNode &p_map, const std::string &p_prefix, std::initializer_list<const char *> p_keys) {
-		std::set<std::string> seen;
-		for (cv::FileNodeIterator it = p_map.begin(); it != p_map.end(); ++it) {
-			const std::string key = (*it).name();
-			bool known = false;
-			for (const char *allowed : p_keys) {
-				known = known || key == allowed;
-			}
-			if (!known) {
-				return fail(p_prefix + key, "unknown field");
-			}
-			if (!seen.insert(key).second) {
-				return fail(p_prefix + key, "given twice");
-			}
-		}
-		for (const char *key : p_keys) {
-			if (!seen.count(key)) {
-				return fail(p_prefix + key, "missing");
-			}
-		}
-		return true;
-	}
-
-	bool map(const cv::FileNode &p_parent, const std::string &p_prefix, const char *p_key, cv::FileNode *r_map) {
-		const cv::FileNode node = p_parent[p_key];
-		if (node.empty() || node.isNone()) {
-			return fail(p_prefix + p_key, "missing");
-		}
-		if (!node.isMap()) {
-			return fail(p_prefix + p_key, "must be a map of fields");
-		}
-		*r_map = node;
-		return true;
-	}
-
-	bool integer(const cv::FileNode &p_parent, const std::string &p_prefix, const char *p_key, int *r_value) {
-		const cv::FileNode node = p_parent[p_key];
-		if (node.empty() || node.isNone()) {
-			return fail(p_prefix + p_key, "missing");
-		}
-		if (!node.isInt()) {
-			return fail(p_prefix + p_key, "must be an integer");
-		}
-		*r_value = static_cast<int>(node);
-		return true;
-	}
-
-	bool real(const cv::FileNode &p_parent, const std::string &p_prefix, const char *p_key, double *r_value) {
-		return number(p_parent[p_key], p_prefix + p_key, r_value);
-	}
-
-	bool text(const cv::FileNode &p_parent, const std::string &p_prefix, const char *p_key, std::string *r_value) {
-		const cv::FileNode node = p_parent[p_key];
-		if (node.empty() || node.isNone()) {
-			return fail(p_prefix + p_key, "missing");
-		}
-		if (!node.isString()) {
-			return fail(p_prefix + p_key, "must be a string");
-		}
-		*r_value = static_cast<std::string>(node);
-		return true;
-	}
-
-	bool reals(const cv::FileNode &p_parent, const std::string &p_prefix, const char *p_key, size_t p_count, double *r_values) {
-		const std::string field = p_prefix + p_key;
-		const cv::FileNode node = p_parent[p_key];
-		if (node.empty() || node.isNone()) {
-			return fail(field, "missing");
-		}
-		if (!node.isSeq() || node.size() != p_count) {
-			return fail(field, "must be a list of " + std::to_string(p_count) + " numbers");
-		}
-		for (size_t i = 0; i < p_count; i++) {
-			if (!number(node[static_cast<int>(i)], field + "[" + std::to_string(i) + "]", &r_values[i])) {
-				return false;
-			}
-		}
-		return true;
-	}
-
-	bool fail(const std::string &p_field, const std::string &p_problem) {
-		error = p_field + ": " + p_problem;
-		return false;
-	}
-
-private:
-	bool number(const cv::FileNode &p_node, const std::string &p_field, double *r_value) {
-		if (p_node.empty() || p_node.isNone()) {
-			return fail(p_field, "missing");
-		}
-		if (!p_node.isInt() && !p_node.isReal()) {
-			return fail(p_field, "must be a number");
-		}
-		*r_value = static_cast<double>(p_node);
-		return true;
-	}
-};
-
-bool read_rgb(FieldReader &p_reader, const cv::FileNode &p_root, PinholeParams *r_rgb) {
+bool read_rgb(YamlFieldReader &p_reader, const cv::FileNode &p_root, PinholeParams *r_rgb) {
 	cv::FileNode node;
 	std::string model;
 	const std::string prefix = "rgb.";
@@ -253,7 +144,7 @@ bool read_rgb(FieldReader &p_reader, const cv::FileNode &p_root, PinholeParams *
 			p_reader.real(node, prefix, "k3", &r_rgb->k3);
 }
 
-bool read_fisheye(FieldReader &p_reader, const cv::FileNode &p_root, OmniParams *r_fisheye) {
+bool read_fisheye(YamlFieldReader &p_reader, const cv::FileNode &p_root, OmniParams *r_fisheye) {
 	cv::FileNode node;
 	std::string model;
 	const std::string prefix = "fisheye.";
@@ -280,7 +171,7 @@ bool read_fisheye(FieldReader &p_reader, const cv::FileNode &p_root, OmniParams 
 			p_reader.real(node, prefix, "max_angle_deg", &r_fisheye->max_angle_deg);
 }
 
-bool read_extrinsic(FieldReader &p_reader, const cv::FileNode &p_root, Pose *r_rgb_from_fisheye) {
+bool read_extrinsic(YamlFieldReader &p_reader, const cv::FileNode &p_root, Pose *r_rgb_from_fisheye) {
 	cv::FileNode node;
 	const std::string prefix = "rgb_from_fisheye.";
 	double q[4];
@@ -299,7 +190,7 @@ bool read_extrinsic(FieldReader &p_reader, const cv::FileNode &p_root, Pose *r_r
 	return true;
 }
 
-bool read_rig(FieldReader &p_reader, const cv::FileNode &p_root, Rig *r_rig) {
+bool read_rig(YamlFieldReader &p_reader, const cv::FileNode &p_root, Rig *r_rig) {
 	if (!p_root.isMap()) {
 		return p_reader.fail("roomprobe_rig", "missing (the file is not a map of fields; is it a RoomProbe rig file?)");
 	}
@@ -368,7 +259,7 @@ RigLoadResult load_rig(const std::string &p_path) {
 		return result;
 	}
 	Rig rig;
-	FieldReader reader;
+	YamlFieldReader reader(YamlFieldReader::NonFinite::Accept); // check_rig words the ranges
 	try {
 		cv::FileStorage storage(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
 		if (!storage.isOpened()) {

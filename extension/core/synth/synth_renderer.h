@@ -12,7 +12,8 @@
 // Images are cv::Mat in R, G, B order (not OpenCV's usual BGR), as recording/recording_types.h
 // has them.
 
-#include "synth_opencv.h"
+#include <io/opencv.h>
+
 #include "synth_scene.h"
 
 #include <camera/camera_params.h>

@@ -1,4 +1,5 @@
-#include "synth_opencv.h"
+#include <io/opencv.h>
+
 #include "synth_scene.h"
 
 #include <room/reference_rooms.h>

@@ -1,4 +1,4 @@
-#include "synth_opencv.h"
+#include <io/opencv.h>
 
 #include "synth_sequence.h"
 
