@@ -1,0 +1,285 @@
+#include "occlusion.h"
+
+#include <CGAL/Arr_segment_traits_2.h>
+#include <CGAL/Arrangement_2.h>
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_2.h>
+#include <CGAL/Triangular_expansion_visibility_2.h>
+
+#include <embree4/rtcore.h>
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <exception>
+
+namespace roomprobe {
+
+namespace {
+
+using ExactKernel = CGAL::Exact_predicates_exact_constructions_kernel;
+using Traits = CGAL::Arr_segment_traits_2<ExactKernel>;
+using Arrangement = CGAL::Arrangement_2<Traits>;
+using Visibility = CGAL::Triangular_expansion_visibility_2<Arrangement, CGAL::Tag_true>;
+
+} // namespace
+
+bool floorplan_is_convex(const Floorplan &p_floorplan) {
+	using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+	const size_t n = p_floorplan.points.size();
+	if (n < 3) {
+		return false;
+	}
+	const Floorplan plan = normalized(p_floorplan);
+	for (size_t i = 0; i < n; ++i) {
+		const Vec2 &a = plan.points[i], &b = plan.points[(i + 1) % n], &c = plan.points[(i + 2) % n];
+		if (CGAL::orientation(K::Point_2(a.x, a.y), K::Point_2(b.x, b.y), K::Point_2(c.x, c.y)) == CGAL::RIGHT_TURN) {
+			return false;
+		}
+	}
+	return true;
+}
+
+VisibilityPolygon visibility_polygon(const Floorplan &p_floorplan, const glm::dvec2 &p_viewpoint_xz) {
+	VisibilityPolygon result;
+	const size_t n = p_floorplan.points.size();
+	if (n < 3) {
+		result.error = "the floorplan has fewer than 3 points";
+		return result;
+	}
+	try {
+		const Floorplan plan = normalized(p_floorplan);
+		CGAL::Polygon_2<ExactKernel> polygon;
+		for (const Vec2 &p : plan.points) {
+			polygon.push_back(ExactKernel::Point_2(p.x, p.y));
+		}
+		const ExactKernel::Point_2 q(p_viewpoint_xz.x, p_viewpoint_xz.y);
+		if (polygon.bounded_side(q) != CGAL::ON_BOUNDED_SIDE) {
+			result.error = "the viewpoint is not strictly inside the floorplan";
+			return result;
+		}
+		std::vector<Traits::X_monotone_curve_2> segments;
+		for (size_t i = 0; i < n; ++i) {
+			segments.emplace_back(polygon.vertex(i), polygon.vertex((i + 1) % n));
+		}
+		Arrangement arrangement;
+		CGAL::insert_non_intersecting_curves(arrangement, segments.begin(), segments.end());
+		Arrangement::Face_const_handle interior;
+		bool found = false;
+		for (auto f = arrangement.faces_begin(); f != arrangement.faces_end(); ++f) {
+			if (!f->is_unbounded()) {
+				interior = f;
+				found = true;
+				break;
+			}
+		}
+		if (!found) {
+			result.error = "the floorplan's arrangement has no bounded face";
+			return result;
+		}
+		Visibility visibility(arrangement);
+		Arrangement output;
+		const Arrangement::Face_handle face = visibility.compute_visibility(q, interior, output);
+		if (face->is_unbounded() || !face->has_outer_ccb()) {
+			result.error = "CGAL returned no bounded visibility region";
+			return result;
+		}
+		auto start = face->outer_ccb();
+		auto edge = start;
+		do {
+			const auto &p = edge->source()->point();
+			result.points.emplace_back(CGAL::to_double(p.x()), CGAL::to_double(p.y()));
+		} while (++edge != start);
+		// An outer CCB of a bounded face runs counter-clockwise already; make sure.
+		double area2 = 0.0;
+		for (size_t i = 0; i < result.points.size(); ++i) {
+			const glm::dvec2 &a = result.points[i], &b = result.points[(i + 1) % result.points.size()];
+			area2 += a.x * b.y - b.x * a.y;
+		}
+		if (area2 < 0.0) {
+			std::reverse(result.points.begin(), result.points.end());
+		}
+		result.ok = true;
+	} catch (const std::exception &e) {
+		result = VisibilityPolygon();
+		result.error = std::string("CGAL: ") + e.what();
+	}
+	return result;
+}
+
+bool point_in_polygon(const std::vector<glm::dvec2> &p_polygon, const glm::dvec2 &p_point) {
+	bool inside = false;
+	const size_t n = p_polygon.size();
+	for (size_t i = 0, j = n - 1; i < n; j = i++) {
+		const glm::dvec2 &a = p_polygon[i], &b = p_polygon[j];
+		if ((a.y > p_point.y) != (b.y > p_point.y)) {
+			const double x = a.x + (p_point.y - a.y) / (b.y - a.y) * (b.x - a.x);
+			if (p_point.x < x) {
+				inside = !inside;
+			}
+		}
+	}
+	return inside;
+}
+
+cv::Mat occlusion_mask(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const glm::dvec3 &p_fisheye_position,
+		const OcclusionOptions &p_options, VisibilityPolygon *r_polygon) {
+	const int w = p_geometry.width, h = p_geometry.height;
+	cv::Mat mask(h, w, CV_8UC1, cv::Scalar(0));
+	if (p_options.skip_convex && floorplan_is_convex(p_mesh.floorplan)) {
+		if (r_polygon) {
+			*r_polygon = VisibilityPolygon();
+			r_polygon->ok = true;
+		}
+		for (int y = 0; y < h; ++y) {
+			uint8_t *row = mask.ptr<uint8_t>(y);
+			for (int x = 0; x < w; ++x) {
+				row[x] = p_geometry.charts[size_t(y) * w + x] >= 0 ? 255 : 0;
+			}
+		}
+		return mask;
+	}
+	const VisibilityPolygon polygon = visibility_polygon(p_mesh.floorplan, glm::dvec2(p_fisheye_position.x, p_fisheye_position.z));
+	if (r_polygon) {
+		*r_polygon = polygon;
+	}
+	if (!polygon.ok) {
+		return mask;
+	}
+	const double inset = p_options.wall_inset_m;
+	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {
+		for (int y = p_rows.begin(); y < p_rows.end(); ++y) {
+			uint8_t *row = mask.ptr<uint8_t>(y);
+			for (int x = 0; x < w; ++x) {
+				const size_t i = size_t(y) * w + x;
+				const int chart = p_geometry.charts[i];
+				if (chart < 0) {
+					continue;
+				}
+				glm::dvec3 point = p_geometry.points[i];
+				if (p_mesh.charts[chart].kind == SurfaceKind::Wall) {
+					point += inset * p_geometry.normals[i];
+				}
+				row[x] = point_in_polygon(polygon.points, glm::dvec2(point.x, point.z)) ? 255 : 0;
+			}
+		}
+	});
+	return mask;
+}
+
+// ---------------------------------------------------------------- Embree
+
+struct EmbreeOcclusion::Embree {
+	RTCDevice device = nullptr;
+	RTCScene scene = nullptr;
+	~Embree() {
+		if (scene) {
+			rtcReleaseScene(scene);
+		}
+		if (device) {
+			rtcReleaseDevice(device);
+		}
+	}
+};
+
+EmbreeOcclusion::EmbreeOcclusion(const RoomMesh &p_mesh, const std::vector<glm::dvec3> &p_extra_triangles) :
+		embree(std::make_unique<Embree>()) {
+	std::vector<float> vertices;
+	std::vector<uint32_t> indices;
+	for (const Vec3f &p : p_mesh.positions) {
+		vertices.insert(vertices.end(), { p.x, p.y, p.z });
+	}
+	indices = p_mesh.indices;
+	for (size_t i = 0; i + 2 < p_extra_triangles.size(); i += 3) {
+		for (int k = 0; k < 3; ++k) {
+			const glm::dvec3 &p = p_extra_triangles[i + k];
+			indices.push_back(static_cast<uint32_t>(vertices.size() / 3));
+			vertices.insert(vertices.end(), { float(p.x), float(p.y), float(p.z) });
+		}
+	}
+	if (indices.empty()) {
+		error_message = "no triangles";
+		return;
+	}
+	embree->device = rtcNewDevice(nullptr);
+	if (!embree->device) {
+		error_message = "Embree: cannot create a device";
+		return;
+	}
+	embree->scene = rtcNewScene(embree->device);
+	RTCGeometry geometry = rtcNewGeometry(embree->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+	float *vb = static_cast<float *>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices.size() / 3));
+	uint32_t *ib = static_cast<uint32_t *>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), indices.size() / 3));
+	if (!vb || !ib) {
+		rtcReleaseGeometry(geometry);
+		error_message = "Embree: cannot allocate buffers";
+		return;
+	}
+	std::copy(vertices.begin(), vertices.end(), vb);
+	std::copy(indices.begin(), indices.end(), ib);
+	rtcCommitGeometry(geometry);
+	rtcAttachGeometry(embree->scene, geometry);
+	rtcReleaseGeometry(geometry);
+	rtcCommitScene(embree->scene);
+	const RTCError status = rtcGetDeviceError(embree->device);
+	if (status != RTC_ERROR_NONE) {
+		error_message = std::string("Embree: ") + rtcGetErrorString(status);
+	}
+}
+
+EmbreeOcclusion::~EmbreeOcclusion() = default;
+
+cv::Mat EmbreeOcclusion::mask(const TexelGeometry &p_geometry, const glm::dvec3 &p_fisheye_position, double p_epsilon_m) const {
+	const int w = p_geometry.width, h = p_geometry.height;
+	cv::Mat mask(h, w, CV_8UC1, cv::Scalar(0));
+	if (!ok()) {
+		return mask;
+	}
+	RTCScene scene = embree->scene;
+	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {
+		for (int y = p_rows.begin(); y < p_rows.end(); ++y) {
+			uint8_t *row = mask.ptr<uint8_t>(y);
+			for (int x = 0; x < w; ++x) {
+				const size_t i = size_t(y) * w + x;
+				if (p_geometry.charts[i] < 0) {
+					continue;
+				}
+				const glm::dvec3 direction = p_geometry.points[i] - p_fisheye_position;
+				const double distance = glm::length(direction);
+				if (!(distance > p_epsilon_m)) {
+					row[x] = 255;
+					continue;
+				}
+				RTCRay ray;
+				ray.org_x = float(p_fisheye_position.x);
+				ray.org_y = float(p_fisheye_position.y);
+				ray.org_z = float(p_fisheye_position.z);
+				ray.dir_x = float(direction.x / distance);
+				ray.dir_y = float(direction.y / distance);
+				ray.dir_z = float(direction.z / distance);
+				ray.tnear = 0.0f;
+				ray.tfar = float(distance - p_epsilon_m);
+				ray.time = 0.0f;
+				ray.mask = 0xffffffffu;
+				ray.id = 0;
+				ray.flags = 0;
+				rtcOccluded1(scene, &ray, nullptr);
+				row[x] = ray.tfar < 0.0f ? 0 : 255;
+			}
+		}
+	});
+	return mask;
+}
+
+cv::Mat occlusion_mask_embree(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const glm::dvec3 &p_fisheye_position,
+		const std::vector<glm::dvec3> &p_extra_triangles, double p_epsilon_m) {
+	const EmbreeOcclusion tracer(p_mesh, p_extra_triangles);
+	if (!tracer.ok()) {
+		return cv::Mat();
+	}
+	return tracer.mask(p_geometry, p_fisheye_position, p_epsilon_m);
+}
+
+} // namespace roomprobe

@@ -1,0 +1,217 @@
+#include "texture_update.h"
+
+#include <camera/omni_camera.h>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+
+namespace roomprobe {
+
+TexelGeometry make_texel_geometry(const RoomMesh &p_mesh) {
+	TexelGeometry g;
+	g.width = std::max(p_mesh.atlas_width, 0);
+	g.height = std::max(p_mesh.atlas_height, 0);
+	const size_t n = size_t(g.width) * size_t(g.height);
+	g.points.assign(n, glm::dvec3(0.0));
+	g.normals.assign(n, glm::dvec3(0.0));
+	g.charts.assign(n, -1);
+	std::atomic<size_t> count { 0 };
+	tbb::parallel_for(tbb::blocked_range<int>(0, g.height), [&](const tbb::blocked_range<int> &p_rows) {
+		size_t local = 0;
+		for (int y = p_rows.begin(); y < p_rows.end(); ++y) {
+			for (int x = 0; x < g.width; ++x) {
+				Vec3 point, normal;
+				if (!texel_to_world(p_mesh, x, y, &point, &normal)) {
+					continue;
+				}
+				const size_t i = size_t(y) * g.width + x;
+				g.points[i] = glm::dvec3(point.x, point.y, point.z);
+				g.normals[i] = glm::dvec3(normal.x, normal.y, normal.z);
+				g.charts[i] = find_chart_at_texel(p_mesh, x, y);
+				++local;
+			}
+		}
+		count += local;
+	});
+	g.surface_texels = count;
+	return g;
+}
+
+double observation_quality(double p_cos_view, double p_distance_m, double p_radius_fraction, const TextureUpdateOptions &p_options) {
+	if (!(p_cos_view >= p_options.min_cos_view) || !(p_cos_view > 0.0)) {
+		return 0.0;
+	}
+	const double d = std::max(p_distance_m, p_options.min_distance_m);
+	const double r = std::clamp(p_radius_fraction, 0.0, 1.0);
+	return p_cos_view / (d * d) * std::max(1.0 - p_options.edge_penalty * r * r, 0.0);
+}
+
+namespace {
+
+// Bilinear sample at p_pixel (pixel centres at integers), as linear R, G, B.
+template <typename T, int C>
+cv::Vec3f bilinear(const cv::Mat &p_image, double p_x, double p_y, float p_scale) {
+	const int x0 = static_cast<int>(std::floor(p_x));
+	const int y0 = static_cast<int>(std::floor(p_y));
+	const float fx = static_cast<float>(p_x - x0);
+	const float fy = static_cast<float>(p_y - y0);
+	const int x1 = std::min(x0 + 1, p_image.cols - 1);
+	const int y1 = std::min(y0 + 1, p_image.rows - 1);
+	const int xa = std::max(x0, 0), ya = std::max(y0, 0);
+	auto at = [&](int p_yy, int p_xx) {
+		const T *row = p_image.ptr<T>(p_yy) + size_t(p_xx) * C;
+		if constexpr (C == 1) {
+			const float v = static_cast<float>(row[0]);
+			return cv::Vec3f(v, v, v);
+		} else {
+			return cv::Vec3f(static_cast<float>(row[0]), static_cast<float>(row[1]), static_cast<float>(row[2]));
+		}
+	};
+	const cv::Vec3f top = at(ya, xa) * (1.0f - fx) + at(ya, x1) * fx;
+	const cv::Vec3f bottom = at(y1, xa) * (1.0f - fx) + at(y1, x1) * fx;
+	return (top * (1.0f - fy) + bottom * fy) * p_scale;
+}
+
+} // namespace
+
+TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const OmniParams &p_params,
+		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask,
+		CoarseTexture *io_texture, const TextureUpdateOptions &p_options) {
+	TextureUpdateStats stats;
+	const auto start = std::chrono::steady_clock::now();
+	const int w = p_mesh.atlas_width, h = p_mesh.atlas_height;
+	if (!io_texture || p_geometry.width != w || p_geometry.height != h || p_fisheye_image.empty()) {
+		return stats;
+	}
+	const int type = p_fisheye_image.type();
+	if (type != CV_8UC1 && type != CV_8UC3 && type != CV_32FC3) {
+		return stats;
+	}
+	CoarseTexture &tex = *io_texture;
+	if (tex.color.size() != cv::Size(w, h) || tex.color.type() != CV_32FC3 || tex.observed.size() != cv::Size(w, h) ||
+			tex.quality.size() != cv::Size(w, h) || tex.updated.size() != cv::Size(w, h)) {
+		return stats;
+	}
+	if (p_visibility_mask && (p_visibility_mask->size() != cv::Size(w, h) || p_visibility_mask->type() != CV_8UC1)) {
+		return stats;
+	}
+
+	const Pose fisheye_from_world = inverse(p_world_from_fisheye);
+	const glm::dmat3 rotation = glm::mat3_cast(fisheye_from_world.rotation);
+	const glm::dvec3 translation = fisheye_from_world.translation;
+	const glm::dvec3 camera = p_world_from_fisheye.translation;
+	const int cols = p_fisheye_image.cols, rows = p_fisheye_image.rows;
+	const double margin = p_options.rim_margin_px;
+	const bool has_circle = p_params.circle_radius > 0.0;
+	const double circle_cx = has_circle ? p_params.circle_cx : 0.5 * (cols - 1);
+	const double circle_cy = has_circle ? p_params.circle_cy : 0.5 * (rows - 1);
+	const double radius = has_circle ? p_params.circle_radius : 0.5 * std::hypot(double(cols), double(rows));
+	const bool best = p_options.policy == TextureUpdatePolicy::Best;
+	const double keep_fraction = 1.0 - std::clamp(p_options.replace_epsilon, 0.0, 1.0);
+
+	std::atomic<size_t> visible_total { 0 }, updated_total { 0 };
+	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {
+		size_t visible = 0, updated = 0;
+		for (int y = p_rows.begin(); y < p_rows.end(); ++y) {
+			uint8_t *updated_row = tex.updated.ptr<uint8_t>(y);
+			std::fill(updated_row, updated_row + w, uint8_t(0));
+			const uint8_t *mask_row = p_visibility_mask ? p_visibility_mask->ptr<uint8_t>(y) : nullptr;
+			cv::Vec3f *color_row = tex.color.ptr<cv::Vec3f>(y);
+			float *quality_row = tex.quality.ptr<float>(y);
+			uint8_t *observed_row = tex.observed.ptr<uint8_t>(y);
+			for (int x = 0; x < w; ++x) {
+				const size_t i = size_t(y) * w + x;
+				if (p_geometry.charts[i] < 0 || (mask_row && mask_row[x] == 0)) {
+					continue;
+				}
+				const glm::dvec3 &point = p_geometry.points[i];
+				const glm::dvec3 to_camera = camera - point;
+				const double distance = glm::length(to_camera);
+				if (!(distance > 1e-9)) {
+					continue;
+				}
+				const double cos_view = glm::dot(p_geometry.normals[i], to_camera) / distance;
+				if (cos_view <= 0.0) {
+					continue; // the back of the surface
+				}
+				glm::dvec2 pixel;
+				if (!project_omni(p_params, rotation * point + translation, &pixel)) {
+					continue;
+				}
+				if (!(pixel.x >= margin && pixel.y >= margin && pixel.x <= cols - 1 - margin && pixel.y <= rows - 1 - margin)) {
+					continue;
+				}
+				const double r = std::hypot(pixel.x - circle_cx, pixel.y - circle_cy);
+				if (has_circle && r > radius - margin) {
+					continue;
+				}
+				++visible;
+				double quality = observation_quality(cos_view, distance, r / radius, p_options);
+				if (p_options.footprint_quality && quality > 0.0) {
+					// The texel's area in the image, pixels^2, from the projections of its two edges.
+					const Chart &chart = p_mesh.charts[p_geometry.charts[i]];
+					const glm::dvec3 u(chart.u_axis_m.x, chart.u_axis_m.y, chart.u_axis_m.z);
+					const glm::dvec3 v(chart.v_axis_m.x, chart.v_axis_m.y, chart.v_axis_m.z);
+					glm::dvec2 pu, pv;
+					// (Where an edge's projection fails, at the model's limit, the closed form stays.)
+					if (project_omni(p_params, rotation * (point + u) + translation, &pu) &&
+							project_omni(p_params, rotation * (point + v) + translation, &pv)) {
+						const glm::dvec2 du = pu - pixel, dv = pv - pixel;
+						quality = std::abs(du.x * dv.y - du.y * dv.x) * std::max(1.0 - p_options.edge_penalty * (r / radius) * (r / radius), 0.0);
+					}
+				}
+				if (best) {
+					if (quality <= 0.0 || (observed_row[x] && quality < quality_row[x] * keep_fraction)) {
+						continue;
+					}
+				}
+				cv::Vec3f sample;
+				switch (type) {
+					case CV_8UC1:
+						sample = bilinear<uint8_t, 1>(p_fisheye_image, pixel.x, pixel.y, 1.0f / 255.0f);
+						break;
+					case CV_8UC3:
+						sample = bilinear<uint8_t, 3>(p_fisheye_image, pixel.x, pixel.y, 1.0f / 255.0f);
+						break;
+					default:
+						sample = bilinear<float, 3>(p_fisheye_image, pixel.x, pixel.y, 1.0f);
+						break;
+				}
+				color_row[x] = sample;
+				// Best: the best quality ever seen, not the new (possibly epsilon-worse) one's, so that
+				// a run of slightly worse views cannot ratchet the reference down (measured: with the
+				// new one's, epsilon = 0.1 came out worse than the "last" policy).
+				quality_row[x] = static_cast<float>(best && observed_row[x] ? std::max(double(quality_row[x]), quality) : quality);
+				observed_row[x] = 255;
+				updated_row[x] = 255;
+				++updated;
+			}
+		}
+		visible_total += visible;
+		updated_total += updated;
+	});
+	stats.texels_visible = visible_total;
+	stats.texels_updated = updated_total;
+	stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+	return stats;
+}
+
+TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const OmniParams &p_params, const Pose &p_world_from_fisheye,
+		const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, CoarseTexture *io_texture,
+		const TextureUpdateOptions &p_options) {
+	const auto start = std::chrono::steady_clock::now();
+	const TexelGeometry geometry = make_texel_geometry(p_mesh);
+	TextureUpdateStats stats = update_coarse_texture(p_mesh, geometry, p_params, p_world_from_fisheye, p_fisheye_image,
+			p_visibility_mask, io_texture, p_options);
+	stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+	return stats;
+}
+
+} // namespace roomprobe

@@ -1,0 +1,101 @@
+#pragma once
+// Updating the coarse model's texture from a fisheye frame (paper §4.3): every atlas texel on the
+// room's surface is taken to the world, into the fisheye's frame, projected with the unified
+// omnidirectional model (camera/omni_camera.h) and, where the fisheye sees it and the occlusion
+// mask (coarse/occlusion.h, §4.4) lets it, the image is sampled there. Rather than the paper's
+// "latest frame wins", the texel keeps its BEST observation so far (viewing angle, distance,
+// position in the image circle), still following the scene when seen about as well again.
+
+#include <io/opencv.h>
+
+#include "coarse_texture.h"
+
+#include <camera/camera_params.h>
+#include <math/pose.h>
+#include <room/room_mesh.h>
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace roomprobe {
+
+// Each atlas texel's world point and inward normal (room/room_mesh.h texel_to_world), computed
+// once per mesh and reused by every frame (and by the occlusion masks).
+struct TexelGeometry {
+	int width = 0; // atlas width, texels
+	int height = 0; // atlas height, texels
+	std::vector<glm::dvec3> points; // world point of texel (x, y) at [y * width + x], metres
+	std::vector<glm::dvec3> normals; // unit inward normal, same indexing
+	std::vector<int> charts; // chart index (into RoomMesh::charts), -1 where the texel is not on the surface
+	size_t surface_texels = 0; // texels with charts[i] >= 0
+
+	bool on_surface(int p_x, int p_y) const { return charts[size_t(p_y) * width + p_x] >= 0; }
+};
+
+TexelGeometry make_texel_geometry(const RoomMesh &p_mesh);
+
+enum class TextureUpdatePolicy {
+	Best, // keep the best-quality observation (replace when the new one is nearly as good or better)
+	Last, // the paper's: every valid observation overwrites the texel (for comparison)
+};
+
+// Settings of update_coarse_texture().
+struct TextureUpdateOptions {
+	TextureUpdatePolicy policy = TextureUpdatePolicy::Best;
+	// Best: a new observation replaces the kept one when its quality >= kept * (1 - epsilon), so
+	// the texture follows the scene (lighting changes, §4.6) when it is seen about as well again.
+	// Unitless, in [0, 1): 0 only strictly-as-good views replace; 0.25 a view 25 % worse does too.
+	// The reference is the best quality ever seen at the texel (io_texture->quality holds it), so a
+	// run of slightly worse views cannot ratchet it down. Measured on a 20-frame two_rooms sequence
+	// (tests/core/test_coarse_update_texture.cpp): MAE falls with epsilon towards 0 (0: -6 % against
+	// "last" with the footprint quality, -10 % with the closed form); 0.05 keeps some following.
+	double replace_epsilon = 0.05;
+	// Texels seen more obliquely than this (cos of the angle between the inward normal and the
+	// direction to the camera) are not updated at all: at grazing angles a texel covers a sliver
+	// of a pixel. Unitless, in [0, 1).
+	double min_cos_view = 0.1;
+	// Distance below which nearer does not count as better (the fisheye's blur and the texel size
+	// dominate there), metres; > 0.
+	double min_distance_m = 0.5;
+	// The fisheye blurs (and its pixels cover more solid angle) towards the image circle's edge:
+	// quality is multiplied by 1 - edge_penalty * r^2, r = distance from the circle centre /
+	// circle radius (image half-diagonal when there is no circle). Unitless, in [0, 1).
+	double edge_penalty = 0.5;
+	// true: quality is the texel's area in the image (pixels^2, from projecting its edges with the
+	// camera model: viewing angle, distance and the lens's distortion in one), times the edge
+	// penalty, instead of observation_quality()'s closed form. Costs two more projections a texel.
+	bool footprint_quality = true;
+	// Pixels this close to the image circle's rim (or the image border) are not sampled (the
+	// bilinear footprint would reach the black outside), pixels; >= 0.
+	double rim_margin_px = 1.5;
+};
+
+// Quality of observing a surface point: cos_view / max(distance, min_distance)^2 * (1 -
+// edge_penalty * r^2), i.e. proportional to the texel's footprint in the image (pixels per
+// texel) discounted towards the edge; 0 when cos_view < min_cos_view. Units: 1 / m^2.
+double observation_quality(double p_cos_view, double p_distance_m, double p_radius_fraction, const TextureUpdateOptions &p_options);
+
+struct TextureUpdateStats {
+	size_t texels_visible = 0; // surface texels the fisheye sees in this frame (in the circle, in front, unmasked)
+	size_t texels_updated = 0; // of those, how many took the new observation
+	double seconds = 0.0; // wall-clock time of the update
+};
+
+// Updates io_texture (from make_coarse_texture(p_mesh)) with one fisheye frame.
+// p_fisheye_image: CV_8UC1 (grey, copied to R, G, B), CV_8UC3 (R, G, B; value / 255) or CV_32FC3
+// (R, G, B radiance as is), p_params' size. p_visibility_mask: CV_8UC1 atlas-sized, 255 where
+// the fisheye can see the texel (occlusion.h); null: all visible. Clears io_texture->updated,
+// then sets it (255) on every texel that took the new observation, with observed and quality.
+// Parallel over atlas rows. Returns zero stats when the inputs do not fit together.
+TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const OmniParams &p_params,
+		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask,
+		CoarseTexture *io_texture, const TextureUpdateOptions &p_options = TextureUpdateOptions());
+
+// The same, computing the texel geometry on the fly (slower: prefer the overload above per frame).
+TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const OmniParams &p_params, const Pose &p_world_from_fisheye,
+		const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, CoarseTexture *io_texture,
+		const TextureUpdateOptions &p_options = TextureUpdateOptions());
+
+} // namespace roomprobe

@@ -1,0 +1,184 @@
+#include "coarse_render.h"
+
+#include <glm/geometric.hpp>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace roomprobe {
+
+namespace {
+
+glm::dvec3 to_glm(const Vec3 &p_v) {
+	return glm::dvec3(p_v.x, p_v.y, p_v.z);
+}
+
+double cross2(double p_ax, double p_ay, double p_bx, double p_by) {
+	return p_ax * p_by - p_ay * p_bx;
+}
+
+// Crossing-number test in the floorplan's (x, z) plane.
+bool inside_polygon(const std::vector<Vec2> &p_points, double p_x, double p_z) {
+	bool inside = false;
+	const size_t n = p_points.size();
+	for (size_t i = 0, j = n - 1; i < n; j = i++) {
+		const Vec2 &a = p_points[i];
+		const Vec2 &b = p_points[j];
+		if ((a.y > p_z) != (b.y > p_z)) {
+			const double x = a.x + (p_z - a.y) * (b.x - a.x) / (b.y - a.y);
+			if (p_x < x) {
+				inside = !inside;
+			}
+		}
+	}
+	return inside;
+}
+
+} // namespace
+
+bool intersect_room(const RoomMesh &p_mesh, const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, RoomRayHit *r_hit) {
+	const std::vector<Vec2> &points = p_mesh.floorplan.points;
+	const size_t n = points.size();
+	const double height = p_mesh.floorplan.ceiling_height_m;
+	const double length = glm::length(p_direction);
+	if (n < 3 || p_mesh.charts.size() < n + 2 || !(length > 0.0)) {
+		return false;
+	}
+	const glm::dvec3 d = p_direction / length;
+	const double t_min = 1e-12;
+	// Rays along an edge where two surfaces meet (a wall's top or bottom, a corner) must not slip
+	// between both: walls accept hits this little beyond their ends and height.
+	const double slack = 1e-9;
+	double best = std::numeric_limits<double>::infinity();
+	int best_chart = -1;
+
+	// Walls: segments points[i] -> points[i + 1] in (x, z), hit between floor and ceiling.
+	for (size_t i = 0; i < n; i++) {
+		const Vec2 &a = points[i];
+		const Vec2 &b = points[(i + 1) % n];
+		const double ex = b.x - a.x;
+		const double ez = b.y - a.y;
+		const double denom = cross2(d.x, d.z, ex, ez);
+		if (denom == 0.0) {
+			continue; // parallel to the wall (or straight up / down)
+		}
+		const double wx = a.x - p_origin.x;
+		const double wz = a.y - p_origin.z;
+		const double t = cross2(wx, wz, ex, ez) / denom;
+		const double s = cross2(wx, wz, d.x, d.z) / denom;
+		if (t <= t_min || t >= best || s < -slack || s > 1.0 + slack) {
+			continue;
+		}
+		const double y = p_origin.y + t * d.y;
+		if (y < -slack || y > height + slack) {
+			continue;
+		}
+		best = t;
+		best_chart = int(i);
+	}
+	// Floor (y = 0) and ceiling (y = height).
+	if (d.y != 0.0) {
+		const bool down = d.y < 0.0;
+		const double t = ((down ? 0.0 : height) - p_origin.y) / d.y;
+		if (t > t_min && t < best && inside_polygon(points, p_origin.x + t * d.x, p_origin.z + t * d.z)) {
+			best = t;
+			best_chart = int(n) + (down ? 0 : 1);
+		}
+	}
+	if (best_chart < 0) {
+		return false;
+	}
+	const Chart &chart = p_mesh.charts[size_t(best_chart)];
+	const glm::dvec3 point = p_origin + best * d;
+	const glm::dvec3 offset = point - to_glm(chart.origin_m);
+	const glm::dvec3 u = to_glm(chart.u_axis_m);
+	const glm::dvec3 v = to_glm(chart.v_axis_m);
+	r_hit->distance = best;
+	r_hit->point = point;
+	r_hit->chart = best_chart;
+	r_hit->atlas = glm::dvec2(chart.x + glm::dot(offset, u) / glm::dot(u, u), chart.y + glm::dot(offset, v) / glm::dot(v, v));
+	return true;
+}
+
+CoarseCubemapRenderer::CoarseCubemapRenderer(const RoomMesh &p_mesh) :
+		mesh(p_mesh), on_surface(size_t(std::max(0, p_mesh.atlas_width)) * size_t(std::max(0, p_mesh.atlas_height)), 0) {
+	const int width = mesh.atlas_width;
+	tbb::parallel_for(tbb::blocked_range<int>(0, std::max(0, mesh.atlas_height)), [&](const tbb::blocked_range<int> &p_rows) {
+		for (int y = p_rows.begin(); y != p_rows.end(); y++) {
+			for (int x = 0; x < width; x++) {
+				on_surface[size_t(y) * size_t(width) + size_t(x)] = texel_to_world(mesh, x, y, nullptr, nullptr) ? 1 : 0;
+			}
+		}
+	});
+}
+
+bool CoarseCubemapRenderer::texel_on_surface(int p_x, int p_y) const {
+	if (p_x < 0 || p_y < 0 || p_x >= mesh.atlas_width || p_y >= mesh.atlas_height) {
+		return false;
+	}
+	return on_surface[size_t(p_y) * size_t(mesh.atlas_width) + size_t(p_x)] != 0;
+}
+
+cv::Vec3f CoarseCubemapRenderer::sample(const cv::Mat &p_atlas_color, int p_chart, const glm::dvec2 &p_atlas) const {
+	const Chart &chart = mesh.charts[size_t(p_chart)];
+	// The last texel whose centre lies within the chart's used extent, per axis.
+	const int last_x = chart.x + std::clamp(int(std::floor(chart.used_w_texels - 0.5)), 0, std::max(0, chart.w - 1));
+	const int last_y = chart.y + std::clamp(int(std::floor(chart.used_h_texels - 0.5)), 0, std::max(0, chart.h - 1));
+	// Texel-centre coordinates, clamped to the chart.
+	const double fx = std::clamp(p_atlas.x - 0.5, double(chart.x), double(last_x));
+	const double fy = std::clamp(p_atlas.y - 0.5, double(chart.y), double(last_y));
+	const int x0 = int(std::floor(fx));
+	const int y0 = int(std::floor(fy));
+	const int x1 = std::min(x0 + 1, last_x);
+	const int y1 = std::min(y0 + 1, last_y);
+	const double ax = fx - x0;
+	const double ay = fy - y0;
+	const int xs[4] = { x0, x1, x0, x1 };
+	const int ys[4] = { y0, y0, y1, y1 };
+	const double ws[4] = { (1.0 - ax) * (1.0 - ay), ax * (1.0 - ay), (1.0 - ax) * ay, ax * ay };
+	double sum[3] = { 0.0, 0.0, 0.0 };
+	double weight = 0.0;
+	for (int i = 0; i < 4; i++) {
+		if (ws[i] <= 0.0 || !texel_on_surface(xs[i], ys[i])) {
+			continue;
+		}
+		const cv::Vec3f &c = p_atlas_color.at<cv::Vec3f>(ys[i], xs[i]);
+		for (int k = 0; k < 3; k++) {
+			sum[k] += ws[i] * c[k];
+		}
+		weight += ws[i];
+	}
+	if (weight <= 0.0) {
+		// No surface texel among the taps (a sliver of floor or ceiling between texel centres):
+		// the nearest tap.
+		return p_atlas_color.at<cv::Vec3f>(ay < 0.5 ? y0 : y1, ax < 0.5 ? x0 : x1);
+	}
+	return cv::Vec3f(float(sum[0] / weight), float(sum[1] / weight), float(sum[2] / weight));
+}
+
+Cubemap CoarseCubemapRenderer::render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size) const {
+	if (p_size <= 0 || p_atlas_color.type() != CV_32FC3 || p_atlas_color.cols != mesh.atlas_width || p_atlas_color.rows != mesh.atlas_height) {
+		return Cubemap();
+	}
+	Cubemap cubemap = make_cubemap(p_size);
+	tbb::parallel_for(tbb::blocked_range<int>(0, 6 * p_size), [&](const tbb::blocked_range<int> &p_rows) {
+		for (int row = p_rows.begin(); row != p_rows.end(); row++) {
+			const int face = row / p_size;
+			const int v = row % p_size;
+			cv::Vec3f *out = cubemap.faces[size_t(face)].ptr<cv::Vec3f>(v);
+			for (int u = 0; u < p_size; u++) {
+				RoomRayHit hit;
+				if (intersect_room(mesh, p_position, cubemap_direction(face, u, v, p_size), &hit)) {
+					out[u] = sample(p_atlas_color, hit.chart, hit.atlas);
+				}
+			}
+		}
+	});
+	return cubemap;
+}
+
+} // namespace roomprobe

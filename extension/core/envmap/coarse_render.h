@@ -1,0 +1,66 @@
+#pragma once
+// Renders the textured coarse model (the floorplan prism and its atlas, room/room_mesh.h,
+// coarse/coarse_texture.h) into a cubemap at a probe position (paper §4.7, first pass).
+//
+// The paper rasterises the six faces on the GPU; here every face pixel's ray (cubemap_direction)
+// is intersected with the prism exactly instead: the floor (y = 0) and ceiling (y = height)
+// planes with a point-in-polygon test, and each wall as a segment in (x, z) with a height check;
+// the nearest hit wins. The hit is mapped into its chart's atlas rect (the inverse of Chart's
+// texel mapping) and the atlas is sampled bilinearly, only from texels on that chart's surface
+// (texel_to_world succeeds), so nothing bleeds in from padding, the rounding margin or, on the
+// floor and ceiling, from outside the polygon.
+
+#include "cubemap.h"
+
+#include <coarse/coarse_texture.h>
+#include <room/room_mesh.h>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace roomprobe {
+
+// The nearest surface of the room along a ray.
+struct RoomRayHit {
+	double distance = 0.0; // along the (normalised) ray direction, metres
+	glm::dvec3 point = glm::dvec3(0.0); // world metres
+	int chart = -1; // into RoomMesh::charts (walls 0..n-1, floor n, ceiling n + 1)
+	glm::dvec2 atlas = glm::dvec2(0.0); // continuous atlas position, texel units (texel (x, y) has centre (x + 0.5, y + 0.5))
+};
+
+// Intersects the ray p_origin + t p_direction (t > 0; p_direction need not be normalised) with
+// the room prism of p_mesh. False when it hits nothing (an origin outside the room can miss).
+bool intersect_room(const RoomMesh &p_mesh, const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, RoomRayHit *r_hit);
+
+// Renders a coarse model into cubemaps. Build once per room mesh (it caches which atlas texels
+// lie on the surface, p_mesh's atlas size in bytes), then render any number of probes. The
+// mesh must outlive the renderer.
+class CoarseCubemapRenderer {
+public:
+	explicit CoarseCubemapRenderer(const RoomMesh &p_mesh);
+
+	// The cubemap seen from p_position (world metres, inside the room) through the atlas
+	// p_atlas_color (CV_32FC3, the mesh's atlas size; CoarseTexture::color). Directions that hit
+	// nothing (a position outside the room) are black. Returns an invalid (size 0) cubemap when
+	// the atlas has the wrong size or type. Parallel over face rows (TBB).
+	Cubemap render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size = 256) const;
+	Cubemap render(const CoarseTexture &p_texture, const glm::dvec3 &p_position, int p_size = 256) const {
+		return render(p_texture.color, p_position, p_size);
+	}
+
+	// The atlas colour at continuous atlas position p_atlas (texel units, see RoomRayHit) on
+	// chart p_chart: bilinear over the chart's surface texels, clamped to the chart.
+	cv::Vec3f sample(const cv::Mat &p_atlas_color, int p_chart, const glm::dvec2 &p_atlas) const;
+
+	// Whether atlas texel (x, y) lies on the room surface (texel_to_world succeeds).
+	bool texel_on_surface(int p_x, int p_y) const;
+
+private:
+	const RoomMesh &mesh;
+	std::vector<uint8_t> on_surface; // atlas_width * atlas_height, row-major
+};
+
+} // namespace roomprobe

@@ -1,0 +1,28 @@
+#pragma once
+// An environment map as a cubemap (paper §4.7): six square CV_32FC3 faces of linear R, G, B,
+// in the project's one cubemap convention (recording/cubemap_layout.h: face order +X -X +Y -Y
+// +Z -Z, world Y up, cubemap_direction / cubemap_face_pixel for the pixel <-> direction map).
+
+#include <io/opencv.h>
+
+#include <recording/cubemap_layout.h>
+#include <recording/recording_types.h>
+
+namespace roomprobe {
+
+struct Cubemap {
+	int size = 0; // face width and height, pixels
+	CubemapFaces faces; // each size x size, CV_32FC3, linear R, G, B
+};
+
+// A p_size x p_size cubemap filled with p_fill.
+Cubemap make_cubemap(int p_size, const cv::Vec3f &p_fill = cv::Vec3f(0.0f, 0.0f, 0.0f));
+
+// Whether p_cubemap has six p_cubemap.size-square CV_32FC3 faces (size > 0).
+bool is_valid_cubemap(const Cubemap &p_cubemap);
+
+// The exact solid angle (steradians) that face pixel (p_u, p_v) of a p_size face subtends;
+// the same for every face. The 6 p_size^2 pixels sum to 4 pi.
+double cubemap_texel_solid_angle(int p_u, int p_v, int p_size);
+
+} // namespace roomprobe
