@@ -1,0 +1,137 @@
+extends RoomProbeTestCase
+## A mirror sphere (shaders/mirror.gdshader) fed by a RoomProbe's Cubemap, rendered by Godot:
+## checks that Godot samples the probe's Cubemap with the same direction convention as the
+## core's cubemap_direction. Seen from above, the sphere's centre reflects straight up and must
+## show the ceiling; seen from +Z it reflects towards +Z (the wall facing -Z); from +X, the
+## wall facing -X. Runs only in the "rendering" suite.
+
+const SIZE := Vector2i(96, 96)
+const PLAN := [Vector2(0, 0), Vector2(4, 0), Vector2(4, 3), Vector2(0, 3)]
+const HEIGHT := 2.5
+const CENTRE := Vector3(2.0, 1.25, 1.5)
+const FLOOR_COLOR := Color(0.8, 0.5, 0.1)
+const CEILING_COLOR := Color(0.2, 0.9, 0.6)
+const WALL_COLORS := [Color(0.9, 0.1, 0.1), Color(0.1, 0.7, 0.2), Color(0.1, 0.2, 0.9), Color(0.6, 0.6, 0.1)]
+
+var _viewport: SubViewport
+var _holder: Node3D
+
+
+func after_each() -> void:
+	for n in [_viewport, _holder]:
+		if is_instance_valid(n):
+			n.free()
+	_viewport = null
+	_holder = null
+
+
+func test_mirror_sphere_reflects_the_right_surfaces() -> void:
+	if not rendering:
+		return skip("needs a renderer (rendering suite: --rendering under a display)")
+	# The room and the probe, outside the viewport's world (hidden: only the map matters).
+	_holder = Node3D.new()
+	_holder.visible = false
+	var room = ClassDB.instantiate("CoarseRoomModel")
+	room.name = "Room"
+	room.floorplan = PackedVector2Array(PLAN)
+	room.ceiling_height = HEIGHT
+	room.texel_size = 0.05
+	_holder.add_child(room)
+	var size: Vector2i = room.get_atlas_size()
+	var atlas := Image.create_empty(size.x, size.y, false, Image.FORMAT_RGBF)
+	var by_normal := {}  # a surface's colour by the direction from which it is seen
+	for c in room.get_charts():
+		var color: Color = FLOOR_COLOR if c.kind == "floor" else CEILING_COLOR if c.kind == "ceiling" else WALL_COLORS[c.wall_index]
+		atlas.fill_rect(c.rect, color)
+		by_normal[Vector3i((-c.normal as Vector3).round())] = color
+	assert_true(room.set_atlas_image(atlas))
+	var material := ShaderMaterial.new()
+	material.shader = load("res://shaders/mirror.gdshader")
+	var probe = ClassDB.instantiate("RoomProbe")
+	probe.resolution = 64
+	probe.position = CENTRE
+	probe.target_material = material
+	_holder.add_child(probe)
+	probe.coarse_model = NodePath("../Room")
+	add_to_tree(_holder)
+	assert_not_null(probe.get_cubemap(), "the probe rendered on ready")
+
+	# Camera position and rotation; the sphere's centre pixel reflects back towards the camera.
+	var views: Array = [[Vector3(0, 3, 0), Vector3(-90, 0, 0), Vector3i(0, 1, 0), "from above: the ceiling"],
+			[Vector3(0, 0, 3), Vector3(0, 0, 0), Vector3i(0, 0, 1), "from +Z: the wall seen towards +Z"],
+			[Vector3(3, 0, 0), Vector3(0, 90, 0), Vector3i(1, 0, 0), "from +X: the wall seen towards +X"]]
+	# One viewport (its own world: a sphere and a camera) per view, rendered together.
+	_viewport = SubViewport.new()  # holds the others, so that after_each frees them all
+	_viewport.size = Vector2i(4, 4)
+	var shots: Array[SubViewport] = []
+	for view in views:
+		var vp := _make_view(material, view[0], view[1])
+		_viewport.add_child(vp)
+		shots.append(vp)
+	# The other two shaders compile and show the room too (fed by hand: one target_material).
+	var others: Array[SubViewport] = []
+	for path in ["res://shaders/rough_metal.gdshader", "res://shaders/glass.gdshader"]:
+		var m := ShaderMaterial.new()
+		m.shader = load(path)
+		m.set_shader_parameter("environment", probe.get_cubemap())
+		m.set_shader_parameter("sh", probe.get_sh_coefficients())
+		if path.contains("rough"):
+			m.set_shader_parameter("roughness", 0.9)  # mostly the SH irradiance
+		var vp := _make_view(m, Vector3(0, 3, 0), Vector3(-90, 0, 0))
+		_viewport.add_child(vp)
+		others.append(vp)
+	add_to_tree(_viewport)
+	await wait_frames(4)
+	for vp in others:
+		var img := vp.get_texture().get_image()
+		if not artifacts_dir.is_empty():
+			img.save_png(artifacts_dir.path_join("room_probe_other_%d.png" % others.find(vp)))
+		var c := img.get_pixel(SIZE.x / 2, SIZE.y / 2).srgb_to_linear()
+		assert_true(c.get_luminance() > 0.05, "shader %d shows the room, not black: %s" % [others.find(vp), c])
+	for i in views.size():
+		var view: Array = views[i]
+		var img := shots[i].get_texture().get_image()
+		if not assert_not_null(img, "viewport image"):
+			return
+		if not artifacts_dir.is_empty():
+			DirAccess.make_dir_recursive_absolute(artifacts_dir)
+			img.save_png(artifacts_dir.path_join("room_probe_%s.png" % str(view[2])))
+		var got := img.get_pixel(SIZE.x / 2, SIZE.y / 2).srgb_to_linear()
+		# The nearest of the six surface colours must be the expected one.
+		var best := Color()
+		var best_d := INF
+		for k in by_normal:
+			var c: Color = by_normal[k]
+			var d := Vector3(c.r - got.r, c.g - got.g, c.b - got.b).length()
+			if d < best_d:
+				best_d = d
+				best = c
+		assert_eq(best, by_normal[view[2]], "%s (pixel %s)" % [view[3], got])
+		assert_true(best_d < 0.1, "%s: pixel %s is close to %s" % [view[3], got, best])
+
+
+func _make_view(material: ShaderMaterial, cam_position: Vector3, cam_rotation: Vector3) -> SubViewport:
+	var vp := SubViewport.new()
+	vp.size = SIZE
+	vp.own_world_3d = true
+	vp.render_target_update_mode = SubViewport.UPDATE_ALWAYS
+	var env := Environment.new()
+	env.background_mode = Environment.BG_COLOR
+	env.background_color = Color(0, 0, 0)
+	var world_env := WorldEnvironment.new()
+	world_env.environment = env
+	vp.add_child(world_env)
+	var sphere_mesh := SphereMesh.new()
+	sphere_mesh.radius = 0.8
+	sphere_mesh.height = 1.6
+	var sphere := MeshInstance3D.new()
+	sphere.mesh = sphere_mesh
+	sphere.material_override = material
+	vp.add_child(sphere)
+	var cam := Camera3D.new()
+	cam.fov = 40
+	cam.position = cam_position
+	cam.rotation_degrees = cam_rotation
+	cam.current = true
+	vp.add_child(cam)
+	return vp
