@@ -352,6 +352,7 @@ def suite_godot(opts, rendering, allow_empty):
             s.notes.append("not run: no xvfb-run")
             return s
         artifacts = os.path.join(LOGS, "rendering")
+        os.makedirs(artifacts, exist_ok=True)  # tests save their pictures there
         user += ["--rendering", "--files", "test_rendering_*.gd", "--artifacts", artifacts]
         cmd = rp.xvfb_prefix() + rp.godot_base_args(rendering=True)
     else:

@@ -1,0 +1,83 @@
+#pragma once
+// Evaluating environment-map estimates against a recording's ground-truth cubemaps (paper §5.3).
+//
+// For every ground-truth cubemap (one per fisheye frame in the synthetic recordings, RGB-D clock),
+// every fisheye frame up to that instant (fisheye timestamp + Rig::fisheye_time_offset_s) is fed,
+// with its pose from the GROUND-TRUTH RGB-D trajectory through fisheye_pose_at (PoseSource::
+// GroundTruth: the evaluation mode until SLAM exists), to:
+//   baseline        §5.3's baseline (envmap/baseline.h), rotation only;
+//   coarse          the coarse model, no inpainting, no lighting compensation;
+//   coarse+inpaint  the same texture, inpainted (§4.5);
+//   +light(add)     inpainting and §4.6's additive model (ADDITIVE_PAPER);
+//   +light(gain)    inpainting and the robust per-channel gain (GAIN_ROBUST);
+// each rendered at the cubemap's probe and compared with eval/metrics.h.
+//
+// Photometric units: the ground truth is linear radiance. When the recording has a synth.yaml
+// (synthetic recordings) and 8-bit fisheye frames, each frame is linearised before any variant
+// sees it: sRGB decoded, divided by synth.yaml's fisheye_exposure and by the renderer's
+// vignetting (synth/synth_renderer.h fisheye_vignetting with fisheye_vignetting_edge_gain), i.e.
+// a perfect photometric calibration; all variants get the same frames. Without synth.yaml the
+// frames are used as they are (8-bit value / 255, the coarse texture's convention).
+//
+// Light switch (living_room): synth.yaml's light_switch_s (RGB-D clock; -1: none). The §4.6
+// effect is measured on the CUBEMAPS: mean PSNR / SSIM over the frames after the switch (the
+// true texture of not-yet-re-observed texels is not available from a recording).
+
+#include "metrics.h"
+
+#include <pipeline/coarse_pipeline.h>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace roomprobe {
+
+struct EvaluationOptions {
+	std::string recording; // folder
+	std::string out; // empty: write nothing; else the last frame's cubemaps (EXR + PNG net) per variant
+	int cubemap_size = 0; // 0: the ground truth's face size; else both are compared at this size
+	double texel_size_m = 0.02;
+	bool linearise = true; // as described above, when synth.yaml is present
+	size_t max_cubemaps = 0; // 0: all
+	std::function<void(const std::string &)> progress; // optional
+};
+
+struct FrameScore {
+	double timestamp_s = 0.0; // RGB-D clock
+	CubemapMetrics metrics;
+};
+
+struct VariantScores {
+	std::string name;
+	std::vector<FrameScore> frames;
+	double mean_psnr_db = 0.0, mean_ssim = 0.0, mean_psnr_linear_db = 0.0, mean_ssim_linear = 0.0;
+	size_t after_switch_frames = 0;
+	double after_switch_psnr_db = 0.0, after_switch_ssim = 0.0; // 0 frames: 0
+	Cubemap last; // the estimate of the last frame
+};
+
+enum EvaluationVariant { VARIANT_BASELINE = 0, VARIANT_COARSE, VARIANT_INPAINT, VARIANT_LIGHT_ADDITIVE, VARIANT_LIGHT_GAIN, VARIANT_COUNT };
+
+struct EvaluationResult {
+	bool ok = false;
+	std::string error;
+	std::vector<VariantScores> variants; // VARIANT_COUNT, in EvaluationVariant order
+	double light_switch_s = -1.0; // RGB-D clock; < 0: none
+	bool linearised = false;
+	size_t fisheye_frames_used = 0;
+	size_t cubemaps = 0;
+	int cubemap_size = 0;
+	// Per-frame averages, ms: the no-lighting pipeline (b/c), the additive (d) and gain (e) ones.
+	CoarsePipelineTimings timings_inpaint, timings_additive, timings_gain;
+	double baseline_ms = 0.0; // BaselineEnvmap::add_frame, per frame
+	double metrics_ms = 0.0; // compare_cubemaps, per comparison
+};
+
+EvaluationResult evaluate_recording(const EvaluationOptions &p_options);
+
+// The summary table (mean over the sequence, and after the switch when there is one), the
+// per-stage timings and, with p_per_frame, one line per frame and variant.
+std::string format_evaluation(const EvaluationResult &p_result, bool p_per_frame);
+
+} // namespace roomprobe

@@ -1,0 +1,145 @@
+#include "coarse_pipeline.h"
+
+#include <chrono>
+
+namespace roomprobe {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point p_start) {
+	return std::chrono::duration<double, std::milli>(Clock::now() - p_start).count();
+}
+
+} // namespace
+
+CoarsePipeline::CoarsePipeline(const CoarsePipelineOptions &p_options) :
+		opts(p_options) {
+	opts.update.policy = TextureUpdatePolicy::Best;
+	opts.lighting_options.model = opts.lighting_model;
+}
+
+CoarsePipeline::~CoarsePipeline() = default;
+
+std::string CoarsePipeline::configure(const OmniParams &p_fisheye, const Floorplan &p_floorplan) {
+	configured = false;
+	inpainter.reset();
+	renderer.reset();
+	RoomMeshOptions mesh_options;
+	mesh_options.texel_size_m = opts.texel_size_m;
+	RoomMeshResult built = build_room_mesh(p_floorplan, mesh_options);
+	if (!built.ok) {
+		return "coarse pipeline: room mesh: " + built.error;
+	}
+	if (p_fisheye.width <= 0 || p_fisheye.height <= 0) {
+		return "coarse pipeline: fisheye has no size";
+	}
+	fisheye = p_fisheye;
+	floorplan = p_floorplan;
+	room = std::move(built.mesh);
+	geometry = make_texel_geometry(room);
+	coarse = make_coarse_texture(room);
+	completed.release();
+	convex = opts.occlusion.skip_convex && floorplan_is_convex(floorplan);
+	renderer = std::make_unique<CoarseCubemapRenderer>(room);
+	inpainter = std::make_unique<TextureInpainter>(room, opts.inpainting);
+	frames = 0;
+	last = CoarsePipelineTimings();
+	total = CoarsePipelineTimings();
+	configured = true;
+	return "";
+}
+
+CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, const Pose &p_world_from_fisheye) {
+	CoarseFrameStats stats;
+	if (!configured) {
+		return stats;
+	}
+	const Clock::time_point frame_start = Clock::now();
+	CoarsePipelineTimings t;
+
+	// 1. Occlusion (§4.4).
+	Clock::time_point start = Clock::now();
+	cv::Mat mask;
+	stats.occlusion_skipped = convex;
+	if (!convex) {
+		mask = occlusion_mask(room, geometry, p_world_from_fisheye.translation, opts.occlusion);
+	}
+	const cv::Mat *mask_ptr = convex ? nullptr : &mask;
+	t.occlusion_ms = ms_since(start);
+
+	// 2. Lighting change (§4.6), from (old texel, new sample) pairs before the update.
+	start = Clock::now();
+	if (opts.lighting && frames > 0) {
+		CoarseTexture scratch;
+		scratch.color = coarse.color.clone();
+		scratch.observed = coarse.observed.clone();
+		scratch.quality = coarse.quality.clone();
+		scratch.updated = cv::Mat::zeros(coarse.updated.size(), CV_8UC1);
+		TextureUpdateOptions sample_options = opts.update;
+		sample_options.policy = TextureUpdatePolicy::Last;
+		update_coarse_texture(room, geometry, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, &scratch, sample_options);
+		// estimate_lighting_change uses only texels observed before (coarse.observed) among the visible.
+		stats.lighting = estimate_lighting_change(coarse, scratch.color, scratch.updated, opts.lighting_options);
+	}
+	t.lighting_ms = ms_since(start);
+
+	// 3. Texture update (§4.3, keep the best).
+	start = Clock::now();
+	stats.update = update_coarse_texture(room, geometry, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, &coarse, opts.update);
+	t.update_ms = ms_since(start);
+
+	// 4. Apply the change to the observed texels this frame did not update.
+	start = Clock::now();
+	if (stats.lighting.valid) {
+		apply_lighting_change(&coarse, stats.lighting);
+	}
+	t.lighting_ms += ms_since(start);
+
+	// 5. Inpainting (§4.5), synchronously.
+	start = Clock::now();
+	if (opts.inpaint) {
+		completed = inpainter->inpaint(coarse, &stats.inpaint);
+	}
+	t.inpaint_ms = ms_since(start);
+
+	frames++;
+	t.frame_ms = ms_since(frame_start);
+	t.render_ms = last.render_ms;
+	t.sh_ms = last.sh_ms;
+	last = t;
+	total.occlusion_ms += t.occlusion_ms;
+	total.lighting_ms += t.lighting_ms;
+	total.update_ms += t.update_ms;
+	total.inpaint_ms += t.inpaint_ms;
+	total.frame_ms += t.frame_ms;
+	return stats;
+}
+
+const cv::Mat &CoarsePipeline::completed_color() const {
+	return (opts.inpaint && !completed.empty()) ? completed : coarse.color;
+}
+
+Cubemap CoarsePipeline::render_cubemap(const glm::dvec3 &p_position, bool p_completed, int p_size) {
+	if (!configured) {
+		return Cubemap();
+	}
+	const Clock::time_point start = Clock::now();
+	const cv::Mat &atlas = p_completed ? completed_color() : coarse.color;
+	Cubemap map = renderer->render(atlas, p_position, p_size > 0 ? p_size : opts.cubemap_size);
+	last.render_ms = ms_since(start);
+	total.render_ms += last.render_ms;
+	return map;
+}
+
+ShCoefficients CoarsePipeline::sh(const glm::dvec3 &p_position) {
+	const Cubemap map = render_cubemap(p_position, true);
+	const Clock::time_point start = Clock::now();
+	const ShCoefficients coefficients = project_sh(map);
+	last.sh_ms = ms_since(start);
+	total.sh_ms += last.sh_ms;
+	return coefficients;
+}
+
+} // namespace roomprobe

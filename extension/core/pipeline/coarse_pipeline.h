@@ -1,0 +1,124 @@
+#pragma once
+// The coarse-model pipeline (paper §4.3-§4.7) as one plain C++ object, without Godot: a room's
+// floorplan and the rig's fisheye in, fisheye frames with their poses in, environment maps out.
+//
+// Per fisheye frame (add_fisheye_frame):
+//   1. occlusion mask (§4.4, coarse/occlusion.h); skipped for a convex floorplan (all visible);
+//   2. lighting change (§4.6, coarse/lighting.h), when enabled: the frame is first sampled into
+//      a scratch copy of the texture (TextureUpdatePolicy::Last, so every visible texel takes the
+//      frame's value), giving (old texel, new sample) pairs on the visible, directly observed
+//      texels; the change is estimated from them BEFORE the update;
+//   3. texture update (§4.3, policy Best, coarse/texture_update.h);
+//   4. the lighting change is applied to the observed texels this frame did not update;
+//   5. inpainting (§4.5), when enabled: synchronously here (TextureInpainter::inpaint), so that the
+//      completed texture always belongs to the latest frame. The live path (Godot) should use the
+//      inpainter's worker thread (request / try_take_result) instead.
+// render_cubemap() renders the completed texture (or the raw one) at a probe (§4.7, first pass);
+// sh() projects that onto 5 bands of spherical harmonics (§4.8).
+//
+// Poses: the pipeline takes world_from_fisheye as given. PoseSource says where the caller got it;
+// only GroundTruth exists so far (the recording's true RGB-D trajectory through fisheye_pose_at,
+// the EVALUATION mode until SLAM is integrated).
+
+#include <coarse/coarse_texture.h>
+#include <coarse/inpainting.h>
+#include <coarse/lighting.h>
+#include <coarse/occlusion.h>
+#include <coarse/texture_update.h>
+#include <envmap/coarse_render.h>
+#include <envmap/spherical_harmonics.h>
+#include <recording/recording_types.h>
+#include <rig/rig.h>
+#include <room/floorplan.h>
+#include <room/room_mesh.h>
+
+#include <memory>
+#include <string>
+
+namespace roomprobe {
+
+enum class PoseSource {
+	GroundTruth, // the recording's ground-truth RGB-D trajectory -> fisheye_pose_at (evaluation mode)
+};
+
+struct CoarsePipelineOptions {
+	PoseSource pose_source = PoseSource::GroundTruth; // informational: the caller supplies the poses
+	bool inpaint = true; // §4.5: complete never-observed texels before rendering
+	bool lighting = true; // §4.6: estimate and apply large-scale lighting changes
+	LightingModel lighting_model = LightingModel::GAIN_ROBUST; // ADDITIVE_PAPER is the paper's
+	double texel_size_m = 0.02; // atlas texel edge, metres (room/room_mesh.h)
+	int cubemap_size = 128; // face size of render_cubemap() and sh(), pixels
+	TextureUpdateOptions update; // §4.3 settings (policy forced to Best)
+	LightingOptions lighting_options; // §4.6 settings (model overridden by lighting_model)
+	InpaintingOptions inpainting; // §4.5 settings
+	OcclusionOptions occlusion; // §4.4 settings
+};
+
+// Wall-clock milliseconds of each stage: of the last frame, and summed over all frames.
+struct CoarsePipelineTimings {
+	double occlusion_ms = 0.0;
+	double lighting_ms = 0.0; // sampling the scratch copy, estimating and applying
+	double update_ms = 0.0;
+	double inpaint_ms = 0.0;
+	double render_ms = 0.0; // render_cubemap() (the last call / all calls)
+	double sh_ms = 0.0; // SH projection in sh()
+	double frame_ms = 0.0; // the whole add_fisheye_frame()
+};
+
+struct CoarseFrameStats {
+	TextureUpdateStats update;
+	LightingChange lighting; // identity when lighting is off or too few samples
+	InpaintReport inpaint;
+	bool occlusion_skipped = false; // convex room
+};
+
+class CoarsePipeline {
+public:
+	explicit CoarsePipeline(const CoarsePipelineOptions &p_options = CoarsePipelineOptions());
+	~CoarsePipeline();
+	CoarsePipeline(const CoarsePipeline &) = delete;
+	CoarsePipeline &operator=(const CoarsePipeline &) = delete;
+
+	// Builds the room mesh, texel geometry, renderer and inpainter; clears the texture. The error
+	// (empty on success) names the problem (invalid floorplan, atlas too large, bad fisheye).
+	std::string configure(const OmniParams &p_fisheye, const Floorplan &p_floorplan);
+	std::string configure(const Rig &p_rig, const Floorplan &p_floorplan) { return configure(p_rig.fisheye, p_floorplan); }
+	bool is_configured() const { return configured; }
+
+	// Integrates one fisheye frame (image types as update_coarse_texture accepts) taken at
+	// p_world_from_fisheye. Returns what each stage did; zero stats before configure().
+	CoarseFrameStats add_fisheye_frame(const FisheyeFrame &p_frame, const Pose &p_world_from_fisheye);
+
+	// The environment map at p_position (world metres) of the completed texture (the raw one
+	// when inpainting is off or p_completed is false). Size 0: options.cubemap_size.
+	Cubemap render_cubemap(const glm::dvec3 &p_position, bool p_completed = true, int p_size = 0);
+	ShCoefficients sh(const glm::dvec3 &p_position);
+
+	// Only observations (CoarseTexture::color keeps no inpainted values).
+	const CoarseTexture &texture() const { return coarse; }
+	// The inpainted colour when inpainting is on and a frame was added, else texture().color.
+	const cv::Mat &completed_color() const;
+	const RoomMesh &mesh() const { return room; }
+	const CoarsePipelineOptions &options() const { return opts; }
+	size_t frame_count() const { return frames; }
+	const CoarsePipelineTimings &last_timings() const { return last; }
+	const CoarsePipelineTimings &total_timings() const { return total; }
+
+private:
+	CoarsePipelineOptions opts;
+	bool configured = false;
+	bool convex = false;
+	OmniParams fisheye;
+	Floorplan floorplan;
+	RoomMesh room;
+	TexelGeometry geometry;
+	CoarseTexture coarse;
+	cv::Mat completed;
+	std::unique_ptr<CoarseCubemapRenderer> renderer;
+	std::unique_ptr<TextureInpainter> inpainter;
+	size_t frames = 0;
+	CoarsePipelineTimings last;
+	CoarsePipelineTimings total;
+};
+
+} // namespace roomprobe

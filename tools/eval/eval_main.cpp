@@ -1,0 +1,82 @@
+// roomprobe_eval: scores environment-map estimates against a recording's ground-truth cubemaps
+// (paper §5.3): the §5.3 baseline and the coarse model without / with inpainting and with the
+// two lighting compensations (eval/evaluate.h). Poses: the ground-truth trajectory.
+//
+// roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame] [--texel-size M]
+//                [--max-cubemaps K] [--quiet]
+
+#include <eval/evaluate.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <string>
+
+int main(int argc, char **argv) {
+	roomprobe::EvaluationOptions options;
+	bool per_frame = false, quiet = false;
+	auto usage = [](const char *p_error) {
+		std::fprintf(stderr,
+				"%s%susage: roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame]\n"
+				"                      [--texel-size M] [--max-cubemaps K] [--quiet]\n",
+				p_error ? "roomprobe_eval: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
+		return 2;
+	};
+	for (int i = 1; i < argc; i++) {
+		const std::string arg = argv[i];
+		auto value = [&](std::string *r_value) {
+			if (i + 1 >= argc) {
+				return false;
+			}
+			*r_value = argv[++i];
+			return true;
+		};
+		std::string v;
+		if (arg == "--recording") {
+			if (!value(&options.recording)) {
+				return usage("--recording needs a folder");
+			}
+		} else if (arg == "--out") {
+			if (!value(&options.out)) {
+				return usage("--out needs a folder");
+			}
+		} else if (arg == "--cubemap-size") {
+			if (!value(&v) || std::atoi(v.c_str()) <= 0) {
+				return usage("--cubemap-size needs a positive integer");
+			}
+			options.cubemap_size = std::atoi(v.c_str());
+		} else if (arg == "--texel-size") {
+			if (!value(&v) || !(std::atof(v.c_str()) > 0.0)) {
+				return usage("--texel-size needs a positive number of metres");
+			}
+			options.texel_size_m = std::atof(v.c_str());
+		} else if (arg == "--max-cubemaps") {
+			if (!value(&v) || std::atoi(v.c_str()) <= 0) {
+				return usage("--max-cubemaps needs a positive integer");
+			}
+			options.max_cubemaps = size_t(std::atoi(v.c_str()));
+		} else if (arg == "--per-frame") {
+			per_frame = true;
+		} else if (arg == "--quiet") {
+			quiet = true;
+		} else if (arg == "--help" || arg == "-h") {
+			usage(nullptr);
+			return 0;
+		} else {
+			return usage(("unknown argument " + arg).c_str());
+		}
+	}
+	if (options.recording.empty()) {
+		return usage("--recording is required");
+	}
+	if (!quiet) {
+		options.progress = [](const std::string &p_line) { std::cerr << p_line << "\n"; };
+	}
+	const roomprobe::EvaluationResult result = roomprobe::evaluate_recording(options);
+	if (!result.ok) {
+		std::fprintf(stderr, "roomprobe_eval: %s\n", result.error.c_str());
+		return 1;
+	}
+	std::cout << roomprobe::format_evaluation(result, per_frame);
+	return 0;
+}
