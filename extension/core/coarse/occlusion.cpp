@@ -1,5 +1,7 @@
 #include "occlusion.h"
 
+#include <io/embree_scene.h>
+
 #include <CGAL/Arr_segment_traits_2.h>
 #include <CGAL/Arrangement_2.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
@@ -171,18 +173,7 @@ cv::Mat occlusion_mask(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, 
 
 // ---------------------------------------------------------------- Embree
 
-struct EmbreeOcclusion::Embree {
-	RTCDevice device = nullptr;
-	RTCScene scene = nullptr;
-	~Embree() {
-		if (scene) {
-			rtcReleaseScene(scene);
-		}
-		if (device) {
-			rtcReleaseDevice(device);
-		}
-	}
-};
+struct EmbreeOcclusion::Embree : EmbreeTriangleScene {};
 
 EmbreeOcclusion::EmbreeOcclusion(const RoomMesh &p_mesh, const std::vector<glm::dvec3> &p_extra_triangles) :
 		embree(std::make_unique<Embree>()) {
@@ -203,30 +194,7 @@ EmbreeOcclusion::EmbreeOcclusion(const RoomMesh &p_mesh, const std::vector<glm::
 		error_message = "no triangles";
 		return;
 	}
-	embree->device = rtcNewDevice(nullptr);
-	if (!embree->device) {
-		error_message = "Embree: cannot create a device";
-		return;
-	}
-	embree->scene = rtcNewScene(embree->device);
-	RTCGeometry geometry = rtcNewGeometry(embree->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-	float *vb = static_cast<float *>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices.size() / 3));
-	uint32_t *ib = static_cast<uint32_t *>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), indices.size() / 3));
-	if (!vb || !ib) {
-		rtcReleaseGeometry(geometry);
-		error_message = "Embree: cannot allocate buffers";
-		return;
-	}
-	std::copy(vertices.begin(), vertices.end(), vb);
-	std::copy(indices.begin(), indices.end(), ib);
-	rtcCommitGeometry(geometry);
-	rtcAttachGeometry(embree->scene, geometry);
-	rtcReleaseGeometry(geometry);
-	rtcCommitScene(embree->scene);
-	const RTCError status = rtcGetDeviceError(embree->device);
-	if (status != RTC_ERROR_NONE) {
-		error_message = std::string("Embree: ") + rtcGetErrorString(status);
-	}
+	error_message = embree->build(vertices, indices, false);
 }
 
 EmbreeOcclusion::~EmbreeOcclusion() = default;
@@ -237,7 +205,7 @@ cv::Mat EmbreeOcclusion::mask(const TexelGeometry &p_geometry, const glm::dvec3 
 	if (!ok()) {
 		return mask;
 	}
-	RTCScene scene = embree->scene;
+	RTCScene scene = embree->get();
 	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {
 		for (int y = p_rows.begin(); y < p_rows.end(); ++y) {
 			uint8_t *row = mask.ptr<uint8_t>(y);

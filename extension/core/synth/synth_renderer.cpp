@@ -1,5 +1,7 @@
 #include "synth_renderer.h"
 
+#include <io/embree_scene.h>
+
 #include <camera/omni_camera.h>
 #include <camera/pinhole_camera.h>
 #include <recording/cubemap_layout.h>
@@ -113,18 +115,7 @@ const SrgbTable &srgb_table() {
 
 // ---------------------------------------------------------------- Embree RAII
 
-struct SynthRenderer::Embree {
-	RTCDevice device = nullptr;
-	RTCScene scene = nullptr;
-	~Embree() {
-		if (scene) {
-			rtcReleaseScene(scene);
-		}
-		if (device) {
-			rtcReleaseDevice(device);
-		}
-	}
-};
+struct SynthRenderer::Embree : EmbreeTriangleScene {};
 
 void SynthRenderer::add_triangle(const glm::dvec3 &p_a, const glm::dvec3 &p_b, const glm::dvec3 &p_c, const TriangleInfo &p_info) {
 	const uint32_t base = static_cast<uint32_t>(vertices.size() / 3);
@@ -279,38 +270,14 @@ SynthRenderer::SynthRenderer(const Scene &p_scene) :
 	}
 
 	embree = std::make_unique<Embree>();
-	embree->device = rtcNewDevice(nullptr);
-	if (!embree->device) {
-		error_message = "Embree: cannot create a device (error " + std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) + ")";
-		return;
-	}
-	embree->scene = rtcNewScene(embree->device);
-	rtcSetSceneBuildQuality(embree->scene, RTC_BUILD_QUALITY_HIGH);
-	RTCGeometry geometry = rtcNewGeometry(embree->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-	float *vb = static_cast<float *>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices.size() / 3));
-	uint32_t *ib = static_cast<uint32_t *>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), indices.size() / 3));
-	if (!vb || !ib) {
-		rtcReleaseGeometry(geometry);
-		error_message = "Embree: cannot allocate the geometry buffers";
-		return;
-	}
-	std::copy(vertices.begin(), vertices.end(), vb);
-	std::copy(indices.begin(), indices.end(), ib);
-	rtcCommitGeometry(geometry);
-	rtcAttachGeometry(embree->scene, geometry);
-	rtcReleaseGeometry(geometry);
-	rtcCommitScene(embree->scene);
-	const RTCError status = rtcGetDeviceError(embree->device);
-	if (status != RTC_ERROR_NONE) {
-		error_message = std::string("Embree: ") + rtcGetErrorString(status);
-	}
+	error_message = embree->build(vertices, indices, true);
 }
 
 SynthRenderer::~SynthRenderer() = default;
 
 Hit SynthRenderer::intersect(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far) const {
 	Hit hit;
-	if (!embree || !embree->scene) {
+	if (!embree || !embree->get()) {
 		return hit;
 	}
 	RTCRayHit rh;
@@ -329,7 +296,7 @@ Hit SynthRenderer::intersect(const glm::dvec3 &p_origin, const glm::dvec3 &p_dir
 	rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
 	rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
 	rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-	rtcIntersect1(embree->scene, &rh, nullptr);
+	rtcIntersect1(embree->get(), &rh, nullptr);
 	if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
 		return hit;
 	}
@@ -358,7 +325,7 @@ Hit SynthRenderer::intersect(const glm::dvec3 &p_origin, const glm::dvec3 &p_dir
 }
 
 bool SynthRenderer::occluded(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far) const {
-	if (!embree || !embree->scene || !(p_t_far > p_t_near)) {
+	if (!embree || !embree->get() || !(p_t_far > p_t_near)) {
 		return false;
 	}
 	RTCRay ray;
@@ -374,7 +341,7 @@ bool SynthRenderer::occluded(const glm::dvec3 &p_origin, const glm::dvec3 &p_dir
 	ray.mask = 0xffffffffu;
 	ray.id = 0;
 	ray.flags = 0;
-	rtcOccluded1(embree->scene, &ray, nullptr);
+	rtcOccluded1(embree->get(), &ray, nullptr);
 	return ray.tfar < 0.0f;
 }
 
