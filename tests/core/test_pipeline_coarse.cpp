@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 using namespace roomprobe;
 
@@ -136,4 +137,46 @@ TEST_CASE("pipeline: a lighting change is carried to texels the frame does not u
 	CHECK(observed > 0);
 	CHECK(not_updated > 100);
 	CHECK(worst < 0.01);
+}
+
+TEST_CASE("pipeline: asynchronous inpainting composes the worker's fill under the texels observed now") {
+	CoarsePipelineOptions options;
+	options.texel_size_m = 0.05;
+	options.cubemap_size = 16;
+	options.lighting = false;
+	options.inpaint_async = true;
+	CoarsePipeline sync_pipeline([&] {
+		CoarsePipelineOptions o = options;
+		o.inpaint_async = false;
+		return o;
+	}());
+	CoarsePipeline pipeline(options);
+	const OmniParams fisheye = small_fisheye();
+	REQUIRE(pipeline.configure(fisheye, box_room()) == "");
+	REQUIRE(sync_pipeline.configure(fisheye, box_room()) == "");
+	Pose up;
+	up.rotation = glm::angleAxis(-std::numbers::pi / 2.0, glm::dvec3(1.0, 0.0, 0.0));
+	up.translation = glm::dvec3(2.0, 1.4, 1.5);
+	FisheyeFrame frame;
+	frame.image = cv::Mat(fisheye.height, fisheye.width, CV_32FC3, cv::Scalar(0.25, 0.5, 0.75));
+	pipeline.add_fisheye_frame(frame, up);
+	sync_pipeline.add_fisheye_frame(frame, up);
+
+	// Right after the frame the observed texels are there whether or not the worker has finished.
+	const cv::Mat observed = pipeline.texture().observed;
+	cv::Mat diff;
+	cv::absdiff(pipeline.completed_color(), pipeline.texture().color, diff);
+	double worst_observed = 0.0;
+	cv::Mat mask3;
+	cv::merge(std::vector<cv::Mat>{ observed, observed, observed }, mask3); // a channel mask per value
+	cv::minMaxLoc(diff.reshape(1), nullptr, &worst_observed, nullptr, nullptr, mask3.reshape(1));
+	CHECK(worst_observed == 0.0);
+
+	// Once the worker is done, the completed texture is the synchronous one.
+	pipeline.finish_inpainting();
+	cv::absdiff(pipeline.completed_color(), sync_pipeline.completed_color(), diff);
+	double worst = 0.0;
+	cv::minMaxLoc(diff.reshape(1), nullptr, &worst);
+	CHECK(worst < 1e-6);
+	CHECK(cv::countNonZero(observed) < int(observed.total())); // there was something to fill
 }

@@ -110,7 +110,143 @@ func test_mirror_sphere_reflects_the_right_surfaces() -> void:
 		assert_true(best_d < 0.1, "%s: pixel %s is close to %s" % [view[3], got, best])
 
 
-func _make_view(material: ShaderMaterial, cam_position: Vector3, cam_rotation: Vector3) -> SubViewport:
+## A CoarseRoomModel of PLAN with one flat colour per surface; fills by_normal (colour by the
+## direction from which a surface is seen, rounded).
+func _coloured_room(by_normal: Dictionary) -> Node3D:
+	var room = ClassDB.instantiate("CoarseRoomModel")
+	room.name = "Room"
+	room.floorplan = PackedVector2Array(PLAN)
+	room.ceiling_height = HEIGHT
+	room.texel_size = 0.05
+	var size: Vector2i = room.get_atlas_size()
+	var atlas := Image.create_empty(size.x, size.y, false, Image.FORMAT_RGBF)
+	for c in room.get_charts():
+		var color: Color = FLOOR_COLOR if c.kind == "floor" else CEILING_COLOR if c.kind == "ceiling" else WALL_COLORS[c.wall_index]
+		atlas.fill_rect(c.rect, color)
+		by_normal[Vector3i((-c.normal as Vector3).round())] = color
+	assert_true(room.set_atlas_image(atlas))
+	return room
+
+
+## Which of the surface colours the pixel is nearest to, and how near.
+func _nearest_surface(by_normal: Dictionary, got: Color) -> Array:
+	var best := Color()
+	var best_d := INF
+	for k in by_normal:
+		var c: Color = by_normal[k]
+		var d := Vector3(c.r - got.r, c.g - got.g, c.b - got.b).length()
+		if d < best_d:
+			best_d = d
+			best = c
+	return [best, best_d]
+
+
+## A chrome sphere with Godot's own StandardMaterial3D (no RoomProbe shader).
+func _chrome() -> StandardMaterial3D:
+	var m := StandardMaterial3D.new()
+	m.metallic = 1.0
+	m.roughness = 0.0
+	m.metallic_specular = 0.5
+	m.albedo_color = Color(1, 1, 1)
+	return m
+
+
+func test_reflection_probe_route_shows_the_room_on_a_standard_material() -> void:
+	if not rendering:
+		return skip("needs a renderer (rendering suite: --rendering under a display)")
+	known_engine_leak(7, "Texture", "godotengine/godot#122498: each reflection atlas leaks 7 texture RIDs (4.6 regression)")
+	var by_normal := {}
+	# One world: the room on layer 20 only, which the camera does not see and the probe does.
+	_viewport = SubViewport.new()
+	_viewport.size = SIZE
+	_viewport.own_world_3d = true
+	_viewport.render_target_update_mode = SubViewport.UPDATE_ALWAYS
+	var env := Environment.new()
+	env.background_mode = Environment.BG_COLOR
+	env.background_color = Color(0, 0, 0)
+	var world_env := WorldEnvironment.new()
+	world_env.environment = env
+	_viewport.add_child(world_env)
+	var room := _coloured_room(by_normal)
+	room.room_layers = 1 << 19
+	_viewport.add_child(room)
+	var reflection := ReflectionProbe.new()
+	reflection.name = "Reflection"
+	_viewport.add_child(reflection)
+	var probe = ClassDB.instantiate("RoomProbe")
+	probe.resolution = 16
+	probe.position = CENTRE
+	_viewport.add_child(probe)
+	var sphere_mesh := SphereMesh.new()
+	sphere_mesh.radius = 0.3
+	sphere_mesh.height = 0.6
+	var sphere := MeshInstance3D.new()
+	sphere.mesh = sphere_mesh
+	sphere.material_override = _chrome()
+	sphere.position = CENTRE
+	_viewport.add_child(sphere)
+	var cam := Camera3D.new()
+	cam.fov = 30
+	cam.position = CENTRE + Vector3(0, 0, 1.2)
+	cam.cull_mask = 0xFFFFF & ~(1 << 19)
+	cam.current = true
+	_viewport.add_child(cam)
+	add_to_tree(_viewport)
+	probe.coarse_model = probe.get_path_to(room)
+	probe.reflection_probe = probe.get_path_to(reflection)
+	assert_true(probe.update_now())
+	assert_near(reflection.global_position + reflection.origin_offset, CENTRE, 0.001, "the capture point is the probe's")
+	assert_near(reflection.size, Vector3(4, HEIGHT, 3), 0.001, "the box is the room's")
+	assert_eq(reflection.cull_mask, 1 << 19, "the probe sees the room's layer only")
+	assert_true(reflection.box_projection)
+	await wait_frames(12)
+	var img := _viewport.get_texture().get_image()
+	if not artifacts_dir.is_empty():
+		img.save_png(artifacts_dir.path_join("room_probe_reflection_probe_route.png"))
+	var background := img.get_pixel(1, 1).srgb_to_linear()
+	assert_true(background.get_luminance() < 0.02, "the camera does not see the room itself: %s" % background)
+	# The sphere's centre reflects back towards the camera, towards +Z: the wall seen that way.
+	var got := img.get_pixel(SIZE.x / 2, SIZE.y / 2).srgb_to_linear()
+	var nearest := _nearest_surface(by_normal, got)
+	assert_eq(nearest[0], by_normal[Vector3i(0, 0, 1)], "the chrome sphere shows the +Z wall (pixel %s)" % got)
+
+
+func test_world_environment_route_lights_standard_materials_from_the_map() -> void:
+	if not rendering:
+		return skip("needs a renderer (rendering suite: --rendering under a display)")
+	var by_normal := {}
+	_holder = Node3D.new()
+	_holder.visible = false
+	_holder.add_child(_coloured_room(by_normal))
+	var probe = ClassDB.instantiate("RoomProbe")
+	probe.name = "Probe"
+	probe.resolution = 32
+	probe.position = CENTRE
+	_holder.add_child(probe)
+	add_to_tree(_holder)
+	probe.coarse_model = NodePath("../Room")
+	_viewport = SubViewport.new()
+	_viewport.size = Vector2i(4, 4)
+	var vp := _make_view(_chrome(), Vector3(0, 0, 3), Vector3(0, 0, 0))
+	_viewport.add_child(vp)
+	add_to_tree(_viewport)
+	var world_env: WorldEnvironment = vp.get_child(0)
+	probe.world_environment = probe.get_path_to(world_env)
+	assert_true(probe.update_now())
+	assert_not_null(probe.get_sky_material(), "the sky material was made")
+	assert_eq(world_env.environment.sky.sky_material, probe.get_sky_material())
+	assert_eq(world_env.environment.reflected_light_source, Environment.REFLECTION_SOURCE_SKY)
+	assert_eq(world_env.environment.background_mode, Environment.BG_COLOR, "the background is left alone")
+	await wait_frames(8)
+	var img := vp.get_texture().get_image()
+	if not artifacts_dir.is_empty():
+		img.save_png(artifacts_dir.path_join("room_probe_world_environment_route.png"))
+	var got := img.get_pixel(SIZE.x / 2, SIZE.y / 2).srgb_to_linear()
+	var nearest := _nearest_surface(by_normal, got)
+	assert_eq(nearest[0], by_normal[Vector3i(0, 0, 1)], "the chrome sphere shows the +Z wall through the sky (pixel %s)" % got)
+
+
+func _make_view(material: Material, cam_position: Vector3, cam_rotation: Vector3) -> SubViewport:
 	var vp := SubViewport.new()
 	vp.size = SIZE
 	vp.own_world_3d = true

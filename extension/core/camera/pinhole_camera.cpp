@@ -31,4 +31,12 @@ glm::dvec3 unproject_pinhole(const PinholeParams &p_params, const glm::dvec2 &p_
 	return { undistorted.x, undistorted.y, 1.0 };
 }
 
+PinholeIntrinsics pinhole_intrinsics(const PinholeParams &p_params) {
+	return { float(p_params.fx), float(p_params.fy), float(p_params.cx), float(p_params.cy), p_params.width, p_params.height };
+}
+
+bool has_pinhole_distortion(const PinholeParams &p_params) {
+	return p_params.k1 != 0.0 || p_params.k2 != 0.0 || p_params.p1 != 0.0 || p_params.p2 != 0.0 || p_params.k3 != 0.0;
+}
+
 } // namespace roomprobe

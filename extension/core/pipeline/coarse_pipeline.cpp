@@ -41,6 +41,7 @@ std::string CoarsePipeline::configure(const OmniParams &p_fisheye, const Floorpl
 	geometry = make_texel_geometry(room);
 	coarse = make_coarse_texture(room);
 	completed.release();
+	inpainted.release();
 	convex = opts.occlusion.skip_convex && floorplan_is_convex(floorplan);
 	renderer = std::make_unique<CoarseCubemapRenderer>(room);
 	inpainter = std::make_unique<TextureInpainter>(room, opts.inpainting);
@@ -97,9 +98,13 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 	}
 	t.lighting_ms += ms_since(start);
 
-	// 5. Inpainting (§4.5), synchronously.
+	// 5. Inpainting (§4.5), here or on the worker.
 	start = Clock::now();
-	if (opts.inpaint) {
+	if (opts.inpaint && opts.inpaint_async) {
+		inpainter->request(coarse);
+		inpainter->try_take_result(&inpainted, nullptr, &stats.inpaint);
+		compose_completed();
+	} else if (opts.inpaint) {
 		completed = inpainter->inpaint(coarse, &stats.inpaint);
 	}
 	t.inpaint_ms = ms_since(start);
@@ -115,6 +120,22 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 	total.inpaint_ms += t.inpaint_ms;
 	total.frame_ms += t.frame_ms;
 	return stats;
+}
+
+void CoarsePipeline::compose_completed() {
+	coarse.color.copyTo(completed);
+	if (!inpainted.empty()) {
+		inpainted.copyTo(completed, coarse.observed == 0);
+	}
+}
+
+void CoarsePipeline::finish_inpainting() {
+	if (!configured || !opts.inpaint || !opts.inpaint_async || frames == 0) {
+		return;
+	}
+	inpainter->wait_idle();
+	inpainter->try_take_result(&inpainted);
+	compose_completed();
 }
 
 const cv::Mat &CoarsePipeline::completed_color() const {

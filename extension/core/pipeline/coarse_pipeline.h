@@ -10,9 +10,11 @@
 //      texels; the change is estimated from them BEFORE the update;
 //   3. texture update (§4.3, policy Best, coarse/texture_update.h);
 //   4. the lighting change is applied to the observed texels this frame did not update;
-//   5. inpainting (§4.5), when enabled: synchronously here (TextureInpainter::inpaint), so that the
-//      completed texture always belongs to the latest frame. The live path (Godot) should use the
-//      inpainter's worker thread (request / try_take_result) instead.
+//   5. inpainting (§4.5), when enabled: synchronously (TextureInpainter::inpaint), so that the
+//      completed texture always belongs to the latest frame (evaluation); or, with inpaint_async
+//      (the live path, CoarseRoomModel), off the frame's critical path on the inpainter's worker:
+//      each frame requests a completion of its texture and composes the newest finished one under
+//      the texels observed now, so new observations show at once and the fill catches up.
 // render_cubemap() renders the completed texture (or the raw one) at a probe (§4.7, first pass);
 // sh() projects that onto 5 bands of spherical harmonics (§4.8).
 //
@@ -44,6 +46,7 @@ enum class PoseSource {
 struct CoarsePipelineOptions {
 	PoseSource pose_source = PoseSource::GroundTruth; // informational: the caller supplies the poses
 	bool inpaint = true; // §4.5: complete never-observed texels before rendering
+	bool inpaint_async = false; // §4.5 on a worker thread (see step 5 above); false: in add_fisheye_frame
 	bool lighting = true; // §4.6: estimate and apply large-scale lighting changes
 	LightingModel lighting_model = LightingModel::GAIN_ROBUST; // ADDITIVE_PAPER is the paper's
 	double texel_size_m = 0.02; // atlas texel edge, metres (room/room_mesh.h)
@@ -93,6 +96,9 @@ public:
 	// when inpainting is off or p_completed is false). Size 0: options.cubemap_size.
 	Cubemap render_cubemap(const glm::dvec3 &p_position, bool p_completed = true, int p_size = 0);
 	ShCoefficients sh(const glm::dvec3 &p_position);
+	// With inpaint_async: waits for the worker's newest completion and composes it (end of a
+	// recording, tests). No effect otherwise.
+	void finish_inpainting();
 
 	// Only observations (CoarseTexture::color keeps no inpainted values).
 	const CoarseTexture &texture() const { return coarse; }
@@ -105,6 +111,8 @@ public:
 	const CoarsePipelineTimings &total_timings() const { return total; }
 
 private:
+	void compose_completed();
+
 	CoarsePipelineOptions opts;
 	bool configured = false;
 	bool convex = false;
@@ -114,6 +122,7 @@ private:
 	TexelGeometry geometry;
 	CoarseTexture coarse;
 	cv::Mat completed;
+	cv::Mat inpainted; // inpaint_async: the worker's newest completion (of an older texture)
 	std::unique_ptr<CoarseCubemapRenderer> renderer;
 	std::unique_ptr<TextureInpainter> inpainter;
 	size_t frames = 0;

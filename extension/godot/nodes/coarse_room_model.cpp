@@ -1,6 +1,10 @@
 #include "coarse_room_model.h"
 
+#include "rig_capture.h"
+
 #include "../convert/image_convert.h"
+
+#include <rig/fisheye_pose.h>
 
 #include <atomic>
 #include <cstring>
@@ -52,18 +56,32 @@ bool same(const Vec3 &p_a, const Vec3 &p_b) {
 
 CoarseRoomModel::CoarseRoomModel() {
 	mesh.instantiate();
+	// After RigCapture (which delivers frames) and before RoomProbe (which renders the texture).
+	set_process_priority(-10);
 	// Built at once, so that a new node already reports why its (empty) floorplan is no room.
 	rebuild();
 }
+
+CoarseRoomModel::~CoarseRoomModel() = default;
 
 void CoarseRoomModel::_notification(int p_what) {
 	if (p_what == NOTIFICATION_READY && mesh_instance == nullptr) {
 		// An internal child: it is not saved with the scene and the editor does not list it.
 		mesh_instance = memnew(MeshInstance3D);
 		mesh_instance->set_mesh(mesh);
+		mesh_instance->set_layer_mask(room_layers);
 		add_child(mesh_instance, false, Node::INTERNAL_MODE_FRONT);
 		rebuild();
 		apply_material();
+		// The fisheye textures the room in the running game only; the editor shows the layout.
+		set_process(!Engine::get_singleton()->is_editor_hint());
+	}
+}
+
+void CoarseRoomModel::_process(double p_delta) {
+	(void)p_delta;
+	if (!rig_capture_path.is_empty()) {
+		integrate_rig_frame();
 	}
 }
 
@@ -119,6 +137,8 @@ void CoarseRoomModel::rebuild() {
 	if (!same_layout) {
 		texture = result.ok ? make_coarse_texture(result.mesh) : CoarseTexture();
 		textured = false;
+		// The pipeline's observations belong to the old layout: start again with the next frame.
+		pipeline.reset();
 	}
 	apply_material();
 	update_configuration_warnings();
@@ -167,10 +187,168 @@ bool CoarseRoomModel::set_atlas_image(const Ref<Image> &p_image) {
 }
 
 Ref<Image> CoarseRoomModel::get_atlas_image() const {
-	return textured ? image_from_mat(texture.color) : Ref<Image>();
+	return has_texture_data() ? image_from_mat(get_atlas()) : Ref<Image>();
 }
 
-bool CoarseRoomModel::has_texture_data() const { return textured; }
+bool CoarseRoomModel::has_texture_data() const { return textured || pipeline_has_frames(); }
+
+const cv::Mat &CoarseRoomModel::get_atlas() const {
+	return pipeline_has_frames() ? pipeline->completed_color() : texture.color;
+}
+
+// ---------------------------------------------------------------- texturing from the rig (§4.3-§4.6)
+
+void CoarseRoomModel::set_rig_capture_path(const NodePath &p_path) {
+	rig_capture_path = p_path;
+	pipeline.reset();
+	update_configuration_warnings();
+}
+
+NodePath CoarseRoomModel::get_rig_capture_path() const { return rig_capture_path; }
+
+void CoarseRoomModel::set_pose_source(PoseSource p_source) { pose_source = p_source; }
+CoarseRoomModel::PoseSource CoarseRoomModel::get_pose_source() const { return pose_source; }
+
+void CoarseRoomModel::set_inpainting(bool p_enabled) {
+	inpainting = p_enabled;
+	pipeline.reset();
+}
+
+bool CoarseRoomModel::get_inpainting() const { return inpainting; }
+
+void CoarseRoomModel::set_lighting_compensation(LightingCompensation p_mode) {
+	lighting_compensation = p_mode;
+	pipeline.reset();
+}
+
+CoarseRoomModel::LightingCompensation CoarseRoomModel::get_lighting_compensation() const { return lighting_compensation; }
+
+void CoarseRoomModel::set_room_layers(uint32_t p_layers) {
+	room_layers = p_layers;
+	if (mesh_instance != nullptr) {
+		mesh_instance->set_layer_mask(room_layers);
+	}
+}
+
+uint32_t CoarseRoomModel::get_room_layers() const { return room_layers; }
+
+RigCapture *CoarseRoomModel::find_rig_capture() const {
+	if (rig_capture_path.is_empty() || !is_inside_tree()) {
+		return nullptr;
+	}
+	return cast_to<RigCapture>(get_node_or_null(rig_capture_path));
+}
+
+bool CoarseRoomModel::ensure_pipeline(const RigCapture &p_rig) {
+	const RecordingReader *reader = p_rig.get_reader();
+	if (reader == nullptr || !reader->is_open()) {
+		pipeline_problem = "rig_capture has no recording open.";
+		return false;
+	}
+	if (!result.ok) {
+		pipeline_problem = "the room is not valid.";
+		return false;
+	}
+	if (pipeline && pipeline_reader == reader) {
+		return true;
+	}
+	CoarsePipelineOptions options;
+	options.texel_size_m = texel_size;
+	options.inpaint = inpainting;
+	options.inpaint_async = true; // off the frame's critical path
+	options.lighting = lighting_compensation != LIGHTING_OFF;
+	options.lighting_model = lighting_compensation == LIGHTING_ADDITIVE ? LightingModel::ADDITIVE_PAPER : LightingModel::GAIN_ROBUST;
+	pipeline = std::make_unique<CoarsePipeline>(options);
+	Floorplan plan;
+	plan.ceiling_height_m = ceiling_height;
+	for (int64_t i = 0; i < floorplan.size(); i++) {
+		plan.points.push_back({ floorplan[i].x, floorplan[i].y });
+	}
+	const std::string error = pipeline->configure(reader->get_rig(), plan);
+	if (!error.empty()) {
+		pipeline.reset();
+		pipeline_problem = error;
+		return false;
+	}
+	// The same inputs as rebuild(): the pipeline's atlas is the one the mesh's UVs address.
+	ERR_FAIL_COND_V(pipeline->mesh().atlas_width != result.mesh.atlas_width || pipeline->mesh().atlas_height != result.mesh.atlas_height, false);
+	pipeline_reader = reader;
+	last_fisheye_index = -1;
+	last_stats = CoarseFrameStats();
+	return true;
+}
+
+bool CoarseRoomModel::integrate_rig_frame() {
+	RigCapture *rig = find_rig_capture();
+	if (rig == nullptr) {
+		pipeline_problem = rig_capture_path.is_empty() ? "" : "rig_capture does not lead to a RigCapture.";
+		return false;
+	}
+	if (!ensure_pipeline(*rig)) {
+		return false;
+	}
+	const int64_t index = rig->get_frame_index(RigCapture::STREAM_FISHEYE);
+	if (index < 0 || index == last_fisheye_index) {
+		return false;
+	}
+	last_fisheye_index = index;
+	const RecordingReader &reader = *rig->get_reader();
+	const FisheyeFrame &frame = rig->get_fisheye_frame();
+	if (!reader.has_ground_truth_trajectory(RecordingStream::Rgbd)) {
+		pipeline_problem = "pose_source is Ground Truth, but the recording has no ground-truth RGB-D trajectory.";
+		return false;
+	}
+	Pose world_from_fisheye;
+	std::string error;
+	if (!fisheye_pose_at(reader.ground_truth_trajectory(RecordingStream::Rgbd), reader.get_rig(), frame.timestamp_s, &world_from_fisheye, &error)) {
+		// One frame without a pose is skipped; the next may have one.
+		WARN_PRINT(String(("CoarseRoomModel: fisheye frame " + std::to_string(index) + ": " + error).c_str()));
+		return false;
+	}
+	pipeline_problem.clear();
+	last_stats = pipeline->add_fisheye_frame(frame, world_from_fisheye);
+	apply_material();
+	emit_signal("texture_updated", index);
+	return true;
+}
+
+int64_t CoarseRoomModel::get_integrated_frame_count() const { return pipeline ? int64_t(pipeline->frame_count()) : 0; }
+
+Dictionary CoarseRoomModel::get_last_frame_stats() const {
+	Dictionary d;
+	if (!pipeline_has_frames()) {
+		return d;
+	}
+	const CoarsePipelineTimings &t = pipeline->last_timings();
+	d.set("texels_visible", int64_t(last_stats.update.texels_visible));
+	d.set("texels_updated", int64_t(last_stats.update.texels_updated));
+	d.set("occlusion_skipped", last_stats.occlusion_skipped);
+	d.set("lighting_valid", last_stats.lighting.valid);
+	d.set("lighting_gain", Vector3(last_stats.lighting.gain[0], last_stats.lighting.gain[1], last_stats.lighting.gain[2]));
+	d.set("lighting_offset", Vector3(last_stats.lighting.offset[0], last_stats.lighting.offset[1], last_stats.lighting.offset[2]));
+	d.set("occlusion_ms", t.occlusion_ms);
+	d.set("lighting_ms", t.lighting_ms);
+	d.set("update_ms", t.update_ms);
+	d.set("inpaint_ms", t.inpaint_ms);
+	d.set("frame_ms", t.frame_ms);
+	return d;
+}
+
+void CoarseRoomModel::reset_texture() {
+	pipeline.reset();
+	if (result.ok) {
+		texture = make_coarse_texture(result.mesh);
+	}
+	textured = false;
+	apply_material();
+}
+
+void CoarseRoomModel::finish_inpainting() {
+	if (pipeline_has_frames()) {
+		pipeline->finish_inpainting();
+		apply_material();
+	}
+}
 
 Array CoarseRoomModel::get_charts() const {
 	Array charts;
@@ -194,11 +372,11 @@ void CoarseRoomModel::apply_material() {
 	if (mesh_instance == nullptr) {
 		return;
 	}
-	if (!textured) {
+	if (!has_texture_data()) {
 		mesh_instance->set_material_override(Ref<Material>());
 		return;
 	}
-	show_in_texture(image_from_mat(texture.color), atlas_texture);
+	show_in_texture(image_from_mat(get_atlas()), atlas_texture);
 	if (material.is_null()) {
 		material.instantiate();
 		material->set_shading_mode(BaseMaterial3D::SHADING_MODE_UNSHADED);
@@ -214,7 +392,11 @@ PackedStringArray CoarseRoomModel::get_warnings() const {
 		const char *phrase = check.ok ? "The room cannot be built" : floorplan_problem_summary(check.problem);
 		warnings.push_back(String((std::string(phrase) + ": " + result.error).c_str()));
 	}
-	warnings.push_back("Texturing from the fisheye is not wired yet (issue #4): the atlas comes only from set_atlas_image().");
+	if (!rig_capture_path.is_empty() && is_inside_tree() && find_rig_capture() == nullptr) {
+		warnings.push_back("rig_capture does not lead to a RigCapture node.");
+	} else if (!pipeline_problem.empty()) {
+		warnings.push_back(String(("Fisheye frames are not being integrated: " + pipeline_problem).c_str()));
+	}
 	return warnings;
 }
 
@@ -234,13 +416,40 @@ void CoarseRoomModel::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_atlas_image"), &CoarseRoomModel::get_atlas_image);
 	ClassDB::bind_method(D_METHOD("has_texture_data"), &CoarseRoomModel::has_texture_data);
 	ClassDB::bind_method(D_METHOD("get_charts"), &CoarseRoomModel::get_charts);
+	ClassDB::bind_method(D_METHOD("set_rig_capture", "path"), &CoarseRoomModel::set_rig_capture_path);
+	ClassDB::bind_method(D_METHOD("get_rig_capture"), &CoarseRoomModel::get_rig_capture_path);
+	ClassDB::bind_method(D_METHOD("set_pose_source", "source"), &CoarseRoomModel::set_pose_source);
+	ClassDB::bind_method(D_METHOD("get_pose_source"), &CoarseRoomModel::get_pose_source);
+	ClassDB::bind_method(D_METHOD("set_inpainting", "enabled"), &CoarseRoomModel::set_inpainting);
+	ClassDB::bind_method(D_METHOD("get_inpainting"), &CoarseRoomModel::get_inpainting);
+	ClassDB::bind_method(D_METHOD("set_lighting_compensation", "mode"), &CoarseRoomModel::set_lighting_compensation);
+	ClassDB::bind_method(D_METHOD("get_lighting_compensation"), &CoarseRoomModel::get_lighting_compensation);
+	ClassDB::bind_method(D_METHOD("set_room_layers", "layers"), &CoarseRoomModel::set_room_layers);
+	ClassDB::bind_method(D_METHOD("get_room_layers"), &CoarseRoomModel::get_room_layers);
+	ClassDB::bind_method(D_METHOD("integrate_rig_frame"), &CoarseRoomModel::integrate_rig_frame);
+	ClassDB::bind_method(D_METHOD("get_integrated_frame_count"), &CoarseRoomModel::get_integrated_frame_count);
+	ClassDB::bind_method(D_METHOD("get_last_frame_stats"), &CoarseRoomModel::get_last_frame_stats);
+	ClassDB::bind_method(D_METHOD("reset_texture"), &CoarseRoomModel::reset_texture);
+	ClassDB::bind_method(D_METHOD("finish_inpainting"), &CoarseRoomModel::finish_inpainting);
 
 	ADD_PROPERTY(PropertyInfo(Variant::PACKED_VECTOR2_ARRAY, "floorplan"), "set_floorplan", "get_floorplan");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "ceiling_height", PROPERTY_HINT_RANGE, "0.5,10,0.01,or_greater,suffix:m"), "set_ceiling_height", "get_ceiling_height");
 	ADD_GROUP("Texture", "");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "texel_size", PROPERTY_HINT_RANGE, "0.005,0.1,0.001,suffix:m"), "set_texel_size", "get_texel_size");
+	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "rig_capture", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "RigCapture"), "set_rig_capture", "get_rig_capture");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "pose_source", PROPERTY_HINT_ENUM, "Ground Truth"), "set_pose_source", "get_pose_source");
+	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "inpainting"), "set_inpainting", "get_inpainting");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "lighting_compensation", PROPERTY_HINT_ENUM, "Off,Additive (paper),Gain"), "set_lighting_compensation", "get_lighting_compensation");
+	ADD_GROUP("Rendering", "");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "room_layers", PROPERTY_HINT_LAYERS_3D_RENDER), "set_room_layers", "get_room_layers");
+
+	BIND_ENUM_CONSTANT(POSE_SOURCE_GROUND_TRUTH);
+	BIND_ENUM_CONSTANT(LIGHTING_OFF);
+	BIND_ENUM_CONSTANT(LIGHTING_ADDITIVE);
+	BIND_ENUM_CONSTANT(LIGHTING_GAIN);
 
 	ADD_SIGNAL(MethodInfo("mesh_changed"));
+	ADD_SIGNAL(MethodInfo("texture_updated", PropertyInfo(Variant::INT, "fisheye_frame")));
 }
 
 } // namespace roomprobe

@@ -2,6 +2,10 @@
 
 #include "../convert/image_convert.h"
 
+#include <glm/gtc/quaternion.hpp>
+
+#include <cmath>
+
 using namespace godot;
 
 namespace roomprobe {
@@ -212,6 +216,60 @@ PackedStringArray RigCapture::get_issues() const {
 
 String RigCapture::get_last_error() const { return String(last_error.c_str()); }
 
+PackedVector2Array RigCapture::get_room_floorplan() const {
+	PackedVector2Array points;
+	if (reader && reader->has_room()) {
+		for (const Vec2 &p : reader->get_room().floorplan.points) {
+			points.push_back(Vector2(real_t(p.x), real_t(p.y)));
+		}
+	}
+	return points;
+}
+
+double RigCapture::get_room_ceiling_height() const {
+	return reader && reader->has_room() ? reader->get_room().floorplan.ceiling_height_m : 0.0;
+}
+
+PackedVector3Array RigCapture::get_probe_positions() const {
+	PackedVector3Array out;
+	if (reader && reader->has_room()) {
+		for (const glm::dvec3 &p : reader->get_room().probes) {
+			out.push_back(Vector3(real_t(p.x), real_t(p.y), real_t(p.z)));
+		}
+	}
+	return out;
+}
+
+bool RigCapture::has_ground_truth() const {
+	return reader && reader->has_ground_truth_trajectory(RecordingStream::Rgbd);
+}
+
+Transform3D RigCapture::get_ground_truth_camera_transform() const {
+	Pose pose;
+	std::string error;
+	if (!has_ground_truth() || frame_index[STREAM_RGBD] < 0 ||
+			!reader->ground_truth_trajectory(RecordingStream::Rgbd).pose_at(rgbd_frame.timestamp_s, &pose, &error)) {
+		return Transform3D();
+	}
+	// OpenCV's camera (x right, y down, z forward) to Godot's (x right, y up, looking down -z).
+	// Godot's basis columns are the camera's axes in the world: x, -y, -z of OpenCV's.
+	const glm::dmat3 r = glm::mat3_cast(pose.rotation); // glm: r[column][row]
+	Transform3D t;
+	for (int row = 0; row < 3; row++) {
+		t.basis.rows[row] = Vector3(real_t(r[0][row]), real_t(-r[1][row]), real_t(-r[2][row]));
+	}
+	t.origin = Vector3(real_t(pose.translation.x), real_t(pose.translation.y), real_t(pose.translation.z));
+	return t;
+}
+
+double RigCapture::get_rgb_camera_fov() const {
+	if (!reader) {
+		return 0.0;
+	}
+	const PinholeParams &rgb = reader->get_rig().rgb;
+	return rgb.fy > 0.0 ? 2.0 * std::atan(0.5 * rgb.height / rgb.fy) * 180.0 / 3.14159265358979323846 : 0.0;
+}
+
 PackedStringArray RigCapture::get_warnings() const {
 	PackedStringArray warnings;
 	if (recording_path.is_empty()) {
@@ -256,6 +314,12 @@ void RigCapture::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_fisheye_image"), &RigCapture::get_fisheye_image);
 	ClassDB::bind_method(D_METHOD("get_issues"), &RigCapture::get_issues);
 	ClassDB::bind_method(D_METHOD("get_last_error"), &RigCapture::get_last_error);
+	ClassDB::bind_method(D_METHOD("get_room_floorplan"), &RigCapture::get_room_floorplan);
+	ClassDB::bind_method(D_METHOD("get_room_ceiling_height"), &RigCapture::get_room_ceiling_height);
+	ClassDB::bind_method(D_METHOD("get_probe_positions"), &RigCapture::get_probe_positions);
+	ClassDB::bind_method(D_METHOD("has_ground_truth"), &RigCapture::has_ground_truth);
+	ClassDB::bind_method(D_METHOD("get_ground_truth_camera_transform"), &RigCapture::get_ground_truth_camera_transform);
+	ClassDB::bind_method(D_METHOD("get_rgb_camera_fov"), &RigCapture::get_rgb_camera_fov);
 
 	ADD_PROPERTY(PropertyInfo(Variant::STRING, "recording_path", PROPERTY_HINT_GLOBAL_DIR), "set_recording_path", "get_recording_path");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "pacing", PROPERTY_HINT_ENUM, "Real Time,Step"), "set_pacing", "get_pacing");

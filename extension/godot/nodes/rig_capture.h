@@ -8,6 +8,8 @@
 
 #include <rp_godot/godot.h>
 
+#include <math/pose.h>
+
 #include <memory>
 
 namespace roomprobe {
@@ -24,6 +26,9 @@ public:
 		STREAM_RGBD,
 		STREAM_FISHEYE,
 	};
+
+	// Processes first: the model nodes read the frames it delivers in the same frame.
+	RigCapture() { set_process_priority(-30); }
 
 	void set_recording_path(const godot::String &p_path);
 	godot::String get_recording_path() const;
@@ -57,6 +62,17 @@ public:
 	godot::Ref<godot::Image> get_rgb_image() const;
 	godot::Ref<godot::Image> get_depth_image() const;
 	godot::Ref<godot::Image> get_fisheye_image() const;
+	// The recording's room (room.yaml): floorplan corners (x, z) in metres, ceiling height in
+	// metres, probe positions in world metres. Empty / 0 without a room.
+	godot::PackedVector2Array get_room_floorplan() const;
+	double get_room_ceiling_height() const;
+	godot::PackedVector3Array get_probe_positions() const;
+	bool has_ground_truth() const;
+	// The ground-truth pose of the RGB camera at the current RGB-D frame, as a Godot camera
+	// transform (looking down -Z, Y up); identity without ground truth or frame.
+	godot::Transform3D get_ground_truth_camera_transform() const;
+	// The RGB camera's vertical field of view, degrees (for Camera3D.fov); 0 without a recording.
+	double get_rgb_camera_fov() const;
 	godot::PackedStringArray get_issues() const;
 	godot::String get_last_error() const;
 

@@ -4,9 +4,33 @@
 
 #include "../convert/image_convert.h"
 
+#include <envmap/export.h>
+
+#include <algorithm>
+#include <limits>
+
 using namespace godot;
 
 namespace roomprobe {
+
+namespace {
+
+// Route (c): the probe's cubemap as the sky. EYEDIR is a world direction, sampled with the same
+// convention as shaders/mirror.gdshader. Godot prefilters the sky into its radiance maps itself
+// (GGX), so StandardMaterial3D roughness works with no custom shader.
+const char *const SKY_SHADER_CODE = R"(shader_type sky;
+uniform samplerCube environment : hint_default_black, filter_linear_mipmap;
+uniform float energy = 1.0;
+void sky() {
+	COLOR = energy * texture(environment, EYEDIR).rgb;
+}
+)";
+
+std::string global_path(const String &p_path) {
+	return ProjectSettings::get_singleton()->globalize_path(p_path).utf8_string();
+}
+
+} // namespace
 
 RoomProbe::RoomProbe() = default;
 RoomProbe::~RoomProbe() = default;
@@ -51,6 +75,20 @@ void RoomProbe::set_sh_parameter(const StringName &p_name) {
 
 StringName RoomProbe::get_sh_parameter() const { return sh_parameter; }
 
+void RoomProbe::set_reflection_probe_path(const NodePath &p_path) {
+	reflection_probe_path = p_path;
+	update_configuration_warnings();
+}
+
+NodePath RoomProbe::get_reflection_probe_path() const { return reflection_probe_path; }
+
+void RoomProbe::set_world_environment_path(const NodePath &p_path) {
+	world_environment_path = p_path;
+	update_configuration_warnings();
+}
+
+NodePath RoomProbe::get_world_environment_path() const { return world_environment_path; }
+
 void RoomProbe::_notification(int p_what) {
 	if (p_what == NOTIFICATION_READY) {
 		// A first map at once when the model is there; quietly none otherwise (see the warnings).
@@ -88,7 +126,9 @@ bool RoomProbe::update_now() {
 	}
 	// The room mesh is in the model's local frame; only its translation is accounted for.
 	const Vector3 p = get_global_position() - model->get_global_position();
-	const roomprobe::Cubemap map = renderer->render(model->get_texture(), glm::dvec3(p.x, p.y, p.z), resolution);
+	const cv::Mat &atlas = model->get_atlas();
+	ERR_FAIL_COND_V_MSG(atlas.empty(), false, "The CoarseRoomModel has no atlas.");
+	roomprobe::Cubemap map = renderer->render(atlas, glm::dvec3(p.x, p.y, p.z), resolution);
 	ERR_FAIL_COND_V_MSG(!is_valid_cubemap(map), false, "Rendering the coarse model failed.");
 
 	sh = project_sh(map);
@@ -115,9 +155,86 @@ bool RoomProbe::update_now() {
 		ERR_FAIL_COND_V_MSG(err != OK, false, "Could not create the Cubemap.");
 	}
 	has_map = true;
+	last_map = std::move(map);
 	apply_to_material();
+	drive_reflection_probe(*model);
+	drive_world_environment();
 	emit_signal("environment_map_updated");
 	return true;
+}
+
+void RoomProbe::drive_reflection_probe(const CoarseRoomModel &p_model) {
+	if (reflection_probe_path.is_empty()) {
+		return;
+	}
+	ReflectionProbe *probe = cast_to<ReflectionProbe>(get_node_or_null(reflection_probe_path));
+	ERR_FAIL_NULL_MSG(probe, "reflection_probe does not lead to a ReflectionProbe.");
+	const RoomMesh *mesh = p_model.get_room_mesh();
+	ERR_FAIL_NULL(mesh);
+	// The room's box, for box projection: reflections of the walls then move with the viewer
+	// (parallax) instead of sitting at infinity.
+	Vector3 lo(std::numeric_limits<real_t>::max(), std::numeric_limits<real_t>::max(), std::numeric_limits<real_t>::max());
+	Vector3 hi = -lo;
+	for (const Vec3f &v : mesh->positions) {
+		lo = Vector3(std::min(lo.x, real_t(v.x)), std::min(lo.y, real_t(v.y)), std::min(lo.z, real_t(v.z)));
+		hi = Vector3(std::max(hi.x, real_t(v.x)), std::max(hi.y, real_t(v.y)), std::max(hi.z, real_t(v.z)));
+	}
+	const Vector3 centre = p_model.get_global_position() + (lo + hi) * 0.5;
+	probe->set_global_position(centre);
+	probe->set_size(hi - lo);
+	probe->set_origin_offset(get_global_position() - centre);
+	probe->set_enable_box_projection(true);
+	probe->set_as_interior(true);
+	// Only the textured room: not the virtual objects, nor the rest of the scene.
+	probe->set_cull_mask(p_model.get_room_layers());
+	probe->set_update_mode(update_mode == UPDATE_ALWAYS ? ReflectionProbe::UPDATE_ALWAYS : ReflectionProbe::UPDATE_ONCE);
+}
+
+void RoomProbe::drive_world_environment() {
+	if (world_environment_path.is_empty()) {
+		return;
+	}
+	WorldEnvironment *world = cast_to<WorldEnvironment>(get_node_or_null(world_environment_path));
+	ERR_FAIL_NULL_MSG(world, "world_environment does not lead to a WorldEnvironment.");
+	Ref<Environment> environment = world->get_environment();
+	if (environment.is_null()) {
+		environment.instantiate();
+		world->set_environment(environment);
+	}
+	if (sky_material.is_null()) {
+		Ref<Shader> shader;
+		shader.instantiate();
+		shader->set_code(SKY_SHADER_CODE);
+		sky_material.instantiate();
+		sky_material->set_shader(shader);
+		sky.instantiate();
+		sky->set_material(sky_material);
+	}
+	// A live map changes every frame: only REALTIME re-filters the radiance every frame.
+	sky->set_process_mode(update_mode == UPDATE_ALWAYS ? Sky::PROCESS_MODE_REALTIME : Sky::PROCESS_MODE_AUTOMATIC);
+	sky_material->set_shader_parameter("environment", cubemap);
+	if (environment->get_sky() != sky) {
+		environment->set_sky(sky);
+	}
+	// The background stays as the scene has it (an AR app shows the camera image there).
+	environment->set_reflection_source(Environment::REFLECTION_SOURCE_SKY);
+	environment->set_ambient_source(Environment::AMBIENT_SOURCE_SKY);
+}
+
+Ref<ShaderMaterial> RoomProbe::get_sky_material() const { return sky_material; }
+
+Error RoomProbe::save_exr(const String &p_path) const {
+	ERR_FAIL_COND_V_MSG(!has_map, ERR_UNAVAILABLE, "No environment map yet: call update_now() first.");
+	const std::string error = write_cubemap_exr(global_path(p_path), last_map);
+	ERR_FAIL_COND_V_MSG(!error.empty(), ERR_FILE_CANT_WRITE, String(error.c_str()));
+	return OK;
+}
+
+Error RoomProbe::save_png_net(const String &p_path) const {
+	ERR_FAIL_COND_V_MSG(!has_map, ERR_UNAVAILABLE, "No environment map yet: call update_now() first.");
+	const std::string error = write_cubemap_png_net(global_path(p_path), last_map);
+	ERR_FAIL_COND_V_MSG(!error.empty(), ERR_FILE_CANT_WRITE, String(error.c_str()));
+	return OK;
 }
 
 void RoomProbe::apply_to_material() {
@@ -163,8 +280,16 @@ PackedStringArray RoomProbe::get_warnings() const {
 			warnings.push_back("The CoarseRoomModel has no valid room: no environment map.");
 		}
 	}
-	warnings.push_back("Only the coarse model is rendered: the dense SLAM model is not implemented yet, and the coarse model's texture comes only from CoarseRoomModel.set_atlas_image() (fisheye texturing not wired yet).");
-	warnings.push_back("The map reaches materials only through target_material (a ShaderMaterial, see shaders/): feeding a ReflectionProbe or the Environment is not supported yet.");
+	if (is_inside_tree() && !reflection_probe_path.is_empty() && cast_to<ReflectionProbe>(get_node_or_null(reflection_probe_path)) == nullptr) {
+		warnings.push_back("reflection_probe does not lead to a ReflectionProbe.");
+	}
+	if (is_inside_tree() && !world_environment_path.is_empty() && cast_to<WorldEnvironment>(get_node_or_null(world_environment_path)) == nullptr) {
+		warnings.push_back("world_environment does not lead to a WorldEnvironment.");
+	}
+	if (target_material.is_null() && reflection_probe_path.is_empty() && world_environment_path.is_empty()) {
+		warnings.push_back("The map reaches nothing: set target_material, reflection_probe or world_environment (or read get_cubemap() from a script).");
+	}
+	warnings.push_back("Only the coarse model is rendered: the dense SLAM model is not implemented yet (issue #5).");
 	return warnings;
 }
 
@@ -188,6 +313,13 @@ void RoomProbe::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_cubemap"), &RoomProbe::get_cubemap);
 	ClassDB::bind_method(D_METHOD("get_face_image", "layer"), &RoomProbe::get_face_image);
 	ClassDB::bind_method(D_METHOD("get_sh_coefficients"), &RoomProbe::get_sh_coefficients);
+	ClassDB::bind_method(D_METHOD("save_exr", "path"), &RoomProbe::save_exr);
+	ClassDB::bind_method(D_METHOD("save_png_net", "path"), &RoomProbe::save_png_net);
+	ClassDB::bind_method(D_METHOD("get_sky_material"), &RoomProbe::get_sky_material);
+	ClassDB::bind_method(D_METHOD("set_reflection_probe", "path"), &RoomProbe::set_reflection_probe_path);
+	ClassDB::bind_method(D_METHOD("get_reflection_probe"), &RoomProbe::get_reflection_probe_path);
+	ClassDB::bind_method(D_METHOD("set_world_environment", "path"), &RoomProbe::set_world_environment_path);
+	ClassDB::bind_method(D_METHOD("get_world_environment"), &RoomProbe::get_world_environment_path);
 
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "resolution", PROPERTY_HINT_ENUM, "64:64,128:128,256:256,512:512"), "set_resolution", "get_resolution");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "coarse_model", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "CoarseRoomModel"), "set_coarse_model", "get_coarse_model");
@@ -197,6 +329,8 @@ void RoomProbe::_bind_methods() {
 	ADD_PROPERTY(PropertyInfo(Variant::OBJECT, "target_material", PROPERTY_HINT_RESOURCE_TYPE, "ShaderMaterial", PROPERTY_USAGE_DEFAULT, "ShaderMaterial"), "set_target_material", "get_target_material");
 	ADD_PROPERTY(PropertyInfo(Variant::STRING_NAME, "material_parameter"), "set_material_parameter", "get_material_parameter");
 	ADD_PROPERTY(PropertyInfo(Variant::STRING_NAME, "sh_parameter"), "set_sh_parameter", "get_sh_parameter");
+	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "reflection_probe", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "ReflectionProbe"), "set_reflection_probe", "get_reflection_probe");
+	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "world_environment", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "WorldEnvironment"), "set_world_environment", "get_world_environment");
 
 	BIND_ENUM_CONSTANT(UPDATE_ONCE);
 	BIND_ENUM_CONSTANT(UPDATE_ALWAYS);

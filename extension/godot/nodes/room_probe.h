@@ -40,6 +40,10 @@ public:
 	godot::StringName get_material_parameter() const;
 	void set_sh_parameter(const godot::StringName &p_name);
 	godot::StringName get_sh_parameter() const;
+	void set_reflection_probe_path(const godot::NodePath &p_path);
+	godot::NodePath get_reflection_probe_path() const;
+	void set_world_environment_path(const godot::NodePath &p_path);
+	godot::NodePath get_world_environment_path() const;
 
 	// Renders the coarse model at the probe's position into the cubemap, projects it onto SH,
 	// feeds target_material and emits environment_map_updated. False (with an error) when
@@ -49,6 +53,13 @@ public:
 	// Face p_layer (0..5: +X -X +Y -Y +Z -Z) of the latest map as RGBF, full precision, no mipmaps.
 	godot::Ref<godot::Image> get_face_image(int p_layer) const;
 	godot::PackedVector3Array get_sh_coefficients() const;
+	// The latest map as an EXR strip (32-bit float, recording/cubemap_layout.h) or as an 8-bit
+	// PNG cross (envmap/export.h). Paths may be res:// or user:// or absolute. Error codes as
+	// Godot's; the message names the file.
+	godot::Error save_exr(const godot::String &p_path) const;
+	godot::Error save_png_net(const godot::String &p_path) const;
+	// The sky material of the WorldEnvironment route (null until first used).
+	godot::Ref<godot::ShaderMaterial> get_sky_material() const;
 
 	// What the node cannot do as configured; the editor shows these as configuration warnings.
 	godot::PackedStringArray get_warnings() const;
@@ -64,6 +75,10 @@ public:
 private:
 	CoarseRoomModel *find_coarse_model() const;
 	void apply_to_material();
+	// Route (b): places and sets up the ReflectionProbe so that it sees the textured room only.
+	void drive_reflection_probe(const CoarseRoomModel &p_model);
+	// Route (c): the map as the WorldEnvironment's sky (reflections and ambient light).
+	void drive_world_environment();
 
 	int resolution = 256;
 	godot::NodePath coarse_model_path;
@@ -72,11 +87,16 @@ private:
 	godot::Ref<godot::ShaderMaterial> target_material;
 	godot::StringName material_parameter = "environment";
 	godot::StringName sh_parameter = "sh";
+	godot::NodePath reflection_probe_path;
+	godot::NodePath world_environment_path;
+	godot::Ref<godot::ShaderMaterial> sky_material;
+	godot::Ref<godot::Sky> sky;
 
 	// The renderer caches the surface texels of one mesh version of one model.
 	std::unique_ptr<CoarseCubemapRenderer> renderer;
 	uint64_t renderer_mesh_version = 0;
 
+	roomprobe::Cubemap last_map; // as rendered, for export
 	godot::Ref<godot::Image> faces[6]; // RGBF, as rendered
 	godot::Ref<godot::Cubemap> cubemap; // RGBAH with mipmaps
 	ShCoefficients sh{};

@@ -1,0 +1,43 @@
+#pragma once
+// Plain data shared by the dense SLAM stages (paper §4.2): what the model's raycast gives and
+// what frame-to-model tracking takes, and each frame's tracking state.
+
+#include <camera/pinhole_camera.h>
+#include <io/opencv.h>
+#include <math/pose.h>
+
+#include <string>
+
+namespace roomprobe {
+
+// The dense model seen from one camera pose: the raycast of the TSDF (tsdf_volume.h), and the
+// reference that ICP (icp_tracker.h) aligns the next depth frame to. All maps have the camera's
+// size; a pixel whose ray met no surface holds NaN in points and normals (and 0 in colors).
+struct ModelMaps {
+	PinholeIntrinsics camera; // the camera the maps were cast for (undistorted)
+	Pose world_from_camera; // the pose they were cast from
+	cv::Mat points; // CV_32FC3, world metres
+	cv::Mat normals; // CV_32FC3, world, unit length, pointing towards the camera
+	cv::Mat colors; // CV_8UC3, R, G, B
+	cv::Mat depth; // CV_32FC1, metres along the camera's optical axis (z), NaN where no hit
+};
+
+// How tracking went for one frame.
+enum class TrackingState {
+	Good, // the pose is trusted; the frame may be integrated
+	Poor, // a pose was found but with little support; integrate nothing, keep going
+	Lost, // no trustworthy pose: the last good pose is held and nothing is integrated
+};
+
+const char *tracking_state_name(TrackingState p_state); // "good", "poor", "lost"
+
+struct TrackingResult {
+	TrackingState state = TrackingState::Lost;
+	std::string reason; // why Poor or Lost, for people ("too few valid depth pixels: 0 of 307200")
+	Pose world_from_camera; // the estimate (the held pose when Lost)
+	double inlier_fraction = 0.0; // inlier correspondences / valid depth pixels, at the finest level
+	double rmse_m = 0.0; // point-to-plane RMS residual of the inliers at the finest level, metres
+	int iterations = 0; // Gauss-Newton iterations over all levels
+};
+
+} // namespace roomprobe

@@ -1,0 +1,179 @@
+extends RoomProbeTestCase
+## The coarse model live in Godot (paper §4.3-§4.7): a RigCapture steps through the synthetic
+## living-room recording (1 s, rendered by the test runner), CoarseRoomModel textures the room
+## from every fisheye frame (ground-truth poses), and a RoomProbe at the recording's probe renders
+## the environment map, which is compared with the recording's ground-truth cubemap there.
+
+var _dir := ""
+var _scene: Node3D
+
+
+func _init() -> void:
+	_dir = ProjectSettings.globalize_path("res://").path_join("../build/test-data/living_room_1s").simplify_path()
+	timeout_s = 120.0
+
+
+func after_each() -> void:
+	if is_instance_valid(_scene):
+		_scene.free()
+	_scene = null
+
+
+func _need_recording() -> bool:
+	if not DirAccess.dir_exists_absolute(_dir):
+		skip("no synthetic recording at %s (the runner makes it with build/bin/roomprobe_synth)" % _dir)
+		return false
+	return true
+
+
+## rig, room and probe, wired; the room takes the recording's floorplan.
+func _make_scene() -> Array:
+	_scene = Node3D.new()
+	var rig = ClassDB.instantiate("RigCapture")
+	rig.name = "Rig"
+	rig.pacing = 1  # PACING_STEP
+	rig.autoplay = false
+	rig.recording_path = _dir
+	_scene.add_child(rig)
+	var room = ClassDB.instantiate("CoarseRoomModel")
+	room.name = "Room"
+	room.texel_size = 0.04
+	_scene.add_child(room)
+	var probe = ClassDB.instantiate("RoomProbe")
+	probe.name = "Probe"
+	_scene.add_child(probe)
+	add_to_tree(_scene)
+	assert_true(rig.open(), "the recording opens: %s" % rig.get_last_error())
+	room.floorplan = rig.get_room_floorplan()
+	room.ceiling_height = rig.get_room_ceiling_height()
+	room.rig_capture = NodePath("../Rig")
+	probe.position = rig.get_probe_positions()[0]
+	probe.coarse_model = NodePath("../Room")
+	return [rig, room, probe]
+
+
+## The ground-truth cubemap (an N x 6N EXR strip) of the recording's last line, as six RGBF faces.
+func _ground_truth_faces() -> Array[Image]:
+	var lines := FileAccess.get_file_as_string(_dir.path_join("groundtruth/cubemaps.txt")).strip_edges().split("\n")
+	var last := lines[lines.size() - 1].split(" ")
+	var strip := Image.load_from_file(_dir.path_join(last[2]))
+	strip.convert(Image.FORMAT_RGBF)
+	var n := strip.get_width()
+	var faces: Array[Image] = []
+	for f in 6:
+		faces.append(strip.get_region(Rect2i(0, f * n, n, n)))
+	return faces
+
+
+## PSNR in dB of p_faces against p_truth (linear values clamped to [0, 1], peak 1).
+static func _psnr(p_faces: Array, p_truth: Array[Image]) -> float:
+	var se := 0.0
+	var count := 0
+	for f in 6:
+		var a: Image = p_faces[f]
+		var b: Image = p_truth[f]
+		for y in b.get_height():
+			for x in b.get_width():
+				var ca := a.get_pixel(x, y)
+				var cb := b.get_pixel(x, y)
+				se += pow(clampf(ca.r, 0, 1) - clampf(cb.r, 0, 1), 2) + pow(clampf(ca.g, 0, 1) - clampf(cb.g, 0, 1), 2) + pow(clampf(ca.b, 0, 1) - clampf(cb.b, 0, 1), 2)
+				count += 3
+	return 10.0 * log(1.0 / maxf(se / count, 1e-12)) / log(10.0)
+
+
+## Normalised cross-correlation of the luminance (clamped to [0, 1]) of p_faces and p_truth over
+## the texels of the faces in p_face_list: 1 for a map with the truth's structure at any gain and offset, 0 for a map without
+## any (a constant map, or noise).
+static func _correlation(p_faces: Array, p_truth: Array[Image], p_face_list: Array) -> float:
+	var a_values := PackedFloat32Array()
+	var b_values := PackedFloat32Array()
+	for f in p_face_list:
+		var a: Image = p_faces[f]
+		var b: Image = p_truth[f]
+		for y in b.get_height():
+			for x in b.get_width():
+				var ca := a.get_pixel(x, y)
+				var cb := b.get_pixel(x, y)
+				a_values.append(Color(clampf(ca.r, 0, 1), clampf(ca.g, 0, 1), clampf(ca.b, 0, 1)).get_luminance())
+				b_values.append(Color(clampf(cb.r, 0, 1), clampf(cb.g, 0, 1), clampf(cb.b, 0, 1)).get_luminance())
+	var n := a_values.size()
+	var ma := 0.0
+	var mb := 0.0
+	for i in n:
+		ma += a_values[i]
+		mb += b_values[i]
+	ma /= n
+	mb /= n
+	var sab := 0.0
+	var saa := 0.0
+	var sbb := 0.0
+	for i in n:
+		sab += (a_values[i] - ma) * (b_values[i] - mb)
+		saa += (a_values[i] - ma) * (a_values[i] - ma)
+		sbb += (b_values[i] - mb) * (b_values[i] - mb)
+	return sab / sqrt(maxf(saa * sbb, 1e-20))
+
+
+func test_fisheye_frames_texture_the_room_and_the_ceiling_matches_the_truth() -> void:
+	if not _need_recording():
+		return
+	var parts := _make_scene()
+	var rig = parts[0]
+	var room = parts[1]
+	var probe = parts[2]
+	assert_true(rig.has_ground_truth())
+	assert_false(room.has_texture_data(), "no texture before the first frame")
+	var integrated := 0
+	var updated := []
+	room.texture_updated.connect(func(i: int): updated.append(i))
+	while rig.step():
+		if room.integrate_rig_frame():
+			integrated += 1
+			var stats: Dictionary = room.get_last_frame_stats()
+			assert_true(stats.texels_updated <= stats.texels_visible)
+		assert_false(room.integrate_rig_frame(), "a frame goes through once")
+	assert_eq(integrated, rig.get_frame_count(1), "every fisheye frame went through")
+	assert_eq(room.get_integrated_frame_count(), integrated)
+	assert_eq(updated.size(), integrated, "texture_updated once a frame")
+	assert_true(room.has_texture_data())
+	room.finish_inpainting()
+	var truth := _ground_truth_faces()
+	probe.resolution = truth[0].get_width()
+	assert_true(probe.update_now())
+	var faces := []
+	for f in 6:
+		faces.append(probe.get_face_image(f))
+	var psnr := _psnr(faces, truth)
+	var correlation := _correlation(faces, truth, [2])
+	print("    coarse map at the probe vs ground truth: PSNR %.2f dB, luminance correlation %.3f (+Y face), %.3f (all)" % [psnr, correlation, _correlation(faces, truth, range(6))])
+	# Looking up from the probe the truth is the coarse model's alone (ceiling tiles, the panel
+	# light, the walls' tops); below the horizon it is mostly the table top, which only the dense
+	# model (issue #5) can bring, so the whole sphere is printed, not judged. A map without
+	# structure correlates 0; the tiles' edges are 2 cm wide, so a map off by a texel or two
+	# still keeps most of the variance: ask for half of it (r > 0.7).
+	assert_true(correlation > 0.7, "luminance correlation of the +Y face with the truth %.3f" % correlation)
+	assert_eq(room.get_warnings().size(), 0, "no warnings: %s" % [room.get_warnings()])
+
+
+func test_without_ground_truth_pose_source_says_why() -> void:
+	if not _need_recording():
+		return
+	var parts := _make_scene()
+	var room = parts[1]
+	room.rig_capture = NodePath("../Nowhere")
+	assert_false(room.integrate_rig_frame())
+	assert_true(" ".join(room.get_warnings()).contains("does not lead to a RigCapture"), str(room.get_warnings()))
+
+
+func test_a_new_floorplan_starts_the_texture_again() -> void:
+	if not _need_recording():
+		return
+	var parts := _make_scene()
+	var rig = parts[0]
+	var room = parts[1]
+	while room.get_integrated_frame_count() < 2 and rig.step():
+		room.integrate_rig_frame()
+	assert_eq(room.get_integrated_frame_count(), 2)
+	room.texel_size = 0.05
+	assert_eq(room.get_integrated_frame_count(), 0, "the observations belonged to the old atlas")
+	assert_false(room.has_texture_data())
