@@ -1,109 +1,98 @@
 #!/usr/bin/env python3
 """RoomProbe's demo: ./roomprobe demo [OPTIONS] runs it inside the toolchain.
 
-Builds the extension, imports godot_project/ once (so that the extension loads), then runs
-res://demo_scenes/main.tscn, which prints what the RoomProbe extension registered (classes,
-properties, signals, configuration warnings) and shows a room with a mirror sphere.
+  1. builds the extension and tools;
+  2. synthesises the living_room recording once (out/demo/recording/, 6 s; kept for later runs);
+  3. plays it in res://demo_scenes/main.tscn: the RGB image as the background, the AR camera on
+     the recording's ground-truth poses, a mirror sphere, a glass sphere and a gold torus on the
+     table, each lit by a RoomProbe's live environment map;
+  4. writes to out/demo/: the AR frames (Godot's Movie Maker, frames/frame*.png, 15 fps, under
+     Xvfb on Mesa's CPU Vulkan), cubemap.exr and cubemap_net.png of the mirror sphere's last map,
+     and evaluation.txt (roomprobe_eval: the paper's baseline against the coarse variants).
 
 Where it runs:
-  default     in a window when $DISPLAY is set, else headless (report only, then quit)
-  --window    in a window on $DISPLAY (Vulkan), until the window is closed
-  --xvfb      under xvfb-run (Vulkan on lavapipe); saves out/demo/screenshot.png and quits
-  --headless  no window: the report, some frames, quit
+  default     Movie Maker under xvfb-run (no display needed), then quits
+  --window    live in a window on $DISPLAY, until the window is closed (no frames written)
 """
 
 import argparse
 import os
 import re
 import shlex
+import shutil
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import rp_godot as rp  # noqa: E402
 
 OUT = os.path.join(rp.REPO, "out", "demo")
+RECORDING = os.path.join(OUT, "recording")
+FRAMES = os.path.join(OUT, "frames")
 SCENE = "res://demo_scenes/main.tscn"
-XVFB_SCREEN = "-screen 0 1280x720x24"
+FPS = 15
+SIZE = "640x480"  # the synthetic rig's RGB camera: the background and the AR camera line up
+SECONDS = 6
 BAD = re.compile(r"ERROR|Failed to|leaked")
 
 
 def main():
     ap = argparse.ArgumentParser(prog="./roomprobe demo", description=__doc__.split("\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__.split("\n\n", 2)[2])
-    mode = ap.add_mutually_exclusive_group()
-    mode.add_argument("--window", action="store_true", help="run in a window on $DISPLAY")
-    mode.add_argument("--xvfb", action="store_true", help="run under xvfb-run and save out/demo/screenshot.png")
-    mode.add_argument("--headless", action="store_true", help="run without a window")
-    ap.add_argument("--frames", type=int, metavar="N",
-                    help="quit after N frames (default: 120 headless, until closed in a window)")
+                                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__.split("\n\n", 1)[1])
+    ap.add_argument("--window", action="store_true", help="play live in a window on $DISPLAY instead of writing frames")
     ap.add_argument("--no-build", action="store_true", help="skip the build")
+    ap.add_argument("--no-eval", action="store_true", help="skip the evaluation")
     ap.add_argument("--scons-args", metavar="ARGS", help="arguments for scons instead of '-j<nproc>' (also $ROOMPROBE_SCONS_ARGS)")
     opts = ap.parse_args()
     os.makedirs(OUT, exist_ok=True)
-
-    if opts.xvfb:
-        mode_name = "xvfb"
-    elif opts.window or (not opts.headless and os.environ.get("DISPLAY")):
-        mode_name = "window"
-    else:
-        mode_name = "headless"
-    if mode_name == "window" and not os.environ.get("DISPLAY"):
-        rp.die("--window needs a display ($DISPLAY is not set); try --xvfb or --headless")
-    if mode_name == "xvfb" and not rp.have("xvfb-run"):
-        rp.die("--xvfb needs xvfb-run (package xvfb)")
+    if opts.window and not os.environ.get("DISPLAY"):
+        rp.die("--window needs a display ($DISPLAY is not set); without it the demo writes frames under Xvfb")
+    if not opts.window and not rp.have("xvfb-run"):
+        rp.die("the demo needs xvfb-run (package xvfb) to write frames without a display; or use --window")
 
     if not opts.no_build and not build(opts):
         return 1
+    if not synthesise():
+        return 1
     import_project()
-
-    # The demo makes no sound: every mode uses the dummy audio driver (no ALSA noise).
-    godot_args = rp.godot_base_args(rendering=mode_name != "headless")
-    user = []
-    frames = opts.frames
-    if mode_name == "headless" and frames is None:
-        frames = 120
-    if frames is not None:
-        user += ["--frames", str(frames)]
-    cmd = godot_args + [SCENE]
-    if mode_name == "xvfb":
-        shot = os.path.join(OUT, "screenshot.png")
-        if os.path.exists(shot):
-            os.remove(shot)
-        user += ["--screenshot", shot]
-        cmd = rp.xvfb_prefix(XVFB_SCREEN) + cmd + ["--resolution", "1280x720"]
-    if user:
-        cmd += ["--"] + user
-    rp.header(f"demo ({mode_name}): {shlex.join(cmd)}")
-    log = os.path.join(OUT, "demo.log")
-    noise = rp.NoiseFilter()
-    r = rp.run(cmd, log, timeout=None if mode_name == "window" else 600,
-               echo=lambda line: [print(k, flush=True) for k in noise.feed(line)])
-    for k in noise.flush():
-        print(k)
-    print(f"\ndemo: Godot ended: {rp.describe_exit(r)} after {rp.fmt_duration(r.seconds)}; log: {rp.relpath(log)}")
-    if any(re.match(r'^WARNING: \d+ RIDs of type "Texture" were leaked', line) for line in r.lines):
-        print("demo: the Texture RID leak at exit is Godot 4.6's reflection-atlas bug (godotengine/godot#122498),"
-              " set off by the scene's ReflectionProbe; not RoomProbe's")
-    if mode_name == "xvfb":
-        shot = os.path.join(OUT, "screenshot.png")
-        if os.path.exists(shot):
-            print(f"demo: screenshot: {rp.relpath(shot)}")
-        else:
-            print("demo: no screenshot was written")
-            return 1
-    return 0 if r.rc == 0 else 1
+    if not play(opts.window):
+        return 1
+    if not opts.no_eval and not evaluate():
+        return 1
+    rp.header("demo: outputs")
+    frames = sorted(f for f in os.listdir(FRAMES) if f.endswith(".png")) if os.path.isdir(FRAMES) else []
+    print(f"  AR frames:     {rp.relpath(FRAMES)}/ ({len(frames)} PNG at {FPS} fps)")
+    for name in ["cubemap.exr", "cubemap_net.png", "evaluation.txt"]:
+        path = os.path.join(OUT, name)
+        print(f"  {name + ':':<14} {rp.relpath(path) if os.path.exists(path) else '(missing)'}")
+    return 0
 
 
 def build(opts):
     cmd = rp.scons_command([], opts.scons_args)
     rp.header(f"build: {shlex.join(cmd)}")
-    if rp.sconstruct_missing():
-        print("no SConstruct yet: skipping the build (the demo shows what is there)")
-        return True
     r = rp.run(cmd, os.path.join(OUT, "build.log"), timeout=3600, echo=lambda line: print("    " + line, flush=True))
     if r.rc != 0:
         print(f"demo: the build failed ({rp.describe_exit(r)}); log: {rp.relpath(os.path.join(OUT, 'build.log'))}")
         return False
+    return True
+
+
+def synthesise():
+    """The recording, once: a stamp names the arguments, so a changed demo makes it again."""
+    args = ["--scene", "living_room", "--seconds", str(SECONDS), "--seed", "1", "--no-calibration"]
+    stamp = os.path.join(RECORDING, ".made-with")
+    if os.path.exists(stamp) and open(stamp).read() == " ".join(args):
+        rp.header(f"recording: {rp.relpath(RECORDING)} (already made)")
+        return True
+    shutil.rmtree(RECORDING, ignore_errors=True)
+    cmd = [os.path.join(rp.BUILD, "bin", "roomprobe_synth")] + args + ["--out", RECORDING]
+    rp.header(f"recording: {shlex.join(cmd)}")
+    r = rp.run(cmd, os.path.join(OUT, "synth.log"), timeout=1800, echo=lambda line: print("    " + line, flush=True))
+    if r.rc != 0:
+        print(f"demo: synthesising the recording failed ({rp.describe_exit(r)}); log: {rp.relpath(os.path.join(OUT, 'synth.log'))}")
+        return False
+    with open(stamp, "w") as f:
+        f.write(" ".join(args))
     return True
 
 
@@ -119,6 +108,37 @@ def import_project():
             print("    " + line)
     else:
         print(f"ok ({rp.fmt_duration(r.seconds)})")
+
+
+def play(window):
+    cmd = rp.godot_base_args(rendering=True) + ["--resolution", SIZE]
+    if not window:
+        shutil.rmtree(FRAMES, ignore_errors=True)
+        os.makedirs(FRAMES)
+        cmd = rp.xvfb_prefix() + cmd + ["--write-movie", os.path.join(FRAMES, "frame.png"), "--fixed-fps", str(FPS)]
+    cmd += [SCENE, "--", "--recording", RECORDING, "--out", OUT] + ([] if window else ["--quit-at-end"])
+    rp.header(f"play ({'window' if window else 'Movie Maker under Xvfb'}): {shlex.join(cmd)}")
+    log = os.path.join(OUT, "demo.log")
+    noise = rp.NoiseFilter()
+    r = rp.run(cmd, log, timeout=None if window else 1800,
+               echo=lambda line: [print("    " + k, flush=True) for k in noise.feed(line)])
+    for k in noise.flush():
+        print("    " + k)
+    print(f"demo: Godot ended: {rp.describe_exit(r)} after {rp.fmt_duration(r.seconds)}; log: {rp.relpath(log)}")
+    if any(re.match(r'^WARNING: \d+ RIDs of type "Texture" were leaked', line) for line in r.lines):
+        print("demo: the Texture RID leak at exit is Godot 4.6's reflection-atlas bug (godotengine/godot#122498),"
+              " set off by the scene's ReflectionProbe; not RoomProbe's")
+    return r.rc == 0
+
+
+def evaluate():
+    cmd = [os.path.join(rp.BUILD, "bin", "roomprobe_eval"), "--recording", RECORDING]
+    rp.header(f"evaluation: {shlex.join(cmd)}")
+    out = os.path.join(OUT, "evaluation.txt")
+    r = rp.run(cmd, out, timeout=1800, echo=lambda line: print("    " + line, flush=True))
+    if r.rc != 0:
+        print(f"demo: the evaluation failed ({rp.describe_exit(r)}); log: {rp.relpath(out)}")
+    return r.rc == 0
 
 
 if __name__ == "__main__":

@@ -1,0 +1,171 @@
+#include "depth_pyramid.h"
+
+#include "icp_kernels.h"
+
+#include <atomic>
+#include <cmath>
+#include <vector>
+
+namespace roomprobe {
+
+namespace {
+
+// Rows per parallel_for_ stripe: enough work per task, and a fixed split.
+constexpr int ROWS_PER_STRIPE = 16;
+
+template <typename Body>
+void for_rows(int p_rows, const Body &p_body) {
+	const int stripes = (p_rows + ROWS_PER_STRIPE - 1) / ROWS_PER_STRIPE;
+	cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range &p_range) {
+		for (int s = p_range.start; s < p_range.end; ++s) {
+			const int end = std::min(p_rows, (s + 1) * ROWS_PER_STRIPE);
+			for (int y = s * ROWS_PER_STRIPE; y < end; ++y) {
+				p_body(y);
+			}
+		}
+	});
+}
+
+} // namespace
+
+cv::Mat clean_depth(const cv::Mat &p_depth_m, float p_min_depth_m, float p_max_depth_m, int *r_valid_count, double p_depth_scale_m) {
+	cv::Mat depth;
+	if (p_depth_m.type() == CV_16UC1) {
+		p_depth_m.convertTo(depth, CV_32FC1, p_depth_scale_m);
+	} else {
+		CV_Assert(p_depth_m.type() == CV_32FC1);
+		depth = p_depth_m.clone();
+	}
+	std::atomic<int> valid{ 0 };
+	for_rows(depth.rows, [&](int y) {
+		float *row = depth.ptr<float>(y);
+		int count = 0;
+		for (int x = 0; x < depth.cols; ++x) {
+			// Also false for NaN.
+			if (row[x] > 0.0f && row[x] >= p_min_depth_m && row[x] <= p_max_depth_m) {
+				++count;
+			} else {
+				row[x] = ICP_NAN;
+			}
+		}
+		valid += count;
+	});
+	if (r_valid_count != nullptr) {
+		*r_valid_count = valid;
+	}
+	return depth;
+}
+
+cv::Mat downsample_depth(const cv::Mat &p_depth_m, float p_band_m) {
+	CV_Assert(p_depth_m.type() == CV_32FC1);
+	cv::Mat half(p_depth_m.rows / 2, p_depth_m.cols / 2, CV_32FC1);
+	const float *source = p_depth_m.ptr<float>();
+	const size_t stride = p_depth_m.step1();
+	for_rows(half.rows, [&](int y) {
+		float *row = half.ptr<float>(y);
+		for (int x = 0; x < half.cols; ++x) {
+			row[x] = downsample_depth_pixel(source, stride, p_depth_m.cols, p_depth_m.rows, x, y, p_band_m);
+		}
+	});
+	return half;
+}
+
+cv::Mat smooth_depth(const cv::Mat &p_depth_m, int p_radius, float p_band_m) {
+	CV_Assert(p_depth_m.type() == CV_32FC1);
+	if (p_radius <= 0) {
+		return p_depth_m.clone();
+	}
+	const int side = 2 * p_radius + 1;
+	const float sigma = 0.5f * float(p_radius) + 0.5f;
+	std::vector<float> weights(static_cast<size_t>(side * side));
+	for (int dy = -p_radius; dy <= p_radius; ++dy) {
+		for (int dx = -p_radius; dx <= p_radius; ++dx) {
+			weights[size_t((dy + p_radius) * side + dx + p_radius)] = std::exp(-float(dx * dx + dy * dy) / (2.0f * sigma * sigma));
+		}
+	}
+	cv::Mat smooth(p_depth_m.size(), CV_32FC1);
+	const float *source = p_depth_m.ptr<float>();
+	const size_t stride = p_depth_m.step1();
+	for_rows(smooth.rows, [&](int y) {
+		float *row = smooth.ptr<float>(y);
+		for (int x = 0; x < smooth.cols; ++x) {
+			row[x] = smooth_depth_pixel(source, stride, p_depth_m.cols, p_depth_m.rows, x, y, p_radius, p_band_m, weights.data());
+		}
+	});
+	return smooth;
+}
+
+cv::Mat compute_vertex_map(const cv::Mat &p_depth_m, const PinholeIntrinsics &p_camera) {
+	CV_Assert(p_depth_m.type() == CV_32FC1);
+	cv::Mat vertices(p_depth_m.size(), CV_32FC3);
+	for_rows(p_depth_m.rows, [&](int y) {
+		const float *depth = p_depth_m.ptr<float>(y);
+		cv::Vec3f *row = vertices.ptr<cv::Vec3f>(y);
+		for (int x = 0; x < p_depth_m.cols; ++x) {
+			if (depth[x] > 0.0f) {
+				const glm::vec3 v = p_camera.unproject({ float(x), float(y) }, depth[x]);
+				row[x] = cv::Vec3f(v.x, v.y, v.z);
+			} else {
+				row[x] = cv::Vec3f(ICP_NAN, ICP_NAN, ICP_NAN);
+			}
+		}
+	});
+	return vertices;
+}
+
+cv::Mat compute_normal_map(const cv::Mat &p_vertices, float p_max_jump_relative) {
+	CV_Assert(p_vertices.type() == CV_32FC3);
+	cv::Mat normals(p_vertices.size(), CV_32FC3);
+	const float *source = p_vertices.ptr<float>();
+	const size_t stride = p_vertices.step1();
+	for_rows(p_vertices.rows, [&](int y) {
+		cv::Vec3f *row = normals.ptr<cv::Vec3f>(y);
+		for (int x = 0; x < p_vertices.cols; ++x) {
+			const glm::vec3 n = normal_pixel(source, stride, p_vertices.cols, p_vertices.rows, x, y, p_max_jump_relative);
+			row[x] = cv::Vec3f(n.x, n.y, n.z);
+		}
+	});
+	return normals;
+}
+
+cv::Mat intensity_of(const cv::Mat &p_rgb) {
+	if (p_rgb.empty()) {
+		return cv::Mat();
+	}
+	CV_Assert(p_rgb.type() == CV_8UC3);
+	cv::Mat intensity(p_rgb.size(), CV_32FC1);
+	for_rows(p_rgb.rows, [&](int y) {
+		const cv::Vec3b *source = p_rgb.ptr<cv::Vec3b>(y);
+		float *row = intensity.ptr<float>(y);
+		for (int x = 0; x < p_rgb.cols; ++x) {
+			row[x] = (float(source[x][0]) + float(source[x][1]) + float(source[x][2])) * (1.0f / (3.0f * 255.0f));
+		}
+	});
+	return intensity;
+}
+
+FramePyramid build_frame_pyramid(const cv::Mat &p_clean_depth_m, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, int p_levels,
+		float p_band_m, const SurfaceOptions &p_surface) {
+	FramePyramid pyramid;
+	for (int level = 0; level < p_levels; ++level) {
+		const PinholeIntrinsics camera = p_camera.level(level);
+		const cv::Mat depth = level == 0 ? smooth_depth(p_clean_depth_m, p_surface.smoothing_radius_px, p_surface.smoothing_band_m)
+										 : downsample_depth(pyramid.depth.back(), p_band_m);
+		CV_Assert(depth.cols == camera.width && depth.rows == camera.height);
+		pyramid.cameras.push_back(camera);
+		pyramid.depth.push_back(depth);
+		pyramid.vertices.push_back(compute_vertex_map(depth, camera));
+		pyramid.normals.push_back(compute_normal_map(pyramid.vertices.back(), p_surface.max_jump_relative));
+		if (!p_rgb.empty()) {
+			cv::Mat intensity = level == 0 ? intensity_of(p_rgb) : cv::Mat();
+			if (level > 0) {
+				// INTER_AREA at exactly half the size is the 2x2 mean, the blocks the depth uses.
+				cv::resize(pyramid.intensity.back(), intensity, depth.size(), 0.0, 0.0, cv::INTER_AREA);
+			}
+			pyramid.intensity.push_back(intensity);
+		}
+	}
+	return pyramid;
+}
+
+} // namespace roomprobe

@@ -1,0 +1,87 @@
+#pragma once
+// Frame-to-model tracking of the RGB-D camera (paper §4.2, InfiniTAM's ICP tracker): the pose of
+// a depth frame relative to a reference (ModelMaps, the TSDF's raycast or another frame) by
+// point-to-plane ICP with projective data association, coarse to fine over a depth pyramid, with
+// an optional photometric term; and whether the pose can be trusted (TrackingState).
+
+#include <io/opencv.h>
+
+#include "depth_pyramid.h"
+#include "slam_types.h"
+
+#include <camera/pinhole_camera.h>
+#include <math/pose.h>
+
+#include <array>
+
+namespace roomprobe {
+
+struct IcpOptions {
+	static constexpr int MAX_LEVELS = 4;
+	int levels = 3; // pyramid levels used, 1..MAX_LEVELS; level l is 1 / 2^l of the full size
+	// Gauss-Newton iterations per level, finest (0) first; a level stops early once an update moves
+	// the pose by less than min_update_m and min_update_rad.
+	std::array<int, MAX_LEVELS> iterations = { 10, 6, 8, 8 };
+	double min_update_m = 1e-4; // metres
+	double min_update_rad = 1e-4; // radians
+	// Correspondences: point-to-point distance (metres) and angle between the normals (degrees)
+	// beyond which a pair is an outlier. At the coarser levels the distance is allowed to grow by
+	// coarse_distance_growth per level, for the larger initial error they have to take out.
+	double max_distance_m = 0.1;
+	double coarse_distance_growth = 2.0; // factor per level, >= 1
+	double max_normal_angle_deg = 30.0;
+	double min_depth_m = 0.3, max_depth_m = 5.0; // depth readings used, metres along z
+	double pyramid_band_m = 0.05; // downsampling averages depths within this of a block's nearest, metres
+	SurfaceOptions surface; // smoothing and normals of the frame
+	// Photometric term: weight in metres per unit intensity (intensity in [0, 1], mean of R, G, B),
+	// so that an intensity difference of 0.1 weighs as 0.1 * weight metres of point-to-plane
+	// distance. 0: geometry only (the rgb image may then be empty).
+	double colour_weight = 0.0;
+	double max_colour_difference = 0.1; // intensity (in [0, 1]) difference beyond which a pixel's colour row is an outlier
+
+	// Tracking state.
+	double min_valid_fraction = 0.05; // valid depth pixels / all, below: Lost
+	int min_correspondences = 100; // inlier pairs at any level, below: Lost
+	double min_eigenvalue_ratio = 1e-5; // smallest / largest eigenvalue of J^T J, below: Lost (degenerate)
+	double lost_inlier_fraction = 0.2; // inliers / valid depth pixels at the finest level, below: Lost
+	double good_inlier_fraction = 0.5; // below (and not Lost): Poor
+	double max_good_rmse_m = 0.02; // point-to-plane RMS of the inliers above which the pose is Poor, metres
+	// Largest move from the initial guess that is believed (Lost beyond): a hand-held camera at
+	// 30 Hz moves a few centimetres and degrees between frames.
+	double max_jump_m = 0.25; // metres
+	double max_jump_deg = 20.0; // degrees
+};
+
+class IcpTracker {
+public:
+	IcpTracker() = default;
+	explicit IcpTracker(const IcpOptions &p_options) : options(p_options) {}
+
+	const IcpOptions &get_options() const { return options; }
+	void set_options(const IcpOptions &p_options) { options = p_options; }
+
+	// The pose of the camera that took p_depth_m (CV_32FC1, z metres, NaN or 0 = none; undistorted,
+	// p_camera's size) and p_rgb (CV_8UC3 R, G, B; may be empty when colour_weight is 0) relative to
+	// p_model, starting from p_initial_world_from_camera. When Lost, the result's pose is the initial
+	// guess and reason says why.
+	TrackingResult track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, const ModelMaps &p_model,
+			const Pose &p_initial_world_from_camera) const;
+
+private:
+	IcpOptions options;
+};
+
+// The reference a depth frame gives at a pose (frame-to-frame tracking, and tests without a
+// TSDF): world points and normals of p_depth_m (CV_32FC1 metres, NaN or 0 = none; or CV_16UC1
+// millimetres), smoothed and with normals as p_surface says, colours (p_rgb, CV_8UC3 R, G, B;
+// zeros where there is no point or p_rgb is empty) and depth (the unsmoothed input, NaN = none),
+// seen by p_camera at p_world_from_camera.
+ModelMaps make_model_maps(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera,
+		const SurfaceOptions &p_surface = SurfaceOptions());
+
+// The angle of the rotation between two poses, degrees, and the distance between their
+// positions, metres (how far an estimate is from another).
+double rotation_difference_deg(const Pose &p_a, const Pose &p_b);
+double translation_difference_m(const Pose &p_a, const Pose &p_b);
+
+} // namespace roomprobe

@@ -1,0 +1,331 @@
+// Frame-to-model ICP tracking (extension/core/slam/icp_tracker.h, paper §4.2) against the
+// synthetic living room's known poses. Frames are rendered at 320x240 (the test rig's camera at
+// half size, fx = fy = 262.5) to keep the suite fast; the benchmark (tools/bench_tracking) runs
+// the full 640x480.
+
+#include <io/opencv.h>
+
+#include "camera/pinhole_camera.h"
+#include "slam/depth_pyramid.h"
+#include "slam/icp_tracker.h"
+#include "synth/synth_renderer.h"
+#include "synth/synth_scene.h"
+#include "synth/synth_sequence.h"
+#include "synth_test_rig.h"
+
+#include <doctest/doctest.h>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <string>
+#include <vector>
+
+using namespace roomprobe;
+using namespace roomprobe::synth;
+
+namespace {
+
+constexpr double FRAME_S = 1.0 / 30.0;
+
+// The test rig's RGB-D camera at half size: same field of view, a quarter of the pixels.
+PinholeParams half_camera() {
+	PinholeParams camera = test_rig().rgb;
+	camera.width /= 2;
+	camera.height /= 2;
+	camera.fx *= 0.5;
+	camera.fy *= 0.5;
+	camera.cx = (camera.cx + 0.5) * 0.5 - 0.5;
+	camera.cy = (camera.cy + 0.5) * 0.5 - 0.5;
+	return camera;
+}
+
+struct LivingRoom {
+	Scene scene;
+	std::unique_ptr<SynthRenderer> renderer;
+	HandheldTrajectory trajectory;
+};
+
+// One renderer for every test case: building the Embree scene is the slow part.
+const LivingRoom &living_room() {
+	static const std::unique_ptr<LivingRoom> room = [] {
+		auto r = std::make_unique<LivingRoom>();
+		const SceneResult result = make_scene("living_room", SceneOptions());
+		REQUIRE_MESSAGE(result.ok, result.error);
+		r->scene = result.scene;
+		r->renderer = std::make_unique<SynthRenderer>(r->scene);
+		REQUIRE_MESSAGE(r->renderer->ok(), r->renderer->error());
+		r->trajectory = make_handheld_trajectory(r->scene, 1);
+		return r;
+	}();
+	return *room;
+}
+
+struct Frame {
+	cv::Mat depth_m; // CV_32FC1, NaN = none
+	cv::Mat rgb;
+};
+
+// The frame the camera sees at a pose. Noise-free: the renderer's exact z where the sensor has a
+// reading (its holes kept, no 1 mm quantisation). Noisy: the sensor's depth with Kinect-like axial
+// noise (kinect_depth_sigma_m), in millimetres.
+Frame render(const SynthRenderer &p_renderer, const PinholeParams &p_camera, const Pose &p_pose, double p_time_s, bool p_noisy, uint64_t p_seed) {
+	RgbdOptions options;
+	options.depth_noise = p_noisy;
+	options.noise_seed = p_seed;
+	const double scale = 0.001;
+	const RgbdImage image = render_rgbd(p_renderer, p_camera, scale, p_pose, p_time_s, options);
+	Frame frame;
+	frame.rgb = image.rgb;
+	frame.depth_m.create(image.depth.size(), CV_32FC1);
+	for (int y = 0; y < image.depth.rows; ++y) {
+		for (int x = 0; x < image.depth.cols; ++x) {
+			const uint16_t raw = image.depth.at<uint16_t>(y, x);
+			float value = std::numeric_limits<float>::quiet_NaN();
+			if (raw != 0) {
+				value = p_noisy ? float(raw * scale) : image.depth_true_m.at<float>(y, x);
+			}
+			frame.depth_m.at<float>(y, x) = value;
+		}
+	}
+	return frame;
+}
+
+Frame render_living_room(const Pose &p_pose, double p_time_s, bool p_noisy, uint64_t p_seed = 7) {
+	return render(*living_room().renderer, half_camera(), p_pose, p_time_s, p_noisy, p_seed);
+}
+
+// p_pose moved in its own camera frame: rotated by p_angle_deg about p_axis, then translated.
+Pose moved(const Pose &p_pose, const glm::dvec3 &p_axis, double p_angle_deg, const glm::dvec3 &p_translation_m) {
+	Pose delta;
+	delta.rotation = glm::angleAxis(p_angle_deg * std::numbers::pi / 180.0, glm::normalize(p_axis));
+	delta.translation = p_translation_m;
+	return compose(p_pose, delta);
+}
+
+struct Step {
+	Pose reference, current;
+	double time_s = 0.0;
+};
+
+// Tracks the frame at p_step.current against the reference frame's model maps, starting from the
+// reference's pose.
+TrackingResult track_step(const Step &p_step, bool p_noisy, const IcpOptions &p_options = IcpOptions()) {
+	const PinholeIntrinsics camera = pinhole_intrinsics(half_camera());
+	const Frame reference = render_living_room(p_step.reference, p_step.time_s, p_noisy, 11);
+	const Frame current = render_living_room(p_step.current, p_step.time_s, p_noisy, 12);
+	const ModelMaps model = make_model_maps(reference.depth_m, reference.rgb, camera, p_step.reference);
+	return IcpTracker(p_options).track(current.depth_m, current.rgb, camera, model, p_step.reference);
+}
+
+std::vector<Step> test_steps() {
+	const HandheldTrajectory &trajectory = living_room().trajectory;
+	std::vector<Step> steps;
+	for (double t : { 0.5, 3.0, 6.5 }) {
+		// Consecutive 30 Hz frames along the hand-held path.
+		steps.push_back({ trajectory.world_from_rgb(t), trajectory.world_from_rgb(t + FRAME_S), t });
+		// A larger step: 5 deg about an oblique axis and about 10 cm.
+		const Pose a = trajectory.world_from_rgb(t);
+		steps.push_back({ a, moved(a, { 0.3, 1.0, 0.2 }, 5.0, { 0.06, -0.03, 0.07 }), t });
+	}
+	return steps;
+}
+
+} // namespace
+
+TEST_CASE("slam: depth downsampling ignores holes and does not average across an edge") {
+	const float nan = std::numeric_limits<float>::quiet_NaN();
+	// Block (0, 0): 1, 1.02, NaN, 3 (an edge): the mean of the near pair. Block (1, 0): all NaN.
+	cv::Mat depth = (cv::Mat_<float>(2, 4) << 1.0f, 1.02f, nan, nan, nan, 3.0f, nan, nan);
+	const cv::Mat half = downsample_depth(depth, 0.05f);
+	REQUIRE(half.size() == cv::Size(2, 1));
+	CHECK(half.at<float>(0, 0) == doctest::Approx(1.01f));
+	CHECK(std::isnan(half.at<float>(0, 1)));
+}
+
+TEST_CASE("slam: normals of a tilted plane are its normal, towards the camera") {
+	// The plane z = 2 + 0.5 x seen by the half-size camera.
+	const PinholeIntrinsics camera = pinhole_intrinsics(half_camera());
+	cv::Mat depth(camera.height, camera.width, CV_32FC1);
+	for (int y = 0; y < depth.rows; ++y) {
+		for (int x = 0; x < depth.cols; ++x) {
+			// Ray (a, b, 1) meets z = 2 + 0.5 a z at z = 2 / (1 - 0.5 a).
+			const float a = (float(x) - camera.cx) / camera.fx;
+			depth.at<float>(y, x) = 2.0f / (1.0f - 0.5f * a);
+		}
+	}
+	const cv::Mat normals = compute_normal_map(compute_vertex_map(depth, camera), 0.05f);
+	const glm::vec3 expected = glm::normalize(glm::vec3(0.5f, 0.0f, -1.0f)); // towards the camera (-z)
+	const cv::Vec3f n = normals.at<cv::Vec3f>(100, 150);
+	CHECK(n[0] == doctest::Approx(expected.x).epsilon(1e-4));
+	CHECK(std::abs(n[1]) < 1e-4);
+	CHECK(n[2] == doctest::Approx(expected.z).epsilon(1e-4));
+	CHECK(std::isnan(normals.at<cv::Vec3f>(0, 10)[0])); // the border has none
+}
+
+TEST_CASE("slam: ICP recovers known steps on noise-free depth within 2 mm and 0.2 deg") {
+	for (const Step &step : test_steps()) {
+		const double step_m = translation_difference_m(step.reference, step.current);
+		const double step_deg = rotation_difference_deg(step.reference, step.current);
+		CAPTURE(step.time_s);
+		CAPTURE(step_m);
+		CAPTURE(step_deg);
+		const TrackingResult result = track_step(step, false);
+		CAPTURE(result.reason);
+		const double error_m = translation_difference_m(result.world_from_camera, step.current);
+		const double error_deg = rotation_difference_deg(result.world_from_camera, step.current);
+		MESSAGE("noise-free step ", step_m * 1000.0, " mm / ", step_deg, " deg: error ", error_m * 1000.0, " mm / ", error_deg,
+				" deg, inliers ", result.inlier_fraction, ", rmse ", result.rmse_m * 1000.0, " mm, ", result.iterations, " iterations");
+		CHECK(result.state == TrackingState::Good);
+		CHECK(error_m < 0.002);
+		CHECK(error_deg < 0.2);
+	}
+}
+
+TEST_CASE("slam: ICP recovers known steps on noisy depth within the noise's bound") {
+	// The bound, from the noise model rather than from runs. A pair's point-to-plane residual
+	// carries the axial noise of both frames: at most sqrt(2) sigma(z_far), z_far = 3.5 m the
+	// farthest wall the orbit sees. Smoothing (radius 2) correlates the pixels of a 5x5 window, so
+	// N pairs are about N / 25 independent ones; the least-squares error along a direction that
+	// every pair constrains is then sigma_r / sqrt(N / 25). A room's normals point three ways
+	// (floor, walls, table), so a direction is constrained by about a third of the pairs: sqrt(3)
+	// more. Three standard deviations: the translation bound. Rotation: that error over the lever
+	// arm of the points about the camera, at least 0.5 m (half the view's width at 1.5 m, the
+	// nearest the orbit gets to the table). N: at least half the 320x240 pixels (Good needs half
+	// the valid pixels as inliers; most pixels are valid).
+	const double sigma_r = std::sqrt(2.0) * kinect_depth_sigma_m(3.5);
+	const double independent = 0.5 * 320.0 * 240.0 / 25.0;
+	const double translation_bound_m = 3.0 * std::sqrt(3.0) * sigma_r / std::sqrt(independent);
+	const double rotation_bound_deg = translation_bound_m / 0.5 * 180.0 / std::numbers::pi;
+	MESSAGE("noisy bound: ", translation_bound_m * 1000.0, " mm, ", rotation_bound_deg, " deg");
+	for (const Step &step : test_steps()) {
+		CAPTURE(step.time_s);
+		const TrackingResult result = track_step(step, true);
+		CAPTURE(result.reason);
+		const double error_m = translation_difference_m(result.world_from_camera, step.current);
+		const double error_deg = rotation_difference_deg(result.world_from_camera, step.current);
+		MESSAGE("noisy step: error ", error_m * 1000.0, " mm / ", error_deg, " deg, inliers ", result.inlier_fraction, ", rmse ",
+				result.rmse_m * 1000.0, " mm");
+		CHECK(result.state == TrackingState::Good);
+		CHECK(error_m < translation_bound_m);
+		CHECK(error_deg < rotation_bound_deg);
+	}
+}
+
+TEST_CASE("slam: a frame without depth is Lost, says how many pixels were valid, and keeps the initial guess") {
+	const PinholeIntrinsics camera = pinhole_intrinsics(half_camera());
+	const Pose a = living_room().trajectory.world_from_rgb(1.0);
+	const Frame reference = render_living_room(a, 1.0, false);
+	const ModelMaps model = make_model_maps(reference.depth_m, reference.rgb, camera, a);
+	const cv::Mat zeros(camera.height, camera.width, CV_32FC1, cv::Scalar(0.0));
+	const Pose guess = moved(a, { 0.0, 1.0, 0.0 }, 1.0, { 0.01, 0.0, 0.0 });
+	const TrackingResult result = IcpTracker().track(zeros, cv::Mat(), camera, model, guess);
+	CHECK(result.state == TrackingState::Lost);
+	CHECK(result.reason == "too few valid depth pixels: 0 of 76800");
+	CHECK(translation_difference_m(result.world_from_camera, guess) == 0.0);
+	CHECK(rotation_difference_deg(result.world_from_camera, guess) == 0.0);
+}
+
+TEST_CASE("slam: a frame from 1 m and 60 deg away is never tracked as Good") {
+	const HandheldTrajectory &trajectory = living_room().trajectory;
+	for (double t : { 1.0, 4.0, 7.0 }) {
+		CAPTURE(t);
+		// Turned 60 deg about the vertical through a point 1 m ahead (horizontally): the camera moves
+		// 2 sin(30 deg) = 1 m and still looks into the room.
+		const Pose a = trajectory.world_from_rgb(t);
+		glm::dvec3 forward = glm::mat3_cast(a.rotation) * glm::dvec3(0.0, 0.0, 1.0);
+		forward.y = 0.0;
+		const glm::dvec3 pivot = a.translation + glm::normalize(forward);
+		const glm::dquat turn = glm::angleAxis(std::numbers::pi / 3.0, glm::dvec3(0.0, 1.0, 0.0));
+		const Step step{ a, { turn * a.rotation, pivot + turn * (a.translation - pivot) }, t };
+		REQUIRE(translation_difference_m(step.reference, step.current) == doctest::Approx(1.0));
+		REQUIRE(rotation_difference_deg(step.reference, step.current) == doctest::Approx(60.0));
+		const TrackingResult result = track_step(step, false);
+		const double error_m = translation_difference_m(result.world_from_camera, step.current);
+		MESSAGE("jump: ", tracking_state_name(result.state), ": ", result.reason, "; error ", error_m, " m");
+		CHECK(result.state != TrackingState::Good);
+		if (result.state == TrackingState::Lost) {
+			CHECK(translation_difference_m(result.world_from_camera, a) == 0.0);
+			CHECK(!result.reason.empty());
+		}
+	}
+}
+
+TEST_CASE("slam: a single plane is degenerate for point-to-plane ICP and is Lost") {
+	// A wall 2 m in front of the camera: sliding along it and turning about its normal are free.
+	Scene scene;
+	Material material;
+	material.albedo.a = Color(0.5f);
+	material.unlit = true;
+	add_material(&scene, material);
+	Quad wall;
+	wall.corner = glm::dvec3(-10.0, -10.0, 2.0);
+	wall.edge_u = glm::dvec3(20.0, 0.0, 0.0);
+	wall.edge_v = glm::dvec3(0.0, 20.0, 0.0);
+	scene.quads.push_back(wall);
+	const SynthRenderer renderer(scene);
+	REQUIRE(renderer.ok());
+	const PinholeIntrinsics camera = pinhole_intrinsics(half_camera());
+	const Pose a; // at the origin, looking along +z
+	const Pose b = moved(a, { 0.0, 0.0, 1.0 }, 1.0, { 0.01, 0.01, 0.0 });
+	const Frame reference = render(renderer, half_camera(), a, 0.0, false, 1);
+	const Frame current = render(renderer, half_camera(), b, 0.0, false, 2);
+	const ModelMaps model = make_model_maps(reference.depth_m, reference.rgb, camera, a);
+	const TrackingResult result = IcpTracker().track(current.depth_m, current.rgb, camera, model, a);
+	CHECK(result.state == TrackingState::Lost);
+	CHECK(result.reason.find("degenerate") != std::string::npos);
+}
+
+TEST_CASE("slam: the colour term keeps ICP on the known pose") {
+	IcpOptions options;
+	SUBCASE("photometric rows dominating, a 30 Hz step (checks their Jacobian)") {
+		options.colour_weight = 10.0; // an intensity difference of 0.1 weighs as 1 m
+		const Step step = test_steps()[0];
+		const TrackingResult result = track_step(step, false, options);
+		CAPTURE(result.reason);
+		CHECK(result.state == TrackingState::Good);
+		CHECK(translation_difference_m(result.world_from_camera, step.current) < 0.002);
+		CHECK(rotation_difference_deg(result.world_from_camera, step.current) < 0.2);
+	}
+	SUBCASE("a moderate weight, the 10 cm / 5 deg step") {
+		options.colour_weight = 0.1; // an intensity difference of 0.1 weighs as 1 cm
+		const Step step = test_steps()[1];
+		const TrackingResult result = track_step(step, false, options);
+		CAPTURE(result.reason);
+		CHECK(result.state == TrackingState::Good);
+		CHECK(translation_difference_m(result.world_from_camera, step.current) < 0.002);
+		CHECK(rotation_difference_deg(result.world_from_camera, step.current) < 0.2);
+	}
+}
+
+TEST_CASE("slam: frame-to-frame tracking over 1 s of the hand-held path drifts less than 1 cm") {
+	const HandheldTrajectory &trajectory = living_room().trajectory;
+	const PinholeIntrinsics camera = pinhole_intrinsics(half_camera());
+	const IcpTracker tracker;
+	const double start_s = 2.0;
+	Pose estimate = trajectory.world_from_rgb(start_s);
+	Frame previous = render_living_room(estimate, start_s, true, 100);
+	double sum_squared = 0.0;
+	int frames = 0;
+	for (int i = 1; i <= 30; ++i) {
+		const double t = start_s + i * FRAME_S;
+		const Frame frame = render_living_room(trajectory.world_from_rgb(t), t, true, uint64_t(100 + i));
+		const ModelMaps model = make_model_maps(previous.depth_m, previous.rgb, camera, estimate);
+		const TrackingResult result = tracker.track(frame.depth_m, frame.rgb, camera, model, estimate);
+		CAPTURE(i);
+		CAPTURE(result.reason);
+		CHECK(result.state == TrackingState::Good);
+		estimate = result.world_from_camera;
+		const double error = translation_difference_m(estimate, trajectory.world_from_rgb(t));
+		sum_squared += error * error;
+		++frames;
+		previous = frame;
+	}
+	const double ate_m = std::sqrt(sum_squared / frames);
+	MESSAGE("frame-to-frame over 1 s (30 frames, noisy depth): ATE RMSE ", ate_m * 1000.0, " mm");
+	CHECK(ate_m < 0.01);
+}
