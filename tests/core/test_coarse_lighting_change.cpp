@@ -270,3 +270,27 @@ TEST_CASE("lighting: apply_lighting_change touches only observed texels not upda
 		CHECK(texture.color.at<cv::Vec3f>(3, 3) == cv::Vec3f(0.2f, 0.4f, 0.6f));
 	}
 }
+
+TEST_CASE("lighting: changes compose, and the change since a reference undoes it") {
+	LightingChange first;
+	first.valid = true;
+	first.gain = cv::Vec3f(2.0f, 1.5f, 1.0f);
+	first.offset = cv::Vec3f(0.0f, 0.1f, -0.05f);
+	LightingChange then;
+	then.valid = true;
+	then.gain = cv::Vec3f(0.5f, 1.0f, 3.0f);
+	then.offset = cv::Vec3f(0.2f, 0.0f, 0.1f);
+	const cv::Vec3f x(0.3f, 0.4f, 0.5f);
+	const LightingChange both = compose_lighting(then, first);
+	const cv::Vec3f direct = then.apply(first.apply(x));
+	const cv::Vec3f composed = both.apply(x);
+	for (int c = 0; c < 3; c++) {
+		CHECK(composed[c] == doctest::Approx(direct[c]).epsilon(1e-6));
+	}
+	// What was observed under `first` and is now under `both` changed by exactly `then`.
+	const LightingChange since = lighting_since(both, first);
+	const cv::Vec3f y = first.apply(x);
+	for (int c = 0; c < 3; c++) {
+		CHECK(since.apply(y)[c] == doctest::Approx(then.apply(y)[c]).epsilon(1e-6));
+	}
+}

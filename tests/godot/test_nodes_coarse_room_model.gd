@@ -165,7 +165,6 @@ func test_every_node_registers_and_reports_what_it_cannot_do() -> void:
 		assert_true(ClassDB.class_exists(c), c)
 		var n = ClassDB.instantiate(c)
 		var warnings: PackedStringArray = n.get_warnings()
-		if c != "CoarseRoomModel":
-			var text := " ".join(warnings)
-			assert_true(text.contains("not implemented yet") or text.contains("not supported yet"), "%s says what it cannot do yet: %s" % [c, text])
+		# A new node is wired to nothing: each says what it needs.
+		assert_false(warnings.is_empty(), "a new %s says what it needs" % c)
 		n.free()

@@ -174,7 +174,7 @@ func test_warnings_say_what_is_missing() -> void:
 	var lone = ClassDB.instantiate("RoomProbe")
 	var text := " ".join(lone.get_warnings())
 	assert_true(text.contains("coarse_model"), text)
-	assert_true(text.contains("not implemented yet"), text)
+	assert_true(text.contains("reaches nothing"), text)
 	lone.free()
 	_probe.coarse_model = NodePath("../Nowhere")
 	add_to_tree(_root)

@@ -156,46 +156,26 @@ func test_reflection_probe_route_shows_the_room_on_a_standard_material() -> void
 		return skip("needs a renderer (rendering suite: --rendering under a display)")
 	known_engine_leak(7, "Texture", "godotengine/godot#122498: each reflection atlas leaks 7 texture RIDs (4.6 regression)")
 	var by_normal := {}
-	# One world: the room on layer 20 only, which the camera does not see and the probe does.
-	_viewport = SubViewport.new()
-	_viewport.size = SIZE
-	_viewport.own_world_3d = true
-	_viewport.render_target_update_mode = SubViewport.UPDATE_ALWAYS
-	var env := Environment.new()
-	env.background_mode = Environment.BG_COLOR
-	env.background_color = Color(0, 0, 0)
-	var world_env := WorldEnvironment.new()
-	world_env.environment = env
-	_viewport.add_child(world_env)
+	# One world, centred on the sphere: the room (moved so that its centre is there) on layer 20
+	# only, which the camera does not see and the probe does.
+	_viewport = _make_view(_chrome(), Vector3(0, 0, 3), Vector3(0, 0, 0))
+	var cam: Camera3D = _viewport.get_child(2)
+	cam.cull_mask = 0xFFFFF & ~(1 << 19)
 	var room := _coloured_room(by_normal)
 	room.room_layers = 1 << 19
+	room.position = -CENTRE
 	_viewport.add_child(room)
 	var reflection := ReflectionProbe.new()
 	reflection.name = "Reflection"
 	_viewport.add_child(reflection)
 	var probe = ClassDB.instantiate("RoomProbe")
 	probe.resolution = 16
-	probe.position = CENTRE
 	_viewport.add_child(probe)
-	var sphere_mesh := SphereMesh.new()
-	sphere_mesh.radius = 0.3
-	sphere_mesh.height = 0.6
-	var sphere := MeshInstance3D.new()
-	sphere.mesh = sphere_mesh
-	sphere.material_override = _chrome()
-	sphere.position = CENTRE
-	_viewport.add_child(sphere)
-	var cam := Camera3D.new()
-	cam.fov = 30
-	cam.position = CENTRE + Vector3(0, 0, 1.2)
-	cam.cull_mask = 0xFFFFF & ~(1 << 19)
-	cam.current = true
-	_viewport.add_child(cam)
 	add_to_tree(_viewport)
 	probe.coarse_model = probe.get_path_to(room)
 	probe.reflection_probe = probe.get_path_to(reflection)
 	assert_true(probe.update_now())
-	assert_near(reflection.global_position + reflection.origin_offset, CENTRE, 0.001, "the capture point is the probe's")
+	assert_near(reflection.global_position + reflection.origin_offset, Vector3(), 0.001, "the capture point is the probe's")
 	assert_near(reflection.size, Vector3(4, HEIGHT, 3), 0.001, "the box is the room's")
 	assert_eq(reflection.cull_mask, 1 << 19, "the probe sees the room's layer only")
 	assert_true(reflection.box_projection)

@@ -166,4 +166,27 @@ void apply_lighting_change(CoarseTexture *r_texture, const LightingChange &p_cha
 	}
 }
 
+LightingChange compose_lighting(const LightingChange &p_then, const LightingChange &p_first) {
+	LightingChange out;
+	out.valid = p_then.valid && p_first.valid;
+	out.model = p_then.model;
+	out.sample_count = p_then.sample_count;
+	for (int c = 0; c < 3; c++) {
+		out.gain[c] = p_then.gain[c] * p_first.gain[c];
+		out.offset[c] = p_then.gain[c] * p_first.offset[c] + p_then.offset[c];
+	}
+	return out;
+}
+
+LightingChange lighting_since(const LightingChange &p_now, const LightingChange &p_reference) {
+	LightingChange out = p_now;
+	for (int c = 0; c < 3; c++) {
+		// A gain of 0 (everything black) cannot be undone: treat it as no change since.
+		const float g = p_reference.gain[c] > 0.0f ? p_now.gain[c] / p_reference.gain[c] : 1.0f;
+		out.gain[c] = g;
+		out.offset[c] = p_now.offset[c] - g * p_reference.offset[c];
+	}
+	return out;
+}
+
 } // namespace roomprobe

@@ -69,6 +69,12 @@ struct LightingChange {
 	cv::Vec3f apply(const cv::Vec3f &p_old) const;
 };
 
+// The change p_then applied after p_first: gain_then * (gain_first * x + offset_first) + offset_then
+// (without the clamp at 0). Valid when both are.
+LightingChange compose_lighting(const LightingChange &p_then, const LightingChange &p_first);
+// The change that takes colours from p_reference to p_now: p_now after the inverse of p_reference.
+LightingChange lighting_since(const LightingChange &p_now, const LightingChange &p_reference);
+
 // v(t)'s colour part: true when no channel of p_value is saturated or black.
 bool lighting_value_usable(const cv::Vec3f &p_value, const LightingOptions &p_options);
 

@@ -49,4 +49,34 @@ std::string EmbreeTriangleScene::build(const std::vector<float> &p_xyz, const st
 	return "";
 }
 
+bool EmbreeTriangleScene::intersect(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far, RayHit *r_hit) const {
+	if (!scene) {
+		return false;
+	}
+	RTCRayHit rh;
+	rh.ray.org_x = static_cast<float>(p_origin.x);
+	rh.ray.org_y = static_cast<float>(p_origin.y);
+	rh.ray.org_z = static_cast<float>(p_origin.z);
+	rh.ray.dir_x = static_cast<float>(p_direction.x);
+	rh.ray.dir_y = static_cast<float>(p_direction.y);
+	rh.ray.dir_z = static_cast<float>(p_direction.z);
+	rh.ray.tnear = static_cast<float>(p_t_near);
+	rh.ray.tfar = static_cast<float>(std::min(p_t_far, 1e30));
+	rh.ray.time = 0.0f;
+	rh.ray.mask = 0xffffffffu;
+	rh.ray.id = 0;
+	rh.ray.flags = 0;
+	rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+	rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+	rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+	rtcIntersect1(scene, &rh, nullptr);
+	if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+		return false;
+	}
+	r_hit->t = rh.ray.tfar;
+	r_hit->triangle = rh.hit.primID;
+	r_hit->geometric_normal = glm::vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+	return true;
+}
+
 } // namespace roomprobe

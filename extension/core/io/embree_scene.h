@@ -4,6 +4,8 @@
 
 #include <embree4/rtcore.h>
 
+#include <glm/vec3.hpp>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -22,6 +24,16 @@ public:
 	// failure get() is null.
 	std::string build(const std::vector<float> &p_xyz, const std::vector<uint32_t> &p_indices, bool p_high_quality);
 	RTCScene get() const { return scene; }
+
+	// The nearest triangle along origin + t * direction, t in (t_near, t_far): r_t, r_triangle and
+	// the unnormalised geometric normal (Embree's Ng, on the side the winding gives). False on a
+	// miss or before build(). Thread-safe once built.
+	struct RayHit {
+		float t = 0.0f;
+		uint32_t triangle = 0;
+		glm::vec3 geometric_normal = glm::vec3(0.0f);
+	};
+	bool intersect(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far, RayHit *r_hit) const;
 
 private:
 	RTCDevice device = nullptr;

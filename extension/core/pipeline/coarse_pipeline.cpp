@@ -46,6 +46,8 @@ std::string CoarsePipeline::configure(const OmniParams &p_fisheye, const Floorpl
 	renderer = std::make_unique<CoarseCubemapRenderer>(room);
 	inpainter = std::make_unique<TextureInpainter>(room, opts.inpainting);
 	frames = 0;
+	cumulative = LightingChange();
+	cumulative.valid = true;
 	last = CoarsePipelineTimings();
 	total = CoarsePipelineTimings();
 	configured = true;
@@ -95,6 +97,7 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 	start = Clock::now();
 	if (stats.lighting.valid) {
 		apply_lighting_change(&coarse, stats.lighting);
+		cumulative = compose_lighting(stats.lighting, cumulative);
 	}
 	t.lighting_ms += ms_since(start);
 

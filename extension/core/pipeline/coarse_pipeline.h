@@ -109,6 +109,10 @@ public:
 	size_t frame_count() const { return frames; }
 	const CoarsePipelineTimings &last_timings() const { return last; }
 	const CoarsePipelineTimings &total_timings() const { return total; }
+	// Every lighting change applied so far, composed (identity at first): what a colour observed
+	// at the start has become. The dense model's colours take the part since they were observed
+	// (envmap/dense_render.h).
+	const LightingChange &cumulative_lighting() const { return cumulative; }
 
 private:
 	void compose_completed();
@@ -126,6 +130,7 @@ private:
 	std::unique_ptr<CoarseCubemapRenderer> renderer;
 	std::unique_ptr<TextureInpainter> inpainter;
 	size_t frames = 0;
+	LightingChange cumulative;
 	CoarsePipelineTimings last;
 	CoarsePipelineTimings total;
 };

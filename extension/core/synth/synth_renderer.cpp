@@ -280,29 +280,13 @@ Hit SynthRenderer::intersect(const glm::dvec3 &p_origin, const glm::dvec3 &p_dir
 	if (!embree || !embree->get()) {
 		return hit;
 	}
-	RTCRayHit rh;
-	rh.ray.org_x = static_cast<float>(p_origin.x);
-	rh.ray.org_y = static_cast<float>(p_origin.y);
-	rh.ray.org_z = static_cast<float>(p_origin.z);
-	rh.ray.dir_x = static_cast<float>(p_direction.x);
-	rh.ray.dir_y = static_cast<float>(p_direction.y);
-	rh.ray.dir_z = static_cast<float>(p_direction.z);
-	rh.ray.tnear = static_cast<float>(p_t_near);
-	rh.ray.tfar = static_cast<float>(std::min(p_t_far, 1e30));
-	rh.ray.time = 0.0f;
-	rh.ray.mask = 0xffffffffu;
-	rh.ray.id = 0;
-	rh.ray.flags = 0;
-	rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-	rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-	rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-	rtcIntersect1(embree->get(), &rh, nullptr);
-	if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+	EmbreeTriangleScene::RayHit rh;
+	if (!embree->intersect(p_origin, p_direction, p_t_near, p_t_far, &rh)) {
 		return hit;
 	}
-	const TriangleInfo &info = triangles[rh.hit.primID];
+	const TriangleInfo &info = triangles[rh.triangle];
 	hit.hit = true;
-	hit.distance = rh.ray.tfar;
+	hit.distance = rh.t;
 	hit.point = p_origin + hit.distance * p_direction;
 	hit.material = info.material;
 	if (info.sphere >= 0) {

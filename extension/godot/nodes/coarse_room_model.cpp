@@ -1,8 +1,10 @@
 #include "coarse_room_model.h"
 
+#include "dense_slam.h"
 #include "rig_capture.h"
 
 #include "../convert/image_convert.h"
+#include "../convert/mesh_convert.h"
 
 #include <rig/fisheye_pose.h>
 
@@ -15,12 +17,10 @@ namespace roomprobe {
 
 namespace {
 
-// The mesh's arrays in Godot's layout. Godot's front faces are clockwise, the core's are
-// counter-clockwise as seen from inside the room: each triangle is reversed here.
+// The mesh's arrays in Godot's layout, with the atlas UVs.
 Array to_surface_arrays(const RoomMesh &p_mesh) {
 	PackedVector3Array vertices, normals;
 	PackedVector2Array uvs;
-	PackedInt32Array indices;
 	vertices.resize(int64_t(p_mesh.positions.size()));
 	normals.resize(int64_t(p_mesh.normals.size()));
 	uvs.resize(int64_t(p_mesh.uvs.size()));
@@ -31,18 +31,8 @@ Array to_surface_arrays(const RoomMesh &p_mesh) {
 		normals[int64_t(i)] = Vector3(n.x, n.y, n.z);
 		uvs[int64_t(i)] = Vector2(p_mesh.uvs[i].x, p_mesh.uvs[i].y);
 	}
-	indices.resize(int64_t(p_mesh.indices.size()));
-	for (size_t t = 0; t + 2 < p_mesh.indices.size(); t += 3) {
-		indices[int64_t(t)] = int32_t(p_mesh.indices[t]);
-		indices[int64_t(t + 1)] = int32_t(p_mesh.indices[t + 2]);
-		indices[int64_t(t + 2)] = int32_t(p_mesh.indices[t + 1]);
-	}
-	Array arrays;
-	arrays.resize(Mesh::ARRAY_MAX);
-	arrays[Mesh::ARRAY_VERTEX] = vertices;
-	arrays[Mesh::ARRAY_NORMAL] = normals;
+	Array arrays = triangle_surface_arrays(vertices, normals, p_mesh.indices);
 	arrays[Mesh::ARRAY_TEX_UV] = uvs;
-	arrays[Mesh::ARRAY_INDEX] = indices;
 	return arrays;
 }
 
@@ -196,6 +186,15 @@ const cv::Mat &CoarseRoomModel::get_atlas() const {
 	return pipeline_has_frames() ? pipeline->completed_color() : texture.color;
 }
 
+LightingChange CoarseRoomModel::get_cumulative_lighting() const {
+	if (pipeline_has_frames()) {
+		return pipeline->cumulative_lighting();
+	}
+	LightingChange identity;
+	identity.valid = true;
+	return identity;
+}
+
 // ---------------------------------------------------------------- texturing from the rig (§4.3-§4.6)
 
 void CoarseRoomModel::set_rig_capture_path(const NodePath &p_path) {
@@ -206,7 +205,34 @@ void CoarseRoomModel::set_rig_capture_path(const NodePath &p_path) {
 
 NodePath CoarseRoomModel::get_rig_capture_path() const { return rig_capture_path; }
 
-void CoarseRoomModel::set_pose_source(PoseSource p_source) { pose_source = p_source; }
+void CoarseRoomModel::set_pose_source(PoseSource p_source) {
+	pose_source = p_source;
+	update_configuration_warnings();
+}
+
+void CoarseRoomModel::set_dense_slam_path(const NodePath &p_path) {
+	dense_slam_path = p_path;
+	update_configuration_warnings();
+}
+
+NodePath CoarseRoomModel::get_dense_slam_path() const { return dense_slam_path; }
+
+bool CoarseRoomModel::fisheye_pose(const RigCapture &p_rig, double p_timestamp_s, Pose *r_pose, std::string *r_error) const {
+	const RecordingReader &reader = *p_rig.get_reader();
+	if (pose_source == POSE_SOURCE_DENSE_SLAM) {
+		const DenseSLAM *slam = dense_slam_path.is_empty() ? nullptr : cast_to<DenseSLAM>(get_node_or_null(dense_slam_path));
+		if (slam == nullptr) {
+			*r_error = "pose_source is Dense SLAM, but dense_slam does not lead to a DenseSLAM node";
+			return false;
+		}
+		return slam->fisheye_pose_at(p_timestamp_s, r_pose, r_error);
+	}
+	if (!reader.has_ground_truth_trajectory(RecordingStream::Rgbd)) {
+		*r_error = "pose_source is Ground Truth, but the recording has no ground-truth RGB-D trajectory";
+		return false;
+	}
+	return fisheye_pose_at(reader.ground_truth_trajectory(RecordingStream::Rgbd), reader.get_rig(), p_timestamp_s, r_pose, r_error);
+}
 CoarseRoomModel::PoseSource CoarseRoomModel::get_pose_source() const { return pose_source; }
 
 void CoarseRoomModel::set_inpainting(bool p_enabled) {
@@ -292,17 +318,12 @@ bool CoarseRoomModel::integrate_rig_frame() {
 		return false;
 	}
 	last_fisheye_index = index;
-	const RecordingReader &reader = *rig->get_reader();
 	const FisheyeFrame &frame = rig->get_fisheye_frame();
-	if (!reader.has_ground_truth_trajectory(RecordingStream::Rgbd)) {
-		pipeline_problem = "pose_source is Ground Truth, but the recording has no ground-truth RGB-D trajectory.";
-		return false;
-	}
 	Pose world_from_fisheye;
 	std::string error;
-	if (!fisheye_pose_at(reader.ground_truth_trajectory(RecordingStream::Rgbd), reader.get_rig(), frame.timestamp_s, &world_from_fisheye, &error)) {
-		// One frame without a pose is skipped; the next may have one.
-		WARN_PRINT(String(("CoarseRoomModel: fisheye frame " + std::to_string(index) + ": " + error).c_str()));
+	if (!fisheye_pose(*rig, frame.timestamp_s, &world_from_fisheye, &error)) {
+		// A frame without a pose is skipped (never integrated at a guess); the next may have one.
+		pipeline_problem = error + ".";
 		return false;
 	}
 	pipeline_problem.clear();
@@ -418,6 +439,8 @@ void CoarseRoomModel::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_charts"), &CoarseRoomModel::get_charts);
 	ClassDB::bind_method(D_METHOD("set_rig_capture", "path"), &CoarseRoomModel::set_rig_capture_path);
 	ClassDB::bind_method(D_METHOD("get_rig_capture"), &CoarseRoomModel::get_rig_capture_path);
+	ClassDB::bind_method(D_METHOD("set_dense_slam", "path"), &CoarseRoomModel::set_dense_slam_path);
+	ClassDB::bind_method(D_METHOD("get_dense_slam"), &CoarseRoomModel::get_dense_slam_path);
 	ClassDB::bind_method(D_METHOD("set_pose_source", "source"), &CoarseRoomModel::set_pose_source);
 	ClassDB::bind_method(D_METHOD("get_pose_source"), &CoarseRoomModel::get_pose_source);
 	ClassDB::bind_method(D_METHOD("set_inpainting", "enabled"), &CoarseRoomModel::set_inpainting);
@@ -437,13 +460,15 @@ void CoarseRoomModel::_bind_methods() {
 	ADD_GROUP("Texture", "");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "texel_size", PROPERTY_HINT_RANGE, "0.005,0.1,0.001,suffix:m"), "set_texel_size", "get_texel_size");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "rig_capture", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "RigCapture"), "set_rig_capture", "get_rig_capture");
-	ADD_PROPERTY(PropertyInfo(Variant::INT, "pose_source", PROPERTY_HINT_ENUM, "Ground Truth"), "set_pose_source", "get_pose_source");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "pose_source", PROPERTY_HINT_ENUM, "Ground Truth,Dense SLAM"), "set_pose_source", "get_pose_source");
+	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "dense_slam", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "DenseSLAM"), "set_dense_slam", "get_dense_slam");
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "inpainting"), "set_inpainting", "get_inpainting");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "lighting_compensation", PROPERTY_HINT_ENUM, "Off,Additive (paper),Gain"), "set_lighting_compensation", "get_lighting_compensation");
 	ADD_GROUP("Rendering", "");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "room_layers", PROPERTY_HINT_LAYERS_3D_RENDER), "set_room_layers", "get_room_layers");
 
 	BIND_ENUM_CONSTANT(POSE_SOURCE_GROUND_TRUTH);
+	BIND_ENUM_CONSTANT(POSE_SOURCE_DENSE_SLAM);
 	BIND_ENUM_CONSTANT(LIGHTING_OFF);
 	BIND_ENUM_CONSTANT(LIGHTING_ADDITIVE);
 	BIND_ENUM_CONSTANT(LIGHTING_GAIN);

@@ -16,6 +16,7 @@
 
 namespace roomprobe {
 
+class DenseSLAM;
 class RigCapture;
 
 class CoarseRoomModel : public godot::Node3D {
@@ -24,6 +25,7 @@ class CoarseRoomModel : public godot::Node3D {
 public:
 	enum PoseSource {
 		POSE_SOURCE_GROUND_TRUTH, // the recording's ground-truth RGB-D trajectory (evaluation mode)
+		POSE_SOURCE_DENSE_SLAM, // DenseSLAM's tracked trajectory (the live mode)
 	};
 	enum LightingCompensation {
 		LIGHTING_OFF,
@@ -43,6 +45,8 @@ public:
 
 	void set_rig_capture_path(const godot::NodePath &p_path);
 	godot::NodePath get_rig_capture_path() const;
+	void set_dense_slam_path(const godot::NodePath &p_path);
+	godot::NodePath get_dense_slam_path() const;
 	void set_pose_source(PoseSource p_source);
 	PoseSource get_pose_source() const;
 	void set_inpainting(bool p_enabled);
@@ -83,6 +87,8 @@ public:
 	// The atlas to show and render: the pipeline's completed texture once it has a frame, else
 	// what set_atlas_image put in. CV_32FC3 linear R, G, B; empty without a valid room.
 	const cv::Mat &get_atlas() const;
+	// The lighting changes applied so far (identity without a pipeline), for the dense colours.
+	LightingChange get_cumulative_lighting() const;
 	// Changes (to a value never used before by any model) whenever the mesh is rebuilt.
 	uint64_t get_mesh_version() const { return mesh_version; }
 
@@ -101,6 +107,7 @@ private:
 	void rebuild();
 	void apply_material();
 	RigCapture *find_rig_capture() const;
+	bool fisheye_pose(const RigCapture &p_rig, double p_timestamp_s, Pose *r_pose, std::string *r_error) const;
 	bool ensure_pipeline(const RigCapture &p_rig);
 	bool pipeline_has_frames() const { return pipeline && pipeline->frame_count() > 0; }
 
@@ -120,6 +127,7 @@ private:
 	godot::Ref<godot::StandardMaterial3D> material;
 
 	godot::NodePath rig_capture_path;
+	godot::NodePath dense_slam_path;
 	PoseSource pose_source = POSE_SOURCE_GROUND_TRUTH;
 	bool inpainting = true;
 	LightingCompensation lighting_compensation = LIGHTING_GAIN;

@@ -1,26 +1,346 @@
 #include "dense_slam.h"
 
+#include "coarse_room_model.h"
+#include "rig_capture.h"
+
+#include "../convert/mesh_convert.h"
+#include "../convert/pose_convert.h"
+
+#include <rig/fisheye_pose.h>
+
 using namespace godot;
 
 namespace roomprobe {
 
+namespace {
+
+// The fisheye is on its own clock: its frame may come a little after the newest RGB-D frame,
+// so the tracked trajectory is extrapolated that far (seconds).
+constexpr double FISHEYE_EXTRAPOLATION_S = 0.1;
+
+DenseSLAM::TrackingState to_node_state(TrackingState p_state) {
+	switch (p_state) {
+		case TrackingState::Good:
+			return DenseSLAM::TRACKING_GOOD;
+		case TrackingState::Poor:
+			return DenseSLAM::TRACKING_POOR;
+		case TrackingState::Lost:
+			break;
+	}
+	return DenseSLAM::TRACKING_LOST;
+}
+
+// Godot's arrays of the dense mesh, with its vertex colours.
+Array to_surface_arrays(const TriangleMesh &p_mesh) {
+	PackedVector3Array vertices, normals;
+	PackedColorArray colors;
+	const int64_t n = int64_t(p_mesh.vertices.size());
+	vertices.resize(n);
+	normals.resize(n);
+	colors.resize(n);
+	for (int64_t i = 0; i < n; i++) {
+		const glm::vec3 &v = p_mesh.vertices[size_t(i)];
+		const glm::vec3 &m = p_mesh.normals[size_t(i)];
+		const glm::u8vec3 &c = p_mesh.colors[size_t(i)];
+		vertices[i] = Vector3(v.x, v.y, v.z);
+		normals[i] = Vector3(m.x, m.y, m.z);
+		colors[i] = Color(c.x / 255.0f, c.y / 255.0f, c.z / 255.0f);
+	}
+	Array arrays = triangle_surface_arrays(vertices, normals, p_mesh.indices);
+	arrays[Mesh::ARRAY_COLOR] = colors;
+	return arrays;
+}
+
+} // namespace
+
+DenseSLAM::DenseSLAM() {
+	mesh.instantiate();
+	// After RigCapture (frames) and before CoarseRoomModel (fisheye poses) and RoomProbe.
+	set_process_priority(-20);
+}
+
+DenseSLAM::~DenseSLAM() = default;
+
+void DenseSLAM::_notification(int p_what) {
+	if (p_what == NOTIFICATION_READY && mesh_instance == nullptr) {
+		// An internal child: not saved with the scene, not listed in the editor.
+		mesh_instance = memnew(MeshInstance3D);
+		mesh_instance->set_mesh(mesh);
+		mesh_instance->set_layer_mask(mesh_layers);
+		material.instantiate();
+		// The vertex colours are the surfaces' observed light, as the coarse atlas is.
+		material->set_shading_mode(BaseMaterial3D::SHADING_MODE_UNSHADED);
+		material->set_flag(BaseMaterial3D::FLAG_ALBEDO_FROM_VERTEX_COLOR, true);
+		mesh_instance->set_material_override(material);
+		add_child(mesh_instance, false, Node::INTERNAL_MODE_FRONT);
+		// The model is in world coordinates.
+		mesh_instance->set_as_top_level(true);
+		set_process(!Engine::get_singleton()->is_editor_hint());
+	}
+}
+
+void DenseSLAM::_process(double p_delta) {
+	(void)p_delta;
+	if (!capture_path.is_empty()) {
+		process_rig_frame();
+	}
+}
+
+// ---------------------------------------------------------------- properties
+
 void DenseSLAM::set_capture_path(const NodePath &p_path) {
 	capture_path = p_path;
+	slam.reset();
 	update_configuration_warnings();
 }
 
 NodePath DenseSLAM::get_capture_path() const { return capture_path; }
-void DenseSLAM::set_voxel_size(double p_metres) { voxel_size = p_metres; }
+void DenseSLAM::set_camera_path(const NodePath &p_path) { camera_path = p_path; }
+NodePath DenseSLAM::get_camera_path() const { return camera_path; }
+
+void DenseSLAM::set_coarse_model_path(const NodePath &p_path) {
+	coarse_model_path = p_path;
+	placer_coarse_version = 0;
+}
+
+NodePath DenseSLAM::get_coarse_model_path() const { return coarse_model_path; }
+
+void DenseSLAM::set_voxel_size(double p_metres) {
+	voxel_size = p_metres;
+	slam.reset();
+}
+
 double DenseSLAM::get_voxel_size() const { return voxel_size; }
-void DenseSLAM::set_truncation_distance(double p_metres) { truncation_distance = p_metres; }
+
+void DenseSLAM::set_truncation_distance(double p_metres) {
+	truncation_distance = p_metres;
+	slam.reset();
+}
+
 double DenseSLAM::get_truncation_distance() const { return truncation_distance; }
+
+void DenseSLAM::set_max_blocks(int p_blocks) {
+	max_blocks = p_blocks;
+	slam.reset();
+}
+
+int DenseSLAM::get_max_blocks() const { return max_blocks; }
+
+void DenseSLAM::set_mesh_layers(uint32_t p_layers) {
+	mesh_layers = p_layers;
+	if (mesh_instance != nullptr) {
+		mesh_instance->set_layer_mask(mesh_layers);
+	}
+}
+
+uint32_t DenseSLAM::get_mesh_layers() const { return mesh_layers; }
+void DenseSLAM::set_mesh_update_interval(int p_frames) { mesh_update_interval = p_frames; }
+int DenseSLAM::get_mesh_update_interval() const { return mesh_update_interval; }
+
+// ---------------------------------------------------------------- tracking and integration
+
+RigCapture *DenseSLAM::find_capture() const {
+	if (capture_path.is_empty() || !is_inside_tree()) {
+		return nullptr;
+	}
+	return cast_to<RigCapture>(get_node_or_null(capture_path));
+}
+
+bool DenseSLAM::ensure_slam(const RigCapture &p_rig) {
+	const RecordingReader *reader = p_rig.get_reader();
+	if (reader == nullptr || !reader->is_open()) {
+		problem = "capture has no recording open.";
+		return false;
+	}
+	if (slam && slam_reader == reader) {
+		return true;
+	}
+	if (!(voxel_size > 0.0) || !(truncation_distance > voxel_size) || max_blocks < 1) {
+		problem = "voxel_size must be > 0, truncation_distance larger than voxel_size, max_blocks >= 1.";
+		return false;
+	}
+	DenseSlamOptions options;
+	options.tsdf.voxel_size_m = float(voxel_size);
+	options.tsdf.truncation_m = float(truncation_distance);
+	options.tsdf.max_blocks = max_blocks;
+	auto fresh = std::make_unique<DenseSlam>(options);
+	// The room's frame: the recording says where the first RGB-D frame was taken in it.
+	const Pose initial = reader->has_room() ? reader->get_room().initial_rgb_pose : Pose();
+	const std::string error = fresh->configure(reader->get_rig().rgb, initial);
+	if (!error.empty()) {
+		problem = error;
+		return false;
+	}
+	std::vector<glm::dvec3> keep;
+	if (reader->has_room()) {
+		keep = reader->get_room().probes;
+	}
+	fresh->volume().set_keep_points(keep);
+	slam = std::move(fresh);
+	slam_reader = reader;
+	rig = reader->get_rig();
+	trajectory.clear();
+	last_rgbd_index = -1;
+	frames_since_mesh = 0;
+	problem.clear();
+	return true;
+}
+
+void DenseSLAM::set_state(TrackingState p_state, const std::string &p_reason) {
+	const bool changed = p_state != tracking_state;
+	tracking_state = p_state;
+	tracking_reason = p_reason;
+	if (changed) {
+		emit_signal("tracking_state_changed", p_state, String(p_reason.c_str()));
+	}
+}
+
+bool DenseSLAM::process_rig_frame() {
+	RigCapture *rig_node = find_capture();
+	if (rig_node == nullptr) {
+		problem = capture_path.is_empty() ? "" : "capture does not lead to a RigCapture.";
+		return false;
+	}
+	if (!ensure_slam(*rig_node)) {
+		return false;
+	}
+	const int64_t index = rig_node->get_frame_index(RigCapture::STREAM_RGBD);
+	if (index < 0 || index == last_rgbd_index) {
+		return false;
+	}
+	last_rgbd_index = index;
+	const RgbdFrame &frame = rig_node->get_rgbd_frame();
+	last_frame = slam->process(frame);
+	set_state(to_node_state(last_frame.tracking.state), last_frame.tracking.reason);
+	if (last_frame.tracking.state != roomprobe::TrackingState::Lost) {
+		std::string error;
+		trajectory.append({ frame.timestamp_s, slam->pose() }, &error); // a repeated timestamp is skipped
+	}
+	if (!camera_path.is_empty()) {
+		Node3D *camera = cast_to<Node3D>(get_node_or_null(camera_path));
+		ERR_FAIL_NULL_V_MSG(camera, true, "camera does not lead to a Node3D.");
+		camera->set_global_transform(get_camera_transform());
+	}
+	if (last_frame.integrated && ++frames_since_mesh >= std::max(1, mesh_update_interval)) {
+		update_mesh();
+	}
+	emit_signal("frame_processed", index);
+	return true;
+}
+
+void DenseSLAM::update_mesh() {
+	frames_since_mesh = 0;
+	if (!slam) {
+		return;
+	}
+	const TriangleMesh &triangles = slam->update_mesh();
+	mesh->clear_surfaces();
+	if (!triangles.indices.empty()) {
+		mesh->add_surface_from_arrays(Mesh::PRIMITIVE_TRIANGLES, to_surface_arrays(triangles));
+	}
+	const std::string error = placer.set_dense(triangles);
+	if (!error.empty()) {
+		ERR_PRINT(String(("DenseSLAM: placement: " + error).c_str()));
+	}
+	emit_signal("mesh_updated");
+}
+
+void DenseSLAM::reset() {
+	slam.reset();
+	trajectory.clear();
+	placer.clear_dense();
+	mesh->clear_surfaces();
+	last_frame = DenseSlamFrame();
+	set_state(TRACKING_NOT_STARTED, "");
+}
+
 DenseSLAM::TrackingState DenseSLAM::get_tracking_state() const { return tracking_state; }
+String DenseSLAM::get_tracking_reason() const { return String(tracking_reason.c_str()); }
+
+Transform3D DenseSLAM::get_camera_transform() const {
+	return slam ? camera_transform_from_pose(slam->pose()) : Transform3D();
+}
+
+int64_t DenseSLAM::get_processed_frame_count() const { return slam ? int64_t(slam->frame_count()) : 0; }
+
+Dictionary DenseSLAM::get_stats() const {
+	Dictionary d;
+	if (!slam) {
+		return d;
+	}
+	const TsdfStats s = slam->volume().stats();
+	d.set("frames", int64_t(slam->frame_count()));
+	d.set("integrated_frames", int64_t(slam->integrated_count()));
+	d.set("allocated_blocks", int64_t(s.allocated_blocks));
+	d.set("capacity_blocks", int64_t(s.capacity_blocks));
+	d.set("bytes_used", int64_t(s.bytes_used));
+	d.set("evicted_blocks", int64_t(s.evicted_blocks_total));
+	d.set("bounds", AABB{ to_godot(glm::dvec3(s.bounds_min)), to_godot(glm::dvec3(s.bounds_max - s.bounds_min)) });
+	d.set("track_ms", last_frame.timings.track_ms);
+	d.set("integrate_ms", last_frame.timings.integrate_ms);
+	d.set("raycast_ms", last_frame.timings.raycast_ms);
+	d.set("frame_ms", last_frame.timings.frame_ms);
+	d.set("inlier_fraction", last_frame.tracking.inlier_fraction);
+	d.set("rmse_m", last_frame.tracking.rmse_m);
+	return d;
+}
+
+Ref<ArrayMesh> DenseSLAM::get_mesh() const { return mesh; }
+
+bool DenseSLAM::fisheye_pose_at(double p_fisheye_timestamp_s, Pose *r_world_from_fisheye, std::string *r_error) const {
+	if (!slam || trajectory.is_empty()) {
+		*r_error = "DenseSLAM has no tracked pose yet";
+		return false;
+	}
+	return roomprobe::fisheye_pose_at(trajectory, rig, p_fisheye_timestamp_s, r_world_from_fisheye, r_error, FISHEYE_EXTRAPOLATION_S);
+}
+
+// ---------------------------------------------------------------- placement (Embree)
+
+void DenseSLAM::refresh_placer_coarse() const {
+	if (coarse_model_path.is_empty() || !is_inside_tree()) {
+		return;
+	}
+	const CoarseRoomModel *model = cast_to<CoarseRoomModel>(get_node_or_null(coarse_model_path));
+	if (model == nullptr || model->get_room_mesh() == nullptr || model->get_mesh_version() == placer_coarse_version) {
+		return;
+	}
+	placer.set_coarse(*model->get_room_mesh(), to_glm(model->get_global_position()));
+	placer_coarse_version = model->get_mesh_version();
+}
+
+Dictionary DenseSLAM::place_on_ray(const Vector3 &p_origin, const Vector3 &p_direction) const {
+	refresh_placer_coarse();
+	const PlacementHit hit = placer.cast(to_glm(p_origin), to_glm(p_direction));
+	Dictionary d;
+	if (hit.surface == PlacementSurface::None) {
+		return d;
+	}
+	d.set("position", to_godot(hit.point));
+	d.set("normal", to_godot(hit.normal));
+	d.set("surface", String(hit.surface == PlacementSurface::Dense ? "dense" : "coarse"));
+	d.set("distance", hit.distance_m);
+	return d;
+}
+
+Dictionary DenseSLAM::place_on_surface(const Vector2 &p_screen_position) const {
+	ERR_FAIL_COND_V_MSG(camera_path.is_empty(), Dictionary(), "place_on_surface needs the camera property (a Camera3D).");
+	const Camera3D *camera = cast_to<Camera3D>(get_node_or_null(camera_path));
+	ERR_FAIL_NULL_V_MSG(camera, Dictionary(), "camera does not lead to a Camera3D.");
+	return place_on_ray(camera->project_ray_origin(p_screen_position), camera->project_ray_normal(p_screen_position));
+}
 
 PackedStringArray DenseSLAM::get_warnings() const {
 	PackedStringArray warnings;
-	warnings.push_back("Tracking and the dense model are not implemented yet (issue #5): DenseSLAM gives no pose.");
 	if (capture_path.is_empty()) {
 		warnings.push_back("Set capture to a RigCapture node.");
+	} else if (is_inside_tree() && find_capture() == nullptr) {
+		warnings.push_back("capture does not lead to a RigCapture node.");
+	} else if (!problem.empty()) {
+		warnings.push_back(String(("RGB-D frames are not being processed: " + problem).c_str()));
+	}
+	if (!camera_path.is_empty() && is_inside_tree() && cast_to<Camera3D>(get_node_or_null(camera_path)) == nullptr) {
+		warnings.push_back("camera does not lead to a Camera3D.");
 	}
 	return warnings;
 }
@@ -29,16 +349,42 @@ void DenseSLAM::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_warnings"), &DenseSLAM::get_warnings);
 	ClassDB::bind_method(D_METHOD("set_capture", "path"), &DenseSLAM::set_capture_path);
 	ClassDB::bind_method(D_METHOD("get_capture"), &DenseSLAM::get_capture_path);
+	ClassDB::bind_method(D_METHOD("set_camera", "path"), &DenseSLAM::set_camera_path);
+	ClassDB::bind_method(D_METHOD("get_camera"), &DenseSLAM::get_camera_path);
+	ClassDB::bind_method(D_METHOD("set_coarse_model", "path"), &DenseSLAM::set_coarse_model_path);
+	ClassDB::bind_method(D_METHOD("get_coarse_model"), &DenseSLAM::get_coarse_model_path);
 	ClassDB::bind_method(D_METHOD("set_voxel_size", "metres"), &DenseSLAM::set_voxel_size);
 	ClassDB::bind_method(D_METHOD("get_voxel_size"), &DenseSLAM::get_voxel_size);
 	ClassDB::bind_method(D_METHOD("set_truncation_distance", "metres"), &DenseSLAM::set_truncation_distance);
 	ClassDB::bind_method(D_METHOD("get_truncation_distance"), &DenseSLAM::get_truncation_distance);
+	ClassDB::bind_method(D_METHOD("set_max_blocks", "blocks"), &DenseSLAM::set_max_blocks);
+	ClassDB::bind_method(D_METHOD("get_max_blocks"), &DenseSLAM::get_max_blocks);
+	ClassDB::bind_method(D_METHOD("set_mesh_layers", "layers"), &DenseSLAM::set_mesh_layers);
+	ClassDB::bind_method(D_METHOD("get_mesh_layers"), &DenseSLAM::get_mesh_layers);
+	ClassDB::bind_method(D_METHOD("set_mesh_update_interval", "frames"), &DenseSLAM::set_mesh_update_interval);
+	ClassDB::bind_method(D_METHOD("get_mesh_update_interval"), &DenseSLAM::get_mesh_update_interval);
+	ClassDB::bind_method(D_METHOD("process_rig_frame"), &DenseSLAM::process_rig_frame);
 	ClassDB::bind_method(D_METHOD("get_tracking_state"), &DenseSLAM::get_tracking_state);
+	ClassDB::bind_method(D_METHOD("get_tracking_reason"), &DenseSLAM::get_tracking_reason);
+	ClassDB::bind_method(D_METHOD("get_camera_transform"), &DenseSLAM::get_camera_transform);
+	ClassDB::bind_method(D_METHOD("get_processed_frame_count"), &DenseSLAM::get_processed_frame_count);
+	ClassDB::bind_method(D_METHOD("get_stats"), &DenseSLAM::get_stats);
+	ClassDB::bind_method(D_METHOD("get_mesh"), &DenseSLAM::get_mesh);
+	ClassDB::bind_method(D_METHOD("update_mesh"), &DenseSLAM::update_mesh);
+	ClassDB::bind_method(D_METHOD("reset"), &DenseSLAM::reset);
+	ClassDB::bind_method(D_METHOD("place_on_ray", "origin", "direction"), &DenseSLAM::place_on_ray);
+	ClassDB::bind_method(D_METHOD("place_on_surface", "screen_position"), &DenseSLAM::place_on_surface);
 
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "capture", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "RigCapture"), "set_capture", "get_capture");
+	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "camera", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "Camera3D"), "set_camera", "get_camera");
+	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "coarse_model", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "CoarseRoomModel"), "set_coarse_model", "get_coarse_model");
 	ADD_GROUP("Volume", "");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "voxel_size", PROPERTY_HINT_RANGE, "0.002,0.1,0.001,suffix:m"), "set_voxel_size", "get_voxel_size");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "truncation_distance", PROPERTY_HINT_RANGE, "0.005,0.5,0.001,suffix:m"), "set_truncation_distance", "get_truncation_distance");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "max_blocks", PROPERTY_HINT_RANGE, "1,1000000,1,or_greater"), "set_max_blocks", "get_max_blocks");
+	ADD_GROUP("Mesh", "mesh_");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "mesh_layers", PROPERTY_HINT_LAYERS_3D_RENDER), "set_mesh_layers", "get_mesh_layers");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "mesh_update_interval", PROPERTY_HINT_RANGE, "1,300,1,suffix:frames"), "set_mesh_update_interval", "get_mesh_update_interval");
 
 	BIND_ENUM_CONSTANT(TRACKING_NOT_STARTED);
 	BIND_ENUM_CONSTANT(TRACKING_GOOD);
@@ -46,6 +392,8 @@ void DenseSLAM::_bind_methods() {
 	BIND_ENUM_CONSTANT(TRACKING_LOST);
 
 	ADD_SIGNAL(MethodInfo("tracking_state_changed", PropertyInfo(Variant::INT, "state"), PropertyInfo(Variant::STRING, "reason")));
+	ADD_SIGNAL(MethodInfo("frame_processed", PropertyInfo(Variant::INT, "rgbd_frame")));
+	ADD_SIGNAL(MethodInfo("mesh_updated"));
 }
 
 } // namespace roomprobe

@@ -1,8 +1,7 @@
 #include "rig_capture.h"
 
 #include "../convert/image_convert.h"
-
-#include <glm/gtc/quaternion.hpp>
+#include "../convert/pose_convert.h"
 
 #include <cmath>
 
@@ -251,15 +250,7 @@ Transform3D RigCapture::get_ground_truth_camera_transform() const {
 			!reader->ground_truth_trajectory(RecordingStream::Rgbd).pose_at(rgbd_frame.timestamp_s, &pose, &error)) {
 		return Transform3D();
 	}
-	// OpenCV's camera (x right, y down, z forward) to Godot's (x right, y up, looking down -z).
-	// Godot's basis columns are the camera's axes in the world: x, -y, -z of OpenCV's.
-	const glm::dmat3 r = glm::mat3_cast(pose.rotation); // glm: r[column][row]
-	Transform3D t;
-	for (int row = 0; row < 3; row++) {
-		t.basis.rows[row] = Vector3(real_t(r[0][row]), real_t(-r[1][row]), real_t(-r[2][row]));
-	}
-	t.origin = Vector3(real_t(pose.translation.x), real_t(pose.translation.y), real_t(pose.translation.z));
-	return t;
+	return camera_transform_from_pose(pose);
 }
 
 double RigCapture::get_rgb_camera_fov() const {

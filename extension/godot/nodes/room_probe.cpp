@@ -1,12 +1,15 @@
 #include "room_probe.h"
 
 #include "coarse_room_model.h"
+#include "dense_slam.h"
 
 #include "../convert/image_convert.h"
+#include "../convert/pose_convert.h"
 
 #include <envmap/export.h>
 
 #include <algorithm>
+#include <chrono>
 #include <limits>
 
 using namespace godot;
@@ -115,6 +118,7 @@ CoarseRoomModel *RoomProbe::find_coarse_model() const {
 }
 
 bool RoomProbe::update_now() {
+	const auto start = std::chrono::steady_clock::now();
 	ERR_FAIL_COND_V_MSG(resolution < 1 || resolution > 4096, false, "resolution must be 1..4096.");
 	CoarseRoomModel *model = find_coarse_model();
 	ERR_FAIL_COND_V_MSG(model == nullptr, false, "coarse_model does not lead to a CoarseRoomModel in the tree.");
@@ -130,6 +134,7 @@ bool RoomProbe::update_now() {
 	ERR_FAIL_COND_V_MSG(atlas.empty(), false, "The CoarseRoomModel has no atlas.");
 	roomprobe::Cubemap map = renderer->render(atlas, glm::dvec3(p.x, p.y, p.z), resolution);
 	ERR_FAIL_COND_V_MSG(!is_valid_cubemap(map), false, "Rendering the coarse model failed.");
+	render_dense(*model, &map);
 
 	sh = project_sh(map);
 	Array layers;
@@ -159,8 +164,38 @@ bool RoomProbe::update_now() {
 	apply_to_material();
 	drive_reflection_probe(*model);
 	drive_world_environment();
+	update_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 	emit_signal("environment_map_updated");
 	return true;
+}
+
+Dictionary RoomProbe::get_last_update_stats() const {
+	Dictionary d;
+	d.set("dense_texels", int64_t(dense_stats.texels_covered));
+	d.set("dense_ms", dense_stats.milliseconds);
+	d.set("update_ms", update_ms);
+	return d;
+}
+
+DenseSLAM *RoomProbe::find_dense_slam() const {
+	if (dense_slam_path.is_empty() || !is_inside_tree()) {
+		return nullptr;
+	}
+	return cast_to<DenseSLAM>(get_node_or_null(dense_slam_path));
+}
+
+void RoomProbe::render_dense(const CoarseRoomModel &p_model, roomprobe::Cubemap *io_map) {
+	dense_stats = DenseRenderStats();
+	const DenseSLAM *node = find_dense_slam();
+	const DenseSlam *slam = node != nullptr ? node->get_slam() : nullptr;
+	if (slam == nullptr) {
+		return;
+	}
+	const LightingChange change = dense_lighting.update(slam->integrated_count(), p_model.get_cumulative_lighting());
+	DenseRenderOptions options;
+	options.gain = change.gain;
+	options.offset = change.offset;
+	dense_stats = render_dense_over(slam->volume(), to_glm(get_global_position()), options, io_map);
 }
 
 void RoomProbe::drive_reflection_probe(const CoarseRoomModel &p_model) {
@@ -289,7 +324,9 @@ PackedStringArray RoomProbe::get_warnings() const {
 	if (target_material.is_null() && reflection_probe_path.is_empty() && world_environment_path.is_empty()) {
 		warnings.push_back("The map reaches nothing: set target_material, reflection_probe or world_environment (or read get_cubemap() from a script).");
 	}
-	warnings.push_back("Only the coarse model is rendered: the dense SLAM model is not implemented yet (issue #5).");
+	if (!dense_slam_path.is_empty() && is_inside_tree() && find_dense_slam() == nullptr) {
+		warnings.push_back("dense_slam does not lead to a DenseSLAM node.");
+	}
 	return warnings;
 }
 
@@ -313,6 +350,7 @@ void RoomProbe::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_cubemap"), &RoomProbe::get_cubemap);
 	ClassDB::bind_method(D_METHOD("get_face_image", "layer"), &RoomProbe::get_face_image);
 	ClassDB::bind_method(D_METHOD("get_sh_coefficients"), &RoomProbe::get_sh_coefficients);
+	ClassDB::bind_method(D_METHOD("get_last_update_stats"), &RoomProbe::get_last_update_stats);
 	ClassDB::bind_method(D_METHOD("save_exr", "path"), &RoomProbe::save_exr);
 	ClassDB::bind_method(D_METHOD("save_png_net", "path"), &RoomProbe::save_png_net);
 	ClassDB::bind_method(D_METHOD("get_sky_material"), &RoomProbe::get_sky_material);

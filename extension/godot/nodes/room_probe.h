@@ -2,7 +2,9 @@
 // RoomProbe: a point where an environment map of the live room is synthesised (§4.7),
 // as a cubemap and 5-band spherical harmonics (§4.8).
 
+#include <coarse/lighting.h>
 #include <envmap/coarse_render.h>
+#include <envmap/dense_render.h>
 #include <envmap/spherical_harmonics.h>
 
 #include <rp_godot/godot.h>
@@ -13,6 +15,7 @@
 namespace roomprobe {
 
 class CoarseRoomModel;
+class DenseSLAM;
 
 class RoomProbe : public godot::Node3D {
 	GDCLASS(RoomProbe, godot::Node3D)
@@ -53,6 +56,8 @@ public:
 	// Face p_layer (0..5: +X -X +Y -Y +Z -Z) of the latest map as RGBF, full precision, no mipmaps.
 	godot::Ref<godot::Image> get_face_image(int p_layer) const;
 	godot::PackedVector3Array get_sh_coefficients() const;
+	// What the last update_now() did: dense_texels (int), dense_ms, update_ms (float).
+	godot::Dictionary get_last_update_stats() const;
 	// The latest map as an EXR strip (32-bit float, recording/cubemap_layout.h) or as an 8-bit
 	// PNG cross (envmap/export.h). Paths may be res:// or user:// or absolute. Error codes as
 	// Godot's; the message names the file.
@@ -74,6 +79,10 @@ public:
 
 private:
 	CoarseRoomModel *find_coarse_model() const;
+	DenseSLAM *find_dense_slam() const;
+	// §4.7's second pass: the dense model over the coarse render, with the lighting change since
+	// its colours were last refreshed.
+	void render_dense(const CoarseRoomModel &p_model, roomprobe::Cubemap *io_map);
 	void apply_to_material();
 	// Route (b): places and sets up the ReflectionProbe so that it sees the textured room only.
 	void drive_reflection_probe(const CoarseRoomModel &p_model);
@@ -100,6 +109,9 @@ private:
 	godot::Ref<godot::Image> faces[6]; // RGBF, as rendered
 	godot::Ref<godot::Cubemap> cubemap; // RGBAH with mipmaps
 	ShCoefficients sh{};
+	DenseLighting dense_lighting;
+	DenseRenderStats dense_stats;
+	double update_ms = 0.0;
 	bool has_map = false;
 };
 

@@ -24,6 +24,8 @@ void report_error(const char *p_function, const char *p_file, int p_line, const 
 	if ((m_param) == nullptr) [[unlikely]] { RP_REPORT("Parameter \"" #m_param "\" is null.", "", false); return m_ret; } else ((void)0)
 #define ERR_FAIL_NULL_MSG(m_param, m_msg) \
 	if ((m_param) == nullptr) [[unlikely]] { RP_REPORT("Parameter \"" #m_param "\" is null.", m_msg, false); return; } else ((void)0)
+#define ERR_FAIL_NULL_V_MSG(m_param, m_ret, m_msg) \
+	if ((m_param) == nullptr) [[unlikely]] { RP_REPORT("Parameter \"" #m_param "\" is null.", m_msg, false); return m_ret; } else ((void)0)
 #define ERR_FAIL_INDEX(m_index, m_size) \
 	if ((m_index) < 0 || (m_index) >= (m_size)) [[unlikely]] { RP_REPORT("Index " #m_index " is out of bounds (" #m_size ").", "", false); return; } else ((void)0)
 #define ERR_FAIL_INDEX_V(m_index, m_size, m_ret) \

@@ -1,0 +1,61 @@
+#pragma once
+// The dense part of an environment map (paper §4.7, second pass): the dense model (the colour
+// TSDF of slam/tsdf_volume.h) raycast from the probe into each cubemap face and painted over the
+// coarse model's render, with no depth test between the two: near the probe the dense surfaces
+// are the truth, and the coarse prism behind them must not show through.
+//
+// Each face is a 90-degree pinhole camera (fx = N / 2) at the probe, so the TSDF's own raycast
+// (with its empty-space skipping) does the work. A cubemap face's (u right, v down, forward) axes
+// are left-handed, so the camera is the face mirrored left to right: its pixel (x, y) is the
+// face's (N - 1 - x, y). Colours: the TSDF stores the RGB camera's 8-bit
+// values; p_options.lut maps them to the radiance units of the coarse texture (for the synthetic
+// rig, sRGB decoding over the RGB camera's exposure; identity / 255 when absent), then the
+// coarse model's lighting change since is applied (§4.6).
+
+#include "cubemap.h"
+
+#include <coarse/lighting.h>
+#include <slam/tsdf_volume.h>
+
+#include <array>
+
+namespace roomprobe {
+
+struct DenseRenderOptions {
+	float near_m = 0.02f; // rays start this far from the probe, metres
+	float far_m = 4.0f; // and end this far, metres
+	// Raycast at 1 / scale of the face size and upsample (nearest, with the coarse render kept
+	// where the low-resolution texel missed): fewer rays, blockier dense edges. 1: full size.
+	int scale = 1;
+	const std::array<float, 256> *lut = nullptr; // 8-bit value -> radiance; null: value / 255
+	cv::Vec3f gain = cv::Vec3f(1.0f, 1.0f, 1.0f); // lighting change applied after the lut
+	cv::Vec3f offset = cv::Vec3f(0.0f, 0.0f, 0.0f);
+};
+
+struct DenseRenderStats {
+	int texels_covered = 0; // cubemap texels the dense model now paints (full size)
+	double milliseconds = 0.0;
+};
+
+// The pose of face p_face (0..5, +X -X +Y -Y +Z -Z) as a camera at p_position (x = -u, y down = +v,
+// z forward = the face's axis: the face mirrored, see above): world_from_camera.
+Pose cubemap_face_pose(int p_face, const glm::dvec3 &p_position);
+
+// Which part of the coarse model's lighting changes (§4.6) the dense colours have not seen: the
+// colours are as fresh as the last fused RGB-D frame, so only the changes since apply to them (a
+// global approximation: blocks the RGB-D camera has not seen for a while are older still).
+class DenseLighting {
+public:
+	// p_fused_frames: the dense model's fused frame count; p_cumulative: the coarse model's
+	// cumulative change now (CoarsePipeline::cumulative_lighting). Returns the change to apply.
+	LightingChange update(size_t p_fused_frames, const LightingChange &p_cumulative);
+
+private:
+	size_t fused_seen = 0;
+	LightingChange at_refresh; // identity
+};
+
+// Paints the dense model seen from p_position over io_cubemap (any size; faces CV_32FC3).
+DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 &p_position, const DenseRenderOptions &p_options, Cubemap *io_cubemap);
+
+} // namespace roomprobe

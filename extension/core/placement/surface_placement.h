@@ -1,0 +1,49 @@
+#pragma once
+// Scene placement by Embree ray queries: where a ray (from the screen, or any 3-D ray) meets the
+// real room's surfaces, the dense model's mesh (slam/marching_cubes.h) or the coarse room prism
+// (room/room_mesh.h), with the surface normal there, so that a designer or a player can put a
+// virtual object on the real table. The nearer of the two models wins.
+
+#include <io/embree_scene.h>
+#include <room/room_mesh.h>
+#include <slam/marching_cubes.h>
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <memory>
+
+namespace roomprobe {
+
+enum class PlacementSurface {
+	None,
+	Dense, // the dense model's mesh
+	Coarse, // the room prism (walls, floor, ceiling)
+};
+
+struct PlacementHit {
+	PlacementSurface surface = PlacementSurface::None;
+	glm::dvec3 point = glm::dvec3(0.0); // world metres
+	glm::dvec3 normal = glm::dvec3(0.0); // unit, facing the ray's origin
+	double distance_m = 0.0; // along the (normalised) ray
+};
+
+class SurfacePlacer {
+public:
+	// Each scene is rebuilt only when given a mesh (the dense one as it grows). The coarse room
+	// mesh is in the room's frame; p_offset (metres) moves it into the world (its node's position).
+	// Return "" or what Embree reported.
+	std::string set_coarse(const RoomMesh &p_room, const glm::dvec3 &p_offset = glm::dvec3(0.0));
+	std::string set_dense(const TriangleMesh &p_mesh);
+	void clear_dense() { dense.reset(); }
+
+	// The nearest surface along p_origin + t * p_direction, 0 < t <= p_max_distance_m (the
+	// direction need not be unit length; distances are in metres all the same).
+	PlacementHit cast(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_max_distance_m = 100.0) const;
+
+private:
+	std::unique_ptr<EmbreeTriangleScene> coarse;
+	std::unique_ptr<EmbreeTriangleScene> dense;
+};
+
+} // namespace roomprobe

@@ -1,0 +1,188 @@
+#include "dense_slam.h"
+
+#include <chrono>
+#include <limits>
+
+namespace roomprobe {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point p_start) {
+	return std::chrono::duration<double, std::milli>(Clock::now() - p_start).count();
+}
+
+bool has_model(const ModelMaps &p_maps) {
+	return !p_maps.points.empty();
+}
+
+} // namespace
+
+DenseSlam::DenseSlam(const DenseSlamOptions &p_options) :
+		opts(p_options), tracker(p_options.icp), tsdf(p_options.tsdf) {}
+
+std::string DenseSlam::configure(const PinholeParams &p_camera, const Pose &p_initial_world_from_camera) {
+	configured = false;
+	if (p_camera.width <= 0 || p_camera.height <= 0 || !(p_camera.fx > 0.0) || !(p_camera.fy > 0.0)) {
+		return "dense SLAM: the RGB-D camera needs a positive size and focal length";
+	}
+	if (!is_finite(p_initial_world_from_camera)) {
+		return "dense SLAM: the initial pose is not finite";
+	}
+	params = p_camera;
+	intrinsics = pinhole_intrinsics(p_camera);
+	undistort_map_x.release();
+	undistort_map_y.release();
+	if (has_pinhole_distortion(p_camera)) {
+		// Kernels use the distortion-free model: undo the distortion once per frame, by table.
+		const cv::Mat k = (cv::Mat_<double>(3, 3) << p_camera.fx, 0.0, p_camera.cx, 0.0, p_camera.fy, p_camera.cy, 0.0, 0.0, 1.0);
+		const cv::Mat d = (cv::Mat_<double>(1, 5) << p_camera.k1, p_camera.k2, p_camera.p1, p_camera.p2, p_camera.k3);
+		cv::initUndistortRectifyMap(k, d, cv::Mat(), k, cv::Size(p_camera.width, p_camera.height), CV_32FC1, undistort_map_x, undistort_map_y);
+	}
+	tsdf.reset();
+	mesher.clear();
+	mesh = TriangleMesh();
+	reference = ModelMaps();
+	last_pose = p_initial_world_from_camera;
+	has_previous = false;
+	last_state = TrackingState::Lost;
+	frames = 0;
+	integrated_frames = 0;
+	configured = true;
+	return "";
+}
+
+std::string DenseSlam::check_frame(const RgbdFrame &p_frame) const {
+	if (p_frame.depth_m.type() != CV_32FC1 || p_frame.depth_m.cols != params.width || p_frame.depth_m.rows != params.height ||
+			(!p_frame.rgb.empty() && (p_frame.rgb.type() != CV_8UC3 || p_frame.rgb.size() != p_frame.depth_m.size()))) {
+		return "the frame does not fit the camera: depth must be CV_32FC1 and rgb CV_8UC3, both " + std::to_string(params.width) + "x" +
+				std::to_string(params.height);
+	}
+	return "";
+}
+
+DenseSlamFrame DenseSlam::process_at_pose(const RgbdFrame &p_frame, const Pose &p_world_from_camera) {
+	DenseSlamFrame out;
+	out.tracking.world_from_camera = p_world_from_camera;
+	out.tracking.reason = configured ? check_frame(p_frame) : "dense SLAM is not configured";
+	if (!out.tracking.reason.empty()) {
+		return out;
+	}
+	const Clock::time_point start = Clock::now();
+	cv::Mat depth, rgb;
+	undistort(p_frame, &depth, &rgb);
+	out.tracking.state = TrackingState::Good;
+	out.integration = integrate(depth, rgb, p_world_from_camera);
+	out.integrated = true;
+	previous_pose = last_pose;
+	last_pose = p_world_from_camera;
+	last_state = TrackingState::Good;
+	frames++;
+	integrated_frames++;
+	out.timings.integrate_ms = ms_since(start);
+	out.timings.frame_ms = out.timings.integrate_ms;
+	return out;
+}
+
+void DenseSlam::undistort(const RgbdFrame &p_frame, cv::Mat *r_depth, cv::Mat *r_rgb) const {
+	if (undistort_map_x.empty()) {
+		*r_depth = p_frame.depth_m;
+		*r_rgb = p_frame.rgb;
+		return;
+	}
+	// Nearest for depth: interpolating across a depth edge invents surfaces.
+	cv::remap(p_frame.depth_m, *r_depth, undistort_map_x, undistort_map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+	cv::remap(p_frame.rgb, *r_rgb, undistort_map_x, undistort_map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0, 0, 0));
+}
+
+TrackingResult DenseSlam::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_initial_world_from_camera) const {
+	if (!has_model(reference)) {
+		TrackingResult lost;
+		lost.state = TrackingState::Lost;
+		lost.reason = "no model to track against yet";
+		lost.world_from_camera = p_initial_world_from_camera;
+		return lost;
+	}
+	return tracker.track(p_depth_m, p_rgb, intrinsics, reference, p_initial_world_from_camera);
+}
+
+IntegrationStats DenseSlam::integrate(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_world_from_camera) {
+	return tsdf.integrate(p_depth_m, p_rgb, intrinsics, p_world_from_camera);
+}
+
+void DenseSlam::raycast(const Pose &p_world_from_camera, ModelMaps *r_maps) const {
+	tsdf.raycast(intrinsics, p_world_from_camera, r_maps);
+}
+
+const TriangleMesh &DenseSlam::update_mesh() {
+	if (mesher.update(tsdf, tsdf.take_dirty_blocks()) > 0 || mesh.vertices.empty()) {
+		mesh = mesher.mesh();
+	}
+	return mesh;
+}
+
+DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
+	DenseSlamFrame out;
+	if (!configured) {
+		out.tracking.reason = "dense SLAM is not configured";
+		return out;
+	}
+	const Clock::time_point frame_start = Clock::now();
+	out.tracking.reason = check_frame(p_frame);
+	if (!out.tracking.reason.empty()) {
+		out.tracking.world_from_camera = last_pose;
+		last_state = out.tracking.state;
+		frames++;
+		return out;
+	}
+	Clock::time_point start = Clock::now();
+	cv::Mat depth, rgb;
+	undistort(p_frame, &depth, &rgb);
+	out.timings.undistort_ms = ms_since(start);
+
+	start = Clock::now();
+	if (!has_model(reference) && integrated_frames == 0) {
+		// The first frame defines the model at the initial pose; it needs readings all the same.
+		const int valid = cv::countNonZero((depth == depth) & (depth > 0.0f)); // NaN != NaN
+		const bool enough = valid >= int(opts.icp.min_valid_fraction * double(depth.total()));
+		out.tracking.world_from_camera = last_pose;
+		out.tracking.state = enough ? TrackingState::Good : TrackingState::Lost;
+		out.tracking.reason = enough ? "" : "too few valid depth pixels for the first frame: " + std::to_string(valid) + " of " + std::to_string(depth.total());
+	} else {
+		// Constant velocity while trusted; the held pose when re-tracking after a loss.
+		Pose guess = last_pose;
+		if (opts.constant_velocity && has_previous && last_state == TrackingState::Good) {
+			guess = compose(last_pose, compose(inverse(previous_pose), last_pose));
+		}
+		out.tracking = track(depth, rgb, guess);
+		if (out.tracking.state == TrackingState::Lost) {
+			out.tracking.world_from_camera = last_pose;
+		}
+	}
+	out.timings.track_ms = ms_since(start);
+
+	// A Poor pose still moves the camera (the AR view follows it); only Good ones are fused.
+	if (out.tracking.state != TrackingState::Lost) {
+		previous_pose = last_pose;
+		has_previous = integrated_frames > 0;
+		last_pose = out.tracking.world_from_camera;
+	}
+	const bool trusted = out.tracking.state == TrackingState::Good || (opts.integrate_poor && out.tracking.state == TrackingState::Poor);
+	if (trusted) {
+		start = Clock::now();
+		out.integration = integrate(depth, rgb, last_pose);
+		out.integrated = true;
+		integrated_frames++;
+		out.timings.integrate_ms = ms_since(start);
+		start = Clock::now();
+		raycast(last_pose, &reference);
+		out.timings.raycast_ms = ms_since(start);
+	}
+	last_state = out.tracking.state;
+	frames++;
+	out.timings.frame_ms = ms_since(frame_start);
+	return out;
+}
+
+} // namespace roomprobe

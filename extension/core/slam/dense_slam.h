@@ -1,0 +1,117 @@
+#pragma once
+// Dense RGB-D SLAM (paper §4.2) as one plain C++ object: the colour TSDF of the surfaces near the
+// virtual objects (tsdf_volume.h) and the RGB-D camera's pose, frame-to-model ICP (icp_tracker.h)
+// against the model's raycast from the last pose. Open3D's slam Model, four verbs:
+//   track      the pose of a frame, against the model seen from the last trusted pose;
+//   integrate  fuse a frame at a pose;
+//   raycast    the model seen from a pose (the next frame's reference);
+//   mesh       marching cubes of what changed (marching_cubes.h), for Godot and Embree;
+// and process(), which runs a frame through them in order.
+//
+// Tracking states (slam_types.h): Good frames are integrated; Poor ones move the pose but are not
+// integrated (unless integrate_poor); when Lost the last trusted pose is held, nothing is integrated, and each new
+// frame tries to re-track against the model from that pose, so tracking resumes when the camera
+// comes back near where it was lost.
+//
+// World frame: the caller's, through the initial pose (a recording's room.yaml initial_rgb_pose
+// puts the dense model in the room's frame, where the coarse model is).
+
+#include "icp_tracker.h"
+#include "marching_cubes.h"
+#include "slam_types.h"
+#include "tsdf_volume.h"
+
+#include <camera/camera_params.h>
+#include <recording/recording_types.h>
+
+#include <string>
+
+namespace roomprobe {
+
+struct DenseSlamOptions {
+	DenseSlamOptions() {
+		// Against the model rather than the last frame: the model covers less than a frame sees
+		// at first (grazing surfaces and depth edges are not fused, tsdf_volume.h), so a smaller
+		// share of the frame's pixels find a partner while tracking is still sound.
+		icp.good_inlier_fraction = 0.3;
+	}
+	TsdfOptions tsdf; // the volume: voxel size, truncation, block cap (units there)
+	IcpOptions icp; // tracking: pyramid, thresholds, colour term (units there)
+	bool integrate_poor = false; // also fuse frames whose tracking is Poor
+	bool constant_velocity = true; // predict each pose from the last two trusted ones (else: the last one)
+};
+
+// Wall-clock milliseconds of one process() call, by stage.
+struct DenseSlamTimings {
+	double undistort_ms = 0.0;
+	double track_ms = 0.0;
+	double integrate_ms = 0.0;
+	double raycast_ms = 0.0;
+	double frame_ms = 0.0; // the whole call
+};
+
+struct DenseSlamFrame {
+	TrackingResult tracking; // state, reason, pose (the held pose when Lost)
+	bool integrated = false;
+	IntegrationStats integration;
+	DenseSlamTimings timings;
+};
+
+class DenseSlam {
+public:
+	explicit DenseSlam(const DenseSlamOptions &p_options = DenseSlamOptions());
+
+	// Sets the RGB-D camera (depth registered to it; distortion is undone per frame) and the pose
+	// of the first frame, and empties the model. The error (empty on success) names the problem.
+	std::string configure(const PinholeParams &p_camera, const Pose &p_initial_world_from_camera);
+	bool is_configured() const { return configured; }
+
+	// The four verbs, on undistorted images (p_depth_m CV_32FC1 z metres, NaN or 0 = none;
+	// p_rgb CV_8UC3 R, G, B, same size).
+	TrackingResult track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_initial_world_from_camera) const;
+	IntegrationStats integrate(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_world_from_camera);
+	void raycast(const Pose &p_world_from_camera, ModelMaps *r_maps) const;
+	// Re-meshes the blocks changed since the last call; returns the whole mesh.
+	const TriangleMesh &update_mesh();
+
+	// One RGB-D frame: undistort, track (the first frame is taken at the initial pose), integrate
+	// when trusted, raycast the reference for the next frame.
+	DenseSlamFrame process(const RgbdFrame &p_frame);
+	// The same without tracking: the frame is fused at p_world_from_camera (ground-truth poses,
+	// the evaluation mode), and that becomes the pose.
+	DenseSlamFrame process_at_pose(const RgbdFrame &p_frame, const Pose &p_world_from_camera);
+
+	// The RGB-D camera's pose (world_from_camera) after the last frame (held while Lost), and its state.
+	const Pose &pose() const { return last_pose; }
+	TrackingState state() const { return last_state; }
+	size_t frame_count() const { return frames; }
+	size_t integrated_count() const { return integrated_frames; }
+	const TsdfVolume &volume() const { return tsdf; }
+	TsdfVolume &volume() { return tsdf; }
+	const PinholeIntrinsics &camera() const { return intrinsics; }
+	const DenseSlamOptions &options() const { return opts; }
+
+private:
+	void undistort(const RgbdFrame &p_frame, cv::Mat *r_depth, cv::Mat *r_rgb) const;
+	// Empty when p_frame fits the camera, else why not.
+	std::string check_frame(const RgbdFrame &p_frame) const;
+
+	DenseSlamOptions opts;
+	bool configured = false;
+	PinholeParams params;
+	PinholeIntrinsics intrinsics;
+	cv::Mat undistort_map_x, undistort_map_y; // empty when the camera has no distortion
+	IcpTracker tracker;
+	TsdfVolume tsdf;
+	IncrementalMesher mesher;
+	TriangleMesh mesh;
+	ModelMaps reference; // the model raycast from last_pose
+	Pose last_pose;
+	Pose previous_pose; // the trusted pose before last_pose (constant-velocity prediction)
+	bool has_previous = false;
+	TrackingState last_state = TrackingState::Lost;
+	size_t frames = 0;
+	size_t integrated_frames = 0;
+};
+
+} // namespace roomprobe

@@ -1,0 +1,68 @@
+#pragma once
+// Triangle meshes of the TSDF's zero level set by marching cubes (tsdf_volume.h), kept per block
+// so that only the blocks a frame changed are re-meshed.
+
+#include "slam/tsdf_volume.h"
+
+#include <glm/vec3.hpp>
+#include <glm/gtc/type_precision.hpp>
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <tuple>
+#include <vector>
+
+namespace roomprobe {
+
+struct TriangleMesh {
+	std::vector<glm::vec3> vertices; // world metres
+	std::vector<glm::vec3> normals; // world, unit, pointing out of the surface (towards free space)
+	std::vector<glm::u8vec3> colors; // R, G, B
+	std::vector<uint32_t> indices; // triangles, counter-clockwise seen from the free side
+};
+
+// The marching-cubes case table: for each of the 256 sign patterns of a cube's corners (bit c
+// set when corner c, at (c & 1, c >> 1 & 1, c >> 2 & 1), is inside, tsdf < 0), the triangles as
+// triples of cube edges (edge e joins mc_edge_corners()[e]). Generated at first use from the
+// cube's topology (marching_cubes.cpp): contours are traced face by face, separating the inside
+// corners on ambiguous faces, so that neighbouring cubes always agree (watertight).
+struct McCase {
+	uint8_t triangle_count = 0;
+	std::array<uint8_t, 3 * 12> edges {}; // triangle_count triples
+};
+const std::array<McCase, 256> &mc_case_table();
+const std::array<std::array<uint8_t, 2>, 12> &mc_edge_corners();
+
+// The mesh of the cubes whose lowest corner lies in one block (they reach one voxel into the
+// blocks above it). Cubes with an unobserved corner, or whose sign change is between two
+// saturated (+-1) values, give nothing.
+TriangleMesh mesh_block(const TsdfVolume &p_volume, const glm::ivec3 &p_block);
+// The mesh of the whole volume from scratch (blocks in sorted order), as IncrementalMesher::mesh().
+TriangleMesh mesh_volume(const TsdfVolume &p_volume);
+
+// Appends p_piece to r_mesh (indices shifted).
+void append_mesh(const TriangleMesh &p_piece, TriangleMesh *r_mesh);
+
+// Keeps one mesh piece per block and re-meshes only what changed.
+class IncrementalMesher {
+public:
+	// Re-meshes the blocks whose cubes touch a changed block: each changed block and its 7
+	// neighbours below (-x, -y, -z and combinations), whose cubes reach into it. Pieces of blocks
+	// that are no longer allocated are dropped. Returns the number of blocks meshed.
+	int update(const TsdfVolume &p_volume, const std::vector<glm::ivec3> &p_changed_blocks);
+	// The whole mesh: the pieces concatenated in sorted block order.
+	TriangleMesh mesh() const;
+	void clear() { m_pieces.clear(); }
+	size_t piece_count() const { return m_pieces.size(); }
+
+private:
+	struct BlockLess {
+		bool operator()(const glm::ivec3 &p_a, const glm::ivec3 &p_b) const {
+			return std::tie(p_a.x, p_a.y, p_a.z) < std::tie(p_b.x, p_b.y, p_b.z);
+		}
+	};
+	std::map<glm::ivec3, TriangleMesh, BlockLess> m_pieces;
+};
+
+} // namespace roomprobe

@@ -1,0 +1,639 @@
+#include "tsdf_volume.h"
+
+#include <glm/gtc/quaternion.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace roomprobe {
+
+namespace {
+
+// Rows per parallel_for_ stripe: enough work per task, and a fixed split.
+constexpr int ROWS_PER_STRIPE = 8;
+// The hash table is kept at most this full (linear probing degrades beyond).
+constexpr double MAX_HASH_LOAD = 0.75;
+
+glm::mat3 rotation_matrix(const Pose &p_pose) {
+	return glm::mat3(glm::mat3_cast(glm::quat(p_pose.rotation)));
+}
+
+glm::vec3 block_centre(const glm::ivec3 &p_block, float p_voxel_size) {
+	// Voxels 0..7 of a block sit at (8 b + i) voxels; its centre is at 8 b + 3.5.
+	return (glm::vec3(p_block) * float(TSDF_BLOCK_SIDE) + glm::vec3(0.5f * float(TSDF_BLOCK_SIDE - 1))) * p_voxel_size;
+}
+
+// Appends the blocks (in block units) a segment passes through, by a 3D DDA (Amanatides & Woo),
+// skipping those among the last few appended (neighbouring pixels mostly share blocks).
+void append_segment_blocks(const glm::vec3 &p_a, const glm::vec3 &p_b, std::vector<glm::ivec3> *r_blocks) {
+	glm::ivec3 cell(int(std::floor(p_a.x)), int(std::floor(p_a.y)), int(std::floor(p_a.z)));
+	const glm::ivec3 last(int(std::floor(p_b.x)), int(std::floor(p_b.y)), int(std::floor(p_b.z)));
+	const glm::vec3 d = p_b - p_a;
+	glm::ivec3 step(0);
+	glm::vec3 t_max(std::numeric_limits<float>::infinity());
+	glm::vec3 t_delta(std::numeric_limits<float>::infinity());
+	for (int a = 0; a < 3; a++) {
+		if (d[a] > 0.0f) {
+			step[a] = 1;
+			t_max[a] = (float(cell[a] + 1) - p_a[a]) / d[a];
+			t_delta[a] = 1.0f / d[a];
+		} else if (d[a] < 0.0f) {
+			step[a] = -1;
+			t_max[a] = (float(cell[a]) - p_a[a]) / d[a];
+			t_delta[a] = -1.0f / d[a];
+		}
+	}
+	constexpr int RECENT = 8;
+	for (int guard = 0; guard < 64; guard++) {
+		const size_t n = r_blocks->size();
+		bool seen = false;
+		for (size_t i = n > RECENT ? n - RECENT : 0; i < n && !seen; i++) {
+			seen = (*r_blocks)[i] == cell;
+		}
+		if (!seen) {
+			r_blocks->push_back(cell);
+		}
+		if (cell == last) {
+			break;
+		}
+		const int a = t_max.x < t_max.y ? (t_max.x < t_max.z ? 0 : 2) : (t_max.y < t_max.z ? 1 : 2);
+		if (t_max[a] > 1.0f) {
+			break;
+		}
+		cell[a] += step[a];
+		t_max[a] += t_delta[a];
+	}
+}
+
+uint32_t hash_size_for(int p_max_blocks) {
+	uint32_t size = 1024;
+	while (double(size) * MAX_HASH_LOAD < 1.5 * double(p_max_blocks)) {
+		size *= 2;
+	}
+	return size;
+}
+
+} // namespace
+
+TsdfVolume::TsdfVolume(const TsdfOptions &p_options) :
+		m_options(p_options) {
+	m_options.max_blocks = std::max(1, m_options.max_blocks);
+	m_options.max_weight = std::clamp(m_options.max_weight, 1, 65535 / TSDF_WEIGHT_UNIT);
+	m_hash.assign(hash_size_for(m_options.max_blocks), TsdfHashEntry());
+	m_hash_mask = uint32_t(m_hash.size()) - 1;
+	// Address space for the whole cap at once, so that the pool never moves; pages are only
+	// committed as blocks are first written.
+	m_voxels.reserve(size_t(m_options.max_blocks) * TSDF_BLOCK_VOXELS);
+}
+
+// ---- hash table ----
+
+int32_t *TsdfVolume::hash_lookup(const glm::ivec3 &p_block) {
+	uint32_t i = tsdf_block_hash(p_block) & m_hash_mask;
+	while (m_hash[i].slot != TSDF_HASH_EMPTY) {
+		if (m_hash[i].block == p_block) {
+			return &m_hash[i].slot;
+		}
+		i = (i + 1) & m_hash_mask;
+	}
+	return nullptr;
+}
+
+bool TsdfVolume::hash_insert(const glm::ivec3 &p_block, int32_t p_slot) {
+	if (double(m_hash_used + 1) > MAX_HASH_LOAD * double(m_hash.size())) {
+		return false;
+	}
+	uint32_t i = tsdf_block_hash(p_block) & m_hash_mask;
+	while (m_hash[i].slot != TSDF_HASH_EMPTY) {
+		i = (i + 1) & m_hash_mask;
+	}
+	m_hash[i] = { p_block, p_slot };
+	m_hash_used++;
+	return true;
+}
+
+void TsdfVolume::hash_erase(const glm::ivec3 &p_block) {
+	uint32_t i = tsdf_block_hash(p_block) & m_hash_mask;
+	while (m_hash[i].slot != TSDF_HASH_EMPTY && m_hash[i].block != p_block) {
+		i = (i + 1) & m_hash_mask;
+	}
+	if (m_hash[i].slot == TSDF_HASH_EMPTY) {
+		return;
+	}
+	// Backward-shift deletion: move later entries of the run into the hole when their home slot
+	// does not lie (cyclically) between the hole and them, so that no probe sequence breaks.
+	uint32_t hole = i;
+	uint32_t j = i;
+	for (;;) {
+		j = (j + 1) & m_hash_mask;
+		if (m_hash[j].slot == TSDF_HASH_EMPTY) {
+			break;
+		}
+		const uint32_t home = tsdf_block_hash(m_hash[j].block) & m_hash_mask;
+		const bool home_in_range = hole <= j ? (hole < home && home <= j) : (hole < home || home <= j);
+		if (!home_in_range) {
+			m_hash[hole] = m_hash[j];
+			hole = j;
+		}
+	}
+	m_hash[hole] = TsdfHashEntry();
+	m_hash_used--;
+}
+
+// ---- pool ----
+
+int32_t TsdfVolume::allocate_slot(const glm::ivec3 &p_block) {
+	int32_t slot;
+	if (!m_free_slots.empty()) {
+		slot = m_free_slots.back();
+		m_free_slots.pop_back();
+		std::fill_n(m_voxels.begin() + ptrdiff_t(slot) * TSDF_BLOCK_VOXELS, TSDF_BLOCK_VOXELS, TsdfVoxel());
+	} else {
+		slot = int32_t(m_slot_block.size());
+		m_slot_block.push_back(p_block);
+		m_slot_used.push_back(0);
+		m_slot_frame.push_back(0);
+		m_voxels.resize(m_voxels.size() + TSDF_BLOCK_VOXELS);
+	}
+	m_slot_block[size_t(slot)] = p_block;
+	m_slot_used[size_t(slot)] = 1;
+	m_slot_frame[size_t(slot)] = m_frame;
+	m_allocated++;
+	return slot;
+}
+
+void TsdfVolume::free_slot(int32_t p_slot) {
+	m_slot_used[size_t(p_slot)] = 0;
+	m_free_slots.push_back(p_slot);
+	m_allocated--;
+}
+
+// ---- integration ----
+
+void TsdfVolume::collect_band_blocks(const cv::Mat &p_depth_m, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, std::vector<glm::ivec3> *r_blocks, int *r_valid_pixels) const {
+	const glm::mat3 rotation = rotation_matrix(p_world_from_camera);
+	const glm::vec3 translation(p_world_from_camera.translation);
+	const float inv_block = 1.0f / (m_options.voxel_size_m * float(TSDF_BLOCK_SIDE));
+	const int stripes = (p_depth_m.rows + ROWS_PER_STRIPE - 1) / ROWS_PER_STRIPE;
+	std::vector<std::vector<glm::ivec3>> per_stripe(static_cast<size_t>(stripes));
+	std::vector<int> valid(size_t(stripes), 0);
+	cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range &p_range) {
+		for (int s = p_range.start; s < p_range.end; s++) {
+			std::vector<glm::ivec3> &out = per_stripe[size_t(s)];
+			for (int v = s * ROWS_PER_STRIPE; v < std::min(p_depth_m.rows, (s + 1) * ROWS_PER_STRIPE); v++) {
+				const float *row = p_depth_m.ptr<float>(v);
+				for (int u = 0; u < p_depth_m.cols; u++) {
+					const float d = row[u];
+					if (!tsdf_depth_valid(d, m_options.min_depth_m, m_options.max_depth_m)) {
+						continue;
+					}
+					valid[size_t(s)]++;
+					const glm::vec2 pixel = glm::vec2(float(u), float(v));
+					const float z0 = std::max(d - m_options.truncation_m, 0.5f * m_options.min_depth_m);
+					const glm::vec3 a = (rotation * p_camera.unproject(pixel, z0) + translation) * inv_block;
+					const glm::vec3 b = (rotation * p_camera.unproject(pixel, d + m_options.truncation_m) + translation) * inv_block;
+					append_segment_blocks(a, b, &out);
+				}
+			}
+		}
+	});
+	*r_valid_pixels = 0;
+	r_blocks->clear();
+	for (int s = 0; s < stripes; s++) {
+		*r_valid_pixels += valid[size_t(s)];
+		r_blocks->insert(r_blocks->end(), per_stripe[size_t(s)].begin(), per_stripe[size_t(s)].end());
+	}
+}
+
+void TsdfVolume::mark_blocks_in_view(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera) {
+	// Allocated blocks that project into the image (with a margin of the block's radius) are
+	// updated too: free space seen through them carves them towards +1.
+	const Pose camera_from_world = inverse(p_world_from_camera);
+	const glm::mat3 rotation = rotation_matrix(camera_from_world);
+	const glm::vec3 translation(camera_from_world.translation);
+	const float radius = 0.5f * std::sqrt(3.0f) * float(TSDF_BLOCK_SIDE) * m_options.voxel_size_m;
+	for (size_t s = 0; s < m_slot_block.size(); s++) {
+		if (!m_slot_used[s] || m_slot_frame[s] == m_frame) {
+			continue;
+		}
+		const glm::vec3 pc = rotation * block_centre(m_slot_block[s], m_options.voxel_size_m) + translation;
+		if (pc.z + radius < m_options.min_depth_m || pc.z - radius > m_options.max_depth_m + m_options.truncation_m) {
+			continue;
+		}
+		glm::vec2 pixel;
+		if (!p_camera.project(glm::vec3(pc.x, pc.y, std::max(pc.z, m_options.min_depth_m)), &pixel)) {
+			continue;
+		}
+		const float margin_x = radius * p_camera.fx / std::max(pc.z, m_options.min_depth_m);
+		const float margin_y = radius * p_camera.fy / std::max(pc.z, m_options.min_depth_m);
+		if (pixel.x >= -margin_x && pixel.y >= -margin_y && pixel.x <= float(p_camera.width) + margin_x && pixel.y <= float(p_camera.height) + margin_y) {
+			m_slot_frame[s] = m_frame;
+		}
+	}
+}
+
+float TsdfVolume::keep_distance2(const glm::ivec3 &p_block, const Pose &p_world_from_camera) const {
+	const glm::dvec3 c(block_centre(p_block, m_options.voxel_size_m));
+	if (m_keep_points.empty()) {
+		const glm::dvec3 d = c - p_world_from_camera.translation;
+		return float(glm::dot(d, d));
+	}
+	double best = std::numeric_limits<double>::infinity();
+	for (const glm::dvec3 &k : m_keep_points) {
+		const glm::dvec3 d = c - k;
+		best = std::min(best, glm::dot(d, d));
+	}
+	return float(best);
+}
+
+int TsdfVolume::evict_for(int p_needed, const Pose &p_world_from_camera) {
+	std::vector<std::pair<float, int32_t>> candidates; // (-distance², slot): farthest first
+	for (size_t s = 0; s < m_slot_block.size(); s++) {
+		if (m_slot_used[s] && m_slot_frame[s] != m_frame) {
+			candidates.emplace_back(-keep_distance2(m_slot_block[s], p_world_from_camera), int32_t(s));
+		}
+	}
+	const int count = std::min(p_needed, int(candidates.size()));
+	std::nth_element(candidates.begin(), candidates.begin() + count, candidates.end());
+	for (int i = 0; i < count; i++) {
+		const int32_t slot = candidates[size_t(i)].second;
+		hash_erase(m_slot_block[size_t(slot)]);
+		m_dirty.push_back(m_slot_block[size_t(slot)]);
+		free_slot(slot);
+	}
+	m_evicted_total += count;
+	return count;
+}
+
+IntegrationStats TsdfVolume::integrate(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera) {
+	CV_Assert(p_depth_m.type() == CV_32FC1 && p_rgb.type() == CV_8UC3 && p_depth_m.size() == p_rgb.size());
+	CV_Assert(p_depth_m.cols == p_camera.width && p_depth_m.rows == p_camera.height);
+	IntegrationStats stats;
+	m_frame++;
+
+	// 1. Blocks along the readings' bands: stamp those allocated, reserve the rest.
+	std::vector<glm::ivec3> band;
+	collect_band_blocks(p_depth_m, p_camera, p_world_from_camera, &band, &stats.valid_pixels);
+	std::vector<glm::ivec3> wanted;
+	for (const glm::ivec3 &block : band) {
+		int32_t *slot = hash_lookup(block);
+		if (slot == nullptr) {
+			if (hash_insert(block, TSDF_HASH_PENDING)) {
+				wanted.push_back(block);
+			} else {
+				stats.dropped_blocks++;
+			}
+		} else if (*slot >= 0) {
+			m_slot_frame[size_t(*slot)] = m_frame;
+		}
+	}
+	// 2. Allocated blocks in view: updated, and spared by eviction.
+	mark_blocks_in_view(p_camera, p_world_from_camera);
+
+	// 3. Room for the new blocks: evict outside the view, else drop the farthest new ones.
+	const int over = m_allocated + int(wanted.size()) - m_options.max_blocks;
+	if (over > 0) {
+		stats.evicted_blocks = evict_for(over, p_world_from_camera);
+	}
+	const int room = m_options.max_blocks - m_allocated;
+	if (int(wanted.size()) > room) {
+		std::vector<std::pair<float, glm::ivec3>> by_distance;
+		for (const glm::ivec3 &b : wanted) {
+			by_distance.emplace_back(keep_distance2(b, p_world_from_camera), b);
+		}
+		std::stable_sort(by_distance.begin(), by_distance.end(), [](const auto &p_a, const auto &p_b) { return p_a.first < p_b.first; });
+		wanted.clear();
+		for (size_t i = 0; i < by_distance.size(); i++) {
+			if (int(i) < room) {
+				wanted.push_back(by_distance[i].second);
+			} else {
+				hash_erase(by_distance[i].second);
+				stats.dropped_blocks++;
+			}
+		}
+	}
+	for (const glm::ivec3 &block : wanted) {
+		*hash_lookup(block) = allocate_slot(block);
+	}
+	stats.allocated_blocks = int(wanted.size());
+	m_dropped_total += stats.dropped_blocks;
+
+	// 4. Update every voxel of the blocks in view.
+	std::vector<int32_t> visible;
+	for (size_t s = 0; s < m_slot_block.size(); s++) {
+		if (m_slot_used[s] && m_slot_frame[s] == m_frame) {
+			visible.push_back(int32_t(s));
+		}
+	}
+	stats.visible_blocks = int(visible.size());
+	const Pose camera_from_world = inverse(p_world_from_camera);
+	TsdfFrameView frame;
+	frame.camera = p_camera;
+	frame.camera_from_world_rotation = rotation_matrix(camera_from_world);
+	frame.camera_from_world_translation = glm::vec3(camera_from_world.translation);
+	frame.depth = p_depth_m.ptr<float>(0);
+	frame.depth_stride = p_depth_m.step1();
+	frame.rgb = p_rgb.ptr<uint8_t>(0);
+	frame.rgb_stride = p_rgb.step[0];
+	frame.truncation_m = m_options.truncation_m;
+	frame.color_band_m = m_options.color_band_m;
+	frame.min_depth_m = m_options.min_depth_m;
+	frame.max_depth_m = m_options.max_depth_m;
+	frame.max_weight = uint16_t(m_options.max_weight);
+	// Slope factors of the frame's pixels (tsdf_depth_slope); a depth jump of half the band
+	// between neighbours is an edge.
+	cv::Mat slope(p_depth_m.size(), CV_32FC1);
+	cv::parallel_for_(cv::Range(0, p_depth_m.rows), [&](const cv::Range &p_range) {
+		for (int v = p_range.start; v < p_range.end; v++) {
+			float *row = slope.ptr<float>(v);
+			for (int u = 0; u < p_depth_m.cols; u++) {
+				row[u] = tsdf_depth_slope(frame.depth, frame.depth_stride, p_camera, u, v, 0.5f * m_options.truncation_m);
+			}
+		}
+	});
+	frame.slope = slope.ptr<float>(0);
+	frame.slope_stride = slope.step1();
+	frame.min_slope = m_options.min_slope;
+	const float vs = m_options.voxel_size_m;
+	std::vector<uint8_t> changed(visible.size(), 0);
+	cv::parallel_for_(cv::Range(0, int(visible.size())), [&](const cv::Range &p_range) {
+		for (int i = p_range.start; i < p_range.end; i++) {
+			const int32_t slot = visible[size_t(i)];
+			const glm::ivec3 base = m_slot_block[size_t(slot)] * TSDF_BLOCK_SIDE;
+			TsdfVoxel *voxels = &m_voxels[size_t(slot) * TSDF_BLOCK_VOXELS];
+			bool any = false;
+			for (int z = 0; z < TSDF_BLOCK_SIDE; z++) {
+				for (int y = 0; y < TSDF_BLOCK_SIDE; y++) {
+					for (int x = 0; x < TSDF_BLOCK_SIDE; x++) {
+						const glm::ivec3 local(x, y, z);
+						any |= tsdf_update_voxel(frame, glm::vec3(base + local) * vs, &voxels[tsdf_local_index(local)]);
+					}
+				}
+			}
+			changed[size_t(i)] = any;
+		}
+	});
+	for (size_t i = 0; i < visible.size(); i++) {
+		if (changed[i]) {
+			m_dirty.push_back(m_slot_block[size_t(visible[i])]);
+		}
+	}
+	update_bounds();
+	return stats;
+}
+
+void TsdfVolume::update_bounds() {
+	glm::ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
+	for (size_t s = 0; s < m_slot_block.size(); s++) {
+		if (m_slot_used[s]) {
+			lo = glm::min(lo, m_slot_block[s]);
+			hi = glm::max(hi, m_slot_block[s]);
+		}
+	}
+	if (m_allocated == 0) {
+		m_bounds_min = m_bounds_max = glm::vec3(0.0f);
+		return;
+	}
+	// A block's voxels span [8 b, 8 b + 7] voxels; the cells of trilinear reads reach 8 b + 8.
+	const float block_m = float(TSDF_BLOCK_SIDE) * m_options.voxel_size_m;
+	m_bounds_min = glm::vec3(lo) * block_m;
+	m_bounds_max = glm::vec3(hi + glm::ivec3(1)) * block_m;
+}
+
+// ---- queries ----
+
+TsdfView TsdfVolume::view() const {
+	TsdfView view;
+	view.entries = m_hash.data();
+	view.mask = m_hash_mask;
+	view.voxels = m_voxels.data();
+	view.voxel_size = m_options.voxel_size_m;
+	view.truncation = m_options.truncation_m;
+	return view;
+}
+
+// ---- raycast ----
+
+namespace {
+
+// Pixels per side of a cell of the depth-range image.
+constexpr int RANGE_CELL = 8;
+
+} // namespace
+
+cv::Mat TsdfVolume::depth_ranges(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_near_m, float p_far_m) const {
+	// Per cell of RANGE_CELL^2 pixels, the [min, max] camera depth of the allocated blocks that
+	// project onto it (InfiniTAM's expected depths): rays start at the first block they can
+	// meet and stop after the last, and cells no block covers are not marched at all.
+	const int cols = (p_camera.width + RANGE_CELL - 1) / RANGE_CELL, rows = (p_camera.height + RANGE_CELL - 1) / RANGE_CELL;
+	cv::Mat ranges(rows, cols, CV_32FC2, cv::Scalar(std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()));
+	const Pose camera_from_world = inverse(p_world_from_camera);
+	const glm::mat3 rotation = rotation_matrix(camera_from_world);
+	const glm::vec3 translation(camera_from_world.translation);
+	const float block_m = float(TSDF_BLOCK_SIDE) * m_options.voxel_size_m;
+	const float near = p_near_m;
+	for (size_t s = 0; s < m_slot_block.size(); s++) {
+		if (!m_slot_used[s]) {
+			continue;
+		}
+		// The region whose nearest voxels are this block's: [8 b - 0.5, 8 b + 7.5) voxels.
+		const glm::vec3 lo = glm::vec3(m_slot_block[s]) * block_m - glm::vec3(0.5f * m_options.voxel_size_m);
+		float zmin = std::numeric_limits<float>::infinity(), zmax = -zmin;
+		glm::vec2 pmin(std::numeric_limits<float>::infinity()), pmax(-std::numeric_limits<float>::infinity());
+		bool straddles = false;
+		for (int c = 0; c < 8; c++) {
+			const glm::vec3 corner = lo + glm::vec3(float(c & 1), float((c >> 1) & 1), float((c >> 2) & 1)) * block_m;
+			const glm::vec3 pc = rotation * corner + translation;
+			zmin = std::min(zmin, pc.z);
+			zmax = std::max(zmax, pc.z);
+			glm::vec2 pixel;
+			if (pc.z < near || !p_camera.project(pc, &pixel)) {
+				straddles = true;
+				continue;
+			}
+			pmin = glm::min(pmin, pixel);
+			pmax = glm::max(pmax, pixel);
+		}
+		if (zmax < near || zmin > p_far_m) {
+			continue;
+		}
+		if (straddles) {
+			// A corner before the near plane: the block may cover any pixel.
+			pmin = glm::vec2(0.0f);
+			pmax = glm::vec2(float(p_camera.width - 1), float(p_camera.height - 1));
+		}
+		const int c0 = std::max(0, int(std::floor(pmin.x)) / RANGE_CELL), c1 = std::min(cols - 1, int(std::floor(pmax.x)) / RANGE_CELL);
+		const int r0 = std::max(0, int(std::floor(pmin.y)) / RANGE_CELL), r1 = std::min(rows - 1, int(std::floor(pmax.y)) / RANGE_CELL);
+		for (int r = r0; r <= r1; r++) {
+			cv::Vec2f *row = ranges.ptr<cv::Vec2f>(r);
+			for (int c = c0; c <= c1; c++) {
+				row[c][0] = std::min(row[c][0], zmin);
+				row[c][1] = std::max(row[c][1], zmax);
+			}
+		}
+	}
+	return ranges;
+}
+
+void TsdfVolume::raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, ModelMaps *r_maps, RaycastStats *r_stats) const {
+	raycast(p_camera, p_world_from_camera, m_options.min_depth_m, m_options.max_depth_m, r_maps, r_stats);
+}
+
+void TsdfVolume::raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_min_depth_m, float p_max_depth_m, ModelMaps *r_maps,
+		RaycastStats *r_stats) const {
+	const float nan = std::numeric_limits<float>::quiet_NaN();
+	r_maps->camera = p_camera;
+	r_maps->world_from_camera = p_world_from_camera;
+	r_maps->points.create(p_camera.height, p_camera.width, CV_32FC3);
+	r_maps->normals.create(p_camera.height, p_camera.width, CV_32FC3);
+	r_maps->colors.create(p_camera.height, p_camera.width, CV_8UC3);
+	r_maps->depth.create(p_camera.height, p_camera.width, CV_32FC1);
+	r_maps->points.setTo(cv::Scalar::all(nan));
+	r_maps->normals.setTo(cv::Scalar::all(nan));
+	r_maps->colors.setTo(cv::Scalar::all(0));
+	r_maps->depth.setTo(cv::Scalar::all(nan));
+	RaycastStats stats;
+	if (m_allocated == 0) {
+		if (r_stats != nullptr) {
+			*r_stats = stats;
+		}
+		return;
+	}
+	const TsdfView view = this->view();
+	TsdfRayParams ray;
+	ray.origin = glm::vec3(p_world_from_camera.translation);
+	ray.world_from_camera_rotation = rotation_matrix(p_world_from_camera);
+	ray.min_depth_m = p_min_depth_m;
+	ray.max_depth_m = p_max_depth_m;
+	ray.bounds_min = m_bounds_min;
+	ray.bounds_max = m_bounds_max;
+	const cv::Mat ranges = depth_ranges(p_camera, p_world_from_camera, p_min_depth_m, p_max_depth_m);
+	std::vector<long long> steps(size_t(p_camera.height), 0);
+	std::vector<int> hits(size_t(p_camera.height), 0);
+	cv::parallel_for_(cv::Range(0, p_camera.height), [&](const cv::Range &p_range) {
+		for (int v = p_range.start; v < p_range.end; v++) {
+			cv::Vec3f *points = r_maps->points.ptr<cv::Vec3f>(v);
+			cv::Vec3f *normals = r_maps->normals.ptr<cv::Vec3f>(v);
+			cv::Vec3b *colors = r_maps->colors.ptr<cv::Vec3b>(v);
+			float *depth = r_maps->depth.ptr<float>(v);
+			const cv::Vec2f *range_row = ranges.ptr<cv::Vec2f>(v / RANGE_CELL);
+			for (int u = 0; u < p_camera.width; u++) {
+				const cv::Vec2f range = range_row[u / RANGE_CELL];
+				if (!(range[0] <= range[1])) {
+					continue; // no block projects here
+				}
+				TsdfRayParams pixel_ray = ray;
+				pixel_ray.min_depth_m = std::max(ray.min_depth_m, range[0]);
+				pixel_ray.max_depth_m = std::min(ray.max_depth_m, range[1]);
+				TsdfRayHit hit;
+				int n = 0;
+				const bool ok = tsdf_raycast_pixel(view, pixel_ray, p_camera, u, v, &hit, &n);
+				steps[size_t(v)] += n;
+				if (!ok) {
+					continue;
+				}
+				hits[size_t(v)]++;
+				points[u] = cv::Vec3f(hit.point.x, hit.point.y, hit.point.z);
+				normals[u] = cv::Vec3f(hit.normal.x, hit.normal.y, hit.normal.z);
+				colors[u] = cv::Vec3b(cv::saturate_cast<uint8_t>(hit.rgb.x), cv::saturate_cast<uint8_t>(hit.rgb.y), cv::saturate_cast<uint8_t>(hit.rgb.z));
+				depth[u] = hit.depth;
+			}
+		}
+	});
+	for (int v = 0; v < p_camera.height; v++) {
+		stats.steps += steps[size_t(v)];
+		stats.hit_pixels += hits[size_t(v)];
+	}
+	if (r_stats != nullptr) {
+		*r_stats = stats;
+	}
+}
+
+bool TsdfVolume::sample_tsdf(const glm::vec3 &p_world, float *r_tsdf, glm::vec3 *r_rgb) const {
+	if (m_allocated == 0) {
+		return false;
+	}
+	const TsdfView view = this->view();
+	const glm::vec3 grid = p_world / m_options.voxel_size_m;
+	TsdfBlockCache cache;
+	if (!tsdf_trilinear(view, grid, &cache, r_tsdf)) {
+		return false;
+	}
+	if (r_rgb != nullptr && !tsdf_trilinear_color(view, grid, &cache, r_rgb)) {
+		*r_rgb = glm::vec3(0.0f);
+	}
+	return true;
+}
+
+const TsdfVoxel *TsdfVolume::find_block(const glm::ivec3 &p_block) const {
+	const int32_t slot = tsdf_find_slot(view(), p_block);
+	return slot >= 0 ? &m_voxels[size_t(slot) * TSDF_BLOCK_VOXELS] : nullptr;
+}
+
+namespace {
+bool ivec3_less(const glm::ivec3 &p_a, const glm::ivec3 &p_b) {
+	if (p_a.x != p_b.x) {
+		return p_a.x < p_b.x;
+	}
+	if (p_a.y != p_b.y) {
+		return p_a.y < p_b.y;
+	}
+	return p_a.z < p_b.z;
+}
+} // namespace
+
+std::vector<glm::ivec3> TsdfVolume::allocated_blocks() const {
+	std::vector<glm::ivec3> blocks;
+	for (size_t s = 0; s < m_slot_block.size(); s++) {
+		if (m_slot_used[s]) {
+			blocks.push_back(m_slot_block[s]);
+		}
+	}
+	std::sort(blocks.begin(), blocks.end(), ivec3_less);
+	return blocks;
+}
+
+std::vector<glm::ivec3> TsdfVolume::take_dirty_blocks() {
+	std::vector<glm::ivec3> dirty;
+	dirty.swap(m_dirty);
+	std::sort(dirty.begin(), dirty.end(), ivec3_less);
+	dirty.erase(std::unique(dirty.begin(), dirty.end()), dirty.end());
+	return dirty;
+}
+
+void TsdfVolume::set_keep_points(const std::vector<glm::dvec3> &p_points) {
+	m_keep_points = p_points;
+}
+
+void TsdfVolume::reset() {
+	for (const glm::ivec3 &block : allocated_blocks()) {
+		m_dirty.push_back(block);
+	}
+	std::fill(m_hash.begin(), m_hash.end(), TsdfHashEntry());
+	m_hash_used = 0;
+	m_voxels.clear();
+	m_slot_block.clear();
+	m_slot_used.clear();
+	m_slot_frame.clear();
+	m_free_slots.clear();
+	m_allocated = 0;
+	m_bounds_min = m_bounds_max = glm::vec3(0.0f);
+}
+
+TsdfStats TsdfVolume::stats() const {
+	TsdfStats stats;
+	stats.allocated_blocks = m_allocated;
+	stats.capacity_blocks = m_options.max_blocks;
+	const size_t block_bytes = sizeof(TsdfVoxel) * TSDF_BLOCK_VOXELS + sizeof(glm::ivec3) + 2 * sizeof(uint32_t);
+	const size_t hash_bytes = m_hash.size() * sizeof(TsdfHashEntry);
+	stats.bytes_used = size_t(m_allocated) * block_bytes + hash_bytes;
+	stats.bytes_reserved = m_slot_block.size() * block_bytes + hash_bytes;
+	stats.evicted_blocks_total = m_evicted_total;
+	stats.dropped_blocks_total = m_dropped_total;
+	stats.bounds_min = m_bounds_min;
+	stats.bounds_max = m_bounds_max;
+	return stats;
+}
+
+} // namespace roomprobe

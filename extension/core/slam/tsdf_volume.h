@@ -1,0 +1,153 @@
+#pragma once
+// The dense colour model of the dense SLAM stage (paper §4.2, InfiniTAM's design): a truncated
+// signed distance function with colour, stored sparsely in 8 x 8 x 8 voxel blocks that are found
+// through a spatial hash and allocated only around observed surfaces. Depth frames are fused in
+// with integrate(); raycast() gives the model seen from a pose (the reference for tracking).
+// The per-voxel and per-pixel work is in tsdf_kernels.h.
+
+#include <io/opencv.h>
+
+#include "slam/slam_types.h"
+#include "slam/tsdf_kernels.h"
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace roomprobe {
+
+struct TsdfOptions {
+	float voxel_size_m = 0.01f; // edge of one voxel, metres
+	float truncation_m = 0.04f; // half-width of the signed-distance band around surfaces, metres
+	float color_band_m = 0.01f; // colour is averaged only into voxels this close to the surface, metres
+	// Readings become point-to-plane distances: reading - z times the slope factor -n . x / z
+	// of the surface's tangent plane there (n from the neighbouring readings), about the cosine of
+	// the view angle. Readings whose factor is below this (0.3: surfaces tilted more than about
+	// 72 deg from the ray), and those at depth edges, only carve free space; others are weighted
+	// by the factor squared.
+	float min_slope = 0.3f;
+	int max_weight = 64; // cap on the running-average weight (head-on observations), 1..2047
+	float min_depth_m = 0.3f; // depth readings (z, metres) outside [min, max] are ignored
+	float max_depth_m = 4.0f;
+	// Cap on allocated blocks (6 KiB each: 512 voxels of 12 bytes): 40000 blocks = 246 MB of
+	// voxels plus a 2 MB hash table. See TsdfVolume for what happens at the cap.
+	int max_blocks = 40000;
+};
+
+// What one integrate() did.
+struct IntegrationStats {
+	int valid_pixels = 0; // depth readings used
+	int visible_blocks = 0; // blocks updated: along the readings' bands, plus allocated ones in view
+	int allocated_blocks = 0; // blocks newly allocated by this frame
+	int evicted_blocks = 0; // blocks evicted by this frame to stay under max_blocks
+	int dropped_blocks = 0; // blocks this frame wanted but could not have (its own view exceeded the cap)
+};
+
+// The state of the whole volume.
+struct TsdfStats {
+	int allocated_blocks = 0;
+	int capacity_blocks = 0; // max_blocks
+	size_t bytes_used = 0; // voxel pool in use (allocated blocks) plus the hash table, bytes
+	size_t bytes_reserved = 0; // voxel pool held (it does not shrink on eviction) plus the hash table, bytes
+	long long evicted_blocks_total = 0;
+	long long dropped_blocks_total = 0;
+	// World-space box of the allocated blocks, metres (both 0 when none is allocated).
+	glm::vec3 bounds_min = glm::vec3(0.0f), bounds_max = glm::vec3(0.0f);
+};
+
+// What one raycast() did.
+struct RaycastStats {
+	int hit_pixels = 0;
+	long long steps = 0; // samples along all rays (a measure of the empty-space skipping)
+};
+
+// The voxel-hashed colour TSDF.
+//
+// Memory policy: at most max_blocks blocks are allocated. When a frame needs new blocks beyond
+// the cap, blocks outside the frame's view (neither along its readings nor projecting into it)
+// are evicted, farthest first from the nearest keep-point (set_keep_points, e.g. the light
+// probes; the camera position when none is set), and their voxels are lost. Blocks in view are
+// never evicted; when the view alone needs more than the cap, the new blocks farthest from the
+// keep-points are not allocated (dropped_blocks) and those readings go unfused.
+class TsdfVolume {
+public:
+	explicit TsdfVolume(const TsdfOptions &p_options = TsdfOptions());
+
+	// Fuses one frame. p_depth_m: CV_32FC1, z in metres, NaN or 0 = no reading; p_rgb: CV_8UC3,
+	// R, G, B, same size; p_camera: the (undistorted) camera of both; p_world_from_camera: its pose.
+	// Blocks along each reading's ray within [d - truncation, d + truncation] are allocated; then
+	// every voxel of the blocks in view is updated (parallel over blocks). Updated blocks are
+	// marked dirty (take_dirty_blocks).
+	IntegrationStats integrate(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera);
+
+	// The model seen from a pose: per pixel the first + to - zero crossing of the tsdf along the
+	// ray within [min_depth, max_depth] (and within the depth range of the allocated blocks that
+	// project near the pixel), with every field of r_maps filled (points and normals in
+	// world frame, depth = camera z; NaN and colour 0 where no surface was met). Parallel over rows.
+	void raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, ModelMaps *r_maps, RaycastStats *r_stats = nullptr) const;
+	// The same within [p_min_depth_m, p_max_depth_m] of camera z instead of the options' depth
+	// range (a probe's cubemap faces: surfaces a few centimetres away count).
+	void raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_min_depth_m, float p_max_depth_m, ModelMaps *r_maps,
+			RaycastStats *r_stats = nullptr) const;
+
+	// Trilinear tsdf (normalised, [-1, 1]) and colour (0..255, zero when no voxel around has one)
+	// at a world point (metres); false where a voxel around it is unallocated or unobserved.
+	bool sample_tsdf(const glm::vec3 &p_world, float *r_tsdf, glm::vec3 *r_rgb) const;
+
+	// Points (world metres) whose neighbourhood eviction spares longest.
+	void set_keep_points(const std::vector<glm::dvec3> &p_points);
+
+	// Blocks changed (updated or evicted) since the last call, sorted, each once.
+	std::vector<glm::ivec3> take_dirty_blocks();
+
+	// Frees every block; options and keep-points stay.
+	void reset();
+
+	TsdfStats stats() const;
+	const TsdfOptions &options() const { return m_options; }
+
+	// The 512 voxels of a block (index tsdf_local_index), or nullptr when it is not allocated.
+	const TsdfVoxel *find_block(const glm::ivec3 &p_block) const;
+	// Integer coordinates of every allocated block, sorted.
+	std::vector<glm::ivec3> allocated_blocks() const;
+	// Read-only access for kernels; valid until the next integrate() or reset().
+	TsdfView view() const;
+
+private:
+	void collect_band_blocks(const cv::Mat &p_depth_m, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, std::vector<glm::ivec3> *r_blocks, int *r_valid_pixels) const;
+	void mark_blocks_in_view(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera);
+	float keep_distance2(const glm::ivec3 &p_block, const Pose &p_world_from_camera) const;
+	int evict_for(int p_needed, const Pose &p_world_from_camera);
+	int32_t allocate_slot(const glm::ivec3 &p_block);
+	void free_slot(int32_t p_slot);
+	void update_bounds();
+	cv::Mat depth_ranges(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_near_m, float p_far_m) const;
+
+	// Hash table (open addressing, linear probing, backward-shift deletion).
+	int32_t *hash_lookup(const glm::ivec3 &p_block);
+	bool hash_insert(const glm::ivec3 &p_block, int32_t p_slot);
+	void hash_erase(const glm::ivec3 &p_block);
+
+	TsdfOptions m_options;
+	std::vector<TsdfHashEntry> m_hash;
+	uint32_t m_hash_mask = 0;
+	int m_hash_used = 0;
+
+	std::vector<TsdfVoxel> m_voxels; // pool: slot s at [s * 512, s * 512 + 512)
+	std::vector<glm::ivec3> m_slot_block; // the block held by each slot
+	std::vector<uint8_t> m_slot_used;
+	std::vector<uint32_t> m_slot_frame; // the frame that last saw each slot (in view)
+	std::vector<int32_t> m_free_slots;
+	int m_allocated = 0;
+	uint32_t m_frame = 0;
+
+	std::vector<glm::dvec3> m_keep_points;
+	std::vector<glm::ivec3> m_dirty;
+	long long m_evicted_total = 0;
+	long long m_dropped_total = 0;
+	glm::vec3 m_bounds_min = glm::vec3(0.0f), m_bounds_max = glm::vec3(0.0f);
+};
+
+} // namespace roomprobe

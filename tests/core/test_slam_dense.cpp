@@ -1,0 +1,159 @@
+// slam/dense_slam.h: frame-to-model tracking and fusion end to end on the synthetic living room,
+// and what happens when tracking is lost; envmap/dense_render.h: the dense model in a probe's map.
+
+#include <io/opencv.h>
+
+#include "envmap/coarse_render.h"
+#include "envmap/dense_render.h"
+#include "slam/dense_slam.h"
+#include "synth_test_frames.h"
+
+#include <doctest/doctest.h>
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <limits>
+
+using namespace roomprobe;
+using namespace synth_frames;
+
+namespace {
+
+constexpr double FRAME_S = 1.0 / 30.0;
+
+RgbdFrame rgbd_at(double p_t, bool p_noisy = true) {
+	const Frame frame = render_living_room(living_room().trajectory.world_from_rgb(p_t), p_t, p_noisy, uint64_t(p_t * 1000.0) + 3);
+	RgbdFrame out;
+	out.timestamp_s = p_t;
+	out.rgb = frame.rgb;
+	out.depth_m = frame.depth_m;
+	return out;
+}
+
+DenseSlam started_slam(double p_t0) {
+	DenseSlam slam;
+	REQUIRE(slam.configure(half_camera(), living_room().trajectory.world_from_rgb(p_t0)) == "");
+	return slam;
+}
+
+} // namespace
+
+TEST_CASE("dense SLAM: one second of the living room tracked frame to model, ATE under 1 cm") {
+	DenseSlam slam;
+	REQUIRE(slam.configure(half_camera(), living_room().trajectory.world_from_rgb(0.0)) == "");
+	double sum_sq = 0.0;
+	int tracked = 0;
+	for (int i = 0; i < 30; i++) {
+		const double t = i * FRAME_S;
+		const DenseSlamFrame out = slam.process(rgbd_at(t));
+		REQUIRE_MESSAGE(out.tracking.state == TrackingState::Good, "frame ", i, ": ", out.tracking.reason);
+		CHECK(out.integrated);
+		const glm::dvec3 error = slam.pose().translation - living_room().trajectory.world_from_rgb(t).translation;
+		sum_sq += glm::dot(error, error);
+		tracked++;
+	}
+	const double ate_m = std::sqrt(sum_sq / tracked);
+	MESSAGE("ATE RMSE over 1 s at 320x240, noisy depth: ", ate_m * 1000.0, " mm");
+	CHECK(ate_m < 0.01);
+	CHECK(slam.integrated_count() == 30);
+	CHECK(slam.volume().stats().allocated_blocks > 100);
+	// The model's mesh exists and lies in the room (5 m x 4 m x 2.5 m).
+	const TriangleMesh &mesh = slam.update_mesh();
+	REQUIRE(!mesh.vertices.empty());
+	for (size_t v = 0; v < mesh.vertices.size(); v += 97) {
+		CHECK(mesh.vertices[v].x > -0.1f);
+		CHECK(mesh.vertices[v].x < 5.1f);
+		CHECK(mesh.vertices[v].y > -0.1f);
+		CHECK(mesh.vertices[v].y < 2.6f);
+	}
+}
+
+TEST_CASE("dense SLAM: a frame of zeros is lost, holds the pose, fuses nothing; tracking resumes") {
+	DenseSlam slam = started_slam(0.0);
+	for (int i = 0; i < 3; i++) {
+		REQUIRE(slam.process(rgbd_at(i * FRAME_S)).tracking.state == TrackingState::Good);
+	}
+	const Pose held = slam.pose();
+	const size_t fused = slam.integrated_count();
+	const int blocks = slam.volume().stats().allocated_blocks;
+	RgbdFrame zeros = rgbd_at(3 * FRAME_S);
+	zeros.depth_m.setTo(0.0f);
+	const DenseSlamFrame lost = slam.process(zeros);
+	CHECK(lost.tracking.state == TrackingState::Lost);
+	CHECK(lost.tracking.reason.find("valid depth") != std::string::npos);
+	CHECK_FALSE(lost.integrated);
+	CHECK(slam.integrated_count() == fused);
+	CHECK(slam.volume().stats().allocated_blocks == blocks);
+	CHECK(glm::length(slam.pose().translation - held.translation) == 0.0);
+	// The camera is back where it was lost: re-tracked against the model.
+	const DenseSlamFrame back = slam.process(rgbd_at(4 * FRAME_S));
+	CHECK(back.tracking.state == TrackingState::Good);
+	CHECK(glm::length(slam.pose().translation - living_room().trajectory.world_from_rgb(4 * FRAME_S).translation) < 0.01);
+}
+
+TEST_CASE("dense SLAM: a jump is never tracked as good and never fused") {
+	DenseSlam slam = started_slam(0.0);
+	for (int i = 0; i < 3; i++) {
+		REQUIRE(slam.process(rgbd_at(i * FRAME_S)).tracking.state == TrackingState::Good);
+	}
+	const size_t fused = slam.integrated_count();
+	// A frame from 3 s further along the orbit (about 1.2 rad round the table).
+	const DenseSlamFrame jump = slam.process(rgbd_at(3.0));
+	CHECK(jump.tracking.state != TrackingState::Good);
+	CHECK_FALSE(jump.integrated);
+	CHECK(slam.integrated_count() == fused);
+}
+
+TEST_CASE("dense SLAM: frames that do not fit the camera are refused with a reason") {
+	DenseSlam slam = started_slam(0.0);
+	RgbdFrame bad = rgbd_at(0.0);
+	cv::resize(bad.depth_m, bad.depth_m, cv::Size(100, 80));
+	const DenseSlamFrame out = slam.process(bad);
+	CHECK(out.tracking.state == TrackingState::Lost);
+	CHECK(out.tracking.reason.find("320x240") != std::string::npos);
+	DenseSlam unconfigured;
+	CHECK(unconfigured.process(rgbd_at(0.0)).tracking.reason == "dense SLAM is not configured");
+	CHECK(unconfigured.configure(PinholeParams(), Pose()) != "");
+}
+
+TEST_CASE("dense render: the cubemap faces are (mirrored) pinhole cameras with the cubemap's directions") {
+	const int size = 16;
+	for (int f = 0; f < 6; f++) {
+		const Pose pose = cubemap_face_pose(f, glm::dvec3(0.0));
+		PinholeParams face;
+		face.width = face.height = size;
+		face.fx = face.fy = 0.5 * size;
+		face.cx = face.cy = 0.5 * (size - 1);
+		for (const glm::dvec2 pixel : { glm::dvec2(0, 0), glm::dvec2(3, 11), glm::dvec2(15, 15) }) {
+			// The camera is the face mirrored: its pixel (x, y) is the face's (N - 1 - x, y).
+			const glm::dvec3 ray = glm::normalize(pose.rotation * unproject_pinhole(face, glm::dvec2(size - 1 - pixel.x, pixel.y)));
+			const glm::dvec3 expected = cubemap_direction(f, pixel.x, pixel.y, size);
+			CHECK(glm::length(ray - expected) < 1e-9);
+		}
+	}
+}
+
+TEST_CASE("dense render: the fused table top replaces the coarse floor below the probe, nothing else") {
+	DenseSlam slam = started_slam(0.0);
+	for (int i = 0; i < 10; i++) {
+		REQUIRE(slam.process(rgbd_at(i * FRAME_S)).tracking.state == TrackingState::Good);
+	}
+	// A probe 0.15 m above the middle of the table top (0.75 m), as the recordings' probe 0.
+	const glm::dvec3 probe(2.5, 0.9, 2.0);
+	Cubemap map = make_cubemap(32);
+	for (cv::Mat &face : map.faces) {
+		face.setTo(cv::Scalar(-1.0f, -1.0f, -1.0f)); // "coarse" marker
+	}
+	const DenseRenderStats stats = render_dense_over(slam.volume(), probe, DenseRenderOptions(), &map);
+	CHECK(stats.texels_covered > 0);
+	// Straight down (the -Y face's centre) is the table top, 0.15 m away: painted, in the table's
+	// colour range (a beige noise texture: every channel well above black).
+	const cv::Vec3f below = map.faces[3].at<cv::Vec3f>(16, 16);
+	CHECK(below[0] > 0.2f);
+	CHECK(below[1] > 0.2f);
+	// Straight up is the ceiling, 1.6 m away, which the RGB-D camera looking at the table never
+	// fused: the coarse model stays.
+	const cv::Vec3f above = map.faces[2].at<cv::Vec3f>(16, 16);
+	CHECK(above[0] == -1.0f);
+}
