@@ -1,9 +1,10 @@
 // roomprobe_eval: scores environment-map estimates against a recording's ground-truth cubemaps
-// (paper §5.3): the §5.3 baseline and the coarse model without / with inpainting and with the
-// two lighting compensations (eval/evaluate.h). Poses: the ground-truth trajectory.
+// (paper §5.3): the §5.3 baseline, the coarse model without / with inpainting and with the two
+// lighting compensations, and the dense model over it, with true poses and tracked by SLAM
+// (eval/evaluate.h).
 //
 // roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame] [--texel-size M]
-//                [--max-cubemaps K] [--quiet]
+//                [--max-cubemaps K] [--no-dense] [--quiet]
 
 #include <eval/evaluate.h>
 
@@ -18,7 +19,7 @@ int main(int argc, char **argv) {
 	auto usage = [](const char *p_error) {
 		std::fprintf(stderr,
 				"%s%susage: roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame]\n"
-				"                      [--texel-size M] [--max-cubemaps K] [--quiet]\n",
+				"                      [--texel-size M] [--max-cubemaps K] [--no-dense] [--quiet]\n",
 				p_error ? "roomprobe_eval: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
 		return 2;
 	};
@@ -55,6 +56,8 @@ int main(int argc, char **argv) {
 				return usage("--max-cubemaps needs a positive integer");
 			}
 			options.max_cubemaps = size_t(std::atoi(v.c_str()));
+		} else if (arg == "--no-dense") {
+			options.dense = false;
 		} else if (arg == "--per-frame") {
 			per_frame = true;
 		} else if (arg == "--quiet") {

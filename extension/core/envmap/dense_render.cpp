@@ -59,10 +59,12 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 			cv::Vec3f *out = face.ptr<cv::Vec3f>(v);
 			for (int u = 0; u < size; u++) {
 				const int lu = low - 1 - std::min(low - 1, u * low / size); // mirrored
-				if (!std::isfinite(depth[lu])) {
-					continue; // the coarse model shows here
-				}
 				const cv::Vec3b c = color[lu];
+				// No surface, or a surface whose colour was never observed (fused from depth at the
+				// edge of the colour band only): the coarse model shows here.
+				if (!std::isfinite(depth[lu]) || (c[0] == 0 && c[1] == 0 && c[2] == 0)) {
+					continue;
+				}
 				for (int k = 0; k < 3; k++) {
 					out[u][k] = std::max(0.0f, p_options.gain[k] * lut[c[k]] + p_options.offset[k]);
 				}

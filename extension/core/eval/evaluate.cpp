@@ -1,12 +1,15 @@
 #include "evaluate.h"
 
 #include <envmap/baseline.h>
+#include <envmap/dense_render.h>
 #include <envmap/export.h>
+#include <slam/dense_slam.h>
 #include <recording/recording_reader.h>
 #include <rig/fisheye_pose.h>
 #include <synth/synth_renderer.h>
 
 #include <chrono>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -80,6 +83,119 @@ void add_timings(CoarsePipelineTimings *r_sum, const CoarsePipelineTimings &p_to
 	r_sum->frame_ms = p_total.frame_ms * p_scale;
 }
 
+Cubemap deep_copy(const Cubemap &p_map) {
+	Cubemap out;
+	out.size = p_map.size;
+	for (size_t f = 0; f < 6; f++) {
+		out.faces[f] = p_map.faces[f].clone();
+	}
+	return out;
+}
+
+// The two dense variants of evaluate.h: the dense model fused at the true poses, drawn over the
+// gain pipeline's map; and the live system, tracked, with its own coarse pipeline fed the fisheye
+// poses of the tracked trajectory.
+class DenseVariants {
+public:
+	std::string configure(const RecordingReader &p_reader, const CoarsePipelineOptions &p_coarse, bool p_linearise, double p_rgb_exposure) {
+		const Rig &rig = p_reader.get_rig();
+		const RoomInfo &room = p_reader.get_room();
+		std::string error = with_true_poses.configure(rig.rgb, room.initial_rgb_pose);
+		if (error.empty()) {
+			error = tracked.configure(rig.rgb, room.initial_rgb_pose);
+		}
+		coarse = std::make_unique<CoarsePipeline>(p_coarse);
+		if (error.empty()) {
+			error = coarse->configure(rig, room.floorplan);
+		}
+		with_true_poses.volume().set_keep_points(room.probes);
+		tracked.volume().set_keep_points(room.probes);
+		for (int i = 0; i < 256; i++) {
+			lut[size_t(i)] = p_linearise ? float(srgb_to_linear(float(i) / 255.0f) / p_rgb_exposure) : float(i) / 255.0f;
+		}
+		return error;
+	}
+
+	void add_rgbd(const RgbdFrame &p_frame, const Trajectory &p_truth, SlamScores *r_scores) {
+		Pose truth;
+		std::string error;
+		const bool has_truth = p_truth.pose_at(p_frame.timestamp_s, &truth, &error);
+		if (has_truth) {
+			with_true_poses.process_at_pose(p_frame, truth);
+		}
+		const DenseSlamFrame out = tracked.process(p_frame);
+		r_scores->frames++;
+		r_scores->good += out.tracking.state == TrackingState::Good ? 1 : 0;
+		r_scores->poor += out.tracking.state == TrackingState::Poor ? 1 : 0;
+		r_scores->lost += out.tracking.state == TrackingState::Lost ? 1 : 0;
+		r_scores->track_ms += out.timings.track_ms;
+		r_scores->integrate_ms += out.timings.integrate_ms;
+		r_scores->raycast_ms += out.timings.raycast_ms;
+		if (out.tracking.state == TrackingState::Lost) {
+			return;
+		}
+		trajectory.append({ p_frame.timestamp_s, tracked.pose() }, &error);
+		if (has_truth) {
+			const double e = glm::length(tracked.pose().translation - truth.translation);
+			ate_sum_sq += e * e;
+			ate_count++;
+			r_scores->ate_max_m = std::max(r_scores->ate_max_m, e);
+		}
+	}
+
+	// p_frame linearised as the other variants get it.
+	void add_fisheye(const FisheyeFrame &p_frame, const Rig &p_rig) {
+		Pose pose;
+		std::string error;
+		// The fisheye may come up to a frame after the newest RGB-D frame: extrapolate that far.
+		if (fisheye_pose_at(trajectory, p_rig, p_frame.timestamp_s, &pose, &error, 0.1)) {
+			coarse->add_fisheye_frame(p_frame, pose);
+		}
+	}
+
+	Cubemap over_true_poses(const Cubemap &p_coarse_map, const glm::dvec3 &p_probe, const LightingChange &p_cumulative) {
+		Cubemap map = deep_copy(p_coarse_map);
+		paint(with_true_poses, light_true, p_cumulative, p_probe, &map);
+		return map;
+	}
+
+	Cubemap live(const glm::dvec3 &p_probe, int p_size) {
+		Cubemap map = coarse->render_cubemap(p_probe, true, p_size);
+		paint(tracked, light_tracked, coarse->cumulative_lighting(), p_probe, &map);
+		return map;
+	}
+
+	void finish(SlamScores *r_scores) const {
+		const double n = r_scores->frames > 0 ? double(r_scores->frames) : 1.0;
+		r_scores->track_ms /= n;
+		r_scores->integrate_ms /= n;
+		r_scores->raycast_ms /= n;
+		r_scores->ate_rmse_m = ate_count > 0 ? std::sqrt(ate_sum_sq / double(ate_count)) : 0.0;
+		r_scores->dense_render_ms = renders > 0 ? render_ms / double(renders) : 0.0;
+	}
+
+private:
+	void paint(const DenseSlam &p_slam, DenseLighting &p_lighting, const LightingChange &p_cumulative, const glm::dvec3 &p_probe, Cubemap *io_map) {
+		DenseRenderOptions options;
+		options.lut = &lut;
+		const LightingChange change = p_lighting.update(p_slam.integrated_count(), p_cumulative);
+		options.gain = change.gain;
+		options.offset = change.offset;
+		render_ms += render_dense_over(p_slam.volume(), p_probe, options, io_map).milliseconds;
+		renders++;
+	}
+
+	DenseSlam with_true_poses, tracked;
+	std::unique_ptr<CoarsePipeline> coarse;
+	Trajectory trajectory; // tracked, RGB-D clock
+	DenseLighting light_true, light_tracked;
+	std::array<float, 256> lut{};
+	double ate_sum_sq = 0.0;
+	size_t ate_count = 0;
+	double render_ms = 0.0;
+	size_t renders = 0;
+};
+
 } // namespace
 
 EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
@@ -113,6 +229,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 
 	// synth.yaml: photometry and the light switch.
 	Photometry photometry;
+	double rgb_exposure = 1.0;
 	const std::filesystem::path synth_yaml = std::filesystem::path(p_options.recording) / "synth.yaml";
 	if (std::filesystem::exists(synth_yaml)) {
 		cv::FileStorage info(synth_yaml.string(), cv::FileStorage::READ);
@@ -124,6 +241,9 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 				photometry.active = true;
 				if (!info["fisheye_exposure"].empty()) {
 					photometry.exposure = double(info["fisheye_exposure"]);
+				}
+				if (!info["rgb_exposure"].empty()) {
+					rgb_exposure = double(info["rgb_exposure"]);
 				}
 				double edge_gain = 1.0;
 				if (!info["fisheye_vignetting_edge_gain"].empty()) {
@@ -170,6 +290,17 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		}
 	}
 
+	std::unique_ptr<DenseVariants> dense;
+	if (p_options.dense) {
+		dense = std::make_unique<DenseVariants>();
+		const std::string error = dense->configure(reader, gain, photometry.active, rgb_exposure);
+		if (!error.empty()) {
+			result.error = p_options.recording + ": " + error;
+			return result;
+		}
+	}
+	const int variant_count = dense ? VARIANT_COUNT : VARIANT_DENSE_TRUE_POSES;
+
 	const GroundTruthCubemapResult first = reader.ground_truth_cubemap(0);
 	if (!first.ok) {
 		result.error = first.error;
@@ -179,13 +310,15 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	result.cubemap_size = size;
 	BaselineEnvmap baseline(size);
 
-	const char *names[VARIANT_COUNT] = { "baseline (5.3)", "coarse", "coarse+inpaint", "+light (additive)", "+light (gain)" };
-	result.variants.resize(VARIANT_COUNT);
-	for (int v = 0; v < VARIANT_COUNT; v++) {
+	const char *names[VARIANT_COUNT] = { "baseline (5.3)", "coarse", "coarse+inpaint", "+light (additive)", "+light (gain)", "+dense (true poses)",
+		"+dense (SLAM)" };
+	result.variants.resize(size_t(variant_count));
+	for (int v = 0; v < variant_count; v++) {
 		result.variants[v].name = names[v];
 	}
 
-	size_t next_fisheye = 0;
+	const std::vector<PlaybackEvent> &events = reader.get_events();
+	size_t next_event = 0;
 	double baseline_total_ms = 0.0, metrics_total_ms = 0.0;
 	size_t comparisons = 0;
 	size_t count = reader.ground_truth_cubemap_count();
@@ -194,20 +327,28 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	}
 	for (size_t c = 0; c < count; c++) {
 		const CubemapRef &ref = reader.get_ground_truth_cubemap_ref(c);
-		// Feed every fisheye frame up to this instant.
-		while (next_fisheye < reader.fisheye_count()) {
-			const FrameRef &fref = reader.get_fisheye_ref(next_fisheye);
-			if (fref.timestamp_s + rig.fisheye_time_offset_s > ref.timestamp_s + 1e-6) {
-				break;
+		// Feed every frame up to this instant, in time order.
+		while (next_event < events.size() && events[next_event].time_s <= ref.timestamp_s + 1e-6) {
+			const PlaybackEvent &event = events[next_event++];
+			if (event.stream == RecordingStream::Rgbd) {
+				if (dense) {
+					const RgbdFrameResult rgbd = reader.read_rgbd(event.index);
+					if (rgbd.ok) {
+						dense->add_rgbd(rgbd.frame, trajectory, &result.slam);
+					} else {
+						say("skipping RGB-D frame: " + rgbd.error);
+					}
+				}
+				continue;
 			}
-			next_fisheye++;
+			const FrameRef &fref = reader.get_fisheye_ref(event.index);
 			Pose pose;
 			std::string pose_error;
 			if (!fisheye_pose_at(trajectory, rig, fref.timestamp_s, &pose, &pose_error)) {
-				say("skipping fisheye frame " + std::to_string(next_fisheye - 1) + ": " + pose_error);
+				say("skipping fisheye frame " + std::to_string(event.index) + ": " + pose_error);
 				continue;
 			}
-			FisheyeFrameResult frame = reader.read_fisheye(next_fisheye - 1);
+			FisheyeFrameResult frame = reader.read_fisheye(event.index);
 			if (!frame.ok) {
 				say("skipping fisheye frame: " + frame.error);
 				continue;
@@ -220,6 +361,9 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 			pipe_plain.add_fisheye_frame(frame.frame, pose);
 			pipe_additive.add_fisheye_frame(frame.frame, pose);
 			pipe_gain.add_fisheye_frame(frame.frame, pose);
+			if (dense) {
+				dense->add_fisheye(frame.frame, rig);
+			}
 			result.fisheye_frames_used++;
 		}
 		const GroundTruthCubemapResult truth = c == 0 ? first : reader.ground_truth_cubemap(c);
@@ -235,7 +379,11 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		estimates[VARIANT_INPAINT] = pipe_plain.render_cubemap(probe, true, size);
 		estimates[VARIANT_LIGHT_ADDITIVE] = pipe_additive.render_cubemap(probe, true, size);
 		estimates[VARIANT_LIGHT_GAIN] = pipe_gain.render_cubemap(probe, true, size);
-		for (int v = 0; v < VARIANT_COUNT; v++) {
+		if (dense) {
+			estimates[VARIANT_DENSE_TRUE_POSES] = dense->over_true_poses(estimates[VARIANT_LIGHT_GAIN], probe, pipe_gain.cumulative_lighting());
+			estimates[VARIANT_DENSE_SLAM] = dense->live(probe, size);
+		}
+		for (int v = 0; v < variant_count; v++) {
 			const Clock::time_point start = Clock::now();
 			FrameScore score;
 			score.timestamp_s = ref.timestamp_s;
@@ -254,8 +402,9 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		}
 		if (c + 1 == count && !p_options.out.empty()) {
 			std::filesystem::create_directories(p_options.out);
-			const char *files[VARIANT_COUNT] = { "baseline", "coarse", "coarse_inpaint", "coarse_light_additive", "coarse_light_gain" };
-			for (int v = 0; v < VARIANT_COUNT; v++) {
+			const char *files[VARIANT_COUNT] = { "baseline", "coarse", "coarse_inpaint", "coarse_light_additive", "coarse_light_gain", "dense_true_poses",
+				"dense_slam" };
+			for (int v = 0; v < variant_count; v++) {
 				const std::string stem = (std::filesystem::path(p_options.out) / files[v]).string();
 				std::string error = write_cubemap_exr(stem + ".exr", estimates[v]);
 				if (error.empty()) {
@@ -308,6 +457,9 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	result.timings_gain.render_ms = pipe_gain.total_timings().render_ms * per_cubemap;
 	result.baseline_ms = baseline_total_ms * per_frame;
 	result.metrics_ms = comparisons > 0 ? metrics_total_ms / double(comparisons) : 0.0;
+	if (dense) {
+		dense->finish(&result.slam);
+	}
 	result.ok = true;
 	return result;
 }
@@ -362,6 +514,16 @@ std::string format_evaluation(const EvaluationResult &p_result, bool p_per_frame
 	}
 	std::snprintf(line, sizeof(line), "baseline add_frame %.2f ms per frame; metrics %.2f ms per comparison\n", p_result.baseline_ms, p_result.metrics_ms);
 	out << line;
+	const SlamScores &slam = p_result.slam;
+	if (slam.frames > 0) {
+		std::snprintf(line, sizeof(line),
+				"SLAM (+dense (SLAM)): %zu RGB-D frames, %zu good, %zu poor, %zu lost; ATE RMSE %.2f mm, max %.2f mm (against the ground truth, no alignment)\n",
+				slam.frames, slam.good, slam.poor, slam.lost, slam.ate_rmse_m * 1000.0, slam.ate_max_m * 1000.0);
+		out << line;
+		std::snprintf(line, sizeof(line), "SLAM ms per RGB-D frame: tracking %.2f, integration %.2f, raycast %.2f; dense cubemap pass %.2f ms\n", slam.track_ms,
+				slam.integrate_ms, slam.raycast_ms, slam.dense_render_ms);
+		out << line;
+	}
 	return out.str();
 }
 

@@ -10,14 +10,22 @@
 //   coarse+inpaint  the same texture, inpainted (§4.5);
 //   +light(add)     inpainting and §4.6's additive model (ADDITIVE_PAPER);
 //   +light(gain)    inpainting and the robust per-channel gain (GAIN_ROBUST);
-// each rendered at the cubemap's probe and compared with eval/metrics.h.
+//   +dense (true)   (e) with the dense model over it (§4.7): the RGB-D frames fused at their
+//                   ground-truth poses (slam/dense_slam.h, process_at_pose);
+//   +dense (SLAM)   the live system: the RGB-D camera tracked by DenseSlam from the room's
+//                   initial pose, the fisheye's poses from that tracked trajectory (its own coarse
+//                   pipeline, as (e)), the dense model over it; its ATE is reported;
+// each rendered at the cubemap's probe and compared with eval/metrics.h. RGB-D and fisheye frames
+// are fed in time order (the recording's playback events).
 //
 // Photometric units: the ground truth is linear radiance. When the recording has a synth.yaml
 // (synthetic recordings) and 8-bit fisheye frames, each frame is linearised before any variant
 // sees it: sRGB decoded, divided by synth.yaml's fisheye_exposure and by the renderer's
 // vignetting (synth/synth_renderer.h fisheye_vignetting with fisheye_vignetting_edge_gain), i.e.
 // a perfect photometric calibration; all variants get the same frames. Without synth.yaml the
-// frames are used as they are (8-bit value / 255, the coarse texture's convention).
+// frames are used as they are (8-bit value / 255, the coarse texture's convention). The dense
+// model's 8-bit colours go through the same calibration for the RGB camera (sRGB decoded, divided
+// by synth.yaml's rgb_exposure; that camera has no vignetting) when it is drawn into a map.
 //
 // Light switch (living_room): synth.yaml's light_switch_s (RGB-D clock; -1: none). The §4.6
 // effect is measured on the CUBEMAPS: mean PSNR / SSIM over the frames after the switch (the
@@ -40,6 +48,7 @@ struct EvaluationOptions {
 	double texel_size_m = 0.02;
 	bool linearise = true; // as described above, when synth.yaml is present
 	size_t max_cubemaps = 0; // 0: all
+	bool dense = true; // the two dense variants (they run SLAM on every RGB-D frame: slower)
 	std::function<void(const std::string &)> progress; // optional
 };
 
@@ -57,12 +66,31 @@ struct VariantScores {
 	Cubemap last; // the estimate of the last frame
 };
 
-enum EvaluationVariant { VARIANT_BASELINE = 0, VARIANT_COARSE, VARIANT_INPAINT, VARIANT_LIGHT_ADDITIVE, VARIANT_LIGHT_GAIN, VARIANT_COUNT };
+enum EvaluationVariant {
+	VARIANT_BASELINE = 0,
+	VARIANT_COARSE,
+	VARIANT_INPAINT,
+	VARIANT_LIGHT_ADDITIVE,
+	VARIANT_LIGHT_GAIN,
+	VARIANT_DENSE_TRUE_POSES,
+	VARIANT_DENSE_SLAM,
+	VARIANT_COUNT
+};
+
+// The tracked RGB-D trajectory of the SLAM variant against the ground truth.
+struct SlamScores {
+	size_t frames = 0, good = 0, poor = 0, lost = 0;
+	double ate_rmse_m = 0.0; // over the frames with a pose (good or poor), same timestamps, no alignment
+	double ate_max_m = 0.0;
+	double track_ms = 0.0, integrate_ms = 0.0, raycast_ms = 0.0; // means per RGB-D frame
+	double dense_render_ms = 0.0; // the dense pass of one cubemap, mean
+};
 
 struct EvaluationResult {
 	bool ok = false;
 	std::string error;
-	std::vector<VariantScores> variants; // VARIANT_COUNT, in EvaluationVariant order
+	std::vector<VariantScores> variants; // in EvaluationVariant order: VARIANT_COUNT, or up to LIGHT_GAIN without dense
+	SlamScores slam; // with the dense variants
 	double light_switch_s = -1.0; // RGB-D clock; < 0: none
 	bool linearised = false;
 	size_t fisheye_frames_used = 0;

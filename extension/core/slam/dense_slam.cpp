@@ -1,5 +1,6 @@
 #include "dense_slam.h"
 
+#include <algorithm>
 #include <chrono>
 #include <limits>
 
@@ -176,7 +177,7 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 		integrated_frames++;
 		out.timings.integrate_ms = ms_since(start);
 		start = Clock::now();
-		raycast(last_pose, &reference);
+		tsdf.raycast(intrinsics.level(std::max(0, opts.raycast_level)), last_pose, &reference);
 		out.timings.raycast_ms = ms_since(start);
 	}
 	last_state = out.tracking.state;

@@ -39,6 +39,10 @@ struct DenseSlamOptions {
 	IcpOptions icp; // tracking: pyramid, thresholds, colour term (units there)
 	bool integrate_poor = false; // also fuse frames whose tracking is Poor
 	bool constant_velocity = true; // predict each pose from the last two trusted ones (else: the last one)
+	// The tracking reference is raycast at 1 / 2^raycast_level of the camera's size: the raycast
+	// is the costliest stage per frame, and ICP's projective association reads the model at any
+	// size. 0: full size.
+	int raycast_level = 1;
 };
 
 // Wall-clock milliseconds of one process() call, by stage.

@@ -186,6 +186,7 @@ struct TsdfFrameView {
 	float min_depth_m = 0.3f;
 	float max_depth_m = 4.0f;
 	uint16_t max_weight = 64;
+	uint16_t max_color_weight = 8;
 };
 
 // A usable depth reading (NaN and 0 are none).
@@ -307,7 +308,7 @@ inline bool tsdf_update_voxel(const TsdfFrameView &p_frame, const glm::vec3 &p_w
 		r_voxel->r = uint8_t(std::lround((float(r_voxel->r) * cw + float(px[0])) / (cw + 1.0f)));
 		r_voxel->g = uint8_t(std::lround((float(r_voxel->g) * cw + float(px[1])) / (cw + 1.0f)));
 		r_voxel->b = uint8_t(std::lround((float(r_voxel->b) * cw + float(px[2])) / (cw + 1.0f)));
-		if (r_voxel->color_weight < p_frame.max_weight) {
+		if (r_voxel->color_weight < p_frame.max_color_weight) {
 			r_voxel->color_weight++;
 		}
 	}

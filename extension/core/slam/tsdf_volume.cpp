@@ -1,5 +1,7 @@
 #include "tsdf_volume.h"
 
+#include "depth_pyramid.h"
+
 #include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
@@ -341,14 +343,20 @@ IntegrationStats TsdfVolume::integrate(const cv::Mat &p_depth_m, const cv::Mat &
 	frame.min_depth_m = m_options.min_depth_m;
 	frame.max_depth_m = m_options.max_depth_m;
 	frame.max_weight = uint16_t(m_options.max_weight);
+	frame.max_color_weight = uint16_t(std::clamp(m_options.max_color_weight, 1, 65535));
 	// Slope factors of the frame's pixels (tsdf_depth_slope); a depth jump of half the band
-	// between neighbours is an edge.
+	// between neighbours is an edge. Taken on the depth smoothed as ICP smooths it: a sensor's
+	// noise (centimetres at 3 m) over one-pixel differences (6 mm there) would tilt the tangent
+	// planes at random and reject most far readings as grazing.
+	const cv::Mat smoothed = m_options.slope_smoothing_px > 0
+			? smooth_depth(clean_depth(p_depth_m, m_options.min_depth_m, m_options.max_depth_m), m_options.slope_smoothing_px, m_options.truncation_m)
+			: p_depth_m;
 	cv::Mat slope(p_depth_m.size(), CV_32FC1);
 	cv::parallel_for_(cv::Range(0, p_depth_m.rows), [&](const cv::Range &p_range) {
 		for (int v = p_range.start; v < p_range.end; v++) {
 			float *row = slope.ptr<float>(v);
 			for (int u = 0; u < p_depth_m.cols; u++) {
-				row[u] = tsdf_depth_slope(frame.depth, frame.depth_stride, p_camera, u, v, 0.5f * m_options.truncation_m);
+				row[u] = tsdf_depth_slope(smoothed.ptr<float>(0), smoothed.step1(), p_camera, u, v, 0.5f * m_options.truncation_m);
 			}
 		}
 	});

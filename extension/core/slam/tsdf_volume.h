@@ -28,7 +28,14 @@ struct TsdfOptions {
 	// 72 deg from the ray), and those at depth edges, only carve free space; others are weighted
 	// by the factor squared.
 	float min_slope = 0.3f;
+	// The tangent planes are taken on the depth smoothed over this radius (depth_pyramid.h
+	// smooth_depth, pixels; 0: the raw depth), as ICP's normals are.
+	int slope_smoothing_px = 1;
 	int max_weight = 64; // cap on the running-average weight (head-on observations), 1..2047
+	// Cap on the colour's running-average weight (frames): small, so that the colours follow a
+	// change of the room's lighting within a few frames (§4.6) while the geometry keeps averaging
+	// noise over many. 1..65535.
+	int max_color_weight = 8;
 	float min_depth_m = 0.3f; // depth readings (z, metres) outside [min, max] are ignored
 	float max_depth_m = 4.0f;
 	// Cap on allocated blocks (6 KiB each: 512 voxels of 12 bytes): 40000 blocks = 246 MB of

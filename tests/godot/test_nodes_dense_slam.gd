@@ -1,0 +1,143 @@
+extends RoomProbeTestCase
+## DenseSLAM through Godot on the synthetic living-room recording (1 s, rendered by the test
+## runner): it tracks the RGB-D camera (checked against the recording's ground truth), drives the
+## AR camera, meshes the model, places objects on the real table by Embree rays, feeds the
+## fisheye's poses to CoarseRoomModel and its model to RoomProbe's maps.
+
+const FRAMES := 8
+
+var _dir := ""
+var _scene: Node3D
+
+
+func _init() -> void:
+	_dir = ProjectSettings.globalize_path("res://").path_join("../build/test-data/living_room_1s").simplify_path()
+	timeout_s = 180.0
+
+
+func after_each() -> void:
+	if is_instance_valid(_scene):
+		_scene.free()
+	_scene = null
+
+
+func _need_recording() -> bool:
+	if not DirAccess.dir_exists_absolute(_dir):
+		skip("no synthetic recording at %s (the runner makes it with build/bin/roomprobe_synth)" % _dir)
+		return false
+	return true
+
+
+## rig, slam, camera, room and probe, wired; the rig stepped by hand, FRAMES RGB-D frames in.
+func _run_scene() -> Dictionary:
+	_scene = Node3D.new()
+	var rig = ClassDB.instantiate("RigCapture")
+	rig.name = "Rig"
+	rig.pacing = 1  # PACING_STEP
+	rig.autoplay = false
+	rig.recording_path = _dir
+	_scene.add_child(rig)
+	var camera := Camera3D.new()
+	camera.name = "Camera"
+	_scene.add_child(camera)
+	var room = ClassDB.instantiate("CoarseRoomModel")
+	room.name = "Room"
+	room.texel_size = 0.05
+	_scene.add_child(room)
+	var slam = ClassDB.instantiate("DenseSLAM")
+	slam.name = "SLAM"
+	_scene.add_child(slam)
+	var probe = ClassDB.instantiate("RoomProbe")
+	probe.name = "Probe"
+	probe.resolution = 32
+	_scene.add_child(probe)
+	add_to_tree(_scene)
+	assert_true(rig.open(), rig.get_last_error())
+	room.floorplan = rig.get_room_floorplan()
+	room.ceiling_height = rig.get_room_ceiling_height()
+	slam.capture = NodePath("../Rig")
+	slam.camera = NodePath("../Camera")
+	slam.coarse_model = NodePath("../Room")
+	room.rig_capture = NodePath("../Rig")
+	room.dense_slam = NodePath("../SLAM")
+	room.pose_source = 1  # POSE_SOURCE_DENSE_SLAM
+	probe.position = rig.get_probe_positions()[0]
+	probe.coarse_model = NodePath("../Room")
+	probe.dense_slam = NodePath("../SLAM")
+	var states := []
+	slam.tracking_state_changed.connect(func(state: int, _reason: String): states.append(state))
+	var worst := 0.0
+	var processed := 0
+	while processed < FRAMES and rig.step():
+		if slam.process_rig_frame():
+			processed += 1
+			var truth: Transform3D = rig.get_ground_truth_camera_transform()
+			worst = maxf(worst, camera.global_transform.origin.distance_to(truth.origin))
+			assert_eq(slam.get_tracking_state(), 1, "frame %d: %s" % [processed, slam.get_tracking_reason()])
+		room.integrate_rig_frame()
+	return {"rig": rig, "slam": slam, "room": room, "probe": probe, "camera": camera, "states": states, "worst": worst}
+
+
+func test_tracks_the_rgbd_camera_and_drives_the_ar_camera() -> void:
+	if not _need_recording():
+		return
+	var s := _run_scene()
+	var slam = s.slam
+	assert_eq(slam.get_processed_frame_count(), FRAMES)
+	assert_eq(s.states, [1], "one change: not started -> good")
+	# The synthetic depth has Kinect-like noise; the issue's target is 1 cm ATE.
+	assert_true(s.worst < 0.01, "the AR camera is within 1 cm of the true pose (worst %.4f m)" % s.worst)
+	var stats: Dictionary = slam.get_stats()
+	assert_eq(stats.integrated_frames, FRAMES)
+	assert_true(stats.allocated_blocks > 0 and stats.allocated_blocks <= stats.capacity_blocks, str(stats))
+	assert_eq(slam.get_warnings().size(), 0, str(slam.get_warnings()))
+
+
+func test_places_an_object_on_the_real_table() -> void:
+	if not _need_recording():
+		return
+	var s := _run_scene()
+	var slam = s.slam
+	slam.update_mesh()
+	var mesh: ArrayMesh = slam.get_mesh()
+	assert_eq(mesh.get_surface_count(), 1, "the dense model is meshed")
+	# Straight down over the middle of the table (top at 0.75 m, centre (2.5, 2.0)).
+	var hit: Dictionary = slam.place_on_ray(Vector3(2.5, 1.6, 2.0), Vector3(0, -1, 0))
+	assert_eq(hit.get("surface"), "dense", str(hit))
+	# Within two voxels: the mesh is the 1 cm TSDF's zero crossing of noisy depth.
+	assert_near(hit.get("position", Vector3()).y, 0.75, 0.02, "on the table top")
+	assert_true(hit.get("normal", Vector3()).dot(Vector3.UP) > 0.95, "facing up: %s" % hit.get("normal"))
+	# Straight up: the ceiling of the coarse room, 2.5 m.
+	var up: Dictionary = slam.place_on_ray(Vector3(2.5, 1.6, 2.0), Vector3(0, 1, 0))
+	assert_eq(up.get("surface"), "coarse", str(up))
+	assert_near(up.get("position", Vector3()).y, 2.5, 0.001)
+	# Through the AR camera's centre pixel: the same as a ray along its view direction.
+	var centre: Dictionary = slam.place_on_surface(Vector2(s.camera.get_viewport().get_visible_rect().size / 2.0))
+	assert_false(centre.is_empty(), "the camera looks at something")
+
+
+func test_feeds_the_coarse_model_and_the_probe() -> void:
+	if not _need_recording():
+		return
+	var s := _run_scene()
+	assert_true(s.room.get_integrated_frame_count() > 0, "fisheye frames were posed by SLAM")
+	assert_eq(s.room.get_warnings().size(), 0, str(s.room.get_warnings()))
+	assert_true(s.probe.update_now())
+	var stats: Dictionary = s.probe.get_last_update_stats()
+	# Below the probe is the table the RGB-D camera has been looking at.
+	assert_true(stats.dense_texels > 0, "the dense model is in the map: %s" % stats)
+	var below: Image = s.probe.get_face_image(3)
+	var c := below.get_pixel(16, 16)
+	assert_true(c.r > 0.1 and c.g > 0.1, "straight down is the table top, not black: %s" % c)
+
+
+func test_without_a_recording_it_says_why() -> void:
+	_scene = Node3D.new()
+	var slam = ClassDB.instantiate("DenseSLAM")
+	slam.capture = NodePath("../Nowhere")
+	_scene.add_child(slam)
+	add_to_tree(_scene)
+	assert_false(slam.process_rig_frame())
+	assert_true(" ".join(slam.get_warnings()).contains("does not lead to a RigCapture"), str(slam.get_warnings()))
+	assert_eq(slam.get_tracking_state(), 0)
+	assert_true(slam.get_stats().is_empty())
