@@ -2,26 +2,31 @@ extends Node3D
 ## RoomProbe's demo: a mirror sphere, a glass sphere and a gold torus on the real table.
 ##
 ## The synthetic living-room recording plays as if it were the live rig: its RGB image is the
-## background, the AR camera follows the RGB camera (the recording's ground-truth poses until
-## DenseSLAM tracks, issue #5), CoarseRoomModel textures the room from the fisheye, and each
-## sphere's RoomProbe synthesises the environment map at the sphere's centre every frame. The
-## mirror and the glass use RoomProbe's shaders (route a); the torus is a plain
-## StandardMaterial3D lit by the ReflectionProbe the mirror's probe drives (route b) and by the
-## sky it feeds (route c).
+## background; DenseSLAM tracks the RGB-D camera, drives the AR camera and fuses the dense model
+## of the table; CoarseRoomModel textures the room from the fisheye at the poses SLAM gives; each
+## sphere's RoomProbe synthesises the environment map at the sphere's centre every frame, the
+## dense table over the coarse room. Once the table is meshed, the objects are put down on it by
+## DenseSLAM.place_on_ray (Embree). The mirror and the glass use RoomProbe's shaders (route a);
+## the torus is a plain StandardMaterial3D lit by the ReflectionProbe the mirror's probe drives
+## (route b) and by the sky it feeds (route c).
 ##
 ## User arguments (after --):
 ##   --recording DIR   the recording to play (required)
 ##   --out DIR         where to write cubemap.exr and cubemap_net.png at the end (default: none)
 ##   --quit-at-end     quit when the recording has played (the Movie Maker run does)
+##   --true-poses      the recording's ground-truth poses instead of SLAM (evaluation mode)
 
 @onready var _rig = $Rig
 @onready var _room = $Room
 @onready var _camera: Camera3D = $Camera3D
 @onready var _video: TextureRect = $Background/Video
 @onready var _probe = $MirrorSphere/Probe
+@onready var _slam = $SLAM
 
 var _out_dir := ""
 var _quit_at_end := false
+var _true_poses := false
+var _placed := false
 
 
 func _ready() -> void:
@@ -34,6 +39,8 @@ func _ready() -> void:
 			_out_dir = args[i + 1]
 		elif args[i] == "--quit-at-end":
 			_quit_at_end = true
+		elif args[i] == "--true-poses":
+			_true_poses = true
 	if recording.is_empty():
 		printerr("demo: no recording given (-- --recording DIR); ./roomprobe demo makes one")
 		get_tree().quit(2)
@@ -48,6 +55,12 @@ func _ready() -> void:
 	_camera.fov = _rig.get_rgb_camera_fov()
 	_rig.finished.connect(_on_finished)
 	_room.texture_updated.connect(_on_texture_updated)
+	_slam.tracking_state_changed.connect(func(state: int, reason: String):
+		print("demo: tracking %s %s" % [["not started", "good", "poor", "lost"][state], reason]))
+	_slam.mesh_updated.connect(_place_objects)
+	if _true_poses:
+		_slam.camera = NodePath()
+		_room.pose_source = 0  # POSE_SOURCE_GROUND_TRUTH
 	print("demo: playing %s (%d RGB-D, %d fisheye frames)" % [recording, _rig.get_frame_count(0), _rig.get_frame_count(1)])
 	_rig.play()
 
@@ -56,14 +69,33 @@ func _process(_delta: float) -> void:
 	# RigCapture processes first (priority -30): this frame's image and pose are in.
 	if _video.texture != _rig.get_rgb_texture():
 		_video.texture = _rig.get_rgb_texture()
-	if _rig.has_ground_truth():
+	if _true_poses and _rig.has_ground_truth():
 		_camera.global_transform = _rig.get_ground_truth_camera_transform()
 
 
 func _on_texture_updated(fisheye_frame: int) -> void:
 	if fisheye_frame % 12 == 0:
 		var stats: Dictionary = _room.get_last_frame_stats()
-		print("demo: fisheye frame %d: %d texels updated, pipeline %.1f ms" % [fisheye_frame, stats.texels_updated, stats.frame_ms])
+		var slam: Dictionary = _slam.get_stats()
+		print("demo: fisheye frame %d: %d texels updated, coarse %.1f ms; SLAM frame %.1f ms (track %.1f, integrate %.1f, raycast %.1f), %d blocks" % [
+			fisheye_frame, stats.texels_updated, stats.frame_ms, slam.get("frame_ms", 0.0), slam.get("track_ms", 0.0),
+			slam.get("integrate_ms", 0.0), slam.get("raycast_ms", 0.0), slam.get("allocated_blocks", 0)])
+
+
+## Puts each object down on the real surface below it, once the table is in the dense mesh.
+func _place_objects() -> void:
+	if _placed:
+		return
+	for path in [^"MirrorSphere", ^"GlassSphere", ^"MetalTorus"]:
+		var object: MeshInstance3D = get_node(path)
+		var above := Vector3(object.position.x, 1.6, object.position.z)
+		var hit: Dictionary = _slam.place_on_ray(above, Vector3.DOWN)
+		if hit.get("surface", "") != "dense":
+			return  # the table is not meshed there yet: try again at the next mesh
+		var half_height: float = object.get_aabb().size.y * 0.5 * object.scale.y
+		object.position.y = hit.position.y + half_height
+		print("demo: %s put on the %s surface at y = %.3f m" % [path, hit.surface, hit.position.y])
+	_placed = true
 
 
 func _on_finished() -> void:
