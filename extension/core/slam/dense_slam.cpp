@@ -105,7 +105,16 @@ TrackingResult DenseSlam::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, 
 		lost.world_from_camera = p_initial_world_from_camera;
 		return lost;
 	}
-	return tracker.track(p_depth_m, p_rgb, intrinsics, reference, p_initial_world_from_camera);
+	cv::Mat depth = p_depth_m, rgb = p_rgb;
+	PinholeIntrinsics camera = intrinsics;
+	for (int level = 0; level < opts.tracking_level; level++) {
+		depth = downsample_depth(clean_depth(depth, float(opts.icp.min_depth_m), float(opts.icp.max_depth_m)), float(opts.icp.pyramid_band_m));
+		if (!rgb.empty()) {
+			cv::resize(rgb, rgb, depth.size(), 0.0, 0.0, cv::INTER_AREA);
+		}
+		camera = camera.level(1);
+	}
+	return tracker.track(depth, rgb, camera, reference, p_initial_world_from_camera);
 }
 
 IntegrationStats DenseSlam::integrate(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_world_from_camera) {
@@ -177,7 +186,7 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 		integrated_frames++;
 		out.timings.integrate_ms = ms_since(start);
 		start = Clock::now();
-		tsdf.raycast(intrinsics.level(std::max(0, opts.raycast_level)), last_pose, &reference);
+		tsdf.raycast(intrinsics.level(std::clamp(opts.raycast_level, 0, 4)), last_pose, &reference);
 		out.timings.raycast_ms = ms_since(start);
 	}
 	last_state = out.tracking.state;

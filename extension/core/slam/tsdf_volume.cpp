@@ -68,6 +68,8 @@ void append_segment_blocks(const glm::vec3 &p_a, const glm::vec3 &p_b, std::vect
 	}
 }
 
+constexpr int TSDF_MAX_BLOCKS = 1 << 22;
+
 uint32_t hash_size_for(int p_max_blocks) {
 	uint32_t size = 1024;
 	while (double(size) * MAX_HASH_LOAD < 1.5 * double(p_max_blocks)) {
@@ -80,7 +82,9 @@ uint32_t hash_size_for(int p_max_blocks) {
 
 TsdfVolume::TsdfVolume(const TsdfOptions &p_options) :
 		m_options(p_options) {
-	m_options.max_blocks = std::max(1, m_options.max_blocks);
+	// 1 << 22 blocks is 24 GiB of voxels: beyond any machine this runs on, and the hash table's
+	// size (a power of two of 32 bits) would overflow past it.
+	m_options.max_blocks = std::clamp(m_options.max_blocks, 1, TSDF_MAX_BLOCKS);
 	m_options.max_weight = std::clamp(m_options.max_weight, 1, 65535 / TSDF_WEIGHT_UNIT);
 	m_hash.assign(hash_size_for(m_options.max_blocks), TsdfHashEntry());
 	m_hash_mask = uint32_t(m_hash.size()) - 1;
@@ -208,9 +212,11 @@ void TsdfVolume::collect_band_blocks(const cv::Mat &p_depth_m, const PinholeIntr
 	}
 }
 
-void TsdfVolume::mark_blocks_in_view(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera) {
+void TsdfVolume::mark_blocks_in_view(const cv::Mat &p_depth_m, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera) {
 	// Allocated blocks that project into the image (with a margin of the block's radius) are
-	// updated too: free space seen through them carves them towards +1.
+	// updated too: free space seen through them carves them towards +1. Not those wholly behind
+	// the reading at their centre's pixel (beyond the band): no voxel of theirs would change, and
+	// in a room most blocks in the frustum are hidden behind the nearer surfaces.
 	const Pose camera_from_world = inverse(p_world_from_camera);
 	const glm::mat3 rotation = rotation_matrix(camera_from_world);
 	const glm::vec3 translation(camera_from_world.translation);
@@ -230,6 +236,13 @@ void TsdfVolume::mark_blocks_in_view(const PinholeIntrinsics &p_camera, const Po
 		const float margin_x = radius * p_camera.fx / std::max(pc.z, m_options.min_depth_m);
 		const float margin_y = radius * p_camera.fy / std::max(pc.z, m_options.min_depth_m);
 		if (pixel.x >= -margin_x && pixel.y >= -margin_y && pixel.x <= float(p_camera.width) + margin_x && pixel.y <= float(p_camera.height) + margin_y) {
+			const int u = int(std::lround(pixel.x)), v = int(std::lround(pixel.y));
+			if (u >= 0 && v >= 0 && u < p_camera.width && v < p_camera.height) {
+				const float reading = p_depth_m.at<float>(v, u);
+				if (pc.z - radius > reading + m_options.truncation_m) { // false for NaN: kept
+					continue;
+				}
+			}
 			m_slot_frame[s] = m_frame;
 		}
 	}
@@ -291,7 +304,7 @@ IntegrationStats TsdfVolume::integrate(const cv::Mat &p_depth_m, const cv::Mat &
 		}
 	}
 	// 2. Allocated blocks in view: updated, and spared by eviction.
-	mark_blocks_in_view(p_camera, p_world_from_camera);
+	mark_blocks_in_view(p_depth_m, p_camera, p_world_from_camera);
 
 	// 3. Room for the new blocks: evict outside the view, else drop the farthest new ones.
 	const int over = m_allocated + int(wanted.size()) - m_options.max_blocks;

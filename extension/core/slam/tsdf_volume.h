@@ -40,7 +40,7 @@ struct TsdfOptions {
 	float max_depth_m = 4.0f;
 	// Cap on allocated blocks (6 KiB each: 512 voxels of 12 bytes): 40000 blocks = 246 MB of
 	// voxels plus a 2 MB hash table. See TsdfVolume for what happens at the cap.
-	int max_blocks = 40000;
+	int max_blocks = 40000; // clamped to [1, 4194304]
 };
 
 // What one integrate() did.
@@ -73,8 +73,8 @@ struct RaycastStats {
 // The voxel-hashed colour TSDF.
 //
 // Memory policy: at most max_blocks blocks are allocated. When a frame needs new blocks beyond
-// the cap, blocks outside the frame's view (neither along its readings nor projecting into it)
-// are evicted, farthest first from the nearest keep-point (set_keep_points, e.g. the light
+// the cap, blocks outside the frame's view (neither along its readings nor projecting into it in
+// front of the reading there: hidden blocks count as out of view) are evicted, farthest first from the nearest keep-point (set_keep_points, e.g. the light
 // probes; the camera position when none is set), and their voxels are lost. Blocks in view are
 // never evicted; when the view alone needs more than the cap, the new blocks farthest from the
 // keep-points are not allocated (dropped_blocks) and those readings go unfused.
@@ -124,7 +124,7 @@ public:
 
 private:
 	void collect_band_blocks(const cv::Mat &p_depth_m, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, std::vector<glm::ivec3> *r_blocks, int *r_valid_pixels) const;
-	void mark_blocks_in_view(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera);
+	void mark_blocks_in_view(const cv::Mat &p_depth_m, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera);
 	float keep_distance2(const glm::ivec3 &p_block, const Pose &p_world_from_camera) const;
 	int evict_for(int p_needed, const Pose &p_world_from_camera);
 	int32_t allocate_slot(const glm::ivec3 &p_block);

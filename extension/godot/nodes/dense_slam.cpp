@@ -155,8 +155,8 @@ bool DenseSLAM::ensure_slam(const RigCapture &p_rig) {
 	if (slam && slam_reader == reader) {
 		return true;
 	}
-	if (!(voxel_size > 0.0) || !(truncation_distance > voxel_size) || max_blocks < 1) {
-		problem = "voxel_size must be > 0, truncation_distance larger than voxel_size, max_blocks >= 1.";
+	if (!(voxel_size > 0.0) || !(truncation_distance > voxel_size) || max_blocks < 1 || max_blocks > (1 << 22)) {
+		problem = "voxel_size must be > 0, truncation_distance larger than voxel_size, max_blocks in 1..4194304.";
 		return false;
 	}
 	DenseSlamOptions options;
@@ -381,7 +381,7 @@ void DenseSLAM::_bind_methods() {
 	ADD_GROUP("Volume", "");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "voxel_size", PROPERTY_HINT_RANGE, "0.002,0.1,0.001,suffix:m"), "set_voxel_size", "get_voxel_size");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "truncation_distance", PROPERTY_HINT_RANGE, "0.005,0.5,0.001,suffix:m"), "set_truncation_distance", "get_truncation_distance");
-	ADD_PROPERTY(PropertyInfo(Variant::INT, "max_blocks", PROPERTY_HINT_RANGE, "1,1000000,1,or_greater"), "set_max_blocks", "get_max_blocks");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "max_blocks", PROPERTY_HINT_RANGE, "1,4194304,1"), "set_max_blocks", "get_max_blocks");
 	ADD_GROUP("Mesh", "mesh_");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "mesh_layers", PROPERTY_HINT_LAYERS_3D_RENDER), "set_mesh_layers", "get_mesh_layers");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "mesh_update_interval", PROPERTY_HINT_RANGE, "1,300,1,suffix:frames"), "set_mesh_update_interval", "get_mesh_update_interval");
