@@ -19,6 +19,8 @@
 //
 // usage: roomprobe_bench slam (--recording DIR | --tum DIR) [--frames N] [--threads N]
 
+#include "../common/cli.h"
+
 #include <camera/pinhole_camera.h>
 #include <envmap/cubemap.h>
 #include <envmap/dense_render.h>
@@ -574,34 +576,28 @@ int main(int argc, char **argv) {
 		return usage(("unknown benchmark '" + verb + "' (only 'slam')").c_str());
 	}
 	Arguments args;
-	for (int i = 2; i < argc; i++) {
-		const std::string arg = argv[i];
-		auto value = [&](std::string *r_value) {
-			if (i + 1 >= argc) {
-				return false;
-			}
-			*r_value = argv[++i];
-			return true;
-		};
-		std::string v;
+	cli::Arguments cursor(argc, argv, 2);
+	std::string arg;
+	while (cursor.next(&arg)) {
+		long n = 0;
 		if (arg == "--recording") {
-			if (!value(&args.recording)) {
+			if (!cursor.value(&args.recording)) {
 				return usage("--recording needs a folder");
 			}
 		} else if (arg == "--tum") {
-			if (!value(&args.tum)) {
+			if (!cursor.value(&args.tum)) {
 				return usage("--tum needs a folder");
 			}
 		} else if (arg == "--frames") {
-			if (!value(&v) || std::atol(v.c_str()) <= 0) {
+			if (!cursor.positive_integer(&n)) {
 				return usage("--frames needs a positive integer");
 			}
-			args.frames = std::atol(v.c_str());
+			args.frames = n;
 		} else if (arg == "--threads") {
-			if (!value(&v) || std::atoi(v.c_str()) <= 0) {
+			if (!cursor.positive_integer(&n)) {
 				return usage("--threads needs a positive integer");
 			}
-			args.threads = std::atoi(v.c_str());
+			args.threads = int(n);
 		} else if (arg == "--help" || arg == "-h") {
 			usage(nullptr);
 			return 0;

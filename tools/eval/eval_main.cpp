@@ -8,6 +8,8 @@
 
 #include <eval/evaluate.h>
 
+#include "../common/cli.h"
+
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -23,39 +25,34 @@ int main(int argc, char **argv) {
 				p_error ? "roomprobe_eval: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
 		return 2;
 	};
-	for (int i = 1; i < argc; i++) {
-		const std::string arg = argv[i];
-		auto value = [&](std::string *r_value) {
-			if (i + 1 >= argc) {
-				return false;
-			}
-			*r_value = argv[++i];
-			return true;
-		};
-		std::string v;
+	roomprobe::cli::Arguments cursor(argc, argv, 1);
+	std::string arg;
+	while (cursor.next(&arg)) {
+		long n = 0;
+		double x = 0.0;
 		if (arg == "--recording") {
-			if (!value(&options.recording)) {
+			if (!cursor.value(&options.recording)) {
 				return usage("--recording needs a folder");
 			}
 		} else if (arg == "--out") {
-			if (!value(&options.out)) {
+			if (!cursor.value(&options.out)) {
 				return usage("--out needs a folder");
 			}
 		} else if (arg == "--cubemap-size") {
-			if (!value(&v) || std::atoi(v.c_str()) <= 0) {
+			if (!cursor.positive_integer(&n)) {
 				return usage("--cubemap-size needs a positive integer");
 			}
-			options.cubemap_size = std::atoi(v.c_str());
+			options.cubemap_size = int(n);
 		} else if (arg == "--texel-size") {
-			if (!value(&v) || !(std::atof(v.c_str()) > 0.0)) {
+			if (!cursor.positive_number(&x)) {
 				return usage("--texel-size needs a positive number of metres");
 			}
-			options.texel_size_m = std::atof(v.c_str());
+			options.texel_size_m = x;
 		} else if (arg == "--max-cubemaps") {
-			if (!value(&v) || std::atoi(v.c_str()) <= 0) {
+			if (!cursor.positive_integer(&n)) {
 				return usage("--max-cubemaps needs a positive integer");
 			}
-			options.max_cubemaps = size_t(std::atoi(v.c_str()));
+			options.max_cubemaps = size_t(n);
 		} else if (arg == "--no-dense") {
 			options.dense = false;
 		} else if (arg == "--per-frame") {

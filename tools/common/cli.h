@@ -1,0 +1,66 @@
+#pragma once
+// The command-line tools' argument walking (tools/<name>/*_main.cpp): one argument at a time,
+// with the value that follows an option checked where it is read.
+
+#include <cstdlib>
+#include <string>
+
+namespace roomprobe::cli {
+
+class Arguments {
+public:
+	Arguments(int p_argc, char **p_argv, int p_first) :
+			argc(p_argc), argv(p_argv), index(p_first - 1) {}
+
+	// The next argument into *r_arg; false after the last.
+	bool next(std::string *r_arg) {
+		if (++index >= argc) {
+			return false;
+		}
+		*r_arg = argv[index];
+		return true;
+	}
+	// The value after the current option; false when there is none.
+	bool value(std::string *r_value) {
+		if (index + 1 >= argc) {
+			return false;
+		}
+		*r_value = argv[++index];
+		return true;
+	}
+	// The value as an integer > 0 (false otherwise).
+	bool positive_integer(long *r_value) {
+		std::string v;
+		if (!value(&v)) {
+			return false;
+		}
+		char *end = nullptr;
+		const long n = std::strtol(v.c_str(), &end, 10);
+		if (end == v.c_str() || *end != '\0' || n <= 0) {
+			return false;
+		}
+		*r_value = n;
+		return true;
+	}
+	// The value as a number > 0 (false otherwise).
+	bool positive_number(double *r_value) {
+		std::string v;
+		if (!value(&v)) {
+			return false;
+		}
+		char *end = nullptr;
+		const double x = std::strtod(v.c_str(), &end);
+		if (end == v.c_str() || *end != '\0' || !(x > 0.0)) {
+			return false;
+		}
+		*r_value = x;
+		return true;
+	}
+
+private:
+	int argc;
+	char **argv;
+	int index;
+};
+
+} // namespace roomprobe::cli
