@@ -9,7 +9,7 @@ var _scene: Node3D
 
 
 func _init() -> void:
-	_dir = ProjectSettings.globalize_path("res://").path_join("../build/test-data/living_room_1s").simplify_path()
+	_dir = fixture_recording()
 	timeout_s = 120.0
 
 
@@ -17,13 +17,6 @@ func after_each() -> void:
 	if is_instance_valid(_scene):
 		_scene.free()
 	_scene = null
-
-
-func _need_recording() -> bool:
-	if not DirAccess.dir_exists_absolute(_dir):
-		skip("no synthetic recording at %s (the runner makes it with build/bin/roomprobe_synth)" % _dir)
-		return false
-	return true
 
 
 ## rig, room and probe, wired; the room takes the recording's floorplan.
@@ -115,7 +108,7 @@ static func _correlation(p_faces: Array, p_truth: Array[Image], p_face_list: Arr
 
 
 func test_fisheye_frames_texture_the_room_and_the_ceiling_matches_the_truth() -> void:
-	if not _need_recording():
+	if not need_fixture_recording():
 		return
 	var parts := _make_scene()
 	var rig = parts[0]
@@ -156,7 +149,7 @@ func test_fisheye_frames_texture_the_room_and_the_ceiling_matches_the_truth() ->
 
 
 func test_without_ground_truth_pose_source_says_why() -> void:
-	if not _need_recording():
+	if not need_fixture_recording():
 		return
 	var parts := _make_scene()
 	var room = parts[1]
@@ -166,7 +159,7 @@ func test_without_ground_truth_pose_source_says_why() -> void:
 
 
 func test_a_new_floorplan_starts_the_texture_again() -> void:
-	if not _need_recording():
+	if not need_fixture_recording():
 		return
 	var parts := _make_scene()
 	var rig = parts[0]

@@ -11,7 +11,7 @@ var _scene: Node3D
 
 
 func _init() -> void:
-	_dir = ProjectSettings.globalize_path("res://").path_join("../build/test-data/living_room_1s").simplify_path()
+	_dir = fixture_recording()
 	timeout_s = 180.0
 
 
@@ -19,13 +19,6 @@ func after_each() -> void:
 	if is_instance_valid(_scene):
 		_scene.free()
 	_scene = null
-
-
-func _need_recording() -> bool:
-	if not DirAccess.dir_exists_absolute(_dir):
-		skip("no synthetic recording at %s (the runner makes it with build/bin/roomprobe_synth)" % _dir)
-		return false
-	return true
 
 
 ## rig, slam, camera, room and probe, wired; the rig stepped by hand, FRAMES RGB-D frames in.
@@ -79,7 +72,7 @@ func _run_scene() -> Dictionary:
 
 
 func test_tracks_the_rgbd_camera_and_drives_the_ar_camera() -> void:
-	if not _need_recording():
+	if not need_fixture_recording():
 		return
 	var s := _run_scene()
 	var slam = s.slam
@@ -94,7 +87,7 @@ func test_tracks_the_rgbd_camera_and_drives_the_ar_camera() -> void:
 
 
 func test_places_an_object_on_the_real_table() -> void:
-	if not _need_recording():
+	if not need_fixture_recording():
 		return
 	var s := _run_scene()
 	var slam = s.slam
@@ -117,7 +110,7 @@ func test_places_an_object_on_the_real_table() -> void:
 
 
 func test_feeds_the_coarse_model_and_the_probe() -> void:
-	if not _need_recording():
+	if not need_fixture_recording():
 		return
 	var s := _run_scene()
 	assert_true(s.room.get_integrated_frame_count() > 0, "fisheye frames were posed by SLAM")

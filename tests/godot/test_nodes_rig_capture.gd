@@ -8,7 +8,7 @@ var _dir := ""
 
 
 func before_each() -> void:
-	_dir = ProjectSettings.globalize_path("res://").path_join("../build/test-data/living_room_1s").simplify_path()
+	_dir = fixture_recording()
 	_rig = ClassDB.instantiate("RigCapture")
 	_rig.autoplay = false
 	_rig.pacing = 1  # PACING_STEP
@@ -33,15 +33,8 @@ func _index(file_name: String) -> Array:
 	return rows
 
 
-func _need_recording() -> bool:
-	if not FileAccess.file_exists(_dir.path_join("rgb.txt")):
-		skip("no synthetic recording at %s (the runner makes it with build/bin/roomprobe_synth)" % _dir)
-		return false
-	return true
-
-
 func test_plays_every_frame_in_step_mode() -> void:
-	if not _need_recording():
+	if not need_fixture_recording():
 		return
 	var rgb := _index("rgb.txt")
 	var fisheye := _index("fisheye.txt")
@@ -75,7 +68,7 @@ func _step_to(stream: int, index: int) -> void:
 
 
 func test_pixels_of_a_known_frame() -> void:
-	if not _need_recording():
+	if not need_fixture_recording():
 		return
 	_rig.recording_path = _dir
 	assert_true(_rig.open())

@@ -133,6 +133,20 @@ func known_engine_leak(count: int, rid_type: String, reason: String) -> void:
 	print("[KNOWN-ENGINE-LEAK] %d %s: %s" % [count, rid_type, reason])
 
 
+## The synthetic recording the runner renders before the Godot suites (1 s of living_room,
+## build/bin/roomprobe_synth), as an absolute path.
+func fixture_recording() -> String:
+	return ProjectSettings.globalize_path("res://").path_join("../build/test-data/living_room_1s").simplify_path()
+
+
+## False, and the test skipped, when the fixture recording is not there.
+func need_fixture_recording() -> bool:
+	if not FileAccess.file_exists(fixture_recording().path_join("rgb.txt")):
+		skip("no synthetic recording at %s (the runner makes it with build/bin/roomprobe_synth)" % fixture_recording())
+		return false
+	return true
+
+
 ## Adds node under tree.root and returns it. Free it in after_each() (or in the test).
 func add_to_tree(node: Node) -> Node:
 	tree.root.add_child(node)
