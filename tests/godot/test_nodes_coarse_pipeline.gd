@@ -22,11 +22,7 @@ func after_each() -> void:
 ## rig, room and probe, wired; the room takes the recording's floorplan.
 func _make_scene() -> Array:
 	_scene = Node3D.new()
-	var rig = ClassDB.instantiate("RigCapture")
-	rig.name = "Rig"
-	rig.pacing = 1  # PACING_STEP
-	rig.autoplay = false
-	rig.recording_path = _dir
+	var rig = fixture_rig()
 	_scene.add_child(rig)
 	var room = ClassDB.instantiate("CoarseRoomModel")
 	room.name = "Room"

@@ -6,12 +6,10 @@ extends RoomProbeTestCase
 
 const FRAMES := 8
 
-var _dir := ""
 var _scene: Node3D
 
 
 func _init() -> void:
-	_dir = fixture_recording()
 	timeout_s = 180.0
 
 
@@ -24,11 +22,7 @@ func after_each() -> void:
 ## rig, slam, camera, room and probe, wired; the rig stepped by hand, FRAMES RGB-D frames in.
 func _run_scene() -> Dictionary:
 	_scene = Node3D.new()
-	var rig = ClassDB.instantiate("RigCapture")
-	rig.name = "Rig"
-	rig.pacing = 1  # PACING_STEP
-	rig.autoplay = false
-	rig.recording_path = _dir
+	var rig = fixture_rig()
 	_scene.add_child(rig)
 	var camera := Camera3D.new()
 	camera.name = "Camera"

@@ -350,11 +350,7 @@ int bench_recording(const Arguments &p_args) {
 			Cubemap map = coarse.render_cubemap(probe, true, LIVE_CUBEMAP_SIZE);
 			const double coarse_ms = ms_since(start);
 			start = Clock::now();
-			const LightingChange change = dense_lighting.update(slam.integrated_count(), coarse.cumulative_lighting());
-			DenseRenderOptions dense_options;
-			dense_options.gain = change.gain;
-			dense_options.offset = change.offset;
-			render_dense_over(slam.volume(), probe, dense_options, &map);
+			dense_lighting.render_over(slam.volume(), slam.integrated_count(), coarse.cumulative_lighting(), probe, DenseRenderOptions(), &map);
 			const double dense_ms = ms_since(start);
 			cubemap_coarse.add(coarse_ms);
 			cubemap_dense.add(dense_ms);
@@ -451,10 +447,7 @@ int bench_recording(const Arguments &p_args) {
 			Series ms;
 			int covered = 0;
 			for (int repeat = 0; repeat < OPTION_REPEATS; repeat++) {
-				Cubemap map = base;
-				for (cv::Mat &face : map.faces) {
-					face = face.clone(); // Cubemap copies share pixels
-				}
+				Cubemap map = clone_cubemap(base);
 				const Clock::time_point start = Clock::now();
 				const DenseRenderStats stats = render_dense_over(slam.volume(), probe, options, &map);
 				ms.add(ms_since(start));

@@ -13,6 +13,15 @@ Cubemap make_cubemap(int p_size, const cv::Vec3f &p_fill) {
 	return cubemap;
 }
 
+Cubemap clone_cubemap(const Cubemap &p_cubemap) {
+	Cubemap out;
+	out.size = p_cubemap.size;
+	for (size_t f = 0; f < 6; f++) {
+		out.faces[f] = p_cubemap.faces[f].clone();
+	}
+	return out;
+}
+
 bool is_valid_cubemap(const Cubemap &p_cubemap) {
 	if (p_cubemap.size <= 0) {
 		return false;

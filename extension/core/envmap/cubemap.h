@@ -18,6 +18,9 @@ struct Cubemap {
 // A p_size x p_size cubemap filled with p_fill.
 Cubemap make_cubemap(int p_size, const cv::Vec3f &p_fill = cv::Vec3f(0.0f, 0.0f, 0.0f));
 
+// A copy with pixels of its own (a Cubemap's copy shares them, as cv::Mat does).
+Cubemap clone_cubemap(const Cubemap &p_cubemap);
+
 // Whether p_cubemap has six p_cubemap.size-square CV_32FC3 faces (size > 0).
 bool is_valid_cubemap(const Cubemap &p_cubemap);
 

@@ -30,6 +30,14 @@ LightingChange DenseLighting::update(size_t p_fused_frames, const LightingChange
 	return lighting_since(p_cumulative, at_refresh);
 }
 
+DenseRenderStats DenseLighting::render_over(const TsdfVolume &p_volume, size_t p_fused_frames, const LightingChange &p_cumulative,
+		const glm::dvec3 &p_position, DenseRenderOptions p_options, Cubemap *io_cubemap) {
+	const LightingChange change = update(p_fused_frames, p_cumulative);
+	p_options.gain = change.gain;
+	p_options.offset = change.offset;
+	return render_dense_over(p_volume, p_position, p_options, io_cubemap);
+}
+
 DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 &p_position, const DenseRenderOptions &p_options, Cubemap *io_cubemap) {
 	const auto start = std::chrono::steady_clock::now();
 	DenseRenderStats stats;

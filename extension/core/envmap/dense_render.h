@@ -51,6 +51,9 @@ public:
 	// p_fused_frames: the dense model's fused frame count; p_cumulative: the coarse model's
 	// cumulative change now (CoarsePipeline::cumulative_lighting). Returns the change to apply.
 	LightingChange update(size_t p_fused_frames, const LightingChange &p_cumulative);
+	// update(), then render_dense_over with that change as p_options' gain and offset.
+	DenseRenderStats render_over(const TsdfVolume &p_volume, size_t p_fused_frames, const LightingChange &p_cumulative,
+			const glm::dvec3 &p_position, DenseRenderOptions p_options, Cubemap *io_cubemap);
 
 private:
 	size_t fused_seen = 0;

@@ -83,15 +83,6 @@ void add_timings(CoarsePipelineTimings *r_sum, const CoarsePipelineTimings &p_to
 	r_sum->frame_ms = p_total.frame_ms * p_scale;
 }
 
-Cubemap deep_copy(const Cubemap &p_map) {
-	Cubemap out;
-	out.size = p_map.size;
-	for (size_t f = 0; f < 6; f++) {
-		out.faces[f] = p_map.faces[f].clone();
-	}
-	return out;
-}
-
 // The two dense variants of evaluate.h: the dense model fused at the true poses, drawn over the
 // gain pipeline's map; and the live system, tracked, with its own coarse pipeline fed the fisheye
 // poses of the tracked trajectory.
@@ -154,7 +145,7 @@ public:
 	}
 
 	Cubemap over_true_poses(const Cubemap &p_coarse_map, const glm::dvec3 &p_probe, const LightingChange &p_cumulative) {
-		Cubemap map = deep_copy(p_coarse_map);
+		Cubemap map = clone_cubemap(p_coarse_map);
 		paint(with_true_poses, light_true, p_cumulative, p_probe, &map);
 		return map;
 	}
@@ -178,10 +169,7 @@ private:
 	void paint(const DenseSlam &p_slam, DenseLighting &p_lighting, const LightingChange &p_cumulative, const glm::dvec3 &p_probe, Cubemap *io_map) {
 		DenseRenderOptions options;
 		options.lut = &lut;
-		const LightingChange change = p_lighting.update(p_slam.integrated_count(), p_cumulative);
-		options.gain = change.gain;
-		options.offset = change.offset;
-		render_ms += render_dense_over(p_slam.volume(), p_probe, options, io_map).milliseconds;
+		render_ms += p_lighting.render_over(p_slam.volume(), p_slam.integrated_count(), p_cumulative, p_probe, options, io_map).milliseconds;
 		renders++;
 	}
 

@@ -191,11 +191,8 @@ void RoomProbe::render_dense(const CoarseRoomModel &p_model, roomprobe::Cubemap 
 	if (slam == nullptr) {
 		return;
 	}
-	const LightingChange change = dense_lighting.update(slam->integrated_count(), p_model.get_cumulative_lighting());
-	DenseRenderOptions options;
-	options.gain = change.gain;
-	options.offset = change.offset;
-	dense_stats = render_dense_over(slam->volume(), to_glm(get_global_position()), options, io_map);
+	dense_stats = dense_lighting.render_over(slam->volume(), slam->integrated_count(), p_model.get_cumulative_lighting(), to_glm(get_global_position()),
+			DenseRenderOptions(), io_map);
 }
 
 void RoomProbe::drive_reflection_probe(const CoarseRoomModel &p_model) {

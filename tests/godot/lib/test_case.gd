@@ -147,6 +147,17 @@ func need_fixture_recording() -> bool:
 	return true
 
 
+## A RigCapture named "Rig" on the fixture recording, stepped by hand (PACING_STEP, no
+## autoplay), not yet in the tree.
+func fixture_rig() -> Node:
+	var rig = ClassDB.instantiate("RigCapture")
+	rig.name = "Rig"
+	rig.pacing = 1  # PACING_STEP
+	rig.autoplay = false
+	rig.recording_path = fixture_recording()
+	return rig
+
+
 ## Adds node under tree.root and returns it. Free it in after_each() (or in the test).
 func add_to_tree(node: Node) -> Node:
 	tree.root.add_child(node)
