@@ -96,12 +96,17 @@ void CoarseRoomModel::set_texel_size(double p_metres) {
 
 double CoarseRoomModel::get_texel_size() const { return texel_size; }
 
-void CoarseRoomModel::rebuild() {
+Floorplan CoarseRoomModel::core_floorplan() const {
 	Floorplan plan;
 	plan.ceiling_height_m = ceiling_height;
 	for (int64_t i = 0; i < floorplan.size(); i++) {
 		plan.points.push_back({ floorplan[i].x, floorplan[i].y });
 	}
+	return plan;
+}
+
+void CoarseRoomModel::rebuild() {
+	const Floorplan plan = core_floorplan();
 	RoomMeshOptions options;
 	options.texel_size_m = texel_size;
 	check = check_floorplan(plan);
@@ -285,18 +290,13 @@ bool CoarseRoomModel::ensure_pipeline(const RigCapture &p_rig) {
 	options.lighting = lighting_compensation != LIGHTING_OFF;
 	options.lighting_model = lighting_compensation == LIGHTING_ADDITIVE ? LightingModel::ADDITIVE_PAPER : LightingModel::GAIN_ROBUST;
 	pipeline = std::make_unique<CoarsePipeline>(options);
-	Floorplan plan;
-	plan.ceiling_height_m = ceiling_height;
-	for (int64_t i = 0; i < floorplan.size(); i++) {
-		plan.points.push_back({ floorplan[i].x, floorplan[i].y });
-	}
-	const std::string error = pipeline->configure(reader->get_rig(), plan);
+	// The same inputs as rebuild(): the pipeline's atlas is the one the mesh's UVs address.
+	const std::string error = pipeline->configure(reader->get_rig(), core_floorplan());
 	if (!error.empty()) {
 		pipeline.reset();
 		pipeline_problem = error;
 		return false;
 	}
-	// The same inputs as rebuild(): the pipeline's atlas is the one the mesh's UVs address.
 	ERR_FAIL_COND_V(pipeline->mesh().atlas_width != result.mesh.atlas_width || pipeline->mesh().atlas_height != result.mesh.atlas_height, false);
 	pipeline_reader = reader;
 	last_fisheye_index = -1;

@@ -104,6 +104,7 @@ public:
 	void _process(double p_delta);
 
 private:
+	Floorplan core_floorplan() const; // the floorplan and ceiling height as the core takes them
 	void rebuild();
 	void apply_material();
 	RigCapture *find_rig_capture() const;
