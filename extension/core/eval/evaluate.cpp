@@ -30,11 +30,20 @@ float srgb_to_linear(float p_v) {
 	return p_v <= 0.04045f ? p_v / 12.92f : std::pow((p_v + 0.055f) / 1.055f, 2.4f);
 }
 
+// An 8-bit camera's value -> radiance: sRGB decoded, over the camera's exposure.
+std::array<float, 256> linearising_lut(double p_exposure) {
+	std::array<float, 256> lut{};
+	for (int i = 0; i < 256; i++) {
+		lut[size_t(i)] = float(srgb_to_linear(float(i) / 255.0f) / p_exposure);
+	}
+	return lut;
+}
+
 struct Photometry {
 	bool active = false;
 	double exposure = 1.0;
 	cv::Mat inverse_vignetting; // CV_32FC1, fisheye-sized
-	float lut[256] = {};
+	std::array<float, 256> lut{};
 };
 
 // 8-bit sRGB frame -> CV_32FC3 linear radiance (see evaluate.h).
@@ -53,7 +62,7 @@ cv::Mat linearise(const Photometry &p_photometry, const cv::Mat &p_image) {
 		cv::Vec3f *o = out.ptr<cv::Vec3f>(y);
 		for (int x = 0; x < rgb.cols; x++) {
 			for (int c = 0; c < 3; c++) {
-				o[x][c] = p_photometry.lut[in[x][c]] * iv[x];
+				o[x][c] = p_photometry.lut[size_t(in[x][c])] * iv[x];
 			}
 		}
 	}
@@ -101,8 +110,9 @@ public:
 		}
 		with_true_poses.volume().set_keep_points(room.probes);
 		tracked.volume().set_keep_points(room.probes);
-		for (int i = 0; i < 256; i++) {
-			lut[size_t(i)] = p_linearise ? float(srgb_to_linear(float(i) / 255.0f) / p_rgb_exposure) : float(i) / 255.0f;
+		use_lut = p_linearise;
+		if (p_linearise) {
+			lut = linearising_lut(p_rgb_exposure);
 		}
 		return error;
 	}
@@ -168,7 +178,7 @@ public:
 private:
 	void paint(const DenseSlam &p_slam, DenseLighting &p_lighting, const LightingChange &p_cumulative, const glm::dvec3 &p_probe, Cubemap *io_map) {
 		DenseRenderOptions options;
-		options.lut = &lut;
+		options.lut = use_lut ? &lut : nullptr; // null: value / 255
 		render_ms += p_lighting.render_over(p_slam.volume(), p_slam.integrated_count(), p_cumulative, p_probe, options, io_map).milliseconds;
 		renders++;
 	}
@@ -178,6 +188,7 @@ private:
 	Trajectory trajectory; // tracked, RGB-D clock
 	DenseLighting light_true, light_tracked;
 	std::array<float, 256> lut{};
+	bool use_lut = false;
 	double ate_sum_sq = 0.0;
 	size_t ate_count = 0;
 	double render_ms = 0.0;
@@ -237,9 +248,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 				if (!info["fisheye_vignetting_edge_gain"].empty()) {
 					edge_gain = double(info["fisheye_vignetting_edge_gain"]);
 				}
-				for (int i = 0; i < 256; i++) {
-					photometry.lut[i] = float(srgb_to_linear(float(i) / 255.0f) / photometry.exposure);
-				}
+				photometry.lut = linearising_lut(photometry.exposure);
 				photometry.inverse_vignetting.create(rig.fisheye.height, rig.fisheye.width, CV_32FC1);
 				for (int y = 0; y < rig.fisheye.height; y++) {
 					float *row = photometry.inverse_vignetting.ptr<float>(y);
