@@ -27,6 +27,8 @@ var _out_dir := ""
 var _quit_at_end := false
 var _true_poses := false
 var _placed := false
+var _main_usec_last := -1
+var _main_ms: Array[float] = []  # RoomProbe's main-thread time per rendered frame
 
 
 func _ready() -> void:
@@ -66,11 +68,19 @@ func _ready() -> void:
 
 
 func _process(_delta: float) -> void:
-	# RigCapture processes first (priority -30): this frame's image and pose are in.
-	if _video.texture != _rig.get_rgb_texture():
-		_video.texture = _rig.get_rgb_texture()
+	# The nodes process first (priorities -30 to -10, the probes before this script): this
+	# frame's results are in. The background is the image of the very frame whose pose the AR
+	# camera has, so the two stay in register even when the pipeline lags.
+	var background: Texture2D = _rig.get_rgb_texture() if _true_poses else _slam.get_camera_image_texture()
+	if _video.texture != background:
+		_video.texture = background
 	if _true_poses and _rig.has_ground_truth():
 		_camera.global_transform = _rig.get_ground_truth_camera_transform()
+	# RoomProbe's nodes' main-thread time since the last frame (their _process and signals).
+	var usec: int = RigCapture.get_main_thread_usec()
+	if _main_usec_last >= 0:
+		_main_ms.append((usec - _main_usec_last) / 1000.0)
+	_main_usec_last = usec
 
 
 func _on_texture_updated(fisheye_frame: int) -> void:
@@ -99,6 +109,7 @@ func _place_objects() -> void:
 
 
 func _on_finished() -> void:
+	_print_summary()
 	_room.finish_inpainting()
 	_probe.update_now()
 	if not _out_dir.is_empty():
@@ -109,3 +120,16 @@ func _on_finished() -> void:
 			print("demo: %s %s" % ["wrote" if err == OK else "could not write", path])
 	if _quit_at_end:
 		get_tree().quit(0)
+
+
+## One line of key=value pairs: the main-thread time per rendered frame, and the engine's latency
+## and dropped frames (DenseSLAM.get_stats()).
+func _print_summary() -> void:
+	var sorted := _main_ms.duplicate()
+	sorted.sort()
+	var rank := func(fraction: float) -> float:
+		return sorted[clampi(ceili(fraction * sorted.size()) - 1, 0, sorted.size() - 1)] if not sorted.is_empty() else 0.0
+	var slam: Dictionary = _slam.get_stats()
+	print("demo: summary frames=%d main_thread_ms_p50=%.3f main_thread_ms_p95=%.3f main_thread_ms_max=%.3f latency_ms_p50=%.1f latency_ms_p95=%.1f dropped_rgbd=%d dropped_capture=%d" % [
+		sorted.size(), rank.call(0.5), rank.call(0.95), rank.call(1.0), slam.get("latency_ms_p50", 0.0), slam.get("latency_ms_p95", 0.0),
+		slam.get("dropped_frames", 0), _rig.get_dropped_frame_count()])

@@ -59,11 +59,14 @@ def main():
     if not opts.no_eval and not evaluate():
         return 1
     rp.header("demo: outputs")
+    summary = getattr(play, "summary", "")
     frames = sorted(f for f in os.listdir(FRAMES) if f.endswith(".png")) if os.path.isdir(FRAMES) else []
     print(f"  AR frames:     {rp.relpath(FRAMES)}/ ({len(frames)} PNG at {FPS} fps)")
     for name in ["cubemap.exr", "cubemap_net.png", "evaluation.txt"]:
         path = os.path.join(OUT, name)
         print(f"  {name + ':':<14} {rp.relpath(path) if os.path.exists(path) else '(missing)'}")
+    # The last line: the figures of the run, key=value (main-thread time per frame, latency, drops).
+    print(summary.replace("demo: summary ", "summary: ") if summary else "summary: (the scene printed none)")
     return 0
 
 
@@ -125,6 +128,7 @@ def play(window):
     for k in noise.flush():
         print("    " + k)
     print(f"demo: Godot ended: {rp.describe_exit(r)} after {rp.fmt_duration(r.seconds)}; log: {rp.relpath(log)}")
+    play.summary = next((line.strip() for line in reversed(r.lines) if line.strip().startswith("demo: summary ")), "")
     if any(re.match(r'^WARNING: \d+ RIDs of type "Texture" were leaked', line) for line in r.lines):
         print("demo: the Texture RID leak at exit is Godot 4.6's reflection-atlas bug (godotengine/godot#122498),"
               " set off by the scene's ReflectionProbe; not RoomProbe's")

@@ -11,6 +11,9 @@ Suites, in order (see tests/README.md):
 
 The last line printed is exactly "N passed, N failed" (", N skipped" appended when some were
 skipped); the exit status is 0 only when nothing failed. Raw logs: build/test-logs/.
+
+--sanitize thread|address builds with scons sanitize=... and runs only the core suite's
+build/debug-tsan|asan/tests/core_tests, under ThreadSanitizer or AddressSanitizer with UBSan.
 """
 
 import argparse
@@ -46,6 +49,15 @@ EXPECTED_ERROR = re.compile(r"^\[EXPECTED-ERROR\] (.*)$")
 KNOWN_LEAK = re.compile(r"^\[KNOWN-ENGINE-LEAK\] (\d+) (\S+): (.*)$")
 RD_LEAK = re.compile(r'^WARNING: (\d+) RIDs of type "([^"]+)" were leaked\.')
 ERROR_DETAILS = re.compile(r"^(?:USER )?(?:SCRIPT )?ERROR: (.*)$")
+# The first line of a sanitizer's report, and its last.
+SANITIZER_START = re.compile(r"^(WARNING|ERROR): (Thread|Address|Leak)Sanitizer|: runtime error: ")
+SANITIZER_SUMMARY = re.compile(r"^SUMMARY: \w+Sanitizer: .*$")
+# halt_on_error: the first report ends the run (exit status 66), so none is missed in the summary.
+SANITIZER_ENV = {
+    "thread": {"TSAN_OPTIONS": "halt_on_error=1 second_deadlock_stack=1"},
+    "address": {"ASAN_OPTIONS": "halt_on_error=1", "UBSAN_OPTIONS": "halt_on_error=1 print_stacktrace=1"},
+}
+TSAN_SUPPRESSIONS = os.path.join(rp.REPO, "tests", "tsan.supp")
 DOCTEST = re.compile(r"\[doctest\] test cases:\s*(\d+)\s*\|\s*(\d+) passed\s*\|\s*(\d+) failed\s*\|\s*(\d+) skipped")
 
 
@@ -78,11 +90,16 @@ def main():
     ap.add_argument("--no-build", action="store_true", help="skip the build (use what is built)")
     ap.add_argument("--scons-args", metavar="ARGS",
                     help="arguments for scons instead of '-j<nproc> tests=yes' (also $ROOMPROBE_SCONS_ARGS)")
+    ap.add_argument("--sanitize", choices=sorted(SANITIZER_ENV),
+                    help="build the core test program with -fsanitize=thread (or address,undefined) into "
+                         "build/<target>-tsan|asan/ and run only the core suite under it")
     ap.add_argument("-v", "--verbose", action="store_true", help="show every output line of every step")
     opts = ap.parse_args()
+    if opts.sanitize and set(opts.suite or ["core"]) - {"build", "core"}:
+        ap.error("--sanitize runs only the core suite (and the build)")
 
     os.makedirs(LOGS, exist_ok=True)
-    selected = opts.suite or SUITES
+    selected = opts.suite or (["build", "core"] if opts.sanitize else SUITES)
     results = []
     start = time.monotonic()
 
@@ -130,7 +147,7 @@ def main():
 def suite_build(opts):
     s = Suite("build")
     s.logs.append(os.path.join(LOGS, "build.log"))
-    cmd = rp.scons_command(["tests=yes"], opts.scons_args)
+    cmd = rp.scons_command(["tests=yes"], opts.scons_args) + ([f"sanitize={opts.sanitize}"] if opts.sanitize else [])
     rp.header(f"build: {shlex.join(cmd)}")
     if rp.sconstruct_missing():
         s.fail("build")
@@ -162,12 +179,14 @@ def suite_build(opts):
 def suite_core(opts):
     s = Suite("core")
     s.logs.append(os.path.join(LOGS, "core.log"))
-    programs = sorted(p for p in glob.glob(os.path.join(rp.BUILD, "tests", "*_tests"))
+    tests_dir = os.path.join(rp.BUILD, sanitized_build_dir(opts), "tests")
+    programs = sorted(p for p in glob.glob(os.path.join(tests_dir, "*_tests"))
                       if os.path.isfile(p) and os.access(p, os.X_OK))
-    rp.header("core: " + (", ".join(rp.relpath(p) for p in programs) or "no build/tests/*_tests programs"))
+    rp.header("core: " + (", ".join(rp.relpath(p) for p in programs) or f"no {rp.relpath(tests_dir)}/*_tests programs")
+              + (f" ({sanitizer_env_text(opts)})" if opts.sanitize else ""))
     s.ran = True
     if not programs:
-        s.notes.append("no test programs in build/tests/")
+        s.notes.append(f"no test programs in {rp.relpath(tests_dir)}/")
         print("no test programs (the build made none)")
         return s
     with open(s.logs[0], "w") as combined:
@@ -176,7 +195,8 @@ def suite_core(opts):
             log = os.path.join(LOGS, f"core-{name}.log")
             cmd = [prog] + ([f"-tc={opts.k}"] if opts.k else [])
             echo = (lambda line: print("    " + line, flush=True)) if opts.verbose else None
-            r = rp.run(cmd, log, CORE_TIMEOUT, echo=echo)
+            env = dict(os.environ, **sanitizer_env(opts)) if opts.sanitize else None
+            r = rp.run(cmd, log, CORE_TIMEOUT * (4 if opts.sanitize else 1), echo=echo, env=env)
             combined.write(f"# {name}: see {rp.relpath(log)}\n")
             s.logs.append(log)
             s.seconds += r.seconds
@@ -185,6 +205,13 @@ def suite_core(opts):
                 m = DOCTEST.search(line)
                 if m:
                     summary = tuple(int(x) for x in m.groups())
+            report = sanitizer_report(r.lines)
+            if summary is None and report:
+                s.fail(f"{name}: {sanitizer_summary(report)}")
+                print(f"FAILED {name}: {rp.describe_exit(r)} on a sanitizer report ({rp.fmt_duration(r.seconds)}); "
+                      f"the report (all of it in {rp.relpath(log)}):")
+                rp.tail(report, 80)
+                continue
             if summary is None:
                 why = rp.describe_exit(r) + ", no doctest summary (crashed?)"
                 s.fail(f"{name}: {why}")
@@ -206,7 +233,48 @@ def suite_core(opts):
             print(f"{status} {name}: {passed} passed, {failed} failed, {skipped} skipped{extra} ({rp.fmt_duration(r.seconds)})")
             if status != "ok" and not opts.verbose:
                 show_doctest_failures(r.lines)
+                rp.tail(report, 80)
     return s
+
+
+def sanitized_build_dir(opts):
+    """'' for the normal build/tests/; 'debug-tsan' or 'debug-asan' (SConstruct's build dir) with --sanitize."""
+    if not opts.sanitize:
+        return ""
+    args = opts.scons_args if opts.scons_args is not None else os.environ.get("ROOMPROBE_SCONS_ARGS", "")
+    target = "release" if "target=release" in shlex.split(args) else "debug"
+    return f"{target}-{'tsan' if opts.sanitize == 'thread' else 'asan'}"
+
+
+def sanitizer_env(opts):
+    """TSAN_OPTIONS etc.: ours first, then what the caller set, which wins where both set one."""
+    env = {}
+    for var, value in SANITIZER_ENV[opts.sanitize].items():
+        if var == "TSAN_OPTIONS" and os.path.exists(TSAN_SUPPRESSIONS):
+            value += f" suppressions={TSAN_SUPPRESSIONS}"
+        env[var] = f"{value} {os.environ.get(var, '')}".strip()
+    return env
+
+
+def sanitizer_env_text(opts):
+    return " ".join(f"{k}={shlex.quote(v)}" for k, v in sanitizer_env(opts).items())
+
+
+def sanitizer_report(lines):
+    """The first sanitizer report in lines, through its SUMMARY line; [] when there is none."""
+    for i, line in enumerate(lines):
+        if SANITIZER_START.search(line):
+            report = lines[i:]
+            for j, rest in enumerate(report):
+                if SANITIZER_SUMMARY.match(rest):
+                    return report[:j + 1]
+            return report
+    return []
+
+
+def sanitizer_summary(report):
+    """'ThreadSanitizer: data race file:line in function', or the report's first line."""
+    return next((m.group(0)[len("SUMMARY: "):] for m in map(SANITIZER_SUMMARY.match, report) if m), report[0].strip())
 
 
 def failed_doctest_cases(lines):

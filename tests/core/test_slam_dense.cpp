@@ -31,10 +31,9 @@ RgbdFrame rgbd_at(double p_t, bool p_noisy = true) {
 	return out;
 }
 
-DenseSlam started_slam(double p_t0) {
-	DenseSlam slam;
-	REQUIRE(slam.configure(half_camera(), living_room().trajectory.world_from_rgb(p_t0)) == "");
-	return slam;
+// DenseSlam is not movable (it holds its volume's lock): configured in place.
+void start_slam(DenseSlam *r_slam, double p_t0) {
+	REQUIRE(r_slam->configure(half_camera(), living_room().trajectory.world_from_rgb(p_t0)) == "");
 }
 
 } // namespace
@@ -70,7 +69,8 @@ TEST_CASE("dense SLAM: one second of the living room tracked frame to model, ATE
 }
 
 TEST_CASE("dense SLAM: a frame of zeros is lost, holds the pose, fuses nothing; tracking resumes") {
-	DenseSlam slam = started_slam(0.0);
+	DenseSlam slam;
+	start_slam(&slam, 0.0);
 	for (int i = 0; i < 3; i++) {
 		REQUIRE(slam.process(rgbd_at(i * FRAME_S)).tracking.state == TrackingState::Good);
 	}
@@ -93,7 +93,8 @@ TEST_CASE("dense SLAM: a frame of zeros is lost, holds the pose, fuses nothing; 
 }
 
 TEST_CASE("dense SLAM: a jump is never tracked as good and never fused") {
-	DenseSlam slam = started_slam(0.0);
+	DenseSlam slam;
+	start_slam(&slam, 0.0);
 	for (int i = 0; i < 3; i++) {
 		REQUIRE(slam.process(rgbd_at(i * FRAME_S)).tracking.state == TrackingState::Good);
 	}
@@ -106,7 +107,8 @@ TEST_CASE("dense SLAM: a jump is never tracked as good and never fused") {
 }
 
 TEST_CASE("dense SLAM: frames that do not fit the camera are refused with a reason") {
-	DenseSlam slam = started_slam(0.0);
+	DenseSlam slam;
+	start_slam(&slam, 0.0);
 	RgbdFrame bad = rgbd_at(0.0);
 	cv::resize(bad.depth_m, bad.depth_m, cv::Size(100, 80));
 	const DenseSlamFrame out = slam.process(bad);
@@ -135,7 +137,8 @@ TEST_CASE("dense render: the cubemap faces are (mirrored) pinhole cameras with t
 }
 
 TEST_CASE("dense render: the fused table top replaces the coarse floor below the probe, nothing else") {
-	DenseSlam slam = started_slam(0.0);
+	DenseSlam slam;
+	start_slam(&slam, 0.0);
 	for (int i = 0; i < 10; i++) {
 		REQUIRE(slam.process(rgbd_at(i * FRAME_S)).tracking.state == TrackingState::Good);
 	}

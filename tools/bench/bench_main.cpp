@@ -1,45 +1,64 @@
-// roomprobe_bench: where the time of a live frame goes, and how accurate tracking is.
+// roomprobe_bench: where the time of a live frame goes, and how accurate tracking is. Every
+// recording benchmark drives one LiveRoom (engine/live_room.h), the engine the Godot nodes and
+// roomprobe_eval drive, so what is measured is what ships.
 //
-// slam --recording DIR: replays a RoomProbe recording through the whole live pipeline, every
-// event in time order, as the Godot nodes run it (DenseSLAM, CoarseRoomModel, RoomProbe):
-//   RGB-D frame:   DenseSlam::process (from room.yaml's initial_rgb_pose); every 15 fused frames
-//                  DenseSlam::update_mesh; then probe 0's environment map: the coarse model's
-//                  cubemap (128^2) and the dense model painted over it (render_dense_over);
-//   fisheye frame: its pose from the TRACKED trajectory (fisheye_pose_at, 0.1 s extrapolation,
-//                  as the node), then CoarsePipeline::add_fisheye_frame (async inpainting, gain
-//                  lighting compensation).
-// Prints per-stage median, mean and p90 against the paper's Table 1, the full frame time, the
-// dense cubemap's cost at three raycast scales and two sizes, ATE against the ground truth, and
-// the TSDF's memory. Reading and decoding the images is not timed.
+// slam --recording DIR: the engine in step mode (no threads) over a RoomProbe recording, every
+// event in time order, configured as the nodes configure it (the recording's rig and photometry,
+// the room's floorplan and initial pose, the probes as the TSDF's keep points, tracked poses for
+// both models, async inpainting, gain lighting compensation, a re-mesh every 15 fused frames) with
+// one probe at probe 0 (--probe-size, default 128):
+//   RGB-D frame:   push_rgbd (DenseSlam; every 15 fused frames the dense mesh), then render_probes
+//                  (coarse cubemap, the dense pass over it, SH, the half-float mip chains);
+//   fisheye frame: push_fisheye (its pose from the TRACKED trajectory, then the coarse pipeline).
+// Prints per-stage median, mean and p90 against the paper's Table 1 (from the engine's published
+// timings: TrackedFrame, CoarseSnapshot, ProbeMap), the whole engine calls, the full frame, the
+// dense pass's cost at three raycast scales and two sizes on the final model, ATE against the
+// ground truth, and the TSDF's memory. Reading and decoding the images is not timed.
 //
-// slam --tum DIR: dense SLAM alone on a TUM RGB-D sequence, from the ground-truth pose of the
-// first frame that has one; the same timings and ATE.
+// slam --tum DIR: dense SLAM alone (DenseSlam: the engine needs a rig with a fisheye, which a TUM
+// sequence has not) from the ground-truth pose of the first frame that has one; the same timings
+// and ATE.
 //
-// Prints figures; asserts nothing (the targets are reported as met or not).
+// live --recording DIR: the engine threaded (start()), the recording played in real time (x
+// --speed) by a capture thread that sleeps until each event's instant, reads and decodes the frame
+// (capture time, not the engine's) and pushes it; the main thread polls the probe map at 60 Hz as
+// Godot's main loop would and copies its GPU bytes. At the end finish() and stop(); prints what
+// was pushed, processed and dropped per stream, the latency from a frame's push to the first probe
+// map that includes it, the probe renders, the real-time factor, the tracking states and ATE.
 //
-// usage: roomprobe_bench slam (--recording DIR | --tum DIR) [--frames N] [--threads N]
+// Each benchmark ends with one line 'summary: mode=... key=value ...'. Prints figures; asserts
+// nothing (the targets are reported as met or not).
+//
+// usage: roomprobe_bench slam (--recording DIR | --tum DIR) [--frames N] [--threads N] [--probe-size N]
+//        roomprobe_bench live --recording DIR [--speed X] [--frames N] [--threads N] [--probe-size N]
 
 #include "../common/cli.h"
 
 #include <camera/pinhole_camera.h>
+#include <engine/live_room.h>
 #include <envmap/cubemap.h>
 #include <envmap/dense_render.h>
 #include <pipeline/coarse_pipeline.h>
 #include <recording/recording_reader.h>
 #include <recording/tum_dataset.h>
 #include <rig/fisheye_pose.h>
+#include <rig/photometry.h>
 #include <rig/trajectory.h>
 #include <slam/dense_slam.h>
 
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 using namespace roomprobe;
@@ -52,16 +71,25 @@ double ms_since(Clock::time_point p_start) {
 	return std::chrono::duration<double, std::milli>(Clock::now() - p_start).count();
 }
 
+double ms_between(Clock::time_point p_from, Clock::time_point p_to) {
+	return std::chrono::duration<double, std::milli>(p_to - p_from).count();
+}
+
 // The issue's targets.
 constexpr double TARGET_SLAM_MS = 33.0; // tracking + integration, median, 640x480
 constexpr double TARGET_ATE_MM = 10.0; // ATE RMSE on the synthetic sequences
 constexpr double PAPER_FRAME_MS = 47.42; // Table 1's total
-// As the live nodes: DenseSLAM's mesh_update_interval and fisheye extrapolation, RoomProbe's map size.
+// As the live nodes: DenseSLAM's mesh_update_interval.
 constexpr int MESH_INTERVAL = 15;
-constexpr double FISHEYE_EXTRAPOLATION_S = 0.1;
-constexpr int LIVE_CUBEMAP_SIZE = 128;
+// The probe's map size: RoomProbe's default in step mode, and the live benchmark's.
+constexpr int STEP_PROBE_SIZE = 128;
+constexpr int LIVE_PROBE_SIZE = 256;
 // Repeats of each dense cubemap option on the final model (median taken).
 constexpr int OPTION_REPEATS = 5;
+// Godot's main loop, as the live benchmark polls the engine.
+constexpr double MAIN_LOOP_HZ = 60.0;
+// After finish(): how long the main loop waits for the probe map that includes the last frames.
+constexpr double FINAL_MAP_WAIT_S = 2.0;
 
 // Per-frame values of one stage.
 struct Series {
@@ -69,6 +97,7 @@ struct Series {
 
 	void add(double p_value) { values.push_back(p_value); }
 	bool empty() const { return values.empty(); }
+	size_t size() const { return values.size(); }
 	double percentile(double p_fraction) const {
 		if (values.empty()) {
 			return 0.0;
@@ -100,9 +129,9 @@ struct Series {
 // Paper value < 0: the paper has no such row.
 void print_row(const char *p_name, const Series &p_series, double p_paper_ms = -1.0, const char *p_paper_name = "") {
 	if (p_series.empty()) {
-		std::printf("  %-36s %5d %9s %9s %9s", p_name, 0, "-", "-", "-");
+		std::printf("  %-40s %5d %9s %9s %9s", p_name, 0, "-", "-", "-");
 	} else {
-		std::printf("  %-36s %5zu %9.2f %9.2f %9.2f", p_name, p_series.values.size(), p_series.median(), p_series.mean(), p_series.percentile(0.9));
+		std::printf("  %-40s %5zu %9.2f %9.2f %9.2f", p_name, p_series.values.size(), p_series.median(), p_series.mean(), p_series.percentile(0.9));
 	}
 	if (p_paper_ms >= 0.0) {
 		std::printf("   %6.2f  %s", p_paper_ms, p_paper_name);
@@ -112,14 +141,36 @@ void print_row(const char *p_name, const Series &p_series, double p_paper_ms = -
 
 void print_table_header(const char *p_title) {
 	std::printf("%s\n", p_title);
-	std::printf("  %-36s %5s %9s %9s %9s   %s\n", "stage (ms)", "n", "median", "mean", "p90", "paper Table 1");
+	std::printf("  %-40s %5s %9s %9s %9s   %s\n", "stage (ms)", "n", "median", "mean", "p90", "paper Table 1");
 }
 
 const char *met(bool p_met) {
 	return p_met ? "MET" : "NOT MET";
 }
 
-// What DenseSlam did over a sequence.
+// A figure for the summary line: "nan" when there is none.
+std::string figure(bool p_has, double p_value) {
+	if (!p_has) {
+		return "nan";
+	}
+	char text[32];
+	std::snprintf(text, sizeof(text), "%.2f", p_value);
+	return text;
+}
+
+const char *state_name(TrackingState p_state) {
+	switch (p_state) {
+		case TrackingState::Good:
+			return "good";
+		case TrackingState::Poor:
+			return "poor";
+		case TrackingState::Lost:
+			return "lost";
+	}
+	return "?";
+}
+
+// What dense SLAM did over a sequence.
 struct SlamFigures {
 	Series undistort, track, integrate, raycast, process, track_integrate, mesh;
 	int good = 0, poor = 0, lost = 0;
@@ -131,6 +182,8 @@ struct SlamFigures {
 	double path_m = 0.0; // ground-truth path length over the compared frames
 	bool has_last_truth = false;
 	glm::dvec3 last_truth = glm::dvec3(0.0);
+
+	double ate_mm() const { return compared == 0 ? 0.0 : 1000.0 * std::sqrt(sum_squared_m2 / double(compared)); }
 };
 
 double rotation_error_deg(const glm::dquat &p_a, const glm::dquat &p_b) {
@@ -138,36 +191,15 @@ double rotation_error_deg(const glm::dquat &p_a, const glm::dquat &p_b) {
 	return 2.0 * std::acos(d) * 180.0 / M_PI;
 }
 
-// Records one processed frame's timings and state, and its error against p_truth when it has one.
-void record_slam_frame(const DenseSlamFrame &p_frame, double p_t_s, const Trajectory *p_truth, SlamFigures *r_figures) {
-	const DenseSlamTimings &t = p_frame.timings;
-	r_figures->undistort.add(t.undistort_ms);
-	r_figures->track.add(t.track_ms);
-	if (p_frame.integrated) {
-		r_figures->integrate.add(t.integrate_ms);
-		r_figures->raycast.add(t.raycast_ms);
-	}
-	r_figures->track_integrate.add(t.track_ms + t.integrate_ms);
-	r_figures->process.add(t.frame_ms);
-	switch (p_frame.tracking.state) {
-		case TrackingState::Good:
-			r_figures->good++;
-			break;
-		case TrackingState::Poor:
-			r_figures->poor++;
-			break;
-		case TrackingState::Lost:
-			r_figures->lost++;
-			break;
-	}
+// Adds the error of p_pose at p_t_s against p_truth, when the ground truth has a pose there.
+void record_error(const Pose &p_pose, double p_t_s, const Trajectory *p_truth, SlamFigures *r_figures) {
 	Pose truth;
 	std::string error;
 	if (p_truth == nullptr || p_truth->is_empty() || !p_truth->pose_at(p_t_s, &truth, &error)) {
 		return;
 	}
-	// The reported pose (the held one when Lost), as the application would use it.
-	const double e = glm::length(p_frame.tracking.world_from_camera.translation - truth.translation);
-	const double r = rotation_error_deg(p_frame.tracking.world_from_camera.rotation, truth.rotation);
+	const double e = glm::length(p_pose.translation - truth.translation);
+	const double r = rotation_error_deg(p_pose.rotation, truth.rotation);
 	r_figures->compared++;
 	r_figures->sum_squared_m2 += e * e;
 	r_figures->sum_squared_rot_deg2 += r * r;
@@ -182,14 +214,49 @@ void record_slam_frame(const DenseSlamFrame &p_frame, double p_t_s, const Trajec
 	r_figures->has_last_truth = true;
 }
 
-void print_accuracy(const SlamFigures &p_figures, bool p_synthetic) {
-	std::printf("accuracy (tracked RGB-D poses against the ground truth at the same timestamps, same world frame, no alignment):\n");
+void record_timings(const DenseSlamTimings &p_timings, bool p_integrated, SlamFigures *r_figures) {
+	r_figures->undistort.add(p_timings.undistort_ms);
+	r_figures->track.add(p_timings.track_ms);
+	if (p_integrated) {
+		r_figures->integrate.add(p_timings.integrate_ms);
+		r_figures->raycast.add(p_timings.raycast_ms);
+	}
+	r_figures->track_integrate.add(p_timings.track_ms + p_timings.integrate_ms);
+	r_figures->process.add(p_timings.frame_ms);
+}
+
+void record_state(TrackingState p_state, SlamFigures *r_figures) {
+	switch (p_state) {
+		case TrackingState::Good:
+			r_figures->good++;
+			break;
+		case TrackingState::Poor:
+			r_figures->poor++;
+			break;
+		case TrackingState::Lost:
+			r_figures->lost++;
+			break;
+	}
+}
+
+// One frame as the engine published it: its timings, state and (reported, the held one when
+// Lost, as the application would use it) pose against p_truth.
+void record_tracked_frame(const TrackedFrame &p_frame, const Trajectory *p_truth, SlamFigures *r_figures) {
+	record_timings(p_frame.timings, p_frame.integrated, r_figures);
+	record_state(p_frame.state, r_figures);
+	if (p_frame.has_pose) {
+		record_error(p_frame.world_from_camera, p_frame.timestamp_s, p_truth, r_figures);
+	}
+}
+
+void print_accuracy(const SlamFigures &p_figures, bool p_synthetic, const char *p_what) {
+	std::printf("accuracy (%s against the ground truth at the same timestamps, same world frame, no alignment):\n", p_what);
 	std::printf("  tracking states: %d good, %d poor, %d lost\n", p_figures.good, p_figures.poor, p_figures.lost);
 	if (p_figures.compared == 0) {
 		std::printf("  no ground-truth poses at the frames' timestamps: no ATE\n");
 		return;
 	}
-	const double rmse_mm = 1000.0 * std::sqrt(p_figures.sum_squared_m2 / double(p_figures.compared));
+	const double rmse_mm = p_figures.ate_mm();
 	std::printf("  frames compared: %d (ground-truth path %.0f mm)\n", p_figures.compared, 1000.0 * p_figures.path_m);
 	std::printf("  ATE RMSE (translation): %.2f mm   max %.2f mm (t = %.3f s)   rotation RMSE %.3f deg\n", rmse_mm, 1000.0 * p_figures.max_error_m,
 			p_figures.max_error_t_s, std::sqrt(p_figures.sum_squared_rot_deg2 / double(p_figures.compared)));
@@ -198,8 +265,8 @@ void print_accuracy(const SlamFigures &p_figures, bool p_synthetic) {
 	}
 }
 
-void print_memory(const DenseSlam &p_slam) {
-	const TsdfStats s = p_slam.volume().stats();
+void print_memory(const TsdfStats &p_stats) {
+	const TsdfStats &s = p_stats;
 	std::printf("memory (TSDF at the end):\n");
 	std::printf("  allocated blocks %d of %d   bytes used %.1f MiB (%zu)   reserved %.1f MiB   evicted %lld   dropped %lld\n", s.allocated_blocks,
 			s.capacity_blocks, double(s.bytes_used) / (1024.0 * 1024.0), s.bytes_used, double(s.bytes_reserved) / (1024.0 * 1024.0),
@@ -208,16 +275,14 @@ void print_memory(const DenseSlam &p_slam) {
 			s.bounds_max.z);
 }
 
-void print_slam_rows(const SlamFigures &p_figures) {
+void print_slam_rows(const SlamFigures &p_figures, const char *p_mesh_name) {
 	print_row("undistort (RGB-D)", p_figures.undistort);
 	print_row("tracking", p_figures.track);
 	print_row("integration (fused frames)", p_figures.integrate);
 	print_row("raycast (fused frames)", p_figures.raycast);
 	print_row("SLAM process (whole call)", p_figures.process, 3.16, "SLAM Update (GPU)");
 	if (!p_figures.mesh.empty()) {
-		char name[64];
-		std::snprintf(name, sizeof(name), "meshing (per call, every %d fused)", MESH_INTERVAL);
-		print_row(name, p_figures.mesh);
+		print_row(p_mesh_name, p_figures.mesh);
 	}
 }
 
@@ -228,25 +293,40 @@ void print_slam_target(const SlamFigures &p_figures, int p_width, int p_height) 
 }
 
 struct Arguments {
+	std::string mode; // slam or live
 	std::string recording, tum;
 	long frames = -1; // RGB-D frames to process; -1: all
 	int threads = 0; // 0: the libraries' defaults
+	int probe_size = 0; // 0: the mode's default
+	double speed = 1.0; // live: playback speed
 };
+
+void print_usage(std::FILE *p_out) {
+	std::fprintf(p_out,
+			"usage: roomprobe_bench slam (--recording DIR | --tum DIR) [--frames N] [--threads N] [--probe-size N]\n"
+			"       roomprobe_bench live --recording DIR [--speed X] [--frames N] [--threads N] [--probe-size N]\n"
+			"  slam --recording DIR  a RoomProbe recording through the engine (LiveRoom) in step mode: SLAM, coarse model,\n"
+			"                        one probe's map after every RGB-D frame; per-stage timings, full frame, ATE\n"
+			"  slam --tum DIR        a TUM RGB-D sequence (rgb.txt, depth.txt, groundtruth.txt): dense SLAM only\n"
+			"  live --recording DIR  the recording played in real time into the threaded engine (start()), the probe map\n"
+			"                        polled at 60 Hz like Godot's main loop; frames dropped, latency, ATE\n"
+			"  --frames N            stop after N RGB-D frames (default: all)\n"
+			"  --threads N           worker threads for OpenCV and TBB (default: the libraries')\n"
+			"  --probe-size N        the probe's cubemap face size (default: slam %d, live %d)\n"
+			"  --speed X             live: playback speed (default 1: real time)\n"
+			"Each benchmark ends with one line 'summary: mode=... key=value ...'.\n",
+			STEP_PROBE_SIZE, LIVE_PROBE_SIZE);
+}
 
 int usage(const char *p_error) {
 	if (p_error != nullptr) {
 		std::fprintf(stderr, "roomprobe_bench: %s\n", p_error);
 	}
-	std::fprintf(stderr,
-			"usage: roomprobe_bench slam (--recording DIR | --tum DIR) [--frames N] [--threads N]\n"
-			"  --recording DIR  a RoomProbe recording: the full live pipeline (SLAM, coarse model, probe 0's map)\n"
-			"  --tum DIR        a TUM RGB-D sequence (rgb.txt, depth.txt, groundtruth.txt): dense SLAM only\n"
-			"  --frames N       stop after N RGB-D frames (default: all)\n"
-			"  --threads N      worker threads for OpenCV and TBB (default: the libraries')\n");
+	print_usage(stderr);
 	return 2;
 }
 
-// ---------------------------------------------------------------- recording
+// ---------------------------------------------------------------- recording: the engine's setup
 
 // The probe's map is rendered at probe 0, or the floorplan's centre at 0.9 m when room.yaml has none.
 glm::dvec3 probe_position(const RoomInfo &p_room, bool *r_from_file) {
@@ -262,129 +342,185 @@ glm::dvec3 probe_position(const RoomInfo &p_room, bool *r_from_file) {
 	return centre;
 }
 
-int bench_recording(const Arguments &p_args) {
+// A recording opened, with the engine's configuration as the Godot nodes build it.
+struct RecordingSetup {
 	RecordingReader reader;
-	const RecordingStatus status = reader.open(p_args.recording);
+	LiveRoomConfig config;
+	glm::dvec3 probe = glm::dvec3(0.0);
+	bool probe_from_file = false;
+	size_t rgbd_total = 0; // RGB-D frames to play (--frames)
+};
+
+// Opens p_args.recording and builds the configuration; false after printing the problem.
+bool open_recording(const Arguments &p_args, int p_probe_size, RecordingSetup *r_setup) {
+	const RecordingStatus status = r_setup->reader.open(p_args.recording);
 	if (!status.ok) {
 		std::fprintf(stderr, "roomprobe_bench: --recording: %s\n", status.error.c_str());
-		return 1;
+		return false;
 	}
+	const RecordingReader &reader = r_setup->reader;
 	if (!reader.has_room()) {
 		std::fprintf(stderr, "roomprobe_bench: --recording %s: no room.yaml room\n", p_args.recording.c_str());
-		return 1;
+		return false;
 	}
 	if (reader.rgbd_count() == 0) {
 		std::fprintf(stderr, "roomprobe_bench: --recording %s: no usable RGB-D frames\n", p_args.recording.c_str());
+		return false;
+	}
+	RigPhotometry photometry;
+	std::string error;
+	if (!read_recording_photometry(p_args.recording, &photometry, &error)) {
+		std::fprintf(stderr, "roomprobe_bench: --recording %s: %s\n", p_args.recording.c_str(), error.c_str());
+		return false;
+	}
+	const RoomInfo &room = reader.get_room();
+	LiveRoomConfig &config = r_setup->config;
+	config.has_rig = true;
+	config.rig = reader.get_rig();
+	config.photometry = photometry;
+	config.has_room = true;
+	config.floorplan = room.floorplan;
+	config.initial_rgb_pose = room.initial_rgb_pose;
+	config.keep_points = room.probes; // as the DenseSLAM node: eviction spares the probes' surroundings longest
+	config.dense = true;
+	config.coarse_poses = PoseSource::Tracked;
+	config.dense_poses = PoseSource::Tracked;
+	config.ground_truth = reader.ground_truth_trajectory(RecordingStream::Rgbd); // for the ATE only: poses are tracked
+	config.coarse.inpaint_async = true; // as CoarseRoomModel: off the frame's critical path
+	config.coarse.lighting = true;
+	config.coarse.lighting_model = LightingModel::GAIN_ROBUST;
+	config.coarse.cubemap_size = p_probe_size;
+	config.mesh_interval_frames = MESH_INTERVAL;
+	r_setup->probe = probe_position(room, &r_setup->probe_from_file);
+	r_setup->rgbd_total = p_args.frames > 0 ? std::min(reader.rgbd_count(), size_t(p_args.frames)) : reader.rgbd_count();
+	return true;
+}
+
+void print_recording_header(const char *p_mode, const Arguments &p_args, const RecordingSetup &p_setup, int p_probe_size) {
+	const Rig &rig = p_setup.config.rig;
+	const RecordingReader &reader = p_setup.reader;
+	const DenseSlamOptions &slam = p_setup.config.slam;
+	const RigPhotometry &photometry = p_setup.config.photometry;
+	std::printf("roomprobe_bench %s --recording %s\n", p_mode, p_args.recording.c_str());
+	std::printf("  RGB-D %dx%d, %zu of %zu frames; fisheye %dx%d, %zu frames in the recording; %zu recording issues\n", rig.rgb.width, rig.rgb.height,
+			p_setup.rgbd_total, reader.rgbd_count(), rig.fisheye.width, rig.fisheye.height, reader.fisheye_count(), reader.get_issues().size());
+	std::printf("  probe %s at [%.2f %.2f %.2f], %d^2; voxel %.0f mm, truncation %.0f mm; coarse texel %.0f mm, async inpainting, gain lighting\n",
+			p_setup.probe_from_file ? "0" : "(none in room.yaml: floorplan centre)", p_setup.probe.x, p_setup.probe.y, p_setup.probe.z, p_probe_size,
+			1000.0 * slam.tsdf.voxel_size_m, 1000.0 * slam.tsdf.truncation_m, 1000.0 * p_setup.config.coarse.texel_size_m);
+	if (photometry.known) {
+		std::printf("  photometry (synth.yaml): fisheye exposure %.3f, RGB exposure %.3f, vignetting edge gain %.3f\n", photometry.fisheye_exposure,
+				photometry.rgb_exposure, photometry.fisheye_vignetting_edge_gain);
+	} else {
+		std::printf("  photometry: unknown (frames as recorded)\n");
+	}
+	std::printf("  engine: LiveRoom, tracked poses for both models, re-mesh every %d fused frames, dense pass at 1/%d, %d render thread(s)\n",
+			p_setup.config.mesh_interval_frames, p_setup.config.dense_render_scale, p_setup.config.render_threads);
+	std::printf("  threads: OpenCV %d, TBB %zu\n", cv::getNumThreads(),
+			tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+}
+
+// ---------------------------------------------------------------- slam --recording (step mode)
+
+int bench_recording(const Arguments &p_args) {
+	const int probe_size = p_args.probe_size > 0 ? p_args.probe_size : STEP_PROBE_SIZE;
+	RecordingSetup setup;
+	if (!open_recording(p_args, probe_size, &setup)) {
 		return 1;
 	}
-	const Rig &rig = reader.get_rig();
-	const RoomInfo &room = reader.get_room();
-
-	DenseSlam slam;
-	std::string error = slam.configure(rig.rgb, room.initial_rgb_pose);
-	if (error.empty()) {
-		// As the DenseSLAM node: eviction spares the probes' surroundings longest.
-		slam.volume().set_keep_points(room.probes);
-	}
-	CoarsePipelineOptions coarse_options;
-	coarse_options.inpaint_async = true; // as CoarseRoomModel: off the frame's critical path
-	coarse_options.lighting = true;
-	coarse_options.lighting_model = LightingModel::GAIN_ROBUST;
-	coarse_options.cubemap_size = LIVE_CUBEMAP_SIZE;
-	CoarsePipeline coarse(coarse_options);
-	if (error.empty()) {
-		error = coarse.configure(rig, room.floorplan);
-	}
+	const RecordingReader &reader = setup.reader;
+	const Rig &rig = setup.config.rig;
+	const glm::dvec3 probe = setup.probe;
+	const Trajectory &truth = setup.config.ground_truth;
+	LiveRoom engine;
+	const std::string error = engine.configure(setup.config);
 	if (!error.empty()) {
 		std::fprintf(stderr, "roomprobe_bench: --recording %s: %s\n", p_args.recording.c_str(), error.c_str());
 		return 1;
 	}
-	bool probe_from_file = false;
-	const glm::dvec3 probe = probe_position(room, &probe_from_file);
-	const Trajectory &truth = reader.ground_truth_trajectory(RecordingStream::Rgbd);
-	const size_t rgbd_total = p_args.frames > 0 ? std::min(reader.rgbd_count(), size_t(p_args.frames)) : reader.rgbd_count();
-
-	std::printf("roomprobe_bench slam --recording %s\n", p_args.recording.c_str());
-	std::printf("  RGB-D %dx%d, %zu of %zu frames; fisheye %dx%d, %zu frames in the recording; %zu recording issues\n", rig.rgb.width, rig.rgb.height,
-			rgbd_total, reader.rgbd_count(), rig.fisheye.width, rig.fisheye.height, reader.fisheye_count(), reader.get_issues().size());
-	std::printf("  probe %s at [%.2f %.2f %.2f]; voxel %.0f mm, truncation %.0f mm; coarse texel %.0f mm, async inpainting, gain lighting\n",
-			probe_from_file ? "0" : "(none in room.yaml: floorplan centre)", probe.x, probe.y, probe.z, 1000.0 * slam.options().tsdf.voxel_size_m,
-			1000.0 * slam.options().tsdf.truncation_m, 1000.0 * coarse_options.texel_size_m);
-	std::printf("  threads: OpenCV %d, TBB %zu\n", cv::getNumThreads(),
-			tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+	const int probe_id = engine.add_probe(probe, probe_size);
+	print_recording_header("slam", p_args, setup, probe_size);
 
 	SlamFigures figures;
-	Series occlusion, lighting, update, inpaint, coarse_frame, cubemap_coarse, cubemap_dense, live_frame;
+	Series occlusion, lighting, update, inpaint, coarse_frame;
+	Series map_coarse, map_dense, map_sh, map_mips, map_total;
+	Series push_rgbd, push_fisheye, render_call, live_frame;
 	Series fisheye_error_mm;
-	Trajectory tracked; // the trusted poses, for the fisheye's (as the DenseSLAM node keeps them)
-	DenseLighting dense_lighting;
-	int fused_since_mesh = 0;
-	size_t rgbd_done = 0, fisheye_done = 0, fisheye_skipped = 0, frames_failed = 0, occlusion_skipped = 0;
-	std::string first_skip;
+	uint64_t coarse_frames_seen = 0, mesh_version_seen = 0;
+	size_t rgbd_done = 0, fisheye_pushed = 0, frames_failed = 0, occlusion_skipped = 0, fisheye_integrated = 0;
 	for (const PlaybackEvent &event : reader.get_events()) {
 		if (event.stream == RecordingStream::Rgbd) {
-			if (rgbd_done >= rgbd_total) {
+			if (rgbd_done >= setup.rgbd_total) {
 				break;
 			}
-			const RgbdFrameResult frame = reader.read_rgbd(event.index);
+			RgbdFrameResult frame = reader.read_rgbd(event.index);
 			if (!frame.ok) {
 				std::fprintf(stderr, "roomprobe_bench: %s (frame skipped)\n", frame.error.c_str());
 				frames_failed++;
 				continue;
 			}
 			rgbd_done++;
-			const DenseSlamFrame result = slam.process(frame.frame);
-			record_slam_frame(result, frame.frame.timestamp_s, &truth, &figures);
-			if (result.tracking.state != TrackingState::Lost) {
-				std::string append_error;
-				tracked.append({ frame.frame.timestamp_s, slam.pose() }, &append_error);
-			}
-			if (result.integrated && ++fused_since_mesh >= MESH_INTERVAL) {
-				fused_since_mesh = 0;
-				const Clock::time_point start = Clock::now();
-				figures.mesh_triangles = slam.update_mesh().indices.size() / 3;
-				figures.mesh.add(ms_since(start));
-			}
-			// The probe's environment map, as RoomProbe renders it each frame.
 			Clock::time_point start = Clock::now();
-			Cubemap map = coarse.render_cubemap(probe, true, LIVE_CUBEMAP_SIZE);
-			const double coarse_ms = ms_since(start);
+			engine.push_rgbd(std::move(frame.frame));
+			const double push_ms = ms_since(start);
+			push_rgbd.add(push_ms);
+			const std::shared_ptr<const TrackedFrame> tracked = engine.tracked_frame();
+			if (tracked) {
+				record_tracked_frame(*tracked, &truth, &figures);
+			}
+			// The engine re-meshes inside push_rgbd every MESH_INTERVAL fused frames: its cost is the
+			// call's time beyond SLAM's own (meshing and the placement BVH).
+			const std::shared_ptr<const DenseMeshSnapshot> mesh = engine.dense_mesh();
+			if (mesh && mesh->version != mesh_version_seen) {
+				mesh_version_seen = mesh->version;
+				figures.mesh.add(push_ms - (tracked ? tracked->timings.frame_ms : 0.0));
+				figures.mesh_triangles = mesh->mesh.indices.size() / 3;
+			}
+			// The probe's environment map, as RoomProbe takes it each frame.
 			start = Clock::now();
-			dense_lighting.render_over(slam.volume(), slam.integrated_count(), coarse.cumulative_lighting(), probe, DenseRenderOptions(), &map);
-			const double dense_ms = ms_since(start);
-			cubemap_coarse.add(coarse_ms);
-			cubemap_dense.add(dense_ms);
-			live_frame.add(result.timings.frame_ms + coarse_ms + dense_ms);
+			engine.render_probes();
+			const double render_ms = ms_since(start);
+			render_call.add(render_ms);
+			const std::shared_ptr<const ProbeMap> map = engine.probe_map(probe_id);
+			if (map) {
+				map_coarse.add(map->coarse_ms);
+				map_dense.add(map->dense_ms);
+				map_sh.add(map->sh_ms);
+				map_mips.add(map->mips_ms);
+				map_total.add(map->total_ms);
+			}
+			live_frame.add(push_ms + render_ms);
 		} else {
-			const FisheyeFrameResult frame = reader.read_fisheye(event.index);
+			FisheyeFrameResult frame = reader.read_fisheye(event.index);
 			if (!frame.ok) {
 				std::fprintf(stderr, "roomprobe_bench: %s (frame skipped)\n", frame.error.c_str());
 				frames_failed++;
 				continue;
 			}
-			Pose world_from_fisheye;
+			// The pose the engine is about to take (step mode: nothing moves in between).
+			Pose world_from_fisheye, true_fisheye;
 			std::string pose_error;
-			if (tracked.is_empty() || !fisheye_pose_at(tracked, rig, frame.frame.timestamp_s, &world_from_fisheye, &pose_error, FISHEYE_EXTRAPOLATION_S)) {
-				// As the node: never integrated at a guess.
-				if (first_skip.empty()) {
-					first_skip = tracked.is_empty() ? "no tracked pose yet" : pose_error;
-				}
-				fisheye_skipped++;
-				continue;
-			}
-			Pose true_fisheye;
-			if (!truth.is_empty() && fisheye_pose_at(truth, rig, frame.frame.timestamp_s, &true_fisheye, &pose_error)) {
+			if (engine.fisheye_pose(frame.frame.timestamp_s, &world_from_fisheye, &pose_error) && !truth.is_empty() &&
+					fisheye_pose_at(truth, rig, frame.frame.timestamp_s, &true_fisheye, &pose_error)) {
 				fisheye_error_mm.add(1000.0 * glm::length(world_from_fisheye.translation - true_fisheye.translation));
 			}
-			const CoarseFrameStats stats = coarse.add_fisheye_frame(frame.frame, world_from_fisheye);
-			occlusion_skipped += stats.occlusion_skipped ? 1 : 0;
-			const CoarsePipelineTimings &t = coarse.last_timings();
+			fisheye_pushed++;
+			const Clock::time_point start = Clock::now();
+			engine.push_fisheye(std::move(frame.frame));
+			const double push_ms = ms_since(start);
+			const std::shared_ptr<const CoarseSnapshot> snapshot = engine.coarse_snapshot();
+			if (!snapshot || snapshot->frames == coarse_frames_seen) {
+				continue; // not integrated (no pose yet): its time is not the coarse model's
+			}
+			coarse_frames_seen = snapshot->frames;
+			fisheye_integrated++;
+			push_fisheye.add(push_ms);
+			occlusion_skipped += snapshot->last.occlusion_skipped ? 1 : 0;
+			const CoarsePipelineTimings &t = snapshot->timings;
 			occlusion.add(t.occlusion_ms);
 			lighting.add(t.lighting_ms);
 			update.add(t.update_ms);
 			inpaint.add(t.inpaint_ms);
 			coarse_frame.add(t.frame_ms);
-			fisheye_done++;
 		}
 	}
 	if (rgbd_done == 0) {
@@ -392,84 +528,357 @@ int bench_recording(const Arguments &p_args) {
 		return 1;
 	}
 	const Clock::time_point finish_start = Clock::now();
-	coarse.finish_inpainting();
+	engine.finish();
 	const double finish_ms = ms_since(finish_start);
 	const Clock::time_point last_mesh_start = Clock::now();
-	figures.mesh_triangles = slam.update_mesh().indices.size() / 3;
+	engine.update_dense_mesh();
 	const double last_mesh_ms = ms_since(last_mesh_start);
+	if (const std::shared_ptr<const DenseMeshSnapshot> mesh = engine.dense_mesh()) {
+		figures.mesh_triangles = mesh->mesh.indices.size() / 3;
+	}
+	const LiveRoomStats stats = engine.stats();
 
-	std::printf("  processed: %zu RGB-D frames, %zu fisheye frames (%zu skipped without a tracked pose%s%s), %zu unreadable\n\n", rgbd_done, fisheye_done,
-			fisheye_skipped, first_skip.empty() ? "" : ", first: ", first_skip.c_str(), frames_failed);
+	std::printf("  processed: %zu RGB-D frames, %zu of %zu fisheye frames integrated (%llu skipped without a tracked pose%s%s), %zu unreadable",
+			rgbd_done, fisheye_integrated, fisheye_pushed, (unsigned long long)stats.fisheye_without_pose,
+			stats.fisheye_pose_problem.empty() ? "" : ", last: ", stats.fisheye_pose_problem.c_str(), frames_failed);
+	std::printf("; %llu probe renders, %llu stage errors%s%s\n\n", (unsigned long long)stats.probe_renders, (unsigned long long)stats.stage_errors,
+			stats.last_error.empty() ? "" : ", last: ", stats.last_error.c_str());
 
 	print_table_header("per-stage timings, ms (n = frames or calls; paper: Table 1, a GPU system, for reference)");
-	print_slam_rows(figures);
-	std::printf("  coarse model, per fisheye frame:\n");
+	char name[96];
+	std::snprintf(name, sizeof(name), "re-mesh + placement BVH (every %d fused)", MESH_INTERVAL);
+	print_slam_rows(figures, name);
+	print_row("push_rgbd (whole engine call)", push_rgbd);
+	std::printf("  coarse model, per integrated fisheye frame:\n");
 	print_row("  undistort fisheye (not needed)", Series(), 8.55, "Undistort fisheye image");
-	print_row(occlusion_skipped == fisheye_done && fisheye_done > 0 ? "  occlusion (skipped: convex room)" : "  occlusion", occlusion, 0.61,
+	print_row(occlusion_skipped == fisheye_integrated && fisheye_integrated > 0 ? "  occlusion (skipped: convex room)" : "  occlusion", occlusion, 0.61,
 			"Render occlusion mask");
 	print_row("  lighting (gain)", lighting, 21.37, "Estimate brightness");
 	print_row("  texture update", update, 0.29, "Update coarse model");
 	print_row("  inpaint compose (async request)", inpaint);
-	print_row("  coarse frame (whole call)", coarse_frame);
-	std::printf("  probe 0's environment map, per RGB-D frame:\n");
-	char name[64];
-	std::snprintf(name, sizeof(name), "  coarse cubemap render %d^2", LIVE_CUBEMAP_SIZE);
-	print_row(name, cubemap_coarse, 0.91, "Render cubemap (coarse), 256^2");
-	std::snprintf(name, sizeof(name), "  dense cubemap pass %d^2 (scale %d)", LIVE_CUBEMAP_SIZE, DenseRenderOptions().scale);
-	print_row(name, cubemap_dense, 7.46, "Render cubemap (dense), 256^2");
-	std::printf("  after the last frame: finish_inpainting %.2f ms, final update_mesh %.2f ms (%zu triangles)\n", finish_ms, last_mesh_ms,
+	print_row("  coarse frame (add_fisheye_frame)", coarse_frame);
+	print_row("  push_fisheye (whole engine call)", push_fisheye);
+	std::printf("  probe %s's environment map, per RGB-D frame (ProbeMap):\n", setup.probe_from_file ? "0" : "(floorplan centre)");
+	std::snprintf(name, sizeof(name), "  coarse cubemap render %d^2", probe_size);
+	print_row(name, map_coarse, 0.91, "Render cubemap (coarse), 256^2");
+	std::snprintf(name, sizeof(name), "  dense cubemap pass %d^2 (scale %d)", probe_size, setup.config.dense_render_scale);
+	print_row(name, map_dense, 7.46, "Render cubemap (dense), 256^2");
+	print_row("  SH projection", map_sh);
+	print_row("  half-float mip chains (6 faces)", map_mips);
+	print_row("  probe map (whole render)", map_total);
+	print_row("  render_probes (whole engine call)", render_call);
+	std::printf("  after the last frame: finish (inpainting) %.2f ms, final update_dense_mesh %.2f ms (%zu triangles)\n", finish_ms, last_mesh_ms,
 			figures.mesh_triangles);
 
-	// Full frame: the per-RGB-D-frame work, plus the coarse work spread over the RGB-D frames.
-	const double fisheye_per_rgbd = double(fisheye_done) / double(rgbd_done);
-	const double full_median = live_frame.median() + fisheye_per_rgbd * coarse_frame.median();
-	const double full_mean = live_frame.mean() + fisheye_per_rgbd * coarse_frame.mean();
-	const double mesh_per_frame = figures.mesh.empty() ? 0.0 : figures.mesh.mean() * double(figures.mesh.values.size()) / double(rgbd_done);
-	std::printf("\nfull frame = SLAM process + coarse cubemap + dense cubemap (per RGB-D frame) + %.3f fisheye frames per RGB-D frame x coarse frame:\n",
+	// Full frame: the engine's per-RGB-D-frame work, plus its fisheye work spread over the RGB-D frames.
+	const double fisheye_per_rgbd = double(fisheye_integrated) / double(rgbd_done);
+	const double full_median = live_frame.median() + fisheye_per_rgbd * push_fisheye.median();
+	const double full_mean = live_frame.mean() + fisheye_per_rgbd * push_fisheye.mean();
+	std::printf("\nfull frame = push_rgbd + render_probes (per RGB-D frame) + %.3f integrated fisheye frames per RGB-D frame x push_fisheye:\n",
 			fisheye_per_rgbd);
 	std::printf("  median-based %.2f ms (%.2f + %.3f x %.2f)   mean-based %.2f ms   paper %.2f ms (GPU system, incl. rendering the scene)\n", full_median,
-			live_frame.median(), fisheye_per_rgbd, coarse_frame.median(), full_mean, PAPER_FRAME_MS);
-	std::printf("  (meshing, not included: %.2f ms per RGB-D frame amortised)\n", mesh_per_frame);
+			live_frame.median(), fisheye_per_rgbd, push_fisheye.median(), full_mean, PAPER_FRAME_MS);
+	std::printf("  (re-meshing is inside push_rgbd: in the mean, rarely in the median)\n");
 	print_slam_target(figures, rig.rgb.width, rig.rgb.height);
 
-	// The dense cubemap's cost options on the final model.
-	std::printf("\ndense cubemap options on the final model at probe %s (render_dense_over over a coarse render, median of %d):\n",
-			probe_from_file ? "0" : "(floorplan centre)", OPTION_REPEATS);
-	std::printf("  %-6s %-6s %10s %16s %10s\n", "size", "scale", "ms", "covered texels", "of all");
-	const LightingChange change = dense_lighting.update(slam.integrated_count(), coarse.cumulative_lighting());
+	// The dense pass's cost options on the final model: the engine's coarse map at the probe
+	// (render_at without the dense model), then render_dense_over on the engine's TSDF at each scale.
+	std::printf("\ndense cubemap options on the final model at probe %s (median of %d):\n", setup.probe_from_file ? "0" : "(floorplan centre)",
+			OPTION_REPEATS);
+	const DenseSlam *slam = engine.slam_model();
+	std::array<float, 256> rgb_lut{};
+	if (setup.config.photometry.known) {
+		rgb_lut = linearising_lut(setup.config.photometry.rgb_exposure);
+	}
+	std::printf("  %-6s %-6s %10s %16s %10s   %s\n", "size", "scale", "ms", "covered texels", "of all", "render_at (coarse + dense, engine's scale), ms");
 	for (int size : { 128, 256 }) {
-		const Cubemap base = coarse.render_cubemap(probe, true, size);
+		const Cubemap base = engine.render_at(probe, size, true, false);
+		Series engine_ms;
+		for (int repeat = 0; repeat < OPTION_REPEATS; repeat++) {
+			const Clock::time_point start = Clock::now();
+			const Cubemap whole = engine.render_at(probe, size, true, true);
+			engine_ms.add(ms_since(start));
+		}
 		for (int scale : { 1, 2, 4 }) {
 			DenseRenderOptions options;
 			options.scale = scale;
-			options.gain = change.gain;
-			options.offset = change.offset;
+			options.lut = setup.config.photometry.known ? &rgb_lut : nullptr;
 			Series ms;
 			int covered = 0;
-			for (int repeat = 0; repeat < OPTION_REPEATS; repeat++) {
+			for (int repeat = 0; slam != nullptr && repeat < OPTION_REPEATS; repeat++) {
 				Cubemap map = clone_cubemap(base);
 				const Clock::time_point start = Clock::now();
-				const DenseRenderStats stats = render_dense_over(slam.volume(), probe, options, &map);
+				const DenseRenderStats dense = render_dense_over(slam->volume(), probe, options, &map);
 				ms.add(ms_since(start));
-				covered = stats.texels_covered;
+				covered = dense.texels_covered;
 			}
-			std::printf("  %3d^2  1/%-4d %10.2f %16d %9.1f%%\n", size, scale, ms.median(), covered, 100.0 * double(covered) / (6.0 * size * size));
+			std::printf("  %3d^2  1/%-4d %10.2f %16d %9.1f%%", size, scale, ms.median(), covered, 100.0 * double(covered) / (6.0 * size * size));
+			if (scale == setup.config.dense_render_scale) {
+				std::printf("   %.2f", engine_ms.median());
+			}
+			std::printf("\n");
 		}
 	}
 
 	std::printf("\n");
-	print_accuracy(figures, true);
+	print_accuracy(figures, true, "the engine's tracked RGB-D poses, the held pose when lost");
 	if (!fisheye_error_mm.empty()) {
 		std::printf("  fisheye poses from the tracked trajectory: position error median %.2f mm, max %.2f mm (against the ground truth's)\n",
 				fisheye_error_mm.median(), fisheye_error_mm.percentile(1.0));
 	}
 	std::printf("\n");
-	print_memory(slam);
+	print_memory(stats.tsdf);
 	std::printf("  dense mesh: %zu triangles\n", figures.mesh_triangles);
+	std::printf("summary: mode=slam frames=%zu fisheye_frames=%zu track_ms_p50=%.2f integrate_ms_p50=%.2f slam_ms_p50=%.2f probe_ms_p50=%.2f "
+				"frame_ms_p50=%.2f frame_ms_mean=%.2f ate_mm=%s good=%d poor=%d lost=%d\n",
+			rgbd_done, fisheye_integrated, figures.track.median(), figures.integrate.median(), figures.process.median(), map_total.median(), full_median,
+			full_mean, figure(figures.compared > 0, figures.ate_mm()).c_str(), figures.good, figures.poor, figures.lost);
 	return 0;
 }
 
-// ---------------------------------------------------------------- TUM
+// ---------------------------------------------------------------- live --recording (threaded, real time)
+
+int bench_live(const Arguments &p_args) {
+	const int probe_size = p_args.probe_size > 0 ? p_args.probe_size : LIVE_PROBE_SIZE;
+	RecordingSetup setup;
+	if (!open_recording(p_args, probe_size, &setup)) {
+		return 1;
+	}
+	const RecordingReader &reader = setup.reader;
+	const Trajectory &truth = setup.config.ground_truth;
+	LiveRoom engine;
+	const std::string error = engine.configure(setup.config);
+	if (!error.empty()) {
+		std::fprintf(stderr, "roomprobe_bench: --recording %s: %s\n", p_args.recording.c_str(), error.c_str());
+		return 1;
+	}
+	const int probe_id = engine.add_probe(setup.probe, probe_size);
+	print_recording_header("live", p_args, setup, probe_size);
+
+	// The events to play: up to (not including) the RGB-D event after the last one wanted.
+	std::vector<PlaybackEvent> events;
+	size_t rgbd_events = 0;
+	for (const PlaybackEvent &event : reader.get_events()) {
+		if (event.stream == RecordingStream::Rgbd && rgbd_events++ >= setup.rgbd_total) {
+			break;
+		}
+		events.push_back(event);
+	}
+	if (events.empty()) {
+		std::fprintf(stderr, "roomprobe_bench: --recording %s: no events to play\n", p_args.recording.c_str());
+		return 1;
+	}
+	const double span_s = events.back().time_s - events.front().time_s;
+	std::printf("  playback: %zu events over %.2f s of recording at speed %.2f; main loop polls at %.0f Hz\n", events.size(), span_s, p_args.speed,
+			MAIN_LOOP_HZ);
+
+	if (!engine.start()) {
+		std::fprintf(stderr, "roomprobe_bench: --recording %s: the engine did not start\n", p_args.recording.c_str());
+		return 1;
+	}
+
+	// The capture thread: as a device driver delivers, then as RigCapture pushes.
+	Series late_ms, decode_rgbd_ms, decode_fisheye_ms, push_call_ms;
+	size_t rgbd_pushed = 0, fisheye_pushed = 0, frames_failed = 0;
+	std::atomic<bool> capture_done{ false };
+	const Clock::time_point start = Clock::now();
+	Clock::time_point capture_end = start;
+	std::thread capture([&] {
+		const double t0 = events.front().time_s;
+		for (const PlaybackEvent &event : events) {
+			const Clock::time_point due =
+					start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>((event.time_s - t0) / p_args.speed));
+			std::this_thread::sleep_until(due);
+			late_ms.add(ms_since(due));
+			const Clock::time_point read_start = Clock::now();
+			if (event.stream == RecordingStream::Rgbd) {
+				RgbdFrameResult frame = reader.read_rgbd(event.index);
+				decode_rgbd_ms.add(ms_since(read_start));
+				if (!frame.ok) {
+					frames_failed++;
+					continue;
+				}
+				const Clock::time_point push_start = Clock::now();
+				engine.push_rgbd(std::move(frame.frame));
+				push_call_ms.add(ms_since(push_start));
+				rgbd_pushed++;
+			} else {
+				FisheyeFrameResult frame = reader.read_fisheye(event.index);
+				decode_fisheye_ms.add(ms_since(read_start));
+				if (!frame.ok) {
+					frames_failed++;
+					continue;
+				}
+				const Clock::time_point push_start = Clock::now();
+				engine.push_fisheye(std::move(frame.frame));
+				push_call_ms.add(ms_since(push_start));
+				fisheye_pushed++;
+			}
+		}
+		capture_end = Clock::now();
+		capture_done = true;
+	});
+
+	// The main thread, as Godot's: each tick takes the newest map and, when it is new, copies its
+	// faces' bytes (as into the Image the ReflectionProbe's texture is made from).
+	Series main_copy_ms, main_poll_ms, map_coarse, map_dense, map_sh, map_mips, map_total, map_age_ms;
+	Series slam_track, slam_integrate, slam_frame, coarse_frame;
+	std::array<std::vector<uint8_t>, 6> face_bytes;
+	uint64_t map_version_seen = 0, tracked_seen = 0, coarse_seen = 0;
+	size_t ticks = 0, late_ticks = 0, maps_taken = 0;
+	bool draining = false, final_map_seen = false;
+	Clock::time_point drain_deadline = start;
+	double finish_ms = 0.0;
+	uint64_t final_rgbd = 0, final_fisheye = 0, version_at_finish = 0;
+	const Clock::duration tick = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / MAIN_LOOP_HZ));
+	Clock::time_point next_tick = start;
+	while (true) {
+		std::this_thread::sleep_until(next_tick);
+		next_tick += tick;
+		if (Clock::now() > next_tick) {
+			late_ticks++;
+			next_tick = Clock::now() + tick; // a missed frame is not caught up
+		}
+		ticks++;
+		const Clock::time_point poll_start = Clock::now();
+		const std::shared_ptr<const ProbeMap> map = engine.probe_map(probe_id);
+		if (map && map->version != map_version_seen) {
+			for (size_t f = 0; f < 6; f++) {
+				const std::vector<uint16_t> &src = map->gpu_faces[f];
+				face_bytes[f].resize(src.size() * sizeof(uint16_t));
+				std::memcpy(face_bytes[f].data(), src.data(), face_bytes[f].size());
+			}
+			main_copy_ms.add(ms_since(poll_start));
+			map_version_seen = map->version;
+			maps_taken++;
+			map_coarse.add(map->coarse_ms);
+			map_dense.add(map->dense_ms);
+			map_sh.add(map->sh_ms);
+			map_mips.add(map->mips_ms);
+			map_total.add(map->total_ms);
+		} else {
+			main_poll_ms.add(ms_since(poll_start));
+		}
+		// The stages' own timings, as often as the main loop sees a new result.
+		if (const std::shared_ptr<const TrackedFrame> tracked = engine.tracked_frame(); tracked && tracked->sequence != tracked_seen) {
+			tracked_seen = tracked->sequence;
+			slam_track.add(tracked->timings.track_ms);
+			if (tracked->integrated) {
+				slam_integrate.add(tracked->timings.integrate_ms);
+			}
+			slam_frame.add(tracked->timings.frame_ms);
+		}
+		if (const std::shared_ptr<const CoarseSnapshot> snapshot = engine.coarse_snapshot(); snapshot && snapshot->frames != coarse_seen) {
+			coarse_seen = snapshot->frames;
+			coarse_frame.add(snapshot->timings.frame_ms);
+		}
+		if (!draining && capture_done) {
+			// The recording is over: the engine finishes what it was given (the main thread waits,
+			// as a node's finish would), then the loop runs on until a map made after that includes
+			// the last frames of both streams.
+			capture.join();
+			const Clock::time_point finish_start = Clock::now();
+			engine.finish();
+			finish_ms = ms_since(finish_start);
+			const std::shared_ptr<const TrackedFrame> last_tracked = engine.tracked_frame();
+			const std::shared_ptr<const CoarseSnapshot> last_coarse = engine.coarse_snapshot();
+			const std::shared_ptr<const ProbeMap> at_finish = engine.probe_map(probe_id);
+			final_rgbd = last_tracked ? last_tracked->sequence : 0;
+			final_fisheye = last_coarse ? last_coarse->fisheye_sequence : 0;
+			version_at_finish = at_finish ? at_finish->version : 0;
+			draining = true;
+			drain_deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(FINAL_MAP_WAIT_S));
+			continue;
+		}
+		if (draining) {
+			const bool final_map = map && map->version > version_at_finish && map->rgbd_sequence >= final_rgbd && map->fisheye_sequence >= final_fisheye;
+			final_map_seen = final_map;
+			if (final_map || Clock::now() > drain_deadline) {
+				break;
+			}
+		}
+	}
+	const Clock::time_point end = Clock::now();
+	engine.stop();
+	const LiveRoomStats stats = engine.stats();
+	const double capture_s = ms_between(start, capture_end) / 1000.0;
+	const double wall_s = ms_between(start, end) / 1000.0;
+
+	// ATE over the tracked trajectory (the poses the fisheye takes; Lost frames have none).
+	SlamFigures figures;
+	figures.good = int(stats.good);
+	figures.poor = int(stats.poor);
+	figures.lost = int(stats.lost);
+	const Trajectory tracked = engine.trajectory();
+	for (const TimedPose &sample : tracked.get_samples()) {
+		record_error(sample.world_from_camera, sample.t_s, &truth, &figures);
+	}
+	const std::shared_ptr<const TrackedFrame> last = engine.tracked_frame();
+
+	std::printf("  pushed: %zu RGB-D, %zu fisheye frames; %zu unreadable\n\n", rgbd_pushed, fisheye_pushed, frames_failed);
+	std::printf("frames (LiveRoomStats):\n");
+	std::printf("  RGB-D:   pushed %llu, processed %llu, dropped %llu (%.1f%%)\n", (unsigned long long)stats.rgbd_pushed,
+			(unsigned long long)stats.rgbd_processed, (unsigned long long)stats.rgbd_dropped,
+			stats.rgbd_pushed == 0 ? 0.0 : 100.0 * double(stats.rgbd_dropped) / double(stats.rgbd_pushed));
+	std::printf("  fisheye: pushed %llu, integrated %llu, dropped %llu (%.1f%%), without a pose %llu%s%s\n", (unsigned long long)stats.fisheye_pushed,
+			(unsigned long long)stats.fisheye_integrated, (unsigned long long)stats.fisheye_dropped,
+			stats.fisheye_pushed == 0 ? 0.0 : 100.0 * double(stats.fisheye_dropped) / double(stats.fisheye_pushed),
+			(unsigned long long)stats.fisheye_without_pose, stats.fisheye_pose_problem.empty() ? "" : " (last: ", stats.fisheye_pose_problem.empty() ? "" : (stats.fisheye_pose_problem + ")").c_str());
+	std::printf("  dense SLAM: %zu frames, %zu fused; stage errors %llu%s%s\n", stats.dense_frames, stats.dense_fused,
+			(unsigned long long)stats.stage_errors, stats.last_error.empty() ? "" : ", last: ", stats.last_error.c_str());
+	std::printf("latency, push to the first probe map that includes the frame (nearest rank):\n");
+	std::printf("  RGB-D:   n %zu   p50 %.2f ms   p95 %.2f ms   max %.2f ms\n", stats.rgbd_latency.count, stats.rgbd_latency.p50_ms,
+			stats.rgbd_latency.p95_ms, stats.rgbd_latency.max_ms);
+	std::printf("  fisheye: n %zu   p50 %.2f ms   p95 %.2f ms   max %.2f ms\n", stats.fisheye_latency.count, stats.fisheye_latency.p50_ms,
+			stats.fisheye_latency.p95_ms, stats.fisheye_latency.max_ms);
+
+	print_table_header("\ntimings, ms (the workers' published figures, each as often as the main loop saw a new one)");
+	print_row("SLAM tracking", slam_track);
+	print_row("SLAM integration (fused frames)", slam_integrate);
+	print_row("SLAM process (whole call)", slam_frame, 3.16, "SLAM Update (GPU)");
+	print_row("coarse frame (add_fisheye_frame)", coarse_frame);
+	char name[96];
+	std::snprintf(name, sizeof(name), "probe coarse cubemap %d^2", probe_size);
+	print_row(name, map_coarse, 0.91, "Render cubemap (coarse), 256^2");
+	std::snprintf(name, sizeof(name), "probe dense pass %d^2 (scale %d)", probe_size, setup.config.dense_render_scale);
+	print_row(name, map_dense, 7.46, "Render cubemap (dense), 256^2");
+	print_row("probe SH projection", map_sh);
+	print_row("probe half-float mip chains", map_mips);
+	print_row("probe map (whole render)", map_total);
+	std::printf("  probe renders: %llu by the engine, %zu taken by the main loop\n", (unsigned long long)stats.probe_renders, maps_taken);
+	std::printf("main thread (%zu ticks at %.0f Hz, %zu late):\n", ticks, MAIN_LOOP_HZ, late_ticks);
+	print_row("take a new map + copy its GPU bytes", main_copy_ms);
+	std::printf("  %-40s p50 %.3f ms   p95 %.3f ms\n", "  (the same)", main_copy_ms.median(), main_copy_ms.percentile(0.95));
+	print_row("poll without a new map", main_poll_ms);
+	std::printf("capture thread:\n");
+	print_row("read + decode RGB-D", decode_rgbd_ms);
+	print_row("read + decode fisheye", decode_fisheye_ms);
+	print_row("push call", push_call_ms);
+	print_row("lateness against the event's instant", late_ms);
+	std::printf("real time: %.2f s of recording played in %.2f s (capture; x%.2f asked), %.2f s to %s; finish() %.2f ms\n", span_s, capture_s,
+			p_args.speed, wall_s, final_map_seen ? "the map with the last frames" : "giving up on a map with the last frames", finish_ms);
+	const double real_time_factor = capture_s > 0.0 ? span_s / capture_s : 0.0;
+	std::printf("  real-time factor (recording time / capture time): %.3f\n", real_time_factor);
+	if (last) {
+		std::printf("  last tracked frame: #%llu, %s%s%s\n", (unsigned long long)last->sequence, state_name(last->state), last->reason.empty() ? "" : ": ",
+				last->reason.c_str());
+	}
+	std::printf("\n");
+	print_accuracy(figures, true, "the tracked trajectory's poses (lost frames have none)");
+	std::printf("\n");
+	print_memory(stats.tsdf);
+	std::printf("summary: mode=live latency_ms_p50=%.2f latency_ms_p95=%.2f fisheye_latency_ms_p50=%.2f fisheye_latency_ms_p95=%.2f dropped_rgbd=%llu "
+				"dropped_fisheye=%llu pushed_rgbd=%llu pushed_fisheye=%llu probe_renders=%llu probe_ms_p50=%.2f main_copy_ms_p50=%.3f "
+				"main_copy_ms_p95=%.3f real_time_factor=%.3f ate_mm=%s good=%llu poor=%llu lost=%llu\n",
+			stats.rgbd_latency.p50_ms, stats.rgbd_latency.p95_ms, stats.fisheye_latency.p50_ms, stats.fisheye_latency.p95_ms,
+			(unsigned long long)stats.rgbd_dropped, (unsigned long long)stats.fisheye_dropped, (unsigned long long)stats.rgbd_pushed,
+			(unsigned long long)stats.fisheye_pushed, (unsigned long long)stats.probe_renders, map_total.median(), main_copy_ms.median(),
+			main_copy_ms.percentile(0.95), real_time_factor, figure(figures.compared > 0, figures.ate_mm()).c_str(), (unsigned long long)stats.good,
+			(unsigned long long)stats.poor, (unsigned long long)stats.lost);
+	return 0;
+}
+
+// ---------------------------------------------------------------- slam --tum (DenseSlam alone)
 
 int bench_tum(const Arguments &p_args) {
 	TumDatasetOptions options;
@@ -536,7 +945,10 @@ int bench_tum(const Arguments &p_args) {
 			continue;
 		}
 		const DenseSlamFrame result = slam.process(frame.frame);
-		record_slam_frame(result, frame.frame.timestamp_s, has_initial ? &truth : nullptr, &figures);
+		record_timings(result.timings, result.integrated, &figures);
+		record_state(result.tracking.state, &figures);
+		// The reported pose (the held one when Lost), as the application would use it.
+		record_error(result.tracking.world_from_camera, frame.frame.timestamp_s, has_initial ? &truth : nullptr, &figures);
 		done++;
 	}
 	if (done == 0) {
@@ -545,12 +957,16 @@ int bench_tum(const Arguments &p_args) {
 	}
 	std::printf("  processed %zu frames, %zu unreadable\n\n", done, failed);
 	print_table_header("per-stage timings, ms (paper: Table 1, for reference)");
-	print_slam_rows(figures);
+	print_slam_rows(figures, "");
 	print_slam_target(figures, rgb.width, rgb.height);
 	std::printf("\n");
-	print_accuracy(figures, false);
+	print_accuracy(figures, false, "tracked RGB-D poses, the held pose when lost");
 	std::printf("\n");
-	print_memory(slam);
+	print_memory(slam.volume().stats());
+	std::printf("summary: mode=tum frames=%zu track_ms_p50=%.2f integrate_ms_p50=%.2f slam_ms_p50=%.2f track_integrate_ms_p50=%.2f ate_mm=%s good=%d "
+				"poor=%d lost=%d\n",
+			done, figures.track.median(), figures.integrate.median(), figures.process.median(), figures.track_integrate.median(),
+			figure(figures.compared > 0, figures.ate_mm()).c_str(), figures.good, figures.poor, figures.lost);
 	return 0;
 }
 
@@ -562,13 +978,14 @@ int main(int argc, char **argv) {
 	}
 	const std::string verb = argv[1];
 	if (verb == "--help" || verb == "-h") {
-		usage(nullptr);
+		print_usage(stdout);
 		return 0;
 	}
-	if (verb != "slam") {
-		return usage(("unknown benchmark '" + verb + "' (only 'slam')").c_str());
+	if (verb != "slam" && verb != "live") {
+		return usage(("unknown benchmark '" + verb + "' (slam or live)").c_str());
 	}
 	Arguments args;
+	args.mode = verb;
 	cli::Arguments cursor(argc, argv, 2);
 	std::string arg;
 	while (cursor.next(&arg)) {
@@ -577,7 +994,7 @@ int main(int argc, char **argv) {
 			if (!cursor.value(&args.recording)) {
 				return usage("--recording needs a folder");
 			}
-		} else if (arg == "--tum") {
+		} else if (arg == "--tum" && args.mode == "slam") {
 			if (!cursor.value(&args.tum)) {
 				return usage("--tum needs a folder");
 			}
@@ -591,12 +1008,24 @@ int main(int argc, char **argv) {
 				return usage("--threads needs a positive integer");
 			}
 			args.threads = int(n);
+		} else if (arg == "--probe-size") {
+			if (!cursor.positive_integer(&n) || n > 4096) {
+				return usage("--probe-size needs a face size in texels, 1 to 4096");
+			}
+			args.probe_size = int(n);
+		} else if (arg == "--speed" && args.mode == "live") {
+			if (!cursor.positive_number(&args.speed)) {
+				return usage("--speed needs a number > 0");
+			}
 		} else if (arg == "--help" || arg == "-h") {
-			usage(nullptr);
+			print_usage(stdout);
 			return 0;
 		} else {
-			return usage(("unknown argument " + arg).c_str());
+			return usage(("unknown argument " + arg + " for " + args.mode).c_str());
 		}
+	}
+	if (args.mode == "live" && args.recording.empty()) {
+		return usage("live needs --recording");
 	}
 	if (args.recording.empty() && args.tum.empty()) {
 		return usage("--recording or --tum is required");
@@ -606,6 +1035,9 @@ int main(int argc, char **argv) {
 	if (args.threads > 0) {
 		cv::setNumThreads(args.threads);
 		tbb_threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(args.threads));
+	}
+	if (args.mode == "live") {
+		return bench_live(args);
 	}
 	int rc = 0;
 	if (!args.recording.empty()) {

@@ -1,12 +1,11 @@
 #include "evaluate.h"
 
+#include <engine/live_room.h>
 #include <envmap/baseline.h>
-#include <envmap/dense_render.h>
 #include <envmap/export.h>
-#include <slam/dense_slam.h>
 #include <recording/recording_reader.h>
 #include <rig/fisheye_pose.h>
-#include <synth/synth_renderer.h>
+#include <rig/photometry.h>
 
 #include <chrono>
 #include <array>
@@ -24,49 +23,6 @@ using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point p_start) {
 	return std::chrono::duration<double, std::milli>(Clock::now() - p_start).count();
-}
-
-float srgb_to_linear(float p_v) {
-	return p_v <= 0.04045f ? p_v / 12.92f : std::pow((p_v + 0.055f) / 1.055f, 2.4f);
-}
-
-// An 8-bit camera's value -> radiance: sRGB decoded, over the camera's exposure.
-std::array<float, 256> linearising_lut(double p_exposure) {
-	std::array<float, 256> lut{};
-	for (int i = 0; i < 256; i++) {
-		lut[size_t(i)] = float(srgb_to_linear(float(i) / 255.0f) / p_exposure);
-	}
-	return lut;
-}
-
-struct Photometry {
-	bool active = false;
-	double exposure = 1.0;
-	cv::Mat inverse_vignetting; // CV_32FC1, fisheye-sized
-	std::array<float, 256> lut{};
-};
-
-// 8-bit sRGB frame -> CV_32FC3 linear radiance (see evaluate.h).
-cv::Mat linearise(const Photometry &p_photometry, const cv::Mat &p_image) {
-	if (!p_photometry.active || p_image.depth() != CV_8U) {
-		return p_image;
-	}
-	cv::Mat rgb = p_image;
-	if (p_image.channels() == 1) {
-		cv::cvtColor(p_image, rgb, cv::COLOR_GRAY2RGB);
-	}
-	cv::Mat out(rgb.size(), CV_32FC3);
-	for (int y = 0; y < rgb.rows; y++) {
-		const cv::Vec3b *in = rgb.ptr<cv::Vec3b>(y);
-		const float *iv = p_photometry.inverse_vignetting.ptr<float>(y);
-		cv::Vec3f *o = out.ptr<cv::Vec3f>(y);
-		for (int x = 0; x < rgb.cols; x++) {
-			for (int c = 0; c < 3; c++) {
-				o[x][c] = p_photometry.lut[size_t(in[x][c])] * iv[x];
-			}
-		}
-	}
-	return out;
 }
 
 Cubemap to_cubemap(const CubemapFaces &p_faces, int p_size) {
@@ -92,80 +48,31 @@ void add_timings(CoarsePipelineTimings *r_sum, const CoarsePipelineTimings &p_to
 	r_sum->frame_ms = p_total.frame_ms * p_scale;
 }
 
-// The two dense variants of evaluate.h: the dense model fused at the true poses, drawn over the
-// gain pipeline's map; and the live system, tracked, with its own coarse pipeline fed the fisheye
-// poses of the tracked trajectory.
-class DenseVariants {
+// The SLAM variant's figures: tracking states, timings and ATE of the tracked engine.
+class SlamFigures {
 public:
-	std::string configure(const RecordingReader &p_reader, const CoarsePipelineOptions &p_coarse, bool p_linearise, double p_rgb_exposure) {
-		const Rig &rig = p_reader.get_rig();
-		const RoomInfo &room = p_reader.get_room();
-		std::string error = with_true_poses.configure(rig.rgb, room.initial_rgb_pose);
-		if (error.empty()) {
-			error = tracked.configure(rig.rgb, room.initial_rgb_pose);
-		}
-		coarse = std::make_unique<CoarsePipeline>(p_coarse);
-		if (error.empty()) {
-			error = coarse->configure(rig, room.floorplan);
-		}
-		with_true_poses.volume().set_keep_points(room.probes);
-		tracked.volume().set_keep_points(room.probes);
-		use_lut = p_linearise;
-		if (p_linearise) {
-			lut = linearising_lut(p_rgb_exposure);
-		}
-		return error;
-	}
-
-	void add_rgbd(const RgbdFrame &p_frame, const Trajectory &p_truth, SlamScores *r_scores) {
+	void add(const TrackedFrame &p_frame, const Trajectory &p_truth, SlamScores *r_scores) {
+		r_scores->frames++;
+		r_scores->good += p_frame.state == TrackingState::Good ? 1 : 0;
+		r_scores->poor += p_frame.state == TrackingState::Poor ? 1 : 0;
+		r_scores->lost += p_frame.state == TrackingState::Lost ? 1 : 0;
+		r_scores->track_ms += p_frame.timings.track_ms;
+		r_scores->integrate_ms += p_frame.timings.integrate_ms;
+		r_scores->raycast_ms += p_frame.timings.raycast_ms;
 		Pose truth;
 		std::string error;
-		const bool has_truth = p_truth.pose_at(p_frame.timestamp_s, &truth, &error);
-		if (has_truth) {
-			with_true_poses.process_at_pose(p_frame, truth);
-		}
-		const DenseSlamFrame out = tracked.process(p_frame);
-		r_scores->frames++;
-		r_scores->good += out.tracking.state == TrackingState::Good ? 1 : 0;
-		r_scores->poor += out.tracking.state == TrackingState::Poor ? 1 : 0;
-		r_scores->lost += out.tracking.state == TrackingState::Lost ? 1 : 0;
-		r_scores->track_ms += out.timings.track_ms;
-		r_scores->integrate_ms += out.timings.integrate_ms;
-		r_scores->raycast_ms += out.timings.raycast_ms;
-		if (out.tracking.state == TrackingState::Lost) {
+		if (p_frame.state == TrackingState::Lost || !p_frame.has_pose || !p_truth.pose_at(p_frame.timestamp_s, &truth, &error)) {
 			return;
 		}
-		trajectory.append({ p_frame.timestamp_s, tracked.pose() }, &error);
-		if (has_truth) {
-			const double e = glm::length(tracked.pose().translation - truth.translation);
-			ate_sum_sq += e * e;
-			ate_count++;
-			r_scores->ate_max_m = std::max(r_scores->ate_max_m, e);
-		}
+		const double e = glm::length(p_frame.world_from_camera.translation - truth.translation);
+		ate_sum_sq += e * e;
+		ate_count++;
+		r_scores->ate_max_m = std::max(r_scores->ate_max_m, e);
 	}
-
-	// p_frame linearised as the other variants get it.
-	void add_fisheye(const FisheyeFrame &p_frame, const Rig &p_rig) {
-		Pose pose;
-		std::string error;
-		// The fisheye may come up to a frame after the newest RGB-D frame: extrapolate that far.
-		if (fisheye_pose_at(trajectory, p_rig, p_frame.timestamp_s, &pose, &error, 0.1)) {
-			coarse->add_fisheye_frame(p_frame, pose);
-		}
+	void add_render(double p_ms) {
+		render_ms += p_ms;
+		renders++;
 	}
-
-	Cubemap over_true_poses(const Cubemap &p_coarse_map, const glm::dvec3 &p_probe, const LightingChange &p_cumulative) {
-		Cubemap map = clone_cubemap(p_coarse_map);
-		paint(with_true_poses, light_true, p_cumulative, p_probe, &map);
-		return map;
-	}
-
-	Cubemap live(const glm::dvec3 &p_probe, int p_size) {
-		Cubemap map = coarse->render_cubemap(p_probe, true, p_size);
-		paint(tracked, light_tracked, coarse->cumulative_lighting(), p_probe, &map);
-		return map;
-	}
-
 	void finish(SlamScores *r_scores) const {
 		const double n = r_scores->frames > 0 ? double(r_scores->frames) : 1.0;
 		r_scores->track_ms /= n;
@@ -176,19 +83,6 @@ public:
 	}
 
 private:
-	void paint(const DenseSlam &p_slam, DenseLighting &p_lighting, const LightingChange &p_cumulative, const glm::dvec3 &p_probe, Cubemap *io_map) {
-		DenseRenderOptions options;
-		options.lut = use_lut ? &lut : nullptr; // null: value / 255
-		render_ms += p_lighting.render_over(p_slam.volume(), p_slam.integrated_count(), p_cumulative, p_probe, options, io_map).milliseconds;
-		renders++;
-	}
-
-	DenseSlam with_true_poses, tracked;
-	std::unique_ptr<CoarsePipeline> coarse;
-	Trajectory trajectory; // tracked, RGB-D clock
-	DenseLighting light_true, light_tracked;
-	std::array<float, 256> lut{};
-	bool use_lut = false;
 	double ate_sum_sq = 0.0;
 	size_t ate_count = 0;
 	double render_ms = 0.0;
@@ -226,77 +120,71 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	const RoomInfo &room = reader.get_room();
 	const Trajectory &trajectory = reader.ground_truth_trajectory(RecordingStream::Rgbd);
 
-	// synth.yaml: photometry and the light switch.
-	Photometry photometry;
-	double rgb_exposure = 1.0;
+	// synth.yaml: the light switch, and the rig's photometry (a perfect photometric calibration).
 	const std::filesystem::path synth_yaml = std::filesystem::path(p_options.recording) / "synth.yaml";
 	if (std::filesystem::exists(synth_yaml)) {
 		cv::FileStorage info(synth_yaml.string(), cv::FileStorage::READ);
-		if (info.isOpened()) {
-			if (!info["light_switch_s"].empty()) {
-				result.light_switch_s = double(info["light_switch_s"]);
-			}
-			if (p_options.linearise) {
-				photometry.active = true;
-				if (!info["fisheye_exposure"].empty()) {
-					photometry.exposure = double(info["fisheye_exposure"]);
-				}
-				if (!info["rgb_exposure"].empty()) {
-					rgb_exposure = double(info["rgb_exposure"]);
-				}
-				double edge_gain = 1.0;
-				if (!info["fisheye_vignetting_edge_gain"].empty()) {
-					edge_gain = double(info["fisheye_vignetting_edge_gain"]);
-				}
-				photometry.lut = linearising_lut(photometry.exposure);
-				photometry.inverse_vignetting.create(rig.fisheye.height, rig.fisheye.width, CV_32FC1);
-				for (int y = 0; y < rig.fisheye.height; y++) {
-					float *row = photometry.inverse_vignetting.ptr<float>(y);
-					for (int x = 0; x < rig.fisheye.width; x++) {
-						const double v = synth::fisheye_vignetting(rig.fisheye, glm::dvec2(x, y), edge_gain);
-						row[x] = v > 1e-6 ? float(1.0 / v) : 0.0f;
-					}
-				}
-			}
+		if (info.isOpened() && !info["light_switch_s"].empty()) {
+			result.light_switch_s = double(info["light_switch_s"]);
 		}
 	}
-	result.linearised = photometry.active;
-
-	// The three coarse pipelines (b and c share one) and the baseline.
-	CoarsePipelineOptions base_options;
-	base_options.texel_size_m = p_options.texel_size_m;
-	base_options.inpaint = true;
-	if (photometry.active) {
-		// Thresholds in linearised units: the centre pixel's 250 / 255 and 5 / 255 (vignetting
-		// correction only raises values, so saturated pixels stay above the threshold).
-		base_options.lighting_options.saturated_threshold = photometry.lut[250];
-		base_options.lighting_options.black_threshold = photometry.lut[5];
-	}
-	CoarsePipelineOptions no_light = base_options, additive = base_options, gain = base_options;
-	no_light.lighting = false;
-	additive.lighting = true;
-	additive.lighting_model = LightingModel::ADDITIVE_PAPER;
-	gain.lighting = true;
-	gain.lighting_model = LightingModel::GAIN_ROBUST;
-	CoarsePipeline pipe_plain(no_light), pipe_additive(additive), pipe_gain(gain);
-	for (CoarsePipeline *pipe : { &pipe_plain, &pipe_additive, &pipe_gain }) {
-		const std::string error = pipe->configure(rig, room.floorplan);
-		if (!error.empty()) {
-			result.error = p_options.recording + ": " + error;
+	RigPhotometry photometry;
+	if (p_options.linearise) {
+		std::string error;
+		if (!read_recording_photometry(p_options.recording, &photometry, &error)) {
+			result.error = error;
 			return result;
 		}
 	}
+	result.linearised = photometry.known;
+	// The baseline sees the frames as the engines do.
+	FisheyeLinearizer linearizer;
+	linearizer.configure(photometry, rig.fisheye);
 
-	std::unique_ptr<DenseVariants> dense;
+	// The variants, each one LiveRoom in step mode, as the nodes and the benchmark run it: (b, c)
+	// share one engine (raw and completed texture), (e, f) another (without and with its dense
+	// model fused at the true poses), and (g) is the live system on tracked poses.
+	LiveRoomConfig base;
+	base.rig = rig;
+	base.photometry = photometry;
+	base.has_room = true;
+	base.floorplan = room.floorplan;
+	base.initial_rgb_pose = room.initial_rgb_pose;
+	base.keep_points = room.probes;
+	base.ground_truth = trajectory;
+	base.coarse_poses = PoseSource::GroundTruth;
+	base.dense_poses = PoseSource::GroundTruth;
+	base.dense = false;
+	base.coarse.texel_size_m = p_options.texel_size_m;
+	base.coarse.inpaint = true;
+	base.coarse.inpaint_async = false; // the completed texture belongs to the latest frame
+	LiveRoomConfig no_light = base, additive = base, gain = base, tracked = base;
+	no_light.coarse.lighting = false;
+	additive.coarse.lighting = true;
+	additive.coarse.lighting_model = LightingModel::ADDITIVE_PAPER;
+	gain.coarse.lighting = true;
+	gain.coarse.lighting_model = LightingModel::GAIN_ROBUST;
+	gain.dense = p_options.dense;
+	tracked = gain;
+	tracked.coarse_poses = PoseSource::Tracked;
+	tracked.dense_poses = PoseSource::Tracked;
+	LiveRoom engine_plain, engine_additive, engine_gain, engine_tracked;
+	std::vector<std::pair<LiveRoom *, const LiveRoomConfig *>> engines = { { &engine_plain, &no_light }, { &engine_additive, &additive },
+		{ &engine_gain, &gain } };
 	if (p_options.dense) {
-		dense = std::make_unique<DenseVariants>();
-		const std::string error = dense->configure(reader, gain, photometry.active, rgb_exposure);
+		engines.emplace_back(&engine_tracked, &tracked);
+	}
+	for (const auto &[engine, config] : engines) {
+		const std::string error = engine->configure(*config);
 		if (!error.empty()) {
 			result.error = p_options.recording + ": " + error;
 			return result;
 		}
 	}
+	const bool dense = p_options.dense;
 	const int variant_count = dense ? VARIANT_COUNT : VARIANT_DENSE_TRUE_POSES;
+	SlamFigures slam_figures;
+	double render_ms[3] = { 0.0, 0.0, 0.0 }; // coarse renders of (c), (d), (e), summed
 
 	const GroundTruthCubemapResult first = reader.ground_truth_cubemap(0);
 	if (!first.ok) {
@@ -329,9 +217,11 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 			const PlaybackEvent &event = events[next_event++];
 			if (event.stream == RecordingStream::Rgbd) {
 				if (dense) {
-					const RgbdFrameResult rgbd = reader.read_rgbd(event.index);
+					RgbdFrameResult rgbd = reader.read_rgbd(event.index);
 					if (rgbd.ok) {
-						dense->add_rgbd(rgbd.frame, trajectory, &result.slam);
+						engine_gain.push_rgbd(rgbd.frame);
+						engine_tracked.push_rgbd(std::move(rgbd.frame));
+						slam_figures.add(*engine_tracked.tracked_frame(), trajectory, &result.slam);
 					} else {
 						say("skipping RGB-D frame: " + rgbd.error);
 					}
@@ -350,16 +240,11 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 				say("skipping fisheye frame: " + frame.error);
 				continue;
 			}
-			frame.frame.image = linearise(photometry, frame.frame.image);
-			frame.frame.hdr = frame.frame.image.type() == CV_32FC3;
 			const Clock::time_point start = Clock::now();
-			baseline.add_frame(frame.frame.image, rig.fisheye, pose);
+			baseline.add_frame(linearizer.linearise(frame.frame.image), rig.fisheye, pose);
 			baseline_total_ms += ms_since(start);
-			pipe_plain.add_fisheye_frame(frame.frame, pose);
-			pipe_additive.add_fisheye_frame(frame.frame, pose);
-			pipe_gain.add_fisheye_frame(frame.frame, pose);
-			if (dense) {
-				dense->add_fisheye(frame.frame, rig);
+			for (const auto &[engine, config] : engines) {
+				engine->push_fisheye(frame.frame);
 			}
 			result.fisheye_frames_used++;
 		}
@@ -372,13 +257,23 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		const glm::dvec3 probe = truth.cubemap.position;
 		Cubemap estimates[VARIANT_COUNT];
 		estimates[VARIANT_BASELINE] = baseline.cubemap();
-		estimates[VARIANT_COARSE] = pipe_plain.render_cubemap(probe, false, size);
-		estimates[VARIANT_INPAINT] = pipe_plain.render_cubemap(probe, true, size);
-		estimates[VARIANT_LIGHT_ADDITIVE] = pipe_additive.render_cubemap(probe, true, size);
-		estimates[VARIANT_LIGHT_GAIN] = pipe_gain.render_cubemap(probe, true, size);
+		// The coarse render's time, per engine (the render column of the timings table).
+		auto timed = [&](LiveRoom &p_engine, bool p_completed, double *io_ms) {
+			const Clock::time_point start = Clock::now();
+			Cubemap map = p_engine.render_at(probe, size, p_completed, false);
+			*io_ms += ms_since(start);
+			return map;
+		};
+		double unused_ms = 0.0;
+		estimates[VARIANT_COARSE] = timed(engine_plain, false, &unused_ms);
+		estimates[VARIANT_INPAINT] = timed(engine_plain, true, &render_ms[0]);
+		estimates[VARIANT_LIGHT_ADDITIVE] = timed(engine_additive, true, &render_ms[1]);
+		estimates[VARIANT_LIGHT_GAIN] = timed(engine_gain, true, &render_ms[2]);
 		if (dense) {
-			estimates[VARIANT_DENSE_TRUE_POSES] = dense->over_true_poses(estimates[VARIANT_LIGHT_GAIN], probe, pipe_gain.cumulative_lighting());
-			estimates[VARIANT_DENSE_SLAM] = dense->live(probe, size);
+			estimates[VARIANT_DENSE_TRUE_POSES] = engine_gain.render_at(probe, size, true, true);
+			DenseRenderStats stats;
+			estimates[VARIANT_DENSE_SLAM] = engine_tracked.render_at(probe, size, true, true, &stats);
+			slam_figures.add_render(stats.milliseconds);
 		}
 		for (int v = 0; v < variant_count; v++) {
 			const Clock::time_point start = Clock::now();
@@ -444,18 +339,17 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		}
 	}
 	const double per_frame = result.fisheye_frames_used > 0 ? 1.0 / double(result.fisheye_frames_used) : 0.0;
-	add_timings(&result.timings_inpaint, pipe_plain.total_timings(), per_frame);
-	add_timings(&result.timings_additive, pipe_additive.total_timings(), per_frame);
-	add_timings(&result.timings_gain, pipe_gain.total_timings(), per_frame);
-	// Renders: two per cubemap for the plain pipeline, one for the others.
+	add_timings(&result.timings_inpaint, engine_plain.coarse_model()->total_timings(), per_frame);
+	add_timings(&result.timings_additive, engine_additive.coarse_model()->total_timings(), per_frame);
+	add_timings(&result.timings_gain, engine_gain.coarse_model()->total_timings(), per_frame);
 	const double per_cubemap = 1.0 / double(result.cubemaps);
-	result.timings_inpaint.render_ms = pipe_plain.total_timings().render_ms * per_cubemap * 0.5;
-	result.timings_additive.render_ms = pipe_additive.total_timings().render_ms * per_cubemap;
-	result.timings_gain.render_ms = pipe_gain.total_timings().render_ms * per_cubemap;
+	result.timings_inpaint.render_ms = render_ms[0] * per_cubemap;
+	result.timings_additive.render_ms = render_ms[1] * per_cubemap;
+	result.timings_gain.render_ms = render_ms[2] * per_cubemap;
 	result.baseline_ms = baseline_total_ms * per_frame;
 	result.metrics_ms = comparisons > 0 ? metrics_total_ms / double(comparisons) : 0.0;
 	if (dense) {
-		dense->finish(&result.slam);
+		slam_figures.finish(&result.slam);
 	}
 	result.ok = true;
 	return result;

@@ -2,30 +2,26 @@
 // Evaluating environment-map estimates against a recording's ground-truth cubemaps (paper §5.3).
 //
 // For every ground-truth cubemap (one per fisheye frame in the synthetic recordings, RGB-D clock),
-// every fisheye frame up to that instant (fisheye timestamp + Rig::fisheye_time_offset_s) is fed,
-// with its pose from the GROUND-TRUTH RGB-D trajectory through fisheye_pose_at (PoseSource::
-// GroundTruth: the evaluation mode until SLAM exists), to:
-//   baseline        §5.3's baseline (envmap/baseline.h), rotation only;
-//   coarse          the coarse model, no inpainting, no lighting compensation;
-//   coarse+inpaint  the same texture, inpainted (§4.5);
+// every frame up to that instant is fed, in time order (the recording's playback events), to the
+// variants. All but the baseline are the live system itself, engine/live_room.h in step mode:
+//   baseline        §5.3's baseline (envmap/baseline.h), rotation only, at the true poses;
+//   coarse          the coarse model at true poses, no inpainting, no lighting compensation;
+//   coarse+inpaint  the same engine's completed texture (§4.5);
 //   +light(add)     inpainting and §4.6's additive model (ADDITIVE_PAPER);
 //   +light(gain)    inpainting and the robust per-channel gain (GAIN_ROBUST);
-//   +dense (true)   (e) with the dense model over it (§4.7): the RGB-D frames fused at their
-//                   ground-truth poses (slam/dense_slam.h, process_at_pose);
-//   +dense (SLAM)   the live system: the RGB-D camera tracked by DenseSlam from the room's
-//                   initial pose, the fisheye's poses from that tracked trajectory (its own coarse
-//                   pipeline, as (e)), the dense model over it; its ATE is reported;
-// each rendered at the cubemap's probe and compared with eval/metrics.h. RGB-D and fisheye frames
-// are fed in time order (the recording's playback events).
+//   +dense (true)   the same engine with its dense model over the map (§4.7), the RGB-D frames
+//                   fused at their ground-truth poses (DenseSlam::process_at_pose);
+//   +dense (SLAM)   the live system: the RGB-D camera tracked from the room's initial pose, the
+//                   fisheye's poses from that tracked trajectory, the dense model over it; its
+//                   ATE is reported;
+// each rendered at the cubemap's probe (LiveRoom::render_at) and compared with eval/metrics.h.
 //
-// Photometric units: the ground truth is linear radiance. When the recording has a synth.yaml
-// (synthetic recordings) and 8-bit fisheye frames, each frame is linearised before any variant
-// sees it: sRGB decoded, divided by synth.yaml's fisheye_exposure and by the renderer's
-// vignetting (synth/synth_renderer.h fisheye_vignetting with fisheye_vignetting_edge_gain), i.e.
-// a perfect photometric calibration; all variants get the same frames. Without synth.yaml the
-// frames are used as they are (8-bit value / 255, the coarse texture's convention). The dense
-// model's 8-bit colours go through the same calibration for the RGB camera (sRGB decoded, divided
-// by synth.yaml's rgb_exposure; that camera has no vignetting) when it is drawn into a map.
+// Photometric units: the ground truth is linear radiance. A synthetic recording's synth.yaml gives
+// the rig's photometry (rig/photometry.h: read_recording_photometry), which the engines apply to
+// every frame as the nodes do: fisheye frames sRGB-decoded, over the exposure and the vignetting,
+// i.e. a perfect photometric calibration; the dense model's 8-bit colours sRGB-decoded over the
+// RGB camera's exposure when drawn. Without synth.yaml (or with linearise off) the frames are used
+// as they are (8-bit value / 255, the coarse texture's convention).
 //
 // Light switch (living_room): synth.yaml's light_switch_s (RGB-D clock; -1: none). The §4.6
 // effect is measured on the CUBEMAPS: mean PSNR / SSIM over the frames after the switch (the
@@ -33,6 +29,7 @@
 
 #include "metrics.h"
 
+#include <envmap/cubemap.h>
 #include <pipeline/coarse_pipeline.h>
 
 #include <functional>

@@ -41,6 +41,7 @@ namespace roomprobe {
 
 enum class PoseSource {
 	GroundTruth, // the recording's ground-truth RGB-D trajectory -> fisheye_pose_at (evaluation mode)
+	Tracked, // DenseSlam's tracked RGB-D trajectory -> fisheye_pose_at (the live mode)
 };
 
 struct CoarsePipelineOptions {

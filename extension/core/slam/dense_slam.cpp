@@ -118,6 +118,7 @@ TrackingResult DenseSlam::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, 
 }
 
 IntegrationStats DenseSlam::integrate(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_world_from_camera) {
+	const std::unique_lock<std::shared_mutex> writing(volume_mutex);
 	return tsdf.integrate(p_depth_m, p_rgb, intrinsics, p_world_from_camera);
 }
 

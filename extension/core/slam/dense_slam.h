@@ -24,6 +24,8 @@
 #include <camera/camera_params.h>
 #include <recording/recording_types.h>
 
+#include <atomic>
+#include <shared_mutex>
 #include <string>
 
 namespace roomprobe {
@@ -98,6 +100,10 @@ public:
 	size_t integrated_count() const { return integrated_frames; }
 	const TsdfVolume &volume() const { return tsdf; }
 	TsdfVolume &volume() { return tsdf; }
+	// For readers on other threads (a probe's dense pass): while held, no frame is being fused, so
+	// the volume is whole. Fusing (integrate, process, process_at_pose) takes the lock exclusively
+	// and only for the fusing itself; tracking and meshing only read, on the fusing thread.
+	std::shared_lock<std::shared_mutex> read_lock() const { return std::shared_lock<std::shared_mutex>(volume_mutex); }
 	const PinholeIntrinsics &camera() const { return intrinsics; }
 	const DenseSlamOptions &options() const { return opts; }
 
@@ -120,8 +126,10 @@ private:
 	Pose previous_pose; // the trusted pose before last_pose (constant-velocity prediction)
 	bool has_previous = false;
 	TrackingState last_state = TrackingState::Lost;
-	size_t frames = 0;
-	size_t integrated_frames = 0;
+	// Atomic: read by other threads (the engine's stats, the dense lighting of probes).
+	std::atomic<size_t> frames = 0;
+	std::atomic<size_t> integrated_frames = 0;
+	mutable std::shared_mutex volume_mutex;
 };
 
 } // namespace roomprobe

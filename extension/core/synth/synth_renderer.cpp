@@ -554,23 +554,6 @@ RgbdImage render_rgbd(const SynthRenderer &p_renderer, const PinholeParams &p_ca
 
 // ---------------------------------------------------------------- fisheye
 
-double fisheye_vignetting(const OmniParams &p_camera, const glm::dvec2 &p_pixel, double p_edge_gain) {
-	if (!(p_edge_gain > 0.0) || p_edge_gain >= 1.0) {
-		return 1.0;
-	}
-	double radius = p_camera.circle_radius;
-	double cx = p_camera.circle_cx, cy = p_camera.circle_cy;
-	if (radius <= 0.0) {
-		cx = p_camera.cx;
-		cy = p_camera.cy;
-		radius = 0.5 * std::hypot(p_camera.width, p_camera.height);
-	}
-	const double r = std::hypot(p_pixel.x - cx, p_pixel.y - cy) / radius;
-	const double k = std::sqrt(1.0 / p_edge_gain) - 1.0;
-	const double f = 1.0 + k * r * r;
-	return 1.0 / (f * f);
-}
-
 FisheyeImage render_fisheye(const SynthRenderer &p_renderer, const OmniParams &p_camera, const Pose &p_world_from_camera,
 		double p_time_s, const FisheyeOptions &p_options) {
 	const int width = p_camera.width, height = p_camera.height;

@@ -18,6 +18,7 @@
 
 #include <camera/camera_params.h>
 #include <math/pose.h>
+#include <rig/photometry.h>
 
 
 #include <array>
@@ -143,7 +144,10 @@ struct FisheyeImage {
 	cv::Mat radiance; // CV_32FC3 linear R, G, B: exposure and vignetting applied, not clipped (the HDR frame)
 };
 
-double fisheye_vignetting(const OmniParams &p_camera, const glm::dvec2 &p_pixel, double p_edge_gain);
+// The rig's vignetting model (rig/photometry.h), which the renderer applies and calibration inverts.
+inline double fisheye_vignetting(const OmniParams &p_camera, const glm::dvec2 &p_pixel, double p_edge_gain) {
+	return radial_vignetting(p_camera, p_pixel, p_edge_gain);
+}
 
 FisheyeImage render_fisheye(const SynthRenderer &p_renderer, const OmniParams &p_camera, const Pose &p_world_from_camera,
 		double p_time_s, const FisheyeOptions &p_options);

@@ -1,14 +1,9 @@
 #include "coarse_room_model.h"
 
-#include "dense_slam.h"
-#include "rig_capture.h"
-
 #include "../convert/image_convert.h"
 #include "../convert/mesh_convert.h"
+#include "../convert/pose_convert.h"
 
-#include <rig/fisheye_pose.h>
-
-#include <atomic>
 #include <cstring>
 
 using namespace godot;
@@ -36,12 +31,6 @@ Array to_surface_arrays(const RoomMesh &p_mesh) {
 	return arrays;
 }
 
-std::atomic<uint64_t> next_mesh_version{ 1 };
-
-bool same(const Vec3 &p_a, const Vec3 &p_b) {
-	return p_a.x == p_b.x && p_a.y == p_b.y && p_a.z == p_b.z;
-}
-
 } // namespace
 
 CoarseRoomModel::CoarseRoomModel() {
@@ -52,7 +41,11 @@ CoarseRoomModel::CoarseRoomModel() {
 	rebuild();
 }
 
-CoarseRoomModel::~CoarseRoomModel() = default;
+CoarseRoomModel::~CoarseRoomModel() {
+	if (engine && !own_engine) {
+		engine->edit_config([](LiveRoomConfig &p_config) { p_config.has_room = false; });
+	}
+}
 
 void CoarseRoomModel::_notification(int p_what) {
 	if (p_what == NOTIFICATION_READY && mesh_instance == nullptr) {
@@ -66,13 +59,19 @@ void CoarseRoomModel::_notification(int p_what) {
 		// The fisheye textures the room in the running game only; the editor shows the layout.
 		set_process(!Engine::get_singleton()->is_editor_hint());
 	}
+	if (p_what == NOTIFICATION_READY) {
+		connect_engine();
+	} else if (p_what == NOTIFICATION_EXIT_TREE && engine && !own_engine) {
+		engine->edit_config([](LiveRoomConfig &p_config) { p_config.has_room = false; });
+		engine.reset();
+		pushed.clear();
+	}
 }
 
 void CoarseRoomModel::_process(double p_delta) {
 	(void)p_delta;
-	if (!rig_capture_path.is_empty()) {
-		integrate_rig_frame();
-	}
+	MainThreadTimer timer;
+	integrate_rig_frame();
 }
 
 void CoarseRoomModel::set_floorplan(const PackedVector2Array &p_points) {
@@ -110,31 +109,12 @@ void CoarseRoomModel::rebuild() {
 	RoomMeshOptions options;
 	options.texel_size_m = texel_size;
 	check = check_floorplan(plan);
-	const std::vector<Chart> old_charts = result.ok ? result.mesh.charts : std::vector<Chart>();
-	const int old_w = result.mesh.atlas_width;
-	const int old_h = result.mesh.atlas_height;
 	result = build_room_mesh(plan, options);
 	mesh->clear_surfaces();
 	if (result.ok) {
 		mesh->add_surface_from_arrays(Mesh::PRIMITIVE_TRIANGLES, to_surface_arrays(result.mesh));
 	}
-	mesh_version = next_mesh_version.fetch_add(1);
-	// The texture survives a rebuild that leaves the atlas layout as it was (entering the tree,
-	// setting a value again); a new layout makes the old texture data meaningless.
-	bool same_layout = result.ok && textured && old_w == result.mesh.atlas_width && old_h == result.mesh.atlas_height &&
-			old_charts.size() == result.mesh.charts.size();
-	for (size_t i = 0; same_layout && i < old_charts.size(); i++) {
-		const Chart &a = old_charts[i];
-		const Chart &b = result.mesh.charts[i];
-		same_layout = a.kind == b.kind && a.x == b.x && a.y == b.y && a.w == b.w && a.h == b.h && same(a.origin_m, b.origin_m) &&
-				same(a.u_axis_m, b.u_axis_m) && same(a.v_axis_m, b.v_axis_m);
-	}
-	if (!same_layout) {
-		texture = result.ok ? make_coarse_texture(result.mesh) : CoarseTexture();
-		textured = false;
-		// The pipeline's observations belong to the old layout: start again with the next frame.
-		pipeline.reset();
-	}
+	push_room();
 	apply_material();
 	update_configuration_warnings();
 	emit_signal("mesh_changed");
@@ -165,46 +145,30 @@ bool CoarseRoomModel::set_atlas_image(const Ref<Image> &p_image) {
 	const int w = result.mesh.atlas_width;
 	const int h = result.mesh.atlas_height;
 	ERR_FAIL_COND_V(data.size() != int64_t(w) * h * 3 * int64_t(sizeof(float)), false);
-	std::memcpy(texture.color.data, data.ptr(), size_t(data.size()));
-	for (int y = 0; y < h; y++) {
-		uint8_t *observed = texture.observed.ptr<uint8_t>(y);
-		float *quality = texture.quality.ptr<float>(y);
-		for (int x = 0; x < w; x++) {
-			const bool on = texel_to_world(result.mesh, x, y, nullptr, nullptr);
-			observed[x] = on ? 255 : 0;
-			quality[x] = on ? 1.0f : 0.0f;
-		}
+	cv::Mat atlas(h, w, CV_32FC3);
+	std::memcpy(atlas.data, data.ptr(), size_t(data.size()));
+	if (!engine) {
+		connect_engine();
 	}
-	texture.updated = texture.observed.clone();
-	textured = true;
-	apply_material();
+	engine->apply_config();
+	ERR_FAIL_COND_V_MSG(!engine->set_atlas(atlas), false, String(("The engine has no room: " + engine->configuration_error()).c_str()));
+	take_snapshot();
 	return true;
 }
 
 Ref<Image> CoarseRoomModel::get_atlas_image() const {
-	return has_texture_data() ? image_from_mat(get_atlas()) : Ref<Image>();
+	return has_texture_data() ? image_from_mat(shown->atlas) : Ref<Image>();
 }
 
-bool CoarseRoomModel::has_texture_data() const { return textured || pipeline_has_frames(); }
-
-const cv::Mat &CoarseRoomModel::get_atlas() const {
-	return pipeline_has_frames() ? pipeline->completed_color() : texture.color;
-}
-
-LightingChange CoarseRoomModel::get_cumulative_lighting() const {
-	if (pipeline_has_frames()) {
-		return pipeline->cumulative_lighting();
-	}
-	LightingChange identity;
-	identity.valid = true;
-	return identity;
-}
+bool CoarseRoomModel::has_texture_data() const { return result.ok && shown && !shown->atlas.empty(); }
 
 // ---------------------------------------------------------------- texturing from the rig (§4.3-§4.6)
 
 void CoarseRoomModel::set_rig_capture_path(const NodePath &p_path) {
 	rig_capture_path = p_path;
-	pipeline.reset();
+	if (is_inside_tree()) {
+		connect_engine();
+	}
 	update_configuration_warnings();
 }
 
@@ -212,8 +176,11 @@ NodePath CoarseRoomModel::get_rig_capture_path() const { return rig_capture_path
 
 void CoarseRoomModel::set_pose_source(PoseSource p_source) {
 	pose_source = p_source;
+	push_room();
 	update_configuration_warnings();
 }
+
+CoarseRoomModel::PoseSource CoarseRoomModel::get_pose_source() const { return pose_source; }
 
 void CoarseRoomModel::set_dense_slam_path(const NodePath &p_path) {
 	dense_slam_path = p_path;
@@ -222,34 +189,16 @@ void CoarseRoomModel::set_dense_slam_path(const NodePath &p_path) {
 
 NodePath CoarseRoomModel::get_dense_slam_path() const { return dense_slam_path; }
 
-bool CoarseRoomModel::fisheye_pose(const RigCapture &p_rig, double p_timestamp_s, Pose *r_pose, std::string *r_error) const {
-	const RecordingReader &reader = *p_rig.get_reader();
-	if (pose_source == POSE_SOURCE_DENSE_SLAM) {
-		const DenseSLAM *slam = dense_slam_path.is_empty() ? nullptr : cast_to<DenseSLAM>(get_node_or_null(dense_slam_path));
-		if (slam == nullptr) {
-			*r_error = "pose_source is Dense SLAM, but dense_slam does not lead to a DenseSLAM node";
-			return false;
-		}
-		return slam->fisheye_pose_at(p_timestamp_s, r_pose, r_error);
-	}
-	if (!reader.has_ground_truth_trajectory(RecordingStream::Rgbd)) {
-		*r_error = "pose_source is Ground Truth, but the recording has no ground-truth RGB-D trajectory";
-		return false;
-	}
-	return fisheye_pose_at(reader.ground_truth_trajectory(RecordingStream::Rgbd), reader.get_rig(), p_timestamp_s, r_pose, r_error);
-}
-CoarseRoomModel::PoseSource CoarseRoomModel::get_pose_source() const { return pose_source; }
-
 void CoarseRoomModel::set_inpainting(bool p_enabled) {
 	inpainting = p_enabled;
-	pipeline.reset();
+	push_room();
 }
 
 bool CoarseRoomModel::get_inpainting() const { return inpainting; }
 
 void CoarseRoomModel::set_lighting_compensation(LightingCompensation p_mode) {
 	lighting_compensation = p_mode;
-	pipeline.reset();
+	push_room();
 }
 
 CoarseRoomModel::LightingCompensation CoarseRoomModel::get_lighting_compensation() const { return lighting_compensation; }
@@ -263,90 +212,110 @@ void CoarseRoomModel::set_room_layers(uint32_t p_layers) {
 
 uint32_t CoarseRoomModel::get_room_layers() const { return room_layers; }
 
-RigCapture *CoarseRoomModel::find_rig_capture() const {
-	if (rig_capture_path.is_empty() || !is_inside_tree()) {
-		return nullptr;
+// ---------------------------------------------------------------- the engine
+
+void CoarseRoomModel::connect_engine() {
+	Node *capture = is_inside_tree() ? find_collaborator(*this, rig_capture_path, "RigCapture", "rig_capture", &find_warning) : nullptr;
+	std::shared_ptr<LiveRoom> found = live_room_of(capture);
+	if (found && found == engine) {
+		return;
 	}
-	return cast_to<RigCapture>(get_node_or_null(rig_capture_path));
+	if (!found && engine && own_engine) {
+		return;
+	}
+	if (engine && !own_engine) {
+		engine->edit_config([](LiveRoomConfig &p_config) { p_config.has_room = false; });
+	}
+	own_engine = !found;
+	if (own_engine) {
+		// No rig: the room alone, for set_atlas_image and the editor.
+		found = std::make_shared<LiveRoom>();
+		found->edit_config([](LiveRoomConfig &p_config) {
+			p_config.has_rig = false;
+			p_config.dense = false;
+		});
+	}
+	engine = found;
+	pushed.clear();
+	shown.reset();
+	push_room();
 }
 
-bool CoarseRoomModel::ensure_pipeline(const RigCapture &p_rig) {
-	const RecordingReader *reader = p_rig.get_reader();
-	if (reader == nullptr || !reader->is_open()) {
-		pipeline_problem = "rig_capture has no recording open.";
+// The room and the texturing options into the engine (applied by RigCapture before the next
+// frame; at once for a room-only engine).
+void CoarseRoomModel::push_room() {
+	if (!engine) {
+		return;
+	}
+	const glm::dvec3 origin = is_inside_tree() ? to_glm(get_global_position()) : glm::dvec3(0.0);
+	char key[512];
+	std::snprintf(key, sizeof(key), "%d %.9g %.9g %d %d %d %.9g %.9g %.9g|", int(result.ok), ceiling_height, texel_size, int(inpainting),
+			int(lighting_compensation), int(pose_source), origin.x, origin.y, origin.z);
+	std::string state = key;
+	for (int64_t i = 0; i < floorplan.size(); i++) {
+		std::snprintf(key, sizeof(key), "%.9g,%.9g;", double(floorplan[i].x), double(floorplan[i].y));
+		state += key;
+	}
+	if (state == pushed) {
+		return; // the same room again (entering the tree, a value set twice): keep the texture
+	}
+	pushed = state;
+	const Floorplan plan = core_floorplan();
+	engine->edit_config([&](LiveRoomConfig &p_config) {
+		p_config.has_room = result.ok;
+		p_config.floorplan = plan;
+		p_config.room_origin_m = origin;
+		p_config.coarse.texel_size_m = texel_size;
+		p_config.coarse.inpaint = inpainting;
+		p_config.coarse.inpaint_async = true; // off the frame's critical path
+		p_config.coarse.lighting = lighting_compensation != LIGHTING_OFF;
+		p_config.coarse.lighting_model = lighting_compensation == LIGHTING_ADDITIVE ? LightingModel::ADDITIVE_PAPER : LightingModel::GAIN_ROBUST;
+		p_config.coarse_poses = pose_source == POSE_SOURCE_DENSE_SLAM ? roomprobe::PoseSource::Tracked : roomprobe::PoseSource::GroundTruth;
+	});
+	if (own_engine) {
+		engine->apply_config();
+	}
+	shown.reset();
+	apply_material();
+}
+
+bool CoarseRoomModel::take_snapshot() {
+	std::shared_ptr<const CoarseSnapshot> snapshot = engine ? engine->coarse_snapshot() : nullptr;
+	if (snapshot == shown) {
 		return false;
 	}
-	if (!result.ok) {
-		pipeline_problem = "the room is not valid.";
-		return false;
-	}
-	if (pipeline && pipeline_reader == reader) {
-		return true;
-	}
-	CoarsePipelineOptions options;
-	options.texel_size_m = texel_size;
-	options.inpaint = inpainting;
-	options.inpaint_async = true; // off the frame's critical path
-	options.lighting = lighting_compensation != LIGHTING_OFF;
-	options.lighting_model = lighting_compensation == LIGHTING_ADDITIVE ? LightingModel::ADDITIVE_PAPER : LightingModel::GAIN_ROBUST;
-	pipeline = std::make_unique<CoarsePipeline>(options);
-	// The same inputs as rebuild(): the pipeline's atlas is the one the mesh's UVs address.
-	const std::string error = pipeline->configure(reader->get_rig(), core_floorplan());
-	if (!error.empty()) {
-		pipeline.reset();
-		pipeline_problem = error;
-		return false;
-	}
-	ERR_FAIL_COND_V(pipeline->mesh().atlas_width != result.mesh.atlas_width || pipeline->mesh().atlas_height != result.mesh.atlas_height, false);
-	pipeline_reader = reader;
-	last_fisheye_index = -1;
-	last_stats = CoarseFrameStats();
-	return true;
+	shown = snapshot;
+	apply_material();
+	return snapshot != nullptr;
 }
 
 bool CoarseRoomModel::integrate_rig_frame() {
-	RigCapture *rig = find_rig_capture();
-	if (rig == nullptr) {
-		pipeline_problem = rig_capture_path.is_empty() ? "" : "rig_capture does not lead to a RigCapture.";
+	if (is_inside_tree() && (!engine || own_engine) && find_collaborator(*this, rig_capture_path, "RigCapture", "rig_capture", &find_warning) != nullptr) {
+		connect_engine(); // the RigCapture may have come later
+	}
+	const uint64_t before = shown ? shown->frames : 0;
+	if (!take_snapshot() || shown->frames == before || shown->frames == 0) {
 		return false;
 	}
-	if (!ensure_pipeline(*rig)) {
-		return false;
-	}
-	const int64_t index = rig->get_frame_index(RigCapture::STREAM_FISHEYE);
-	if (index < 0 || index == last_fisheye_index) {
-		return false;
-	}
-	last_fisheye_index = index;
-	const FisheyeFrame &frame = rig->get_fisheye_frame();
-	Pose world_from_fisheye;
-	std::string error;
-	if (!fisheye_pose(*rig, frame.timestamp_s, &world_from_fisheye, &error)) {
-		// A frame without a pose is skipped (never integrated at a guess); the next may have one.
-		pipeline_problem = error + ".";
-		return false;
-	}
-	pipeline_problem.clear();
-	last_stats = pipeline->add_fisheye_frame(frame, world_from_fisheye);
-	apply_material();
-	emit_signal("texture_updated", index);
+	emit_signal("texture_updated", int64_t(shown->frames - 1));
 	return true;
 }
 
-int64_t CoarseRoomModel::get_integrated_frame_count() const { return pipeline ? int64_t(pipeline->frame_count()) : 0; }
+int64_t CoarseRoomModel::get_integrated_frame_count() const { return shown ? int64_t(shown->frames) : 0; }
 
 Dictionary CoarseRoomModel::get_last_frame_stats() const {
 	Dictionary d;
-	if (!pipeline_has_frames()) {
+	if (!shown || shown->frames == 0) {
 		return d;
 	}
-	const CoarsePipelineTimings &t = pipeline->last_timings();
-	d.set("texels_visible", int64_t(last_stats.update.texels_visible));
-	d.set("texels_updated", int64_t(last_stats.update.texels_updated));
-	d.set("occlusion_skipped", last_stats.occlusion_skipped);
-	d.set("lighting_valid", last_stats.lighting.valid);
-	d.set("lighting_gain", Vector3(last_stats.lighting.gain[0], last_stats.lighting.gain[1], last_stats.lighting.gain[2]));
-	d.set("lighting_offset", Vector3(last_stats.lighting.offset[0], last_stats.lighting.offset[1], last_stats.lighting.offset[2]));
+	const CoarseFrameStats &last = shown->last;
+	const CoarsePipelineTimings &t = shown->timings;
+	d.set("texels_visible", int64_t(last.update.texels_visible));
+	d.set("texels_updated", int64_t(last.update.texels_updated));
+	d.set("occlusion_skipped", last.occlusion_skipped);
+	d.set("lighting_valid", last.lighting.valid);
+	d.set("lighting_gain", Vector3(last.lighting.gain[0], last.lighting.gain[1], last.lighting.gain[2]));
+	d.set("lighting_offset", Vector3(last.lighting.offset[0], last.lighting.offset[1], last.lighting.offset[2]));
 	d.set("occlusion_ms", t.occlusion_ms);
 	d.set("lighting_ms", t.lighting_ms);
 	d.set("update_ms", t.update_ms);
@@ -356,18 +325,19 @@ Dictionary CoarseRoomModel::get_last_frame_stats() const {
 }
 
 void CoarseRoomModel::reset_texture() {
-	pipeline.reset();
-	if (result.ok) {
-		texture = make_coarse_texture(result.mesh);
+	if (engine) {
+		// The engine starts its models again: every observation is forgotten.
+		engine->edit_config([](LiveRoomConfig &) {});
+		engine->apply_config();
 	}
-	textured = false;
+	shown.reset();
 	apply_material();
 }
 
 void CoarseRoomModel::finish_inpainting() {
-	if (pipeline_has_frames()) {
-		pipeline->finish_inpainting();
-		apply_material();
+	if (engine) {
+		engine->finish();
+		take_snapshot();
 	}
 }
 
@@ -397,7 +367,7 @@ void CoarseRoomModel::apply_material() {
 		mesh_instance->set_material_override(Ref<Material>());
 		return;
 	}
-	show_in_texture(image_from_mat(get_atlas()), atlas_texture);
+	show_in_texture(image_from_mat(shown->atlas), atlas_texture);
 	if (material.is_null()) {
 		material.instantiate();
 		material->set_shading_mode(BaseMaterial3D::SHADING_MODE_UNSHADED);
@@ -413,10 +383,25 @@ PackedStringArray CoarseRoomModel::get_warnings() const {
 		const char *phrase = check.ok ? "The room cannot be built" : floorplan_problem_summary(check.problem);
 		warnings.push_back(String((std::string(phrase) + ": " + result.error).c_str()));
 	}
-	if (!rig_capture_path.is_empty() && is_inside_tree() && find_rig_capture() == nullptr) {
-		warnings.push_back("rig_capture does not lead to a RigCapture node.");
-	} else if (!pipeline_problem.empty()) {
-		warnings.push_back(String(("Fisheye frames are not being integrated: " + pipeline_problem).c_str()));
+	std::string warning;
+	const Node *capture = is_inside_tree() ? find_collaborator(*this, rig_capture_path, "RigCapture", "rig_capture", &warning) : nullptr;
+	if (!warning.empty()) {
+		warnings.push_back(String(warning.c_str()));
+	}
+	if (is_inside_tree() && pose_source == POSE_SOURCE_DENSE_SLAM && capture != nullptr) {
+		std::string slam_warning;
+		if (find_collaborator(*this, dense_slam_path, "DenseSLAM", "dense_slam", &slam_warning) == nullptr) {
+			warnings.push_back(String(("Fisheye frames are not being integrated: pose_source is Dense SLAM, but there is no DenseSLAM. " + slam_warning).c_str()));
+		}
+	}
+	if (engine && !own_engine && !engine->config_pending()) {
+		const std::string error = engine->configuration_error();
+		const LiveRoomStats stats = engine->stats();
+		if (!error.empty()) {
+			warnings.push_back(String(("Fisheye frames are not being integrated: " + error + ".").c_str()));
+		} else if (stats.fisheye_integrated == 0 && stats.fisheye_without_pose > 0) {
+			warnings.push_back(String(("Fisheye frames are not being integrated: " + stats.fisheye_pose_problem + ".").c_str()));
+		}
 	}
 	return warnings;
 }

@@ -1,11 +1,13 @@
 #pragma once
 // CoarseRoomModel: the room as its floorplan extruded to the ceiling (§4.1), shown as a mesh
 // with one texture atlas. The mesh is rebuilt, in the editor too, whenever the floorplan changes.
-// With a RigCapture, each new fisheye frame goes through the core's CoarsePipeline (§4.3-§4.6,
-// pipeline/coarse_pipeline.h), inpainting on its worker thread; this node only feeds and shows it.
+// It gives the room to the live engine (engine/live_room.h) of its RigCapture, which textures it
+// from every fisheye frame (§4.3-§4.6) on its coarse worker; this node shows the newest atlas.
+// Without a RigCapture it holds a room-only engine of its own, for set_atlas_image.
 
-#include <coarse/coarse_texture.h>
-#include <pipeline/coarse_pipeline.h>
+#include "live_room_link.h"
+
+#include <room/floorplan.h>
 #include <room/room_mesh.h>
 
 #include <cstdint>
@@ -16,10 +18,7 @@
 
 namespace roomprobe {
 
-class DenseSLAM;
-class RigCapture;
-
-class CoarseRoomModel : public godot::Node3D {
+class CoarseRoomModel : public godot::Node3D, public LiveRoomHost {
 	GDCLASS(CoarseRoomModel, godot::Node3D)
 
 public:
@@ -56,8 +55,8 @@ public:
 	void set_room_layers(uint32_t p_layers);
 	uint32_t get_room_layers() const;
 
-	// Puts rig_capture's newest fisheye frame through the pipeline if it has not been yet; true
-	// when it did. Called every frame while the node processes.
+	// Shows the engine's newest coarse atlas if it has not been shown yet (signals
+	// texture_updated); true when it did. Called every frame while the node processes.
 	bool integrate_rig_frame();
 	int64_t get_integrated_frame_count() const;
 	godot::Dictionary get_last_frame_stats() const;
@@ -82,15 +81,7 @@ public:
 	// rect (Rect2i, atlas texels), normal (Vector3, into the room), wall_index (int, -1 if none).
 	godot::Array get_charts() const;
 
-	// For RoomProbe (C++ only). get_room_mesh is null while the floorplan is invalid.
-	const RoomMesh *get_room_mesh() const { return result.ok ? &result.mesh : nullptr; }
-	// The atlas to show and render: the pipeline's completed texture once it has a frame, else
-	// what set_atlas_image put in. CV_32FC3 linear R, G, B; empty without a valid room.
-	const cv::Mat &get_atlas() const;
-	// The lighting changes applied so far (identity without a pipeline), for the dense colours.
-	LightingChange get_cumulative_lighting() const;
-	// Changes (to a value never used before by any model) whenever the mesh is rebuilt.
-	uint64_t get_mesh_version() const { return mesh_version; }
+	std::shared_ptr<LiveRoom> get_live_room() const override { return engine; }
 
 	// What the node cannot do as configured; the editor shows these as configuration warnings.
 	godot::PackedStringArray get_warnings() const;
@@ -107,10 +98,10 @@ private:
 	Floorplan core_floorplan() const; // the floorplan and ceiling height as the core takes them
 	void rebuild();
 	void apply_material();
-	RigCapture *find_rig_capture() const;
-	bool fisheye_pose(const RigCapture &p_rig, double p_timestamp_s, Pose *r_pose, std::string *r_error) const;
-	bool ensure_pipeline(const RigCapture &p_rig);
-	bool pipeline_has_frames() const { return pipeline && pipeline->frame_count() > 0; }
+	// The RigCapture's engine (by path, or the one RigCapture in the scene), else one of its own.
+	void connect_engine();
+	void push_room();
+	bool take_snapshot();
 
 	godot::PackedVector2Array floorplan;
 	double ceiling_height = 2.5;
@@ -120,10 +111,6 @@ private:
 	RoomMeshResult result;
 	godot::Ref<godot::ArrayMesh> mesh;
 	godot::MeshInstance3D *mesh_instance = nullptr;
-
-	uint64_t mesh_version = 0;
-	CoarseTexture texture; // the atlas's size while the mesh is valid, empty otherwise
-	bool textured = false; // whether texture holds data (set_atlas_image so far)
 	godot::Ref<godot::ImageTexture> atlas_texture;
 	godot::Ref<godot::StandardMaterial3D> material;
 
@@ -134,11 +121,11 @@ private:
 	LightingCompensation lighting_compensation = LIGHTING_GAIN;
 	uint32_t room_layers = 1;
 
-	std::unique_ptr<CoarsePipeline> pipeline; // null until a rig delivers; reset by any change
-	const void *pipeline_reader = nullptr; // the RecordingReader the pipeline was configured for
-	int64_t last_fisheye_index = -1; // of the rig's fisheye stream, the last frame integrated
-	CoarseFrameStats last_stats;
-	std::string pipeline_problem; // why frames are not integrated (for the warnings), or empty
+	std::shared_ptr<LiveRoom> engine;
+	bool own_engine = false; // no RigCapture: a room-only engine
+	std::string find_warning;
+	std::string pushed; // what push_room last gave the engine, to skip repeats
+	std::shared_ptr<const CoarseSnapshot> shown; // the atlas on the mesh
 };
 
 } // namespace roomprobe

@@ -1,22 +1,14 @@
 #include "dense_slam.h"
 
-#include "coarse_room_model.h"
-#include "rig_capture.h"
-
+#include "../convert/image_convert.h"
 #include "../convert/mesh_convert.h"
 #include "../convert/pose_convert.h"
-
-#include <rig/fisheye_pose.h>
 
 using namespace godot;
 
 namespace roomprobe {
 
 namespace {
-
-// The fisheye is on its own clock: its frame may come a little after the newest RGB-D frame,
-// so the tracked trajectory is extrapolated that far (seconds).
-constexpr double FISHEYE_EXTRAPOLATION_S = 0.1;
 
 DenseSLAM::TrackingState to_node_state(TrackingState p_state) {
 	switch (p_state) {
@@ -55,11 +47,13 @@ Array to_surface_arrays(const TriangleMesh &p_mesh) {
 
 DenseSLAM::DenseSLAM() {
 	mesh.instantiate();
-	// After RigCapture (frames) and before CoarseRoomModel (fisheye poses) and RoomProbe.
+	// After RigCapture (which applies the engine's configuration) and before the others.
 	set_process_priority(-20);
 }
 
-DenseSLAM::~DenseSLAM() = default;
+DenseSLAM::~DenseSLAM() {
+	disconnect_engine();
+}
 
 void DenseSLAM::_notification(int p_what) {
 	if (p_what == NOTIFICATION_READY && mesh_instance == nullptr) {
@@ -77,51 +71,90 @@ void DenseSLAM::_notification(int p_what) {
 		mesh_instance->set_as_top_level(true);
 		set_process(!Engine::get_singleton()->is_editor_hint());
 	}
+	if (p_what == NOTIFICATION_READY) {
+		connect_engine();
+	} else if (p_what == NOTIFICATION_EXIT_TREE) {
+		disconnect_engine();
+	}
 }
 
 void DenseSLAM::_process(double p_delta) {
 	(void)p_delta;
-	if (!capture_path.is_empty()) {
-		process_rig_frame();
+	MainThreadTimer timer;
+	process_rig_frame();
+}
+
+// ---------------------------------------------------------------- the engine
+
+void DenseSLAM::connect_engine() {
+	Node *capture = find_collaborator(*this, capture_path, "RigCapture", "capture", &find_warning);
+	std::shared_ptr<LiveRoom> found = live_room_of(capture);
+	if (found == engine) {
+		return;
 	}
+	disconnect_engine();
+	engine = found;
+	taken_sequence = taken_mesh = 0;
+	push_settings();
+}
+
+void DenseSLAM::disconnect_engine() {
+	if (engine) {
+		engine->edit_config([](LiveRoomConfig &p_config) { p_config.dense = false; });
+		engine.reset();
+	}
+}
+
+// The volume's settings into the engine (applied by RigCapture, which restarts the model).
+void DenseSLAM::push_settings() {
+	if (!engine) {
+		return;
+	}
+	const bool valid = voxel_size > 0.0 && truncation_distance > voxel_size && max_blocks >= 1 && max_blocks <= (1 << 22);
+	engine->edit_config([&](LiveRoomConfig &p_config) {
+		p_config.dense = valid;
+		p_config.dense_poses = roomprobe::PoseSource::Tracked;
+		p_config.slam.tsdf.voxel_size_m = float(voxel_size);
+		p_config.slam.tsdf.truncation_m = float(truncation_distance);
+		p_config.slam.tsdf.max_blocks = max_blocks;
+		p_config.mesh_interval_frames = std::max(1, mesh_update_interval);
+	});
+	update_configuration_warnings();
 }
 
 // ---------------------------------------------------------------- properties
 
 void DenseSLAM::set_capture_path(const NodePath &p_path) {
 	capture_path = p_path;
-	slam.reset();
+	if (is_inside_tree()) {
+		connect_engine();
+	}
 	update_configuration_warnings();
 }
 
 NodePath DenseSLAM::get_capture_path() const { return capture_path; }
 void DenseSLAM::set_camera_path(const NodePath &p_path) { camera_path = p_path; }
 NodePath DenseSLAM::get_camera_path() const { return camera_path; }
-
-void DenseSLAM::set_coarse_model_path(const NodePath &p_path) {
-	coarse_model_path = p_path;
-	placer_coarse_version = 0;
-}
-
+void DenseSLAM::set_coarse_model_path(const NodePath &p_path) { coarse_model_path = p_path; }
 NodePath DenseSLAM::get_coarse_model_path() const { return coarse_model_path; }
 
 void DenseSLAM::set_voxel_size(double p_metres) {
 	voxel_size = p_metres;
-	slam.reset();
+	push_settings();
 }
 
 double DenseSLAM::get_voxel_size() const { return voxel_size; }
 
 void DenseSLAM::set_truncation_distance(double p_metres) {
 	truncation_distance = p_metres;
-	slam.reset();
+	push_settings();
 }
 
 double DenseSLAM::get_truncation_distance() const { return truncation_distance; }
 
 void DenseSLAM::set_max_blocks(int p_blocks) {
 	max_blocks = p_blocks;
-	slam.reset();
+	push_settings();
 }
 
 int DenseSLAM::get_max_blocks() const { return max_blocks; }
@@ -134,57 +167,15 @@ void DenseSLAM::set_mesh_layers(uint32_t p_layers) {
 }
 
 uint32_t DenseSLAM::get_mesh_layers() const { return mesh_layers; }
-void DenseSLAM::set_mesh_update_interval(int p_frames) { mesh_update_interval = p_frames; }
+
+void DenseSLAM::set_mesh_update_interval(int p_frames) {
+	mesh_update_interval = p_frames;
+	push_settings();
+}
+
 int DenseSLAM::get_mesh_update_interval() const { return mesh_update_interval; }
 
-// ---------------------------------------------------------------- tracking and integration
-
-RigCapture *DenseSLAM::find_capture() const {
-	if (capture_path.is_empty() || !is_inside_tree()) {
-		return nullptr;
-	}
-	return cast_to<RigCapture>(get_node_or_null(capture_path));
-}
-
-bool DenseSLAM::ensure_slam(const RigCapture &p_rig) {
-	const RecordingReader *reader = p_rig.get_reader();
-	if (reader == nullptr || !reader->is_open()) {
-		problem = "capture has no recording open.";
-		return false;
-	}
-	if (slam && slam_reader == reader) {
-		return true;
-	}
-	if (!(voxel_size > 0.0) || !(truncation_distance > voxel_size) || max_blocks < 1 || max_blocks > (1 << 22)) {
-		problem = "voxel_size must be > 0, truncation_distance larger than voxel_size, max_blocks in 1..4194304.";
-		return false;
-	}
-	DenseSlamOptions options;
-	options.tsdf.voxel_size_m = float(voxel_size);
-	options.tsdf.truncation_m = float(truncation_distance);
-	options.tsdf.max_blocks = max_blocks;
-	auto fresh = std::make_unique<DenseSlam>(options);
-	// The room's frame: the recording says where the first RGB-D frame was taken in it.
-	const Pose initial = reader->has_room() ? reader->get_room().initial_rgb_pose : Pose();
-	const std::string error = fresh->configure(reader->get_rig().rgb, initial);
-	if (!error.empty()) {
-		problem = error;
-		return false;
-	}
-	std::vector<glm::dvec3> keep;
-	if (reader->has_room()) {
-		keep = reader->get_room().probes;
-	}
-	fresh->volume().set_keep_points(keep);
-	slam = std::move(fresh);
-	slam_reader = reader;
-	rig = reader->get_rig();
-	trajectory.clear();
-	last_rgbd_index = -1;
-	frames_since_mesh = 0;
-	problem.clear();
-	return true;
-}
+// ---------------------------------------------------------------- results
 
 void DenseSLAM::set_state(TrackingState p_state, const std::string &p_reason) {
 	const bool changed = p_state != tracking_state;
@@ -196,61 +187,75 @@ void DenseSLAM::set_state(TrackingState p_state, const std::string &p_reason) {
 }
 
 bool DenseSLAM::process_rig_frame() {
-	RigCapture *rig_node = find_capture();
-	if (rig_node == nullptr) {
-		problem = capture_path.is_empty() ? "" : "capture does not lead to a RigCapture.";
+	if (!engine && is_inside_tree()) {
+		connect_engine(); // the RigCapture may have come later
+	}
+	if (!engine) {
 		return false;
 	}
-	if (!ensure_slam(*rig_node)) {
+	take_mesh();
+	const std::shared_ptr<const TrackedFrame> frame = engine->tracked_frame();
+	if (!frame || frame->sequence == taken_sequence || !engine->config().dense) {
 		return false;
 	}
-	const int64_t index = rig_node->get_frame_index(RigCapture::STREAM_RGBD);
-	if (index < 0 || index == last_rgbd_index) {
-		return false;
-	}
-	last_rgbd_index = index;
-	const RgbdFrame &frame = rig_node->get_rgbd_frame();
-	last_frame = slam->process(frame);
-	set_state(to_node_state(last_frame.tracking.state), last_frame.tracking.reason);
-	if (last_frame.tracking.state != roomprobe::TrackingState::Lost) {
-		std::string error;
-		trajectory.append({ frame.timestamp_s, slam->pose() }, &error); // a repeated timestamp is skipped
-	}
-	if (!camera_path.is_empty()) {
+	taken_sequence = frame->sequence;
+	last_frame = frame;
+	processed++;
+	set_state(to_node_state(frame->state), frame->reason);
+	// The pose and the image of one frame: the background and the virtual objects stay in register.
+	if (!camera_path.is_empty() && frame->has_pose) {
 		Node3D *camera = cast_to<Node3D>(get_node_or_null(camera_path));
 		ERR_FAIL_NULL_V_MSG(camera, true, "camera does not lead to a Node3D.");
-		camera->set_global_transform(get_camera_transform());
+		camera->set_global_transform(camera_transform_from_pose(frame->world_from_camera));
 	}
-	if (last_frame.integrated && ++frames_since_mesh >= std::max(1, mesh_update_interval)) {
-		update_mesh();
+	if (camera_image_wanted && !frame->rgb.empty()) {
+		show_in_texture(image_from_mat(frame->rgb), camera_image);
 	}
-	emit_signal("frame_processed", index);
+	emit_signal("frame_processed", int64_t(frame->sequence));
 	return true;
 }
 
-void DenseSLAM::update_mesh() {
-	frames_since_mesh = 0;
-	if (!slam) {
+Ref<ImageTexture> DenseSLAM::get_camera_image_texture() const {
+	if (!camera_image_wanted) {
+		camera_image_wanted = true;
+		if (last_frame && !last_frame->rgb.empty()) {
+			show_in_texture(image_from_mat(last_frame->rgb), camera_image);
+		}
+	}
+	return camera_image;
+}
+
+void DenseSLAM::take_mesh() {
+	const std::shared_ptr<const DenseMeshSnapshot> snapshot = engine ? engine->dense_mesh() : nullptr;
+	if (!snapshot || snapshot->version == taken_mesh) {
 		return;
 	}
-	const TriangleMesh &triangles = slam->update_mesh();
+	taken_mesh = snapshot->version;
 	mesh->clear_surfaces();
-	if (!triangles.indices.empty()) {
-		mesh->add_surface_from_arrays(Mesh::PRIMITIVE_TRIANGLES, to_surface_arrays(triangles));
-	}
-	const std::string error = placer.set_dense(triangles);
-	if (!error.empty()) {
-		ERR_PRINT(String(("DenseSLAM: placement: " + error).c_str()));
+	if (!snapshot->mesh.indices.empty()) {
+		mesh->add_surface_from_arrays(Mesh::PRIMITIVE_TRIANGLES, to_surface_arrays(snapshot->mesh));
 	}
 	emit_signal("mesh_updated");
 }
 
+void DenseSLAM::update_mesh() {
+	if (!engine) {
+		return;
+	}
+	engine->update_dense_mesh();
+	take_mesh();
+}
+
 void DenseSLAM::reset() {
-	slam.reset();
-	trajectory.clear();
-	placer.clear_dense();
+	if (engine) {
+		// The whole live model starts again (tracking, volume, and the coarse texture with it).
+		engine->edit_config([](LiveRoomConfig &) {});
+		engine->apply_config();
+	}
 	mesh->clear_surfaces();
-	last_frame = DenseSlamFrame();
+	last_frame.reset();
+	taken_sequence = taken_mesh = 0;
+	processed = 0;
 	set_state(TRACKING_NOT_STARTED, "");
 }
 
@@ -258,61 +263,46 @@ DenseSLAM::TrackingState DenseSLAM::get_tracking_state() const { return tracking
 String DenseSLAM::get_tracking_reason() const { return String(tracking_reason.c_str()); }
 
 Transform3D DenseSLAM::get_camera_transform() const {
-	return slam ? camera_transform_from_pose(slam->pose()) : Transform3D();
+	return last_frame && last_frame->has_pose ? camera_transform_from_pose(last_frame->world_from_camera) : Transform3D();
 }
 
-int64_t DenseSLAM::get_processed_frame_count() const { return slam ? int64_t(slam->frame_count()) : 0; }
+int64_t DenseSLAM::get_processed_frame_count() const { return processed; }
 
 Dictionary DenseSLAM::get_stats() const {
 	Dictionary d;
-	if (!slam) {
+	if (!engine || !last_frame) {
 		return d;
 	}
-	const TsdfStats s = slam->volume().stats();
-	d.set("frames", int64_t(slam->frame_count()));
-	d.set("integrated_frames", int64_t(slam->integrated_count()));
-	d.set("allocated_blocks", int64_t(s.allocated_blocks));
-	d.set("capacity_blocks", int64_t(s.capacity_blocks));
-	d.set("bytes_used", int64_t(s.bytes_used));
-	d.set("evicted_blocks", int64_t(s.evicted_blocks_total));
-	d.set("bounds", AABB{ to_godot(glm::dvec3(s.bounds_min)), to_godot(glm::dvec3(s.bounds_max - s.bounds_min)) });
-	d.set("track_ms", last_frame.timings.track_ms);
-	d.set("integrate_ms", last_frame.timings.integrate_ms);
-	d.set("raycast_ms", last_frame.timings.raycast_ms);
-	d.set("frame_ms", last_frame.timings.frame_ms);
-	d.set("inlier_fraction", last_frame.tracking.inlier_fraction);
-	d.set("rmse_m", last_frame.tracking.rmse_m);
+	const LiveRoomStats s = engine->stats();
+	d.set("frames", int64_t(s.dense_frames));
+	d.set("integrated_frames", int64_t(s.dense_fused));
+	d.set("dropped_frames", int64_t(s.rgbd_dropped));
+	d.set("allocated_blocks", int64_t(s.tsdf.allocated_blocks));
+	d.set("capacity_blocks", int64_t(s.tsdf.capacity_blocks));
+	d.set("bytes_used", int64_t(s.tsdf.bytes_used));
+	d.set("evicted_blocks", int64_t(s.tsdf.evicted_blocks_total));
+	d.set("bounds", AABB{ to_godot(glm::dvec3(s.tsdf.bounds_min)), to_godot(glm::dvec3(s.tsdf.bounds_max - s.tsdf.bounds_min)) });
+	d.set("track_ms", last_frame->timings.track_ms);
+	d.set("integrate_ms", last_frame->timings.integrate_ms);
+	d.set("raycast_ms", last_frame->timings.raycast_ms);
+	d.set("frame_ms", last_frame->timings.frame_ms);
+	d.set("inlier_fraction", last_frame->inlier_fraction);
+	d.set("rmse_m", last_frame->rmse_m);
+	d.set("latency_ms_p50", s.rgbd_latency.p50_ms);
+	d.set("latency_ms_p95", s.rgbd_latency.p95_ms);
 	return d;
 }
 
 Ref<ArrayMesh> DenseSLAM::get_mesh() const { return mesh; }
 
-bool DenseSLAM::fisheye_pose_at(double p_fisheye_timestamp_s, Pose *r_world_from_fisheye, std::string *r_error) const {
-	if (!slam || trajectory.is_empty()) {
-		*r_error = "DenseSLAM has no tracked pose yet";
-		return false;
-	}
-	return roomprobe::fisheye_pose_at(trajectory, rig, p_fisheye_timestamp_s, r_world_from_fisheye, r_error, FISHEYE_EXTRAPOLATION_S);
-}
-
 // ---------------------------------------------------------------- placement (Embree)
 
-void DenseSLAM::refresh_placer_coarse() const {
-	if (coarse_model_path.is_empty() || !is_inside_tree()) {
-		return;
-	}
-	const CoarseRoomModel *model = cast_to<CoarseRoomModel>(get_node_or_null(coarse_model_path));
-	if (model == nullptr || model->get_room_mesh() == nullptr || model->get_mesh_version() == placer_coarse_version) {
-		return;
-	}
-	placer.set_coarse(*model->get_room_mesh(), to_glm(model->get_global_position()));
-	placer_coarse_version = model->get_mesh_version();
-}
-
 Dictionary DenseSLAM::place_on_ray(const Vector3 &p_origin, const Vector3 &p_direction) const {
-	refresh_placer_coarse();
-	const PlacementHit hit = placer.cast(to_glm(p_origin), to_glm(p_direction));
 	Dictionary d;
+	if (!engine) {
+		return d;
+	}
+	const PlacementHit hit = engine->place_ray(to_glm(p_origin), to_glm(p_direction));
 	if (hit.surface == PlacementSurface::None) {
 		return d;
 	}
@@ -332,12 +322,20 @@ Dictionary DenseSLAM::place_on_surface(const Vector2 &p_screen_position) const {
 
 PackedStringArray DenseSLAM::get_warnings() const {
 	PackedStringArray warnings;
-	if (capture_path.is_empty()) {
-		warnings.push_back("Set capture to a RigCapture node.");
-	} else if (is_inside_tree() && find_capture() == nullptr) {
-		warnings.push_back("capture does not lead to a RigCapture node.");
-	} else if (!problem.empty()) {
-		warnings.push_back(String(("RGB-D frames are not being processed: " + problem).c_str()));
+	std::string warning;
+	const Node *capture = is_inside_tree() ? find_collaborator(*this, capture_path, "RigCapture", "capture", &warning) : nullptr;
+	if (!warning.empty()) {
+		warnings.push_back(String(warning.c_str()));
+	} else if (!is_inside_tree()) {
+		warnings.push_back("Not in a scene: it takes its RGB-D frames from the RigCapture of its scene (or the one capture leads to).");
+	} else if (capture == nullptr) {
+		warnings.push_back("No RigCapture in the scene: add one, or set capture to it.");
+	}
+	if (!(voxel_size > 0.0) || !(truncation_distance > voxel_size) || max_blocks < 1 || max_blocks > (1 << 22)) {
+		warnings.push_back("RGB-D frames are not being processed: voxel_size must be > 0, truncation_distance larger than voxel_size, max_blocks in 1..4194304.");
+	}
+	if (engine && !engine->config_pending() && !engine->configuration_error().empty()) {
+		warnings.push_back(String(("RGB-D frames are not being processed: " + engine->configuration_error()).c_str()));
 	}
 	if (!camera_path.is_empty() && is_inside_tree() && cast_to<Camera3D>(get_node_or_null(camera_path)) == nullptr) {
 		warnings.push_back("camera does not lead to a Camera3D.");
@@ -364,6 +362,7 @@ void DenseSLAM::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("set_mesh_update_interval", "frames"), &DenseSLAM::set_mesh_update_interval);
 	ClassDB::bind_method(D_METHOD("get_mesh_update_interval"), &DenseSLAM::get_mesh_update_interval);
 	ClassDB::bind_method(D_METHOD("process_rig_frame"), &DenseSLAM::process_rig_frame);
+	ClassDB::bind_method(D_METHOD("get_camera_image_texture"), &DenseSLAM::get_camera_image_texture);
 	ClassDB::bind_method(D_METHOD("get_tracking_state"), &DenseSLAM::get_tracking_state);
 	ClassDB::bind_method(D_METHOD("get_tracking_reason"), &DenseSLAM::get_tracking_reason);
 	ClassDB::bind_method(D_METHOD("get_camera_transform"), &DenseSLAM::get_camera_transform);

@@ -1,12 +1,12 @@
 #pragma once
 // DenseSLAM: tracks the RGB-D camera and keeps the dense colour model of nearby surfaces (§4.2).
-// A thin shim over the core's DenseSlam (slam/dense_slam.h): it feeds RigCapture's RGB-D frames
-// in, drives the AR Camera3D, shows the model's mesh and answers placement rays (Embree).
+// A thin shim over the live engine (engine/live_room.h) of its RigCapture: it turns dense SLAM on
+// there with its volume settings, and each frame copies the engine's newest results into Godot:
+// the AR Camera3D's transform together with the RGB image of that very frame (the background, so
+// the two never slip apart), the tracking state, and the dense mesh. Placement rays are Embree's,
+// in the engine.
 
-#include <placement/surface_placement.h>
-#include <rig/rig.h>
-#include <rig/trajectory.h>
-#include <slam/dense_slam.h>
+#include "live_room_link.h"
 
 #include <rp_godot/godot.h>
 
@@ -15,9 +15,7 @@
 
 namespace roomprobe {
 
-class RigCapture;
-
-class DenseSLAM : public godot::Node3D {
+class DenseSLAM : public godot::Node3D, public LiveRoomHost {
 	GDCLASS(DenseSLAM, godot::Node3D)
 
 public:
@@ -48,8 +46,11 @@ public:
 	void set_mesh_update_interval(int p_frames);
 	int get_mesh_update_interval() const;
 
-	// Tracks and integrates capture's newest RGB-D frame if it has not been yet; true when it did.
+	// Takes the engine's newest tracked RGB-D frame if it has not been taken yet (drives the
+	// camera, signals); true when it did. Called every frame while the node processes.
 	bool process_rig_frame();
+	// The RGB image of the frame whose pose the camera has now: the AR view's background.
+	godot::Ref<godot::ImageTexture> get_camera_image_texture() const;
 	TrackingState get_tracking_state() const;
 	godot::String get_tracking_reason() const;
 	godot::Transform3D get_camera_transform() const;
@@ -61,10 +62,7 @@ public:
 	godot::Dictionary place_on_ray(const godot::Vector3 &p_origin, const godot::Vector3 &p_direction) const;
 	godot::Dictionary place_on_surface(const godot::Vector2 &p_screen_position) const;
 
-	// For CoarseRoomModel and RoomProbe (C++ only).
-	const DenseSlam *get_slam() const { return slam.get(); }
-	// The fisheye's pose at its timestamp, from the tracked RGB-D trajectory (§4.3).
-	bool fisheye_pose_at(double p_fisheye_timestamp_s, Pose *r_world_from_fisheye, std::string *r_error) const;
+	std::shared_ptr<LiveRoom> get_live_room() const override { return engine; }
 
 	godot::PackedStringArray get_warnings() const;
 	godot::PackedStringArray _get_configuration_warnings() const { return get_warnings(); }
@@ -77,10 +75,12 @@ public:
 	void _process(double p_delta);
 
 private:
-	RigCapture *find_capture() const;
-	bool ensure_slam(const RigCapture &p_rig);
+	// Finds the RigCapture (by path, or the one in the scene) and turns dense SLAM on in its engine.
+	void connect_engine();
+	void disconnect_engine();
+	void push_settings();
+	void take_mesh();
 	void set_state(TrackingState p_state, const std::string &p_reason);
-	void refresh_placer_coarse() const;
 
 	godot::NodePath capture_path;
 	godot::NodePath camera_path;
@@ -91,22 +91,20 @@ private:
 	uint32_t mesh_layers = 1;
 	int mesh_update_interval = 15;
 
-	std::unique_ptr<DenseSlam> slam;
-	const void *slam_reader = nullptr; // the RecordingReader the model was started for
-	Rig rig;
-	Trajectory trajectory; // tracked RGB-D poses, RGB-D clock
-	int64_t last_rgbd_index = -1;
-	DenseSlamFrame last_frame;
+	std::shared_ptr<LiveRoom> engine;
+	std::string find_warning;
+	uint64_t taken_sequence = 0; // of the last TrackedFrame copied
+	uint64_t taken_mesh = 0; // version of the last dense mesh shown
+	std::shared_ptr<const TrackedFrame> last_frame;
+	int64_t processed = 0;
 	TrackingState tracking_state = TRACKING_NOT_STARTED;
 	std::string tracking_reason;
-	std::string problem; // why frames are not processed, for the warnings
-	int frames_since_mesh = 0;
 
 	godot::Ref<godot::ArrayMesh> mesh;
 	godot::MeshInstance3D *mesh_instance = nullptr;
 	godot::Ref<godot::StandardMaterial3D> material;
-	mutable SurfacePlacer placer;
-	mutable uint64_t placer_coarse_version = 0;
+	mutable godot::Ref<godot::ImageTexture> camera_image;
+	mutable bool camera_image_wanted = false;
 };
 
 } // namespace roomprobe

@@ -3,6 +3,8 @@
 #include "../convert/image_convert.h"
 #include "../convert/pose_convert.h"
 
+#include <rig/photometry.h>
+
 #include <cmath>
 
 using namespace godot;
@@ -24,6 +26,28 @@ bool RigCapture::get_loop() const { return loop; }
 void RigCapture::set_autoplay(bool p_autoplay) { autoplay = p_autoplay; }
 bool RigCapture::get_autoplay() const { return autoplay; }
 
+RigCapture::RigCapture() :
+		engine(std::make_shared<LiveRoom>()) {
+	set_process_priority(-30);
+	// Until a recording is open, the engine has no rig; the other nodes add their parts.
+	engine->edit_config([](LiveRoomConfig &p_config) {
+		p_config.has_rig = false;
+		p_config.dense = false;
+		p_config.has_room = false;
+	});
+}
+
+RigCapture::~RigCapture() {
+	stop_capture();
+	if (engine) {
+		engine->stop();
+	}
+}
+
+int64_t RigCapture::get_main_thread_usec() {
+	return int64_t(MainThreadTimer::total_usec());
+}
+
 void RigCapture::fail(const std::string &p_message) {
 	last_error = p_message;
 	ERR_PRINT(String(("RigCapture: " + p_message).c_str()));
@@ -38,21 +62,41 @@ bool RigCapture::open() {
 	}
 	// res:// and user:// paths work as well as absolute ones.
 	const std::string folder = ProjectSettings::get_singleton()->globalize_path(recording_path).utf8_string();
-	auto opened = std::make_unique<RecordingReader>();
+	auto opened = std::make_shared<RecordingReader>();
 	const RecordingStatus status = opened->open(folder);
 	if (!status.ok) {
 		fail(status.error);
 		return false;
 	}
-	reader = std::move(opened);
+	RigPhotometry photometry;
+	std::string error;
+	if (!read_recording_photometry(folder, &photometry, &error)) {
+		fail(error);
+		return false;
+	}
+	reader = opened;
+	engine->edit_config([&](LiveRoomConfig &p_config) {
+		p_config.has_rig = true;
+		p_config.rig = opened->get_rig();
+		p_config.photometry = photometry;
+		p_config.initial_rgb_pose = opened->has_room() ? opened->get_room().initial_rgb_pose : Pose();
+		p_config.keep_points = opened->has_room() ? opened->get_room().probes : std::vector<glm::dvec3>();
+		p_config.ground_truth = opened->has_ground_truth_trajectory(RecordingStream::Rgbd) ? opened->ground_truth_trajectory(RecordingStream::Rgbd) : Trajectory();
+	});
 	last_error.clear();
 	update_configuration_warnings();
 	return true;
 }
 
 void RigCapture::close() {
+	stop();
+	if (reader) {
+		engine->edit_config([](LiveRoomConfig &p_config) {
+			p_config.has_rig = false;
+			p_config.ground_truth.clear();
+		});
+	}
 	reader.reset();
-	playing = false;
 	rewind();
 }
 
@@ -63,74 +107,218 @@ void RigCapture::play() {
 		return;
 	}
 	playing = true;
+	if (pacing == PACING_REAL_TIME) {
+		// The engine's workers take the frames; the capture thread reads them.
+		engine->apply_config();
+		engine->start();
+		start_capture();
+	}
 	set_process(pacing == PACING_REAL_TIME);
 }
 
 void RigCapture::stop() {
 	playing = false;
+	stop_capture();
+	engine->stop();
 	set_process(false);
 }
 
 bool RigCapture::is_playing() const { return playing; }
 
 void RigCapture::rewind() {
-	next_event = 0;
-	clock_s = 0.0;
+	{
+		const std::lock_guard<std::mutex> lock(mutex);
+		next_event = 0;
+		clock_s = 0.0;
+		dropped = 0;
+		reached_end = false;
+		latest = Shown();
+	}
+	clock_advanced.notify_all();
 	frame_index[0] = frame_index[1] = -1;
-	dropped = 0;
+	shown_version[0] = shown_version[1] = 0;
 }
 
-// Decodes the frame of event p_event (unless it was overtaken, p_decode false) and signals it.
-bool RigCapture::deliver(size_t p_event, bool p_decode) {
-	const PlaybackEvent &event = reader->get_events()[p_event];
-	const int stream = event.stream == RecordingStream::Rgbd ? STREAM_RGBD : STREAM_FISHEYE;
-	if (!p_decode) {
-		dropped++;
-		return true;
+void RigCapture::_notification(int p_what) {
+	if (p_what == NOTIFICATION_EXIT_TREE) {
+		// Frames stop with the scene; the engine keeps its model for the nodes still holding it.
+		if (playing) {
+			stop();
+		}
 	}
-	if (stream == STREAM_RGBD) {
+}
+
+// Reads the frame of event p_event and hands it to the engine and to the main thread. Called by
+// the capture thread (Real Time) or by step() (Step). False when the frame cannot be read.
+bool RigCapture::read_event(size_t p_event) {
+	const PlaybackEvent event = reader->get_events()[p_event];
+	if (event.stream == RecordingStream::Rgbd) {
 		RgbdFrameResult result = reader->read_rgbd(event.index);
 		if (!result.ok) {
-			// One bad frame is skipped; playback goes on.
-			WARN_PRINT(String(("RigCapture: " + result.error).c_str()));
+			const std::lock_guard<std::mutex> lock(mutex);
+			frame_warnings.push_back(result.error);
 			return false;
 		}
-		rgbd_frame = std::move(result.frame);
-		rgb_image = image_from_mat(rgbd_frame.rgb);
-		depth_image = image_from_mat(rgbd_frame.depth_m);
-		show_in_texture(rgb_image, rgb_texture);
-		show_in_texture(depth_image, depth_texture);
+		engine->push_rgbd(result.frame);
+		const std::lock_guard<std::mutex> lock(mutex);
+		latest.rgbd = std::move(result.frame);
+		latest.index[STREAM_RGBD] = int64_t(event.index);
+		latest.version[STREAM_RGBD]++;
 	} else {
 		FisheyeFrameResult result = reader->read_fisheye(event.index);
 		if (!result.ok) {
-			WARN_PRINT(String(("RigCapture: " + result.error).c_str()));
+			const std::lock_guard<std::mutex> lock(mutex);
+			frame_warnings.push_back(result.error);
 			return false;
 		}
-		fisheye_frame = std::move(result.frame);
-		fisheye_image = image_from_mat(fisheye_frame.image);
-		show_in_texture(fisheye_image, fisheye_texture);
+		engine->push_fisheye(result.frame);
+		const std::lock_guard<std::mutex> lock(mutex);
+		latest.fisheye = std::move(result.frame);
+		latest.index[STREAM_FISHEYE] = int64_t(event.index);
+		latest.version[STREAM_FISHEYE]++;
 	}
-	frame_index[stream] = int64_t(event.index);
-	const double timestamp = stream == STREAM_RGBD ? rgbd_frame.timestamp_s : fisheye_frame.timestamp_s;
-	emit_signal("frame_captured", stream, int64_t(event.index), timestamp);
 	return true;
 }
 
+void RigCapture::capture_loop() {
+	const std::vector<PlaybackEvent> &events = reader->get_events();
+	std::unique_lock<std::mutex> lock(mutex);
+	while (!capture_stop) {
+		if (next_event >= events.size()) {
+			reached_end = true; // the main thread signals it, and rewinds when looping
+			clock_advanced.wait(lock, [this, &events] { return capture_stop || next_event < events.size(); });
+			continue;
+		}
+		// Of the frames now due, only the newest of each stream is read: a slow reader drops
+		// frames instead of falling ever further behind.
+		size_t due_end = next_event;
+		while (due_end < events.size() && events[due_end].time_s - events.front().time_s <= clock_s) {
+			due_end++;
+		}
+		if (due_end == next_event) {
+			clock_advanced.wait(lock);
+			continue;
+		}
+		std::vector<size_t> to_read;
+		for (size_t e = next_event; e < due_end; e++) {
+			bool newest = true;
+			for (size_t later = e + 1; later < due_end; later++) {
+				newest = newest && events[later].stream != events[e].stream;
+			}
+			if (newest) {
+				to_read.push_back(e);
+			} else {
+				dropped++;
+			}
+		}
+		next_event = due_end;
+		lock.unlock();
+		for (size_t e : to_read) {
+			read_event(e);
+		}
+		lock.lock();
+	}
+}
+
+void RigCapture::start_capture() {
+	stop_capture();
+	{
+		const std::lock_guard<std::mutex> lock(mutex);
+		capture_stop = false;
+	}
+	capture_thread = std::thread([this] { capture_loop(); });
+}
+
+void RigCapture::stop_capture() {
+	{
+		const std::lock_guard<std::mutex> lock(mutex);
+		capture_stop = true;
+	}
+	clock_advanced.notify_all();
+	if (capture_thread.joinable()) {
+		capture_thread.join();
+	}
+}
+
+// Main thread: takes the newest frames read since the last call, shows them where wanted and
+// signals them.
+void RigCapture::show_frames(bool p_signal) {
+	Shown taken;
+	std::vector<std::string> warnings;
+	{
+		const std::lock_guard<std::mutex> lock(mutex);
+		taken = latest; // cv::Mat copies share pixels that nobody writes again
+		warnings.swap(frame_warnings);
+	}
+	for (const std::string &w : warnings) {
+		// One bad frame is skipped; playback goes on.
+		WARN_PRINT(String(("RigCapture: " + w).c_str()));
+	}
+	bool changed[2] = { false, false };
+	for (int s = 0; s < 2; s++) {
+		changed[s] = taken.version[s] != shown_version[s] && taken.index[s] >= 0;
+		shown_version[s] = taken.version[s];
+		frame_index[s] = taken.index[s];
+	}
+	if (changed[STREAM_RGBD]) {
+		rgbd_frame = taken.rgbd;
+	}
+	if (changed[STREAM_FISHEYE]) {
+		fisheye_frame = taken.fisheye;
+	}
+	if (!changed[0] && !changed[1]) {
+		return;
+	}
+	images_stale = true;
+	if (textures_wanted) {
+		// Only textures someone asked for cost main-thread time.
+		if (changed[STREAM_RGBD]) {
+			show_in_texture(image_from_mat(rgbd_frame.rgb), rgb_texture);
+			show_in_texture(image_from_mat(rgbd_frame.depth_m), depth_texture);
+		}
+		if (changed[STREAM_FISHEYE]) {
+			show_in_texture(image_from_mat(fisheye_frame.image), fisheye_texture);
+		}
+	}
+	if (p_signal) {
+		for (int s = 0; s < 2; s++) {
+			if (changed[s]) {
+				emit_signal("frame_captured", s, frame_index[s], s == STREAM_RGBD ? rgbd_frame.timestamp_s : fisheye_frame.timestamp_s);
+			}
+		}
+	}
+}
+
 bool RigCapture::step() {
+	MainThreadTimer timer;
 	if (!reader && !open()) {
 		return false;
 	}
-	const auto &events = reader->get_events();
-	if (next_event >= events.size()) {
-		if (!loop || events.empty()) {
-			return false;
-		}
-		rewind();
+	if (capture_thread.joinable()) {
+		return false; // playing in real time: the capture thread reads
 	}
-	const size_t event = next_event++;
-	clock_s = events[event].time_s - events.front().time_s;
-	deliver(event, true);
-	if (next_event >= events.size()) {
+	engine->apply_config();
+	const auto &events = reader->get_events();
+	size_t event = 0;
+	{
+		const std::lock_guard<std::mutex> lock(mutex);
+		if (next_event >= events.size()) {
+			if (!loop || events.empty()) {
+				return false;
+			}
+			next_event = 0;
+		}
+		event = next_event++;
+		clock_s = events[event].time_s - events.front().time_s;
+	}
+	read_event(event);
+	show_frames(true);
+	bool at_end = false;
+	{
+		const std::lock_guard<std::mutex> lock(mutex);
+		at_end = next_event >= events.size();
+	}
+	if (at_end) {
 		emit_signal("finished");
 		if (!loop) {
 			stop();
@@ -147,26 +335,24 @@ void RigCapture::_ready() {
 }
 
 void RigCapture::_process(double p_delta) {
+	MainThreadTimer timer;
+	if (engine->config_pending()) {
+		// A node changed its part: the engine restarts with it (workers too, if they ran).
+		engine->apply_config();
+		update_configuration_warnings();
+	}
 	if (!playing || !reader || pacing != PACING_REAL_TIME) {
 		return;
 	}
-	const auto &events = reader->get_events();
-	clock_s += p_delta;
-	// Of the frames now due, only the newest of each stream is decoded: a slow frame loop drops
-	// frames instead of falling ever further behind.
-	size_t due_end = next_event;
-	while (due_end < events.size() && events[due_end].time_s - events.front().time_s <= clock_s) {
-		due_end++;
+	bool at_end = false;
+	{
+		const std::lock_guard<std::mutex> lock(mutex);
+		clock_s += p_delta;
+		at_end = reached_end;
 	}
-	for (size_t e = next_event; e < due_end; e++) {
-		bool newest = true;
-		for (size_t later = e + 1; later < due_end; later++) {
-			newest = newest && events[later].stream != events[e].stream;
-		}
-		deliver(e, newest);
-	}
-	next_event = due_end;
-	if (next_event >= events.size()) {
+	clock_advanced.notify_all();
+	show_frames(true);
+	if (at_end) {
 		emit_signal("finished");
 		if (loop) {
 			rewind();
@@ -184,8 +370,15 @@ int64_t RigCapture::get_frame_count(Stream p_stream) const {
 }
 
 int64_t RigCapture::get_event_count() const { return reader ? int64_t(reader->get_events().size()) : 0; }
-int64_t RigCapture::get_event_position() const { return int64_t(next_event); }
-double RigCapture::get_time() const { return clock_s; }
+int64_t RigCapture::get_event_position() const {
+	const std::lock_guard<std::mutex> lock(mutex);
+	return int64_t(next_event);
+}
+
+double RigCapture::get_time() const {
+	const std::lock_guard<std::mutex> lock(mutex);
+	return clock_s;
+}
 int64_t RigCapture::get_frame_index(Stream p_stream) const { return frame_index[p_stream == STREAM_RGBD ? 0 : 1]; }
 
 double RigCapture::get_frame_timestamp(Stream p_stream) const {
@@ -195,13 +388,55 @@ double RigCapture::get_frame_timestamp(Stream p_stream) const {
 	return p_stream == STREAM_RGBD ? rgbd_frame.timestamp_s : fisheye_frame.timestamp_s;
 }
 
-int64_t RigCapture::get_dropped_frame_count() const { return dropped; }
-Ref<ImageTexture> RigCapture::get_rgb_texture() const { return rgb_texture; }
-Ref<ImageTexture> RigCapture::get_depth_texture() const { return depth_texture; }
-Ref<ImageTexture> RigCapture::get_fisheye_texture() const { return fisheye_texture; }
-Ref<Image> RigCapture::get_rgb_image() const { return rgb_image; }
-Ref<Image> RigCapture::get_depth_image() const { return depth_image; }
-Ref<Image> RigCapture::get_fisheye_image() const { return fisheye_image; }
+int64_t RigCapture::get_dropped_frame_count() const {
+	const std::lock_guard<std::mutex> lock(mutex);
+	return dropped;
+}
+
+// The textures are made on first request and from then on follow the frames.
+Ref<ImageTexture> RigCapture::get_rgb_texture() const {
+	if (!textures_wanted) {
+		textures_wanted = true;
+		if (frame_index[STREAM_RGBD] >= 0) {
+			show_in_texture(image_from_mat(rgbd_frame.rgb), rgb_texture);
+			show_in_texture(image_from_mat(rgbd_frame.depth_m), depth_texture);
+		}
+		if (frame_index[STREAM_FISHEYE] >= 0) {
+			show_in_texture(image_from_mat(fisheye_frame.image), fisheye_texture);
+		}
+	}
+	return rgb_texture;
+}
+
+Ref<ImageTexture> RigCapture::get_depth_texture() const {
+	get_rgb_texture();
+	return depth_texture;
+}
+
+Ref<ImageTexture> RigCapture::get_fisheye_texture() const {
+	get_rgb_texture();
+	return fisheye_texture;
+}
+
+Ref<Image> RigCapture::get_rgb_image() const {
+	if (images_stale) {
+		rgb_image = frame_index[STREAM_RGBD] >= 0 ? image_from_mat(rgbd_frame.rgb) : Ref<Image>();
+		depth_image = frame_index[STREAM_RGBD] >= 0 ? image_from_mat(rgbd_frame.depth_m) : Ref<Image>();
+		fisheye_image = frame_index[STREAM_FISHEYE] >= 0 ? image_from_mat(fisheye_frame.image) : Ref<Image>();
+		images_stale = false;
+	}
+	return rgb_image;
+}
+
+Ref<Image> RigCapture::get_depth_image() const {
+	get_rgb_image();
+	return depth_image;
+}
+
+Ref<Image> RigCapture::get_fisheye_image() const {
+	get_rgb_image();
+	return fisheye_image;
+}
 
 PackedStringArray RigCapture::get_issues() const {
 	PackedStringArray out;
@@ -269,6 +504,9 @@ PackedStringArray RigCapture::get_warnings() const {
 	if (!last_error.empty()) {
 		warnings.push_back(String(("The recording cannot be played: " + last_error).c_str()));
 	}
+	if (reader && !engine->config_pending() && !engine->configuration_error().empty()) {
+		warnings.push_back(String(("The live engine is not running: " + engine->configuration_error()).c_str()));
+	}
 	return warnings;
 }
 
@@ -311,6 +549,7 @@ void RigCapture::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("has_ground_truth"), &RigCapture::has_ground_truth);
 	ClassDB::bind_method(D_METHOD("get_ground_truth_camera_transform"), &RigCapture::get_ground_truth_camera_transform);
 	ClassDB::bind_method(D_METHOD("get_rgb_camera_fov"), &RigCapture::get_rgb_camera_fov);
+	ClassDB::bind_static_method("RigCapture", D_METHOD("get_main_thread_usec"), &RigCapture::get_main_thread_usec);
 
 	ADD_PROPERTY(PropertyInfo(Variant::STRING, "recording_path", PROPERTY_HINT_GLOBAL_DIR), "set_recording_path", "get_recording_path");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "pacing", PROPERTY_HINT_ENUM, "Real Time,Step"), "set_pacing", "get_pacing");

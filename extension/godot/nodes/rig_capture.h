@@ -1,8 +1,16 @@
 #pragma once
 // RigCapture: where the rig's frames come from: the RGB-D camera and the upward fisheye, two
-// unsynchronised streams (paper §3.2, §4.3). Plays a recording (docs/recording-format.md) in
-// real time by its timestamps, or one frame per step() call for deterministic tests. Live
-// devices (extension/drivers) come later.
+// unsynchronised streams (paper §3.2, §4.3). Plays a recording (docs/recording-format.md) and
+// feeds every frame into the scene's live engine (engine/live_room.h), which it owns:
+//   Real Time: a capture thread reads and decodes the frames due by the scene's clock (the
+//     process delta summed, so Movie Maker's fixed steps play it at recorded speed) and posts
+//     them to the engine's workers; the main thread only shows the newest frames as textures,
+//     and only those asked for.
+//   Step: one frame per step() call, read here and processed by the engine before step() returns
+//     (its step mode): deterministic, for tests.
+// Live devices (extension/drivers) come later.
+
+#include "live_room_link.h"
 
 #include <recording/recording_reader.h>
 
@@ -10,11 +18,15 @@
 
 #include <math/pose.h>
 
+#include <atomic>
+#include <condition_variable>
 #include <memory>
+#include <mutex>
+#include <thread>
 
 namespace roomprobe {
 
-class RigCapture : public godot::Node {
+class RigCapture : public godot::Node, public LiveRoomHost {
 	GDCLASS(RigCapture, godot::Node)
 
 public:
@@ -27,8 +39,9 @@ public:
 		STREAM_FISHEYE,
 	};
 
-	// Processes first: the model nodes read the frames it delivers in the same frame.
-	RigCapture() { set_process_priority(-30); }
+	// Processes first: the model nodes read the results of the frames it delivers in the same frame.
+	RigCapture();
+	~RigCapture();
 
 	void set_recording_path(const godot::String &p_path);
 	godot::String get_recording_path() const;
@@ -76,10 +89,10 @@ public:
 	godot::PackedStringArray get_issues() const;
 	godot::String get_last_error() const;
 
-	// For the nodes that consume frames in C++ (DenseSLAM, CoarseRoomModel).
-	const RecordingReader *get_reader() const { return reader.get(); }
-	const RgbdFrame &get_rgbd_frame() const { return rgbd_frame; }
-	const FisheyeFrame &get_fisheye_frame() const { return fisheye_frame; }
+	// The engine every other node of the rig configures and reads.
+	std::shared_ptr<LiveRoom> get_live_room() const override { return engine; }
+	// Microseconds RoomProbe's nodes have spent on the main thread (MainThreadTimer), for the demo.
+	static int64_t get_main_thread_usec();
 
 	godot::PackedStringArray get_warnings() const;
 	godot::PackedStringArray _get_configuration_warnings() const { return get_warnings(); }
@@ -88,9 +101,22 @@ public:
 
 protected:
 	static void _bind_methods();
+	void _notification(int p_what);
 
 private:
-	bool deliver(size_t p_event, bool p_decode);
+	// A decoded frame to show and signal, handed from whoever read it to the main thread.
+	struct Shown {
+		RgbdFrame rgbd;
+		FisheyeFrame fisheye;
+		int64_t index[2] = { -1, -1 };
+		uint64_t version[2] = { 0, 0 };
+	};
+	bool read_event(size_t p_event);
+	void capture_loop();
+	void start_capture();
+	void stop_capture();
+	void show_frames(bool p_signal);
+	void configure_engine();
 	void fail(const std::string &p_message);
 
 	godot::String recording_path;
@@ -98,16 +124,31 @@ private:
 	bool loop = false;
 	bool autoplay = true;
 
-	std::unique_ptr<RecordingReader> reader;
-	size_t next_event = 0;
+	std::shared_ptr<LiveRoom> engine;
+	std::shared_ptr<const RecordingReader> reader; // read_* is const: the capture thread reads frames
 	bool playing = false;
-	double clock_s = 0.0; // playback time since the first event, seconds
-	int64_t frame_index[2] = { -1, -1 };
+
+	// Shared with the capture thread, under mutex.
+	mutable std::mutex mutex;
+	std::condition_variable clock_advanced;
+	std::thread capture_thread;
+	bool capture_stop = false;
+	size_t next_event = 0;
+	double clock_s = 0.0; // playback time since the first event, seconds (the scene's clock)
 	int64_t dropped = 0;
-	RgbdFrame rgbd_frame;
+	bool reached_end = false; // the capture thread played the last event (the main thread signals it)
+	std::vector<std::string> frame_warnings; // unreadable frames, printed by the main thread
+	Shown latest;
+
+	// Main thread only.
+	uint64_t shown_version[2] = { 0, 0 };
+	int64_t frame_index[2] = { -1, -1 };
+	RgbdFrame rgbd_frame; // the newest shown
 	FisheyeFrame fisheye_frame;
-	godot::Ref<godot::ImageTexture> rgb_texture, depth_texture, fisheye_texture;
-	godot::Ref<godot::Image> rgb_image, depth_image, fisheye_image;
+	mutable bool textures_wanted = false;
+	mutable godot::Ref<godot::ImageTexture> rgb_texture, depth_texture, fisheye_texture;
+	mutable godot::Ref<godot::Image> rgb_image, depth_image, fisheye_image;
+	mutable bool images_stale = true;
 	std::string last_error;
 };
 

@@ -1,8 +1,5 @@
 #include "room_probe.h"
 
-#include "coarse_room_model.h"
-#include "dense_slam.h"
-
 #include "../convert/image_convert.h"
 #include "../convert/pose_convert.h"
 
@@ -10,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <limits>
 
 using namespace godot;
@@ -36,18 +34,33 @@ std::string global_path(const String &p_path) {
 } // namespace
 
 RoomProbe::RoomProbe() = default;
-RoomProbe::~RoomProbe() = default;
 
-void RoomProbe::set_resolution(int p_texels) { resolution = p_texels; }
+RoomProbe::~RoomProbe() {
+	disconnect_engine();
+}
+
+void RoomProbe::set_resolution(int p_texels) {
+	resolution = p_texels;
+	if (engine && probe_id != 0 && resolution >= 1 && resolution <= 4096) {
+		engine->set_probe(probe_id, to_glm(get_global_position()), resolution);
+	}
+}
+
 int RoomProbe::get_resolution() const { return resolution; }
 
 void RoomProbe::set_coarse_model_path(const NodePath &p_path) {
 	coarse_model_path = p_path;
+	if (is_inside_tree()) {
+		connect_engine();
+	}
 	update_configuration_warnings();
 }
 
 NodePath RoomProbe::get_coarse_model_path() const { return coarse_model_path; }
-void RoomProbe::set_dense_slam_path(const NodePath &p_path) { dense_slam_path = p_path; }
+void RoomProbe::set_dense_slam_path(const NodePath &p_path) {
+	dense_slam_path = p_path;
+	update_configuration_warnings();
+}
 NodePath RoomProbe::get_dense_slam_path() const { return dense_slam_path; }
 
 void RoomProbe::set_update_mode(UpdateMode p_mode) {
@@ -94,115 +107,142 @@ NodePath RoomProbe::get_world_environment_path() const { return world_environmen
 
 void RoomProbe::_notification(int p_what) {
 	if (p_what == NOTIFICATION_READY) {
-		// A first map at once when the model is there; quietly none otherwise (see the warnings).
-		const CoarseRoomModel *model = find_coarse_model();
-		if (model != nullptr && model->get_room_mesh() != nullptr) {
+		connect_engine();
+		// A first map at once when the room is there; quietly none otherwise (see the warnings).
+		if (engine && engine->room_mesh() != nullptr) {
 			update_now();
 		}
 		set_process(update_mode == UPDATE_ALWAYS);
+	} else if (p_what == NOTIFICATION_EXIT_TREE) {
+		disconnect_engine();
 	}
 }
 
 void RoomProbe::_process(double p_delta) {
 	(void)p_delta;
-	if (update_mode == UPDATE_ALWAYS) {
-		update_now();
+	MainThreadTimer timer;
+	if (update_mode != UPDATE_ALWAYS) {
+		return;
+	}
+	if (!engine) {
+		connect_engine();
+		if (!engine) {
+			return;
+		}
+	}
+	if (engine->is_running()) {
+		// The probe worker renders; this only says where the probe is and takes finished maps.
+		engine->set_probe(probe_id, to_glm(get_global_position()), std::clamp(resolution, 1, 4096));
+		if (take_map()) {
+			emit_signal("environment_map_updated");
+		}
+	} else {
+		update_now(); // step mode: rendered here, as the frames are
 	}
 }
 
-CoarseRoomModel *RoomProbe::find_coarse_model() const {
-	if (coarse_model_path.is_empty() || !is_inside_tree()) {
-		return nullptr;
+void RoomProbe::connect_engine() {
+	std::string warning;
+	Node *room = is_inside_tree() ? find_collaborator(*this, coarse_model_path, "CoarseRoomModel", "coarse_model", &warning) : nullptr;
+	std::shared_ptr<LiveRoom> found = live_room_of(room);
+	if (found == engine) {
+		return;
 	}
-	return cast_to<CoarseRoomModel>(get_node_or_null(coarse_model_path));
+	disconnect_engine();
+	engine = found;
+	if (engine) {
+		probe_id = engine->add_probe(to_glm(get_global_position()), std::clamp(resolution, 1, 4096));
+	}
+}
+
+void RoomProbe::disconnect_engine() {
+	if (engine && probe_id != 0) {
+		engine->remove_probe(probe_id);
+	}
+	engine.reset();
+	probe_id = 0;
 }
 
 bool RoomProbe::update_now() {
-	const auto start = std::chrono::steady_clock::now();
+	MainThreadTimer timer;
 	ERR_FAIL_COND_V_MSG(resolution < 1 || resolution > 4096, false, "resolution must be 1..4096.");
-	CoarseRoomModel *model = find_coarse_model();
-	ERR_FAIL_COND_V_MSG(model == nullptr, false, "coarse_model does not lead to a CoarseRoomModel in the tree.");
-	const RoomMesh *mesh = model->get_room_mesh();
-	ERR_FAIL_COND_V_MSG(mesh == nullptr, false, "The CoarseRoomModel has no valid room.");
-	if (!renderer || renderer_mesh_version != model->get_mesh_version()) {
-		renderer = std::make_unique<CoarseCubemapRenderer>(*mesh);
-		renderer_mesh_version = model->get_mesh_version();
+	if (!engine) {
+		connect_engine();
 	}
-	// The room mesh is in the model's local frame; only its translation is accounted for.
-	const Vector3 p = get_global_position() - model->get_global_position();
-	const cv::Mat &atlas = model->get_atlas();
-	ERR_FAIL_COND_V_MSG(atlas.empty(), false, "The CoarseRoomModel has no atlas.");
-	roomprobe::Cubemap map = renderer->render(atlas, glm::dvec3(p.x, p.y, p.z), resolution);
-	ERR_FAIL_COND_V_MSG(!is_valid_cubemap(map), false, "Rendering the coarse model failed.");
-	render_dense(*model, &map);
+	ERR_FAIL_COND_V_MSG(!engine, false, "coarse_model does not lead to a CoarseRoomModel in the tree.");
+	if (engine->config_pending()) {
+		engine->apply_config();
+	}
+	ERR_FAIL_COND_V_MSG(engine->room_mesh() == nullptr, false, "The CoarseRoomModel has no valid room.");
+	engine->set_probe(probe_id, to_glm(get_global_position()), resolution);
+	ERR_FAIL_COND_V_MSG(!engine->render_probe(probe_id), false, "Rendering the probe's map failed.");
+	take_map();
+	emit_signal("environment_map_updated");
+	return true;
+}
 
-	sh = project_sh(map);
-	Array layers;
-	Ref<Image> gpu_faces[6];
-	const bool same_size = cubemap.is_valid() && cubemap->get_width() == resolution && cubemap->get_layers() == 6;
-	for (int i = 0; i < 6; i++) {
-		faces[i] = image_from_mat(map.faces[size_t(i)]);
-		ERR_FAIL_COND_V(faces[i].is_null(), false);
-		// Half floats with mipmaps for the GPU: rough materials read the coarser levels.
-		Ref<Image> gpu = Image::create_from_data(resolution, resolution, false, Image::FORMAT_RGBF, faces[i]->get_data());
-		gpu->convert(Image::FORMAT_RGBAH);
-		gpu->generate_mipmaps();
-		gpu_faces[i] = gpu;
-		layers.push_back(gpu);
+bool RoomProbe::take_map() {
+	const std::shared_ptr<const ProbeMap> newest = engine ? engine->probe_map(probe_id) : nullptr;
+	if (!newest || newest == map || !is_valid_cubemap(newest->cubemap)) {
+		return false;
 	}
-	if (same_size) {
-		for (int i = 0; i < 6; i++) {
-			cubemap->update_layer(gpu_faces[i], i);
+	const auto start = std::chrono::steady_clock::now();
+	const int size = newest->cubemap.size;
+	const bool same_size = cubemap.is_valid() && cubemap->get_width() == size && cubemap->get_layers() == 6;
+	Array layers;
+	for (int i = 0; i < 6; i++) {
+		// The worker built the half floats and their mips: only bytes are copied here.
+		const std::vector<uint16_t> &half = newest->gpu_faces[size_t(i)];
+		PackedByteArray bytes;
+		bytes.resize(int64_t(half.size() * sizeof(uint16_t)));
+		std::memcpy(bytes.ptrw(), half.data(), half.size() * sizeof(uint16_t));
+		Ref<Image> gpu = Image::create_from_data(size, size, true, Image::FORMAT_RGBAH, bytes);
+		ERR_FAIL_COND_V(gpu.is_null(), false);
+		if (same_size) {
+			cubemap->update_layer(gpu, i);
+		} else {
+			layers.push_back(gpu);
 		}
-	} else {
+		faces[i].unref();
+	}
+	if (!same_size) {
 		cubemap.instantiate();
 		const Error err = cubemap->create_from_images(layers);
 		ERR_FAIL_COND_V_MSG(err != OK, false, "Could not create the Cubemap.");
 	}
-	has_map = true;
-	last_map = std::move(map);
+	map = newest;
 	apply_to_material();
-	drive_reflection_probe(*model);
+	drive_reflection_probe();
 	drive_world_environment();
-	update_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-	emit_signal("environment_map_updated");
+	upload_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 	return true;
 }
 
 Dictionary RoomProbe::get_last_update_stats() const {
 	Dictionary d;
-	d.set("dense_texels", int64_t(dense_stats.texels_covered));
-	d.set("dense_ms", dense_stats.milliseconds);
-	d.set("update_ms", update_ms);
+	if (!map) {
+		return d;
+	}
+	d.set("dense_texels", int64_t(map->dense.texels_covered));
+	d.set("dense_ms", map->dense_ms);
+	d.set("coarse_ms", map->coarse_ms);
+	d.set("render_ms", map->total_ms);
+	d.set("upload_ms", upload_ms);
+	d.set("update_ms", map->total_ms + upload_ms);
 	return d;
 }
 
-DenseSLAM *RoomProbe::find_dense_slam() const {
-	if (dense_slam_path.is_empty() || !is_inside_tree()) {
-		return nullptr;
-	}
-	return cast_to<DenseSLAM>(get_node_or_null(dense_slam_path));
-}
-
-void RoomProbe::render_dense(const CoarseRoomModel &p_model, roomprobe::Cubemap *io_map) {
-	dense_stats = DenseRenderStats();
-	const DenseSLAM *node = find_dense_slam();
-	const DenseSlam *slam = node != nullptr ? node->get_slam() : nullptr;
-	if (slam == nullptr) {
-		return;
-	}
-	dense_stats = dense_lighting.render_over(slam->volume(), slam->integrated_count(), p_model.get_cumulative_lighting(), to_glm(get_global_position()),
-			DenseRenderOptions(), io_map);
-}
-
-void RoomProbe::drive_reflection_probe(const CoarseRoomModel &p_model) {
-	if (reflection_probe_path.is_empty()) {
+void RoomProbe::drive_reflection_probe() {
+	if (reflection_probe_path.is_empty() || !engine) {
 		return;
 	}
 	ReflectionProbe *probe = cast_to<ReflectionProbe>(get_node_or_null(reflection_probe_path));
 	ERR_FAIL_NULL_MSG(probe, "reflection_probe does not lead to a ReflectionProbe.");
-	const RoomMesh *mesh = p_model.get_room_mesh();
+	const RoomMesh *mesh = engine->room_mesh();
 	ERR_FAIL_NULL(mesh);
+	std::string warning;
+	const Node3D *room = cast_to<Node3D>(find_collaborator(*this, coarse_model_path, "CoarseRoomModel", "coarse_model", &warning));
+	ERR_FAIL_NULL(room);
 	// The room's box, for box projection: reflections of the walls then move with the viewer
 	// (parallax) instead of sitting at infinity.
 	Vector3 lo(std::numeric_limits<real_t>::max(), std::numeric_limits<real_t>::max(), std::numeric_limits<real_t>::max());
@@ -211,14 +251,14 @@ void RoomProbe::drive_reflection_probe(const CoarseRoomModel &p_model) {
 		lo = Vector3(std::min(lo.x, real_t(v.x)), std::min(lo.y, real_t(v.y)), std::min(lo.z, real_t(v.z)));
 		hi = Vector3(std::max(hi.x, real_t(v.x)), std::max(hi.y, real_t(v.y)), std::max(hi.z, real_t(v.z)));
 	}
-	const Vector3 centre = p_model.get_global_position() + (lo + hi) * 0.5;
+	const Vector3 centre = room->get_global_position() + (lo + hi) * 0.5;
 	probe->set_global_position(centre);
 	probe->set_size(hi - lo);
 	probe->set_origin_offset(get_global_position() - centre);
 	probe->set_enable_box_projection(true);
 	probe->set_as_interior(true);
 	// Only the textured room: not the virtual objects, nor the rest of the scene.
-	probe->set_cull_mask(p_model.get_room_layers());
+	probe->set_cull_mask(uint32_t(int64_t(const_cast<Node3D *>(room)->get("room_layers"))));
 	probe->set_update_mode(update_mode == UPDATE_ALWAYS ? ReflectionProbe::UPDATE_ALWAYS : ReflectionProbe::UPDATE_ONCE);
 }
 
@@ -256,21 +296,21 @@ void RoomProbe::drive_world_environment() {
 Ref<ShaderMaterial> RoomProbe::get_sky_material() const { return sky_material; }
 
 Error RoomProbe::save_exr(const String &p_path) const {
-	ERR_FAIL_COND_V_MSG(!has_map, ERR_UNAVAILABLE, "No environment map yet: call update_now() first.");
-	const std::string error = write_cubemap_exr(global_path(p_path), last_map);
+	ERR_FAIL_COND_V_MSG(!map, ERR_UNAVAILABLE, "No environment map yet: call update_now() first.");
+	const std::string error = write_cubemap_exr(global_path(p_path), map->cubemap);
 	ERR_FAIL_COND_V_MSG(!error.empty(), ERR_FILE_CANT_WRITE, String(error.c_str()));
 	return OK;
 }
 
 Error RoomProbe::save_png_net(const String &p_path) const {
-	ERR_FAIL_COND_V_MSG(!has_map, ERR_UNAVAILABLE, "No environment map yet: call update_now() first.");
-	const std::string error = write_cubemap_png_net(global_path(p_path), last_map);
+	ERR_FAIL_COND_V_MSG(!map, ERR_UNAVAILABLE, "No environment map yet: call update_now() first.");
+	const std::string error = write_cubemap_png_net(global_path(p_path), map->cubemap);
 	ERR_FAIL_COND_V_MSG(!error.empty(), ERR_FILE_CANT_WRITE, String(error.c_str()));
 	return OK;
 }
 
 void RoomProbe::apply_to_material() {
-	if (target_material.is_null() || !has_map) {
+	if (target_material.is_null() || !map) {
 		return;
 	}
 	if (!String(material_parameter).is_empty()) {
@@ -285,30 +325,36 @@ Ref<godot::Cubemap> RoomProbe::get_cubemap() const { return cubemap; }
 
 Ref<Image> RoomProbe::get_face_image(int p_layer) const {
 	ERR_FAIL_INDEX_V(p_layer, 6, Ref<Image>());
+	if (faces[p_layer].is_null() && map) {
+		faces[p_layer] = image_from_mat(map->cubemap.faces[size_t(p_layer)]);
+	}
 	return faces[p_layer];
 }
 
 PackedVector3Array RoomProbe::get_sh_coefficients() const {
 	PackedVector3Array out;
-	if (!has_map) {
+	if (!map) {
 		return out;
 	}
 	out.resize(SH_COEFFICIENTS);
 	for (int i = 0; i < SH_COEFFICIENTS; i++) {
-		out[i] = Vector3(real_t(sh[size_t(i)].x), real_t(sh[size_t(i)].y), real_t(sh[size_t(i)].z));
+		out[i] = Vector3(real_t(map->sh[size_t(i)].x), real_t(map->sh[size_t(i)].y), real_t(map->sh[size_t(i)].z));
 	}
 	return out;
 }
 
 PackedStringArray RoomProbe::get_warnings() const {
 	PackedStringArray warnings;
-	if (coarse_model_path.is_empty()) {
-		warnings.push_back("Set coarse_model to the CoarseRoomModel of the room.");
-	} else if (is_inside_tree()) {
-		const CoarseRoomModel *model = find_coarse_model();
-		if (model == nullptr) {
-			warnings.push_back("coarse_model does not lead to a CoarseRoomModel.");
-		} else if (model->get_room_mesh() == nullptr) {
+	if (!is_inside_tree()) {
+		warnings.push_back("Not in a scene: it renders the room of the CoarseRoomModel of its scene (or the one coarse_model leads to).");
+	} else {
+		std::string warning;
+		const Node *room = find_collaborator(*this, coarse_model_path, "CoarseRoomModel", "coarse_model", &warning);
+		if (!warning.empty()) {
+			warnings.push_back(String(warning.c_str()));
+		} else if (room == nullptr) {
+			warnings.push_back("No CoarseRoomModel in the scene: add one, or set coarse_model to it.");
+		} else if (!bool(const_cast<Node *>(room)->call("is_valid"))) {
 			warnings.push_back("The CoarseRoomModel has no valid room: no environment map.");
 		}
 	}
@@ -321,7 +367,7 @@ PackedStringArray RoomProbe::get_warnings() const {
 	if (target_material.is_null() && reflection_probe_path.is_empty() && world_environment_path.is_empty()) {
 		warnings.push_back("The map reaches nothing: set target_material, reflection_probe or world_environment (or read get_cubemap() from a script).");
 	}
-	if (!dense_slam_path.is_empty() && is_inside_tree() && find_dense_slam() == nullptr) {
+	if (!dense_slam_path.is_empty() && is_inside_tree() && cast_to<Node>(get_node_or_null(dense_slam_path)) == nullptr) {
 		warnings.push_back("dense_slam does not lead to a DenseSLAM node.");
 	}
 	return warnings;

@@ -1,11 +1,11 @@
 #pragma once
 // RoomProbe: a point where an environment map of the live room is synthesised (§4.7),
-// as a cubemap and 5-band spherical harmonics (§4.8).
+// as a cubemap and 5-band spherical harmonics (§4.8). The map is rendered by the live engine
+// (engine/live_room.h) that its CoarseRoomModel uses, on the engine's probe worker while frames
+// play in real time; this node only sends its position and uploads each finished map (half-float
+// faces with their mip chain, built on the worker) into its Cubemap.
 
-#include <coarse/lighting.h>
-#include <envmap/coarse_render.h>
-#include <envmap/dense_render.h>
-#include <envmap/spherical_harmonics.h>
+#include "live_room_link.h"
 
 #include <rp_godot/godot.h>
 
@@ -13,9 +13,6 @@
 #include <memory>
 
 namespace roomprobe {
-
-class CoarseRoomModel;
-class DenseSLAM;
 
 class RoomProbe : public godot::Node3D {
 	GDCLASS(RoomProbe, godot::Node3D)
@@ -78,14 +75,14 @@ public:
 	void _process(double p_delta);
 
 private:
-	CoarseRoomModel *find_coarse_model() const;
-	DenseSLAM *find_dense_slam() const;
-	// §4.7's second pass: the dense model over the coarse render, with the lighting change since
-	// its colours were last refreshed.
-	void render_dense(const CoarseRoomModel &p_model, roomprobe::Cubemap *io_map);
+	// The engine of the CoarseRoomModel (by path, or the one in the scene); registers the probe.
+	void connect_engine();
+	void disconnect_engine();
+	// Copies the engine's newest map of this probe into the Cubemap and the outputs; true when new.
+	bool take_map();
 	void apply_to_material();
 	// Route (b): places and sets up the ReflectionProbe so that it sees the textured room only.
-	void drive_reflection_probe(const CoarseRoomModel &p_model);
+	void drive_reflection_probe();
 	// Route (c): the map as the WorldEnvironment's sky (reflections and ambient light).
 	void drive_world_environment();
 
@@ -101,18 +98,12 @@ private:
 	godot::Ref<godot::ShaderMaterial> sky_material;
 	godot::Ref<godot::Sky> sky;
 
-	// The renderer caches the surface texels of one mesh version of one model.
-	std::unique_ptr<CoarseCubemapRenderer> renderer;
-	uint64_t renderer_mesh_version = 0;
-
-	roomprobe::Cubemap last_map; // as rendered, for export
-	godot::Ref<godot::Image> faces[6]; // RGBF, as rendered
+	std::shared_ptr<LiveRoom> engine;
+	int probe_id = 0;
+	std::shared_ptr<const ProbeMap> map; // the one uploaded
+	mutable godot::Ref<godot::Image> faces[6]; // RGBF, made on request
 	godot::Ref<godot::Cubemap> cubemap; // RGBAH with mipmaps
-	ShCoefficients sh{};
-	DenseLighting dense_lighting;
-	DenseRenderStats dense_stats;
-	double update_ms = 0.0;
-	bool has_map = false;
+	double upload_ms = 0.0;
 };
 
 } // namespace roomprobe

@@ -1,0 +1,905 @@
+#include "live_room.h"
+
+#include <envmap/spherical_harmonics.h>
+#include <rig/fisheye_pose.h>
+
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+namespace roomprobe {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double now_s() {
+	return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
+}
+
+double ms_since(double p_start_s) {
+	return (now_s() - p_start_s) * 1000.0;
+}
+
+// How long a worker waits on an empty mailbox before it looks at the stop flag again.
+constexpr std::chrono::milliseconds WORKER_POLL(50);
+// Arrival times kept for the latency figures (frames older than this many are forgotten).
+constexpr size_t ARRIVALS_KEPT = 256;
+
+LatencySummary summarise(std::vector<double> p_values) {
+	LatencySummary s;
+	s.count = p_values.size();
+	if (p_values.empty()) {
+		return s;
+	}
+	std::sort(p_values.begin(), p_values.end());
+	auto rank = [&](double p_fraction) {
+		const size_t r = size_t(std::ceil(p_fraction * double(p_values.size())));
+		return p_values[std::min(p_values.size() - 1, r > 0 ? r - 1 : 0)];
+	};
+	s.p50_ms = rank(0.5);
+	s.p95_ms = rank(0.95);
+	s.max_ms = p_values.back();
+	return s;
+}
+
+// The faces as Godot's RGBAH image with mipmaps wants them: level 0, then each half-size level
+// (box filter) down to 1x1, RGBA half floats.
+std::vector<uint16_t> gpu_face(const cv::Mat &p_face) {
+	std::vector<uint16_t> out;
+	cv::Mat level;
+	cv::cvtColor(p_face, level, cv::COLOR_RGB2RGBA); // alpha 1
+	while (true) {
+		cv::Mat half;
+		level.convertTo(half, CV_16F);
+		const size_t n = size_t(half.total()) * 4;
+		const size_t at = out.size();
+		out.resize(at + n);
+		if (half.isContinuous()) {
+			std::memcpy(out.data() + at, half.ptr(), n * sizeof(uint16_t));
+		} else {
+			for (int y = 0; y < half.rows; y++) {
+				std::memcpy(out.data() + at + size_t(y) * size_t(half.cols) * 4, half.ptr(y), size_t(half.cols) * 4 * sizeof(uint16_t));
+			}
+		}
+		if (level.cols == 1 && level.rows == 1) {
+			break;
+		}
+		cv::Mat next;
+		cv::resize(level, next, cv::Size(std::max(1, level.cols / 2), std::max(1, level.rows / 2)), 0.0, 0.0, cv::INTER_AREA);
+		level = next;
+	}
+	return out;
+}
+
+} // namespace
+
+struct LiveRoom::Probe {
+	glm::dvec3 position = glm::dvec3(0.0);
+	int size = 128;
+	bool dirty = true; // moved, resized or new since its last map
+	uint64_t version = 0;
+	std::shared_ptr<const ProbeMap> map;
+};
+
+struct LiveRoom::Frames {
+	struct Rgbd {
+		RgbdFrame frame;
+		uint64_t sequence = 0;
+		double arrival_s = 0.0;
+	};
+	struct Fisheye {
+		FisheyeFrame frame;
+		uint64_t sequence = 0;
+		double arrival_s = 0.0;
+	};
+	Mailbox<Rgbd> rgbd;
+	Mailbox<Fisheye> fisheye;
+	std::atomic<bool> slam_busy{ false }, coarse_busy{ false };
+};
+
+LiveRoom::LiveRoom() :
+		frames(std::make_unique<Frames>()) {}
+
+LiveRoom::~LiveRoom() {
+	stop();
+}
+
+// ---------------------------------------------------------------- configuration
+
+LiveRoomConfig LiveRoom::config() const {
+	return cfg;
+}
+
+std::string LiveRoom::configuration_error() const {
+	return config_error;
+}
+
+std::string LiveRoom::configure(const LiveRoomConfig &p_config) {
+	const std::unique_lock<std::shared_mutex> exclusive(lifecycle);
+	{
+		const std::lock_guard<std::mutex> lock(pending_mutex);
+		pending = p_config;
+		has_pending = false;
+	}
+	return configure_locked(p_config);
+}
+
+void LiveRoom::edit_config(const std::function<void(LiveRoomConfig &)> &p_edit) {
+	const std::lock_guard<std::mutex> lock(pending_mutex);
+	if (!has_pending) {
+		pending = cfg;
+		has_pending = true;
+	}
+	p_edit(pending);
+}
+
+bool LiveRoom::config_pending() const {
+	const std::lock_guard<std::mutex> lock(pending_mutex);
+	return has_pending;
+}
+
+std::string LiveRoom::apply_config() {
+	const std::unique_lock<std::shared_mutex> exclusive(lifecycle);
+	LiveRoomConfig next;
+	{
+		const std::lock_guard<std::mutex> lock(pending_mutex);
+		if (!has_pending) {
+			return config_error;
+		}
+		next = pending;
+		has_pending = false;
+	}
+	const bool was_running = running;
+	const std::string error = configure_locked(next);
+	if (error.empty() && was_running) {
+		start_locked();
+	}
+	return error;
+}
+
+bool LiveRoom::set_atlas(const cv::Mat &p_atlas) {
+	const RoomMesh *mesh = room_mesh();
+	if (mesh == nullptr || p_atlas.type() != CV_32FC3 || p_atlas.cols != mesh->atlas_width || p_atlas.rows != mesh->atlas_height) {
+		return false;
+	}
+	auto snapshot = std::make_shared<CoarseSnapshot>();
+	snapshot->atlas = p_atlas.clone();
+	snapshot->cumulative.valid = true;
+	{
+		const std::lock_guard<std::mutex> lock(publish_mutex);
+		last_coarse = snapshot;
+	}
+	wake_probes();
+	return true;
+}
+
+std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
+	stop_locked();
+	configured = false;
+	slam.reset();
+	renderer.reset();
+	coarse.reset();
+	own_room.reset();
+	cfg = p_config;
+	auto fail = [this](const std::string &p_error) {
+		config_error = p_error;
+		return p_error;
+	};
+	try {
+		if (!cfg.dense && !cfg.has_room) {
+			return fail("nothing to model: no room (floorplan) and dense SLAM off");
+		}
+		if (cfg.coarse_poses == PoseSource::Tracked && cfg.has_room && cfg.has_rig && !cfg.dense) {
+			return fail("the coarse model takes tracked poses, but dense SLAM is off: use ground-truth poses or turn dense SLAM on");
+		}
+		if ((cfg.coarse_poses == PoseSource::GroundTruth && cfg.has_room && cfg.has_rig) || (cfg.dense_poses == PoseSource::GroundTruth && cfg.dense)) {
+			if (cfg.ground_truth.is_empty()) {
+				return fail("ground-truth poses were asked for, but there is no ground-truth RGB-D trajectory");
+			}
+		}
+		if (cfg.mesh_interval_frames < 1 || !(cfg.fisheye_extrapolation_s >= 0.0) || !(cfg.fisheye_pose_wait_s >= 0.0) || cfg.render_threads < 1 ||
+				cfg.dense_render_scale < 1) {
+			return fail("mesh_interval_frames, render_threads and dense_render_scale must be >= 1, the fisheye times >= 0");
+		}
+		if (!cfg.has_rig && cfg.dense) {
+			return fail("dense SLAM needs a rig (RigCapture with a recording or devices)");
+		}
+		const std::string rig_error = cfg.has_rig ? check_rig(cfg.rig) : "";
+		if (!rig_error.empty()) {
+			return fail("rig: " + rig_error);
+		}
+		linearizer.configure(cfg.photometry, cfg.rig.fisheye);
+		rgb_lut_active = cfg.photometry.known;
+		if (rgb_lut_active) {
+			rgb_lut = linearising_lut(cfg.photometry.rgb_exposure);
+		}
+		if (cfg.dense) {
+			auto fresh = std::make_unique<DenseSlam>(cfg.slam);
+			const std::string error = fresh->configure(cfg.rig.rgb, cfg.initial_rgb_pose);
+			if (!error.empty()) {
+				return fail("dense SLAM: " + error);
+			}
+			fresh->volume().set_keep_points(cfg.keep_points);
+			slam = std::move(fresh);
+		}
+		if (cfg.has_room && !cfg.has_rig) {
+			RoomMeshOptions mesh_options;
+			mesh_options.texel_size_m = cfg.coarse.texel_size_m;
+			RoomMeshResult built = build_room_mesh(cfg.floorplan, mesh_options);
+			if (!built.ok) {
+				return fail("room: " + built.error);
+			}
+			own_room = std::make_unique<RoomMesh>(std::move(built.mesh));
+			renderer = std::make_unique<CoarseCubemapRenderer>(*own_room);
+		} else if (cfg.has_room) {
+			CoarsePipelineOptions options = cfg.coarse;
+			options.pose_source = cfg.coarse_poses;
+			if (linearizer.active()) {
+				// Thresholds in linearised units: the centre pixel's 250 / 255 and 5 / 255 (the
+				// vignetting correction only raises values, so saturated pixels stay above).
+				options.lighting_options.saturated_threshold = linearizer.lut()[250];
+				options.lighting_options.black_threshold = linearizer.lut()[5];
+			}
+			auto fresh = std::make_unique<CoarsePipeline>(options);
+			const std::string error = fresh->configure(cfg.rig, cfg.floorplan);
+			if (!error.empty()) {
+				return fail(error);
+			}
+			coarse = std::move(fresh);
+			renderer = std::make_unique<CoarseCubemapRenderer>(coarse->mesh());
+		}
+		{
+			const std::lock_guard<std::mutex> lock(placer_mutex);
+			placer = SurfacePlacer();
+			if (room_mesh() != nullptr) {
+				const std::string error = placer.set_coarse(*room_mesh(), cfg.room_origin_m);
+				if (!error.empty()) {
+					return fail("placement: " + error);
+				}
+			}
+		}
+	} catch (const std::exception &e) {
+		return fail(std::string("configuring the live room failed: ") + e.what());
+	}
+	{
+		const std::lock_guard<std::mutex> lock(pose_mutex);
+		tracked.clear();
+	}
+	{
+		const std::lock_guard<std::mutex> lock(publish_mutex);
+		last_tracked.reset();
+		last_coarse.reset();
+		last_mesh.reset();
+		fused_since_mesh = 0;
+	}
+	{
+		const std::lock_guard<std::mutex> lock(probe_mutex);
+		dense_lighting = DenseLighting();
+		for (auto &[id, probe] : probes) {
+			probe->dirty = true;
+			probe->map.reset();
+		}
+	}
+	{
+		const std::lock_guard<std::mutex> lock(stats_mutex);
+		counters = LiveRoomStats();
+		rgbd_latencies_ms.clear();
+		fisheye_latencies_ms.clear();
+		rgbd_arrivals.clear();
+		fisheye_arrivals.clear();
+		rgbd_latency_seen = fisheye_latency_seen = 0;
+	}
+	frames->rgbd.reopen();
+	frames->fisheye.reopen();
+	config_error.clear();
+	configured = true;
+	return "";
+}
+
+std::string LiveRoom::reconfigure(const std::function<void(LiveRoomConfig &)> &p_edit) {
+	edit_config(p_edit);
+	return apply_config();
+}
+
+// ---------------------------------------------------------------- threads
+
+bool LiveRoom::start() {
+	const std::unique_lock<std::shared_mutex> exclusive(lifecycle);
+	return start_locked();
+}
+
+void LiveRoom::stop() {
+	const std::unique_lock<std::shared_mutex> exclusive(lifecycle);
+	stop_locked();
+}
+
+bool LiveRoom::start_locked() {
+	if (running) {
+		return true;
+	}
+	if (!configured || !cfg.has_rig) {
+		return false;
+	}
+	stopping = false;
+	frames->rgbd.reopen();
+	frames->fisheye.reopen();
+	running = true;
+	slam_thread = std::thread([this] { slam_worker(); });
+	coarse_thread = std::thread([this] { coarse_worker(); });
+	probe_thread = std::thread([this] { probe_worker(); });
+	return true;
+}
+
+void LiveRoom::stop_locked() {
+	if (!running) {
+		return;
+	}
+	stopping = true;
+	frames->rgbd.close();
+	frames->fisheye.close();
+	{
+		const std::lock_guard<std::mutex> lock(probe_mutex);
+		probes_dirty.notify_all();
+	}
+	{
+		const std::lock_guard<std::mutex> lock(pose_mutex);
+		pose_advanced.notify_all();
+	}
+	for (std::thread *t : { &slam_thread, &coarse_thread, &probe_thread }) {
+		if (t->joinable()) {
+			t->join();
+		}
+	}
+	running = false;
+}
+
+void LiveRoom::slam_worker() {
+	while (!stopping) {
+		std::optional<Frames::Rgbd> item = frames->rgbd.take(WORKER_POLL);
+		if (!item) {
+			continue;
+		}
+		frames->slam_busy = true;
+		process_rgbd(item->frame, item->sequence, item->arrival_s);
+		frames->slam_busy = false;
+	}
+}
+
+void LiveRoom::coarse_worker() {
+	while (!stopping) {
+		std::optional<Frames::Fisheye> item = frames->fisheye.take(WORKER_POLL);
+		if (!item) {
+			continue;
+		}
+		frames->coarse_busy = true;
+		process_fisheye(item->frame, item->sequence, item->arrival_s, true);
+		frames->coarse_busy = false;
+	}
+}
+
+void LiveRoom::probe_worker() {
+	tbb::task_arena arena(std::max(1, cfg.render_threads));
+	while (!stopping) {
+		std::vector<std::tuple<int, glm::dvec3, int>> jobs;
+		{
+			std::unique_lock<std::mutex> lock(probe_mutex);
+			probes_dirty.wait_for(lock, WORKER_POLL, [this] {
+				if (stopping || inputs_changed) {
+					return true;
+				}
+				return std::any_of(probes.begin(), probes.end(), [](const auto &p_entry) { return p_entry.second->dirty; });
+			});
+			if (stopping) {
+				break;
+			}
+			for (auto &[id, probe] : probes) {
+				if (inputs_changed || probe->dirty) {
+					jobs.emplace_back(id, probe->position, probe->size);
+					probe->dirty = false;
+				}
+			}
+			inputs_changed = false;
+		}
+		for (const auto &[id, position, size] : jobs) {
+			if (stopping) {
+				break;
+			}
+			arena.execute([&, id = id, position = position, size = size] { render_one(id, position, size, 0); });
+		}
+	}
+}
+
+void LiveRoom::wake_probes() {
+	{
+		const std::lock_guard<std::mutex> lock(probe_mutex);
+		inputs_changed = true;
+	}
+	probes_dirty.notify_all();
+}
+
+// ---------------------------------------------------------------- frames in
+
+void LiveRoom::push_rgbd(RgbdFrame p_frame) {
+	const uint64_t sequence = ++rgbd_sequence;
+	const double arrival = now_s();
+	{
+		const std::lock_guard<std::mutex> lock(stats_mutex);
+		counters.rgbd_pushed++;
+		rgbd_arrivals.emplace_back(sequence, arrival);
+		if (rgbd_arrivals.size() > ARRIVALS_KEPT) {
+			rgbd_arrivals.erase(rgbd_arrivals.begin());
+		}
+	}
+	const std::shared_lock<std::shared_mutex> shared(lifecycle);
+	if (running) {
+		frames->rgbd.put(Frames::Rgbd{ std::move(p_frame), sequence, arrival });
+	} else if (configured && cfg.has_rig) {
+		process_rgbd(p_frame, sequence, arrival);
+	}
+}
+
+void LiveRoom::push_fisheye(FisheyeFrame p_frame) {
+	const uint64_t sequence = ++fisheye_sequence;
+	const double arrival = now_s();
+	{
+		const std::lock_guard<std::mutex> lock(stats_mutex);
+		counters.fisheye_pushed++;
+		fisheye_arrivals.emplace_back(sequence, arrival);
+		if (fisheye_arrivals.size() > ARRIVALS_KEPT) {
+			fisheye_arrivals.erase(fisheye_arrivals.begin());
+		}
+	}
+	const std::shared_lock<std::shared_mutex> shared(lifecycle);
+	if (running) {
+		frames->fisheye.put(Frames::Fisheye{ std::move(p_frame), sequence, arrival });
+	} else if (configured && cfg.has_rig) {
+		process_fisheye(p_frame, sequence, arrival, false);
+	}
+}
+
+void LiveRoom::record_error(const std::string &p_stage, const std::string &p_what) {
+	const std::lock_guard<std::mutex> lock(stats_mutex);
+	counters.stage_errors++;
+	counters.last_error = p_stage + ": " + p_what;
+}
+
+void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence, double p_arrival_s) {
+	(void)p_arrival_s;
+	try {
+		auto out = std::make_shared<TrackedFrame>();
+		out->sequence = p_sequence;
+		out->timestamp_s = p_frame.timestamp_s;
+		out->rgb = p_frame.rgb;
+		bool fused = false;
+		Pose truth;
+		std::string truth_error;
+		const bool has_truth = !cfg.ground_truth.is_empty() && cfg.ground_truth.pose_at(p_frame.timestamp_s, &truth, &truth_error);
+		if (slam) {
+			DenseSlamFrame result;
+			if (cfg.dense_poses == PoseSource::GroundTruth) {
+				if (has_truth) {
+					result = slam->process_at_pose(p_frame, truth);
+				} else {
+					result.tracking.reason = "no ground-truth pose at this frame: " + truth_error;
+				}
+			} else {
+				result = slam->process(p_frame);
+			}
+			out->state = result.tracking.state;
+			out->reason = result.tracking.reason;
+			out->integrated = result.integrated;
+			out->inlier_fraction = result.tracking.inlier_fraction;
+			out->rmse_m = result.tracking.rmse_m;
+			out->timings = result.timings;
+			out->has_pose = slam->frame_count() > 0 && (result.integrated || slam->integrated_count() > 0);
+			out->world_from_camera = slam->pose();
+			if (result.tracking.state != TrackingState::Lost && out->has_pose) {
+				std::string error;
+				{
+					const std::lock_guard<std::mutex> lock(pose_mutex);
+					tracked.append({ p_frame.timestamp_s, slam->pose() }, &error); // a repeated timestamp is skipped
+				}
+				pose_advanced.notify_all();
+			}
+			fused = result.integrated;
+		} else if (has_truth) {
+			// No SLAM: the AR view still follows the recording's true poses.
+			out->has_pose = true;
+			out->world_from_camera = truth;
+			out->state = TrackingState::Good;
+		}
+		{
+			const std::lock_guard<std::mutex> lock(stats_mutex);
+			counters.rgbd_processed++;
+			counters.good += out->state == TrackingState::Good ? 1 : 0;
+			counters.poor += out->state == TrackingState::Poor ? 1 : 0;
+			counters.lost += out->state == TrackingState::Lost ? 1 : 0;
+		}
+		bool remesh = false;
+		{
+			const std::lock_guard<std::mutex> lock(publish_mutex);
+			last_tracked = out;
+			if (fused && ++fused_since_mesh >= cfg.mesh_interval_frames) {
+				fused_since_mesh = 0;
+				remesh = true;
+			}
+		}
+		if (remesh) {
+			publish_mesh();
+		}
+		if (fused) {
+			wake_probes();
+		}
+	} catch (const std::exception &e) {
+		record_error("SLAM", e.what());
+	}
+}
+
+bool LiveRoom::fisheye_pose(double p_fisheye_timestamp_s, Pose *r_world_from_fisheye, std::string *r_error) const {
+	if (cfg.coarse_poses == PoseSource::GroundTruth) {
+		return fisheye_pose_at(cfg.ground_truth, cfg.rig, p_fisheye_timestamp_s, r_world_from_fisheye, r_error);
+	}
+	const std::lock_guard<std::mutex> lock(pose_mutex);
+	if (tracked.is_empty()) {
+		*r_error = "no tracked RGB-D pose yet";
+		return false;
+	}
+	return fisheye_pose_at(tracked, cfg.rig, p_fisheye_timestamp_s, r_world_from_fisheye, r_error, cfg.fisheye_extrapolation_s);
+}
+
+void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence, double p_arrival_s, bool p_wait_for_pose) {
+	(void)p_arrival_s;
+	if (!coarse) {
+		return;
+	}
+	try {
+		if (p_wait_for_pose && cfg.coarse_poses == PoseSource::Tracked) {
+			// SLAM may not have reached this instant yet: give it a little time.
+			const double t_rgbd = p_frame.timestamp_s + cfg.rig.fisheye_time_offset_s;
+			std::unique_lock<std::mutex> lock(pose_mutex);
+			pose_advanced.wait_for(lock, std::chrono::duration<double>(cfg.fisheye_pose_wait_s),
+					[&] { return stopping || (!tracked.is_empty() && tracked.get_end_s() >= t_rgbd); });
+		}
+		Pose pose;
+		std::string error;
+		if (!fisheye_pose(p_frame.timestamp_s, &pose, &error)) {
+			// Never integrated at a guess; the next frame may have a pose.
+			const std::lock_guard<std::mutex> lock(stats_mutex);
+			counters.fisheye_without_pose++;
+			counters.fisheye_pose_problem = error;
+			return;
+		}
+		pose.translation -= cfg.room_origin_m; // into the room's frame
+		FisheyeFrame frame = p_frame;
+		frame.image = linearizer.linearise(p_frame.image);
+		frame.hdr = frame.image.type() == CV_32FC3;
+		auto snapshot = std::make_shared<CoarseSnapshot>();
+		const std::lock_guard<std::mutex> coarse_lock(coarse_mutex);
+		snapshot->last = coarse->add_fisheye_frame(frame, pose);
+		snapshot->frames = coarse->frame_count();
+		snapshot->fisheye_sequence = p_sequence;
+		// A copy the pipeline will never write: probes read it while the next frame goes in.
+		snapshot->atlas = coarse->completed_color().clone();
+		snapshot->cumulative = coarse->cumulative_lighting();
+		snapshot->timings = coarse->last_timings();
+		{
+			const std::lock_guard<std::mutex> lock(publish_mutex);
+			last_coarse = snapshot;
+		}
+		{
+			const std::lock_guard<std::mutex> lock(stats_mutex);
+			counters.fisheye_integrated++;
+		}
+		wake_probes();
+	} catch (const std::exception &e) {
+		record_error("coarse model", e.what());
+	}
+}
+
+// ---------------------------------------------------------------- probes
+
+int LiveRoom::add_probe(const glm::dvec3 &p_position, int p_size) {
+	const std::lock_guard<std::mutex> lock(probe_mutex);
+	auto probe = std::make_shared<Probe>();
+	probe->position = p_position;
+	probe->size = std::clamp(p_size, 1, 4096);
+	const int id = next_probe++;
+	probes[id] = probe;
+	probes_dirty.notify_all();
+	return id;
+}
+
+void LiveRoom::set_probe(int p_probe, const glm::dvec3 &p_position, int p_size) {
+	const std::lock_guard<std::mutex> lock(probe_mutex);
+	const auto it = probes.find(p_probe);
+	if (it == probes.end()) {
+		return;
+	}
+	const int size = std::clamp(p_size, 1, 4096);
+	if (it->second->position != p_position || it->second->size != size) {
+		it->second->position = p_position;
+		it->second->size = size;
+		it->second->dirty = true;
+		probes_dirty.notify_all();
+	}
+}
+
+void LiveRoom::remove_probe(int p_probe) {
+	const std::lock_guard<std::mutex> lock(probe_mutex);
+	probes.erase(p_probe);
+}
+
+std::shared_ptr<const ProbeMap> LiveRoom::probe_map(int p_probe) const {
+	const std::lock_guard<std::mutex> lock(probe_mutex);
+	const auto it = probes.find(p_probe);
+	return it == probes.end() ? nullptr : it->second->map;
+}
+
+void LiveRoom::render_probes() {
+	std::vector<std::tuple<int, glm::dvec3, int>> jobs;
+	{
+		const std::lock_guard<std::mutex> lock(probe_mutex);
+		for (auto &[id, probe] : probes) {
+			jobs.emplace_back(id, probe->position, probe->size);
+			probe->dirty = false;
+		}
+	}
+	for (const auto &[id, position, size] : jobs) {
+		render_one(id, position, size, 0);
+	}
+}
+
+bool LiveRoom::render_probe(int p_probe) {
+	glm::dvec3 position;
+	int size = 0;
+	{
+		const std::lock_guard<std::mutex> lock(probe_mutex);
+		const auto it = probes.find(p_probe);
+		if (it == probes.end()) {
+			return false;
+		}
+		position = it->second->position;
+		size = it->second->size;
+		it->second->dirty = false;
+	}
+	return render_one(p_probe, position, size, 0) != nullptr;
+}
+
+Cubemap LiveRoom::render_map(const glm::dvec3 &p_position, int p_size, const CoarseSnapshot *p_coarse, bool p_with_dense, DenseRenderStats *r_dense,
+		double *r_coarse_ms, double *r_dense_ms) {
+	double start = now_s();
+	Cubemap map;
+	LightingChange cumulative;
+	cumulative.valid = true;
+	if (renderer && p_coarse != nullptr && !p_coarse->atlas.empty()) {
+		map = renderer->render(p_coarse->atlas, p_position - cfg.room_origin_m, p_size);
+		cumulative = p_coarse->cumulative;
+	} else {
+		// No observation yet (or no room): black, with the dense model over it.
+		map = make_cubemap(p_size);
+	}
+	*r_coarse_ms = ms_since(start);
+	start = now_s();
+	if (p_with_dense && slam) {
+		DenseRenderOptions options;
+		options.scale = cfg.dense_render_scale;
+		options.lut = rgb_lut_active ? &rgb_lut : nullptr;
+		const auto reading = slam->read_lock(); // no frame half-fused
+		LightingChange change;
+		{
+			const std::lock_guard<std::mutex> lock(probe_mutex);
+			change = dense_lighting.update(slam->integrated_count(), cumulative);
+		}
+		options.gain = change.gain;
+		options.offset = change.offset;
+		*r_dense = render_dense_over(slam->volume(), p_position, options, &map);
+	}
+	*r_dense_ms = ms_since(start);
+	return map;
+}
+
+std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dvec3 &p_position, int p_size, uint64_t p_version) {
+	(void)p_version;
+	try {
+		const double start = now_s();
+		std::shared_ptr<const CoarseSnapshot> snapshot;
+		std::shared_ptr<const TrackedFrame> frame;
+		{
+			const std::lock_guard<std::mutex> lock(publish_mutex);
+			snapshot = last_coarse;
+			frame = last_tracked;
+		}
+		auto map = std::make_shared<ProbeMap>();
+		map->probe = p_probe;
+		map->position = p_position;
+		map->rgbd_sequence = frame ? frame->sequence : 0;
+		map->fisheye_sequence = snapshot ? snapshot->fisheye_sequence : 0;
+		map->cubemap = render_map(p_position, p_size, snapshot.get(), true, &map->dense, &map->coarse_ms, &map->dense_ms);
+		double t = now_s();
+		map->sh = project_sh(map->cubemap);
+		map->sh_ms = ms_since(t);
+		t = now_s();
+		for (int f = 0; f < 6; f++) {
+			map->gpu_faces[size_t(f)] = gpu_face(map->cubemap.faces[size_t(f)]);
+		}
+		map->mips_ms = ms_since(t);
+		map->total_ms = ms_since(start);
+		{
+			const std::lock_guard<std::mutex> lock(probe_mutex);
+			const auto it = probes.find(p_probe);
+			if (it == probes.end()) {
+				return nullptr; // removed meanwhile
+			}
+			map->version = ++it->second->version;
+			it->second->map = map;
+		}
+		note_latency(*map);
+		return map;
+	} catch (const std::exception &e) {
+		record_error("probe rendering", e.what());
+		return nullptr;
+	}
+}
+
+void LiveRoom::note_latency(const ProbeMap &p_map) {
+	const double now = now_s();
+	const std::lock_guard<std::mutex> lock(stats_mutex);
+	counters.probe_renders++;
+	auto note = [now](uint64_t p_sequence, uint64_t *io_seen, const std::vector<std::pair<uint64_t, double>> &p_arrivals, std::vector<double> *r_series) {
+		if (p_sequence == 0 || p_sequence <= *io_seen) {
+			return;
+		}
+		*io_seen = p_sequence;
+		for (const auto &[sequence, arrival] : p_arrivals) {
+			if (sequence == p_sequence) {
+				r_series->push_back((now - arrival) * 1000.0);
+				return;
+			}
+		}
+	};
+	note(p_map.rgbd_sequence, &rgbd_latency_seen, rgbd_arrivals, &rgbd_latencies_ms);
+	note(p_map.fisheye_sequence, &fisheye_latency_seen, fisheye_arrivals, &fisheye_latencies_ms);
+}
+
+Cubemap LiveRoom::render_at(const glm::dvec3 &p_position, int p_size, bool p_completed, bool p_with_dense, DenseRenderStats *r_dense) {
+	if (!configured || p_size < 1 || p_size > 4096) {
+		return Cubemap();
+	}
+	std::shared_ptr<const CoarseSnapshot> snapshot;
+	{
+		const std::lock_guard<std::mutex> lock(publish_mutex);
+		snapshot = last_coarse;
+	}
+	CoarseSnapshot raw;
+	if (!p_completed && coarse && !running) {
+		// The observations alone (no inpainting), straight from the pipeline: nothing writes it now.
+		raw.atlas = coarse->texture().color;
+		raw.cumulative = coarse->cumulative_lighting();
+		snapshot = std::shared_ptr<const CoarseSnapshot>(&raw, [](const CoarseSnapshot *) {});
+	}
+	DenseRenderStats dense;
+	double coarse_ms = 0.0, dense_ms = 0.0;
+	Cubemap map = render_map(p_position, p_size, snapshot.get(), p_with_dense, &dense, &coarse_ms, &dense_ms);
+	dense.milliseconds = dense_ms;
+	if (r_dense != nullptr) {
+		*r_dense = dense;
+	}
+	return map;
+}
+
+// ---------------------------------------------------------------- results
+
+std::shared_ptr<const TrackedFrame> LiveRoom::tracked_frame() const {
+	const std::lock_guard<std::mutex> lock(publish_mutex);
+	return last_tracked;
+}
+
+std::shared_ptr<const CoarseSnapshot> LiveRoom::coarse_snapshot() const {
+	const std::lock_guard<std::mutex> lock(publish_mutex);
+	return last_coarse;
+}
+
+std::shared_ptr<const DenseMeshSnapshot> LiveRoom::dense_mesh() const {
+	const std::lock_guard<std::mutex> lock(publish_mutex);
+	return last_mesh;
+}
+
+void LiveRoom::publish_mesh() {
+	if (!slam) {
+		return;
+	}
+	auto snapshot = std::make_shared<DenseMeshSnapshot>();
+	snapshot->mesh = slam->update_mesh();
+	std::string error;
+	{
+		const std::lock_guard<std::mutex> lock(placer_mutex);
+		error = placer.set_dense(snapshot->mesh);
+	}
+	if (!error.empty()) {
+		record_error("placement", error);
+	}
+	const std::lock_guard<std::mutex> lock(publish_mutex);
+	snapshot->version = last_mesh ? last_mesh->version + 1 : 1;
+	last_mesh = snapshot;
+}
+
+void LiveRoom::update_dense_mesh() {
+	if (running || !slam) {
+		return; // the SLAM worker meshes while running
+	}
+	publish_mesh();
+}
+
+Trajectory LiveRoom::trajectory() const {
+	const std::lock_guard<std::mutex> lock(pose_mutex);
+	return tracked;
+}
+
+const RoomMesh *LiveRoom::room_mesh() const {
+	return coarse ? &coarse->mesh() : own_room.get();
+}
+
+PlacementHit LiveRoom::place_ray(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_max_distance_m) const {
+	const std::lock_guard<std::mutex> lock(placer_mutex);
+	return placer.cast(p_origin, p_direction, p_max_distance_m);
+}
+
+void LiveRoom::finish() {
+	if (running) {
+		// Until both workers have taken every posted frame and finished it (at most 30 s).
+		for (int i = 0; i < 6000; i++) {
+			if (!frames->slam_busy && !frames->coarse_busy && !frames->rgbd.pending() && !frames->fisheye.pending()) {
+				break;
+			}
+			std::this_thread::sleep_for(std::chrono::milliseconds(5));
+		}
+	}
+	if (!coarse) {
+		return;
+	}
+	{
+		const std::lock_guard<std::mutex> coarse_lock(coarse_mutex);
+		coarse->finish_inpainting();
+		const std::lock_guard<std::mutex> lock(publish_mutex);
+		if (last_coarse) {
+			auto snapshot = std::make_shared<CoarseSnapshot>(*last_coarse);
+			snapshot->atlas = coarse->completed_color().clone();
+			last_coarse = snapshot;
+		}
+	}
+	wake_probes();
+}
+
+LiveRoomStats LiveRoom::stats() const {
+	LiveRoomStats s;
+	{
+		const std::lock_guard<std::mutex> lock(stats_mutex);
+		s = counters;
+		s.rgbd_latency = summarise(rgbd_latencies_ms);
+		s.fisheye_latency = summarise(fisheye_latencies_ms);
+	}
+	s.running = running;
+	s.rgbd_dropped = frames->rgbd.dropped_count();
+	s.fisheye_dropped = frames->fisheye.dropped_count();
+	if (slam) {
+		s.dense_frames = slam->frame_count();
+		s.dense_fused = slam->integrated_count();
+		const auto reading = slam->read_lock();
+		s.tsdf = slam->volume().stats();
+	}
+	return s;
+}
+
+const DenseSlam *LiveRoom::slam_model() const {
+	return running ? nullptr : slam.get();
+}
+
+const CoarsePipeline *LiveRoom::coarse_model() const {
+	return running ? nullptr : coarse.get();
+}
+
+} // namespace roomprobe

@@ -1,0 +1,299 @@
+#pragma once
+// LiveRoom: the one live system (paper §3.1, Figure 2), as InfiniTAM's main engine is: the Godot
+// nodes, roomprobe_eval and roomprobe_bench all drive this object, so what is measured is what
+// ships. It owns:
+//   the rig (geometry and photometry) and the room (one coarse pipeline with its room mesh and atlas);
+//   DenseSlam, the RGB-D pose history and the fisheye's pose at its own timestamp (§4.3);
+//   the coarse pipeline (§4.3-§4.6) with its inpainting worker (§4.5);
+//   the probes: coarse render, dense pass with its lighting change, SH, half-float mip chains (§4.7);
+//   placement rays (Embree) against the dense mesh and the room.
+//
+// Two ways to run the same code:
+//   step mode (no start()): push_rgbd / push_fisheye process the frame before they return, and
+//     render_probes() renders; deterministic, for tests, the evaluation and the step-paced node.
+//   threaded (start() .. stop()): push_* only post the frame into a latest-value mailbox
+//     (engine/mailbox.h) and return; a SLAM worker, a coarse worker and a probe worker take the
+//     newest frame each (a slow stage drops frames and counts them), and readers take immutable
+//     results: probe maps, the tracked frame, the dense mesh, the coarse atlas. Probes render
+//     while the next frame is tracked; only fusing a frame into the TSDF excludes the dense pass
+//     (DenseSlam::read_lock). stop() joins within about one stage.
+// Workers never call Godot and never throw out: a stage's exception is counted and reported in
+// stats().last_error, and the frame is skipped.
+//
+// Frames come in with timestamps on their own device clocks (RgbdFrame, FisheyeFrame); the
+// fisheye's pose is the RGB-D trajectory at fisheye timestamp + Rig::fisheye_time_offset_s.
+
+#include "mailbox.h"
+
+#include <envmap/dense_render.h>
+#include <pipeline/coarse_pipeline.h>
+#include <placement/surface_placement.h>
+#include <rig/photometry.h>
+#include <rig/rig.h>
+#include <rig/trajectory.h>
+#include <slam/dense_slam.h>
+
+#include <array>
+#include <condition_variable>
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace roomprobe {
+
+struct LiveRoomConfig {
+	// Without a rig (has_rig false) the engine holds only the room: no frames are taken, and the
+	// maps render whatever atlas set_atlas() put in (CoarseRoomModel's texture hook, the editor).
+	bool has_rig = true;
+	Rig rig;
+	RigPhotometry photometry; // unknown: frames as recorded (rig/photometry.h)
+	bool has_room = false; // false: no coarse model (maps then hold only the dense model)
+	Floorplan floorplan; // metres, with the ceiling height
+	// Where the floorplan's origin is in the world (the CoarseRoomModel node's position): the
+	// coarse model lives in the room's frame, the dense model and the probes in the world's.
+	glm::dvec3 room_origin_m = glm::dvec3(0.0);
+	Pose initial_rgb_pose; // world_from_rgb at the first RGB-D frame (room.yaml's)
+	std::vector<glm::dvec3> keep_points; // the TSDF evicts blocks far from these last (the probes)
+	bool dense = true; // run dense SLAM (§4.2) and draw the dense model into the maps
+	// Where poses come from. Tracked: DenseSlam's trajectory (the live mode). GroundTruth: the
+	// recording's true RGB-D trajectory (evaluation mode): the coarse model takes its fisheye poses
+	// from it, and the dense model fuses each RGB-D frame at its true pose.
+	PoseSource coarse_poses = PoseSource::Tracked;
+	PoseSource dense_poses = PoseSource::Tracked;
+	Trajectory ground_truth; // RGB-D clock; needed by either GroundTruth
+	DenseSlamOptions slam;
+	CoarsePipelineOptions coarse; // inpaint_async is set by the engine: on when threaded
+	int mesh_interval_frames = 15; // re-mesh the dense model every this many fused frames
+	// A fisheye frame may come a little after the newest tracked RGB-D frame: the tracked
+	// trajectory is extrapolated this far (seconds). Ground truth is never extrapolated.
+	double fisheye_extrapolation_s = 0.1;
+	// Threaded: a fisheye frame newer than the tracked trajectory waits this long (seconds) for
+	// SLAM to catch up before it is extrapolated.
+	double fisheye_pose_wait_s = 0.07;
+	int render_threads = 1; // threaded: worker threads for probe rendering (cores left to Godot)
+	int dense_render_scale = DenseRenderOptions().scale; // the dense pass at 1 / scale (dense_render.h)
+};
+
+// One RGB-D frame as the engine saw it: the image the AR view shows behind the virtual objects
+// together with the very pose it was taken at, so the two can never slip apart.
+struct TrackedFrame {
+	uint64_t sequence = 0; // 1, 2, ... in push order
+	double timestamp_s = 0.0; // RGB-D clock
+	cv::Mat rgb; // CV_8UC3 R, G, B, as pushed (not undistorted)
+	Pose world_from_camera; // the RGB camera's pose (held while Lost)
+	bool has_pose = false; // false: no pose yet (not configured, or ground truth missing there)
+	TrackingState state = TrackingState::Lost;
+	std::string reason;
+	bool integrated = false;
+	double inlier_fraction = 0.0, rmse_m = 0.0;
+	DenseSlamTimings timings;
+};
+
+struct CoarseSnapshot {
+	uint64_t frames = 0; // fisheye frames integrated
+	uint64_t fisheye_sequence = 0; // the last one
+	cv::Mat atlas; // completed colour (CV_32FC3), never written after publishing
+	LightingChange cumulative; // the coarse model's lighting changes so far (§4.6)
+	CoarseFrameStats last; // of the last frame
+	CoarsePipelineTimings timings; // of the last frame
+};
+
+struct DenseMeshSnapshot {
+	uint64_t version = 0;
+	TriangleMesh mesh; // world metres
+};
+
+// One environment map at one probe (§4.7): the float faces, 25 SH coefficients, and the faces
+// as Godot uploads them (RGBA half floats with the whole mip chain, level 0 first, box-filtered),
+// built on the worker so the main thread only copies bytes.
+struct ProbeMap {
+	int probe = 0;
+	uint64_t version = 0; // per probe: 1, 2, ...
+	glm::dvec3 position = glm::dvec3(0.0);
+	Cubemap cubemap;
+	ShCoefficients sh{};
+	std::array<std::vector<uint16_t>, 6> gpu_faces;
+	uint64_t rgbd_sequence = 0, fisheye_sequence = 0; // the newest frames it includes (0: none)
+	DenseRenderStats dense;
+	double coarse_ms = 0.0, dense_ms = 0.0, sh_ms = 0.0, mips_ms = 0.0, total_ms = 0.0;
+};
+
+// Nearest-rank percentiles of a latency series, milliseconds.
+struct LatencySummary {
+	size_t count = 0;
+	double p50_ms = 0.0, p95_ms = 0.0, max_ms = 0.0;
+};
+
+struct LiveRoomStats {
+	bool running = false;
+	uint64_t rgbd_pushed = 0, rgbd_processed = 0, rgbd_dropped = 0;
+	uint64_t fisheye_pushed = 0, fisheye_integrated = 0, fisheye_dropped = 0;
+	uint64_t fisheye_without_pose = 0; // skipped: no pose at their timestamp (never integrated at a guess)
+	uint64_t probe_renders = 0;
+	uint64_t good = 0, poor = 0, lost = 0;
+	uint64_t stage_errors = 0;
+	std::string last_error; // the last stage exception or frame problem, naming the stage
+	std::string fisheye_pose_problem; // why the last skipped fisheye frame had no pose
+	// From a frame's push to the first probe map that includes it.
+	LatencySummary rgbd_latency, fisheye_latency;
+	size_t dense_frames = 0, dense_fused = 0;
+	TsdfStats tsdf;
+};
+
+class LiveRoom {
+public:
+	LiveRoom();
+	~LiveRoom(); // stops the workers
+	LiveRoom(const LiveRoom &) = delete;
+	LiveRoom &operator=(const LiveRoom &) = delete;
+
+	// Builds the models from p_config (stopping the workers first; they stay stopped). The error
+	// (empty on success) names the problem. Probes are kept.
+	std::string configure(const LiveRoomConfig &p_config);
+	// configure() with the current configuration changed by p_edit, restarting the workers if
+	// they ran. The nodes use it when a property changes.
+	std::string reconfigure(const std::function<void(LiveRoomConfig &)> &p_edit);
+	bool is_configured() const { return configured; }
+	LiveRoomConfig config() const;
+	std::string configuration_error() const;
+
+	// Threads (see above). start() is a no-op when running; false when not configured.
+	bool start();
+	void stop();
+	bool is_running() const { return running; }
+
+	// Configuration in pieces, for the nodes (each owns part of it): p_edit changes the pending
+	// configuration, which apply_config() configures (restarting the workers if they ran).
+	void edit_config(const std::function<void(LiveRoomConfig &)> &p_edit);
+	bool config_pending() const;
+	std::string apply_config();
+
+	// Puts a whole atlas in as the coarse texture (CV_32FC3 linear R, G, B, the room's atlas
+	// size): the maps show it until the next fisheye frame. False when the size is wrong.
+	bool set_atlas(const cv::Mat &p_atlas);
+
+	// Frames in. Step mode: processed before returning. Threaded: posted. Ignored without a rig.
+	void push_rgbd(RgbdFrame p_frame);
+	void push_fisheye(FisheyeFrame p_frame);
+
+	// Probes (ids from add_probe). p_size: cubemap face size in texels (1..4096).
+	int add_probe(const glm::dvec3 &p_position, int p_size);
+	void set_probe(int p_probe, const glm::dvec3 &p_position, int p_size);
+	void remove_probe(int p_probe);
+	// Step mode, or any time: renders every probe (or one) now on the calling thread.
+	void render_probes();
+	bool render_probe(int p_probe);
+	// The newest map of a probe (null before the first).
+	std::shared_ptr<const ProbeMap> probe_map(int p_probe) const;
+	// A one-off map at any position and size (the evaluation): the completed or raw coarse
+	// texture, with or without the dense model. Invalid without a room or a dense model to draw.
+	Cubemap render_at(const glm::dvec3 &p_position, int p_size, bool p_completed = true, bool p_with_dense = true, DenseRenderStats *r_dense = nullptr);
+
+	std::shared_ptr<const TrackedFrame> tracked_frame() const;
+	std::shared_ptr<const CoarseSnapshot> coarse_snapshot() const;
+	std::shared_ptr<const DenseMeshSnapshot> dense_mesh() const;
+	// Re-meshes the dense model now (step mode; threaded, the SLAM worker does it every
+	// mesh_interval_frames) and publishes it.
+	void update_dense_mesh();
+	// The tracked RGB-D trajectory (the ground truth's in GroundTruth mode).
+	Trajectory trajectory() const;
+	// The fisheye's pose at its timestamp, from the pose history as the coarse model takes it.
+	bool fisheye_pose(double p_fisheye_timestamp_s, Pose *r_world_from_fisheye, std::string *r_error) const;
+	// The room's mesh (null without a room). Valid until the next configure.
+	const RoomMesh *room_mesh() const;
+
+	PlacementHit place_ray(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_max_distance_m = 100.0) const;
+
+	// Step mode: waits for the inpainting worker's newest completion (end of a recording).
+	// Threaded: also waits until the workers have taken every posted frame.
+	void finish();
+	LiveRoomStats stats() const;
+	// The SLAM and coarse models themselves, for the evaluation's figures. Step mode only (no
+	// worker may be writing): null while running or without them.
+	const DenseSlam *slam_model() const;
+	const CoarsePipeline *coarse_model() const;
+
+private:
+	struct Probe;
+	struct Frames;
+
+	std::string configure_locked(const LiveRoomConfig &p_config);
+	bool start_locked();
+	void stop_locked();
+	void process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence, double p_arrival_s);
+	void process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence, double p_arrival_s, bool p_wait_for_pose);
+	std::shared_ptr<const ProbeMap> render_one(int p_probe, const glm::dvec3 &p_position, int p_size, uint64_t p_version);
+	Cubemap render_map(const glm::dvec3 &p_position, int p_size, const CoarseSnapshot *p_coarse, bool p_with_dense, DenseRenderStats *r_dense,
+			double *r_coarse_ms, double *r_dense_ms);
+	void publish_mesh();
+	void slam_worker();
+	void coarse_worker();
+	void probe_worker();
+	void record_error(const std::string &p_stage, const std::string &p_what);
+	void note_latency(const ProbeMap &p_map);
+	void wake_probes();
+
+	// Configuration and models: changed only while stopped, under lifecycle (exclusive); pushing
+	// frames holds it shared, so a frame never meets a half-built model.
+	mutable std::shared_mutex lifecycle;
+	mutable std::mutex pending_mutex;
+	LiveRoomConfig pending;
+	bool has_pending = false;
+	LiveRoomConfig cfg;
+	bool configured = false;
+	std::string config_error;
+	std::unique_ptr<DenseSlam> slam;
+	std::unique_ptr<CoarsePipeline> coarse;
+	std::unique_ptr<RoomMesh> own_room; // the room without a rig (no coarse pipeline)
+	std::unique_ptr<CoarseCubemapRenderer> renderer;
+	std::mutex coarse_mutex; // the coarse pipeline: its worker, and finish()
+	FisheyeLinearizer linearizer;
+	std::array<float, 256> rgb_lut{};
+	bool rgb_lut_active = false;
+
+	// Pose history (SLAM thread writes, coarse thread reads).
+	mutable std::mutex pose_mutex;
+	std::condition_variable pose_advanced;
+	Trajectory tracked;
+	DenseLighting dense_lighting; // under probe_mutex
+
+	// Published results.
+	mutable std::mutex publish_mutex;
+	std::shared_ptr<const TrackedFrame> last_tracked;
+	std::shared_ptr<const CoarseSnapshot> last_coarse;
+	std::shared_ptr<const DenseMeshSnapshot> last_mesh;
+	int fused_since_mesh = 0;
+
+	mutable std::mutex placer_mutex;
+	SurfacePlacer placer;
+
+	// Probes.
+	mutable std::mutex probe_mutex;
+	std::condition_variable probes_dirty;
+	std::map<int, std::shared_ptr<Probe>> probes;
+	int next_probe = 1;
+	bool inputs_changed = false; // a new fused frame or coarse snapshot since the last render
+
+	// Threads.
+	std::atomic<bool> running{ false };
+	std::atomic<bool> stopping{ false };
+	std::unique_ptr<Frames> frames;
+	std::thread slam_thread, coarse_thread, probe_thread;
+
+	// Counters and latencies.
+	mutable std::mutex stats_mutex;
+	LiveRoomStats counters;
+	std::vector<double> rgbd_latencies_ms, fisheye_latencies_ms;
+	std::vector<std::pair<uint64_t, double>> rgbd_arrivals, fisheye_arrivals; // recent (sequence, push time)
+	uint64_t rgbd_latency_seen = 0, fisheye_latency_seen = 0;
+	std::atomic<uint64_t> rgbd_sequence{ 0 }, fisheye_sequence{ 0 };
+};
+
+} // namespace roomprobe
