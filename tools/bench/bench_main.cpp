@@ -250,7 +250,7 @@ void record_tracked_frame(const TrackedFrame &p_frame, const Trajectory *p_truth
 }
 
 void print_accuracy(const SlamFigures &p_figures, bool p_synthetic, const char *p_what) {
-	std::printf("accuracy (%s against the ground truth at the same timestamps, same world frame, no alignment):\n", p_what);
+	std::printf("accuracy of %s (against the ground truth at the same timestamps, same world frame, no alignment):\n", p_what);
 	std::printf("  tracking states: %d good, %d poor, %d lost\n", p_figures.good, p_figures.poor, p_figures.lost);
 	if (p_figures.compared == 0) {
 		std::printf("  no ground-truth poses at the frames' timestamps: no ATE\n");
@@ -832,7 +832,8 @@ int bench_live(const Arguments &p_args) {
 	std::printf("  fisheye: n %zu   p50 %.2f ms   p95 %.2f ms   max %.2f ms\n", stats.fisheye_latency.count, stats.fisheye_latency.p50_ms,
 			stats.fisheye_latency.p95_ms, stats.fisheye_latency.max_ms);
 
-	print_table_header("\ntimings, ms (the workers' published figures, each as often as the main loop saw a new one)");
+	std::printf("\n");
+	print_table_header("timings, ms (the workers' published figures, each as often as the main loop saw a new one)");
 	print_row("SLAM tracking", slam_track);
 	print_row("SLAM integration (fused frames)", slam_integrate);
 	print_row("SLAM process (whole call)", slam_frame, 3.16, "SLAM Update (GPU)");
@@ -847,9 +848,13 @@ int bench_live(const Arguments &p_args) {
 	print_row("probe map (whole render)", map_total);
 	std::printf("  probe renders: %llu by the engine, %zu taken by the main loop\n", (unsigned long long)stats.probe_renders, maps_taken);
 	std::printf("main thread (%zu ticks at %.0f Hz, %zu late):\n", ticks, MAIN_LOOP_HZ, late_ticks);
-	print_row("take a new map + copy its GPU bytes", main_copy_ms);
-	std::printf("  %-40s p50 %.3f ms   p95 %.3f ms\n", "  (the same)", main_copy_ms.median(), main_copy_ms.percentile(0.95));
-	print_row("poll without a new map", main_poll_ms);
+	size_t map_bytes = 0;
+	for (const std::vector<uint8_t> &face : face_bytes) {
+		map_bytes += face.size();
+	}
+	std::printf("  take a new map + copy its GPU bytes (%.2f MiB, 6 faces with mips): n %zu   p50 %.3f ms   p95 %.3f ms   max %.3f ms\n",
+			double(map_bytes) / (1024.0 * 1024.0), main_copy_ms.size(), main_copy_ms.median(), main_copy_ms.percentile(0.95), main_copy_ms.percentile(1.0));
+	std::printf("  poll without a new map: n %zu   p50 %.4f ms   p95 %.4f ms\n", main_poll_ms.size(), main_poll_ms.median(), main_poll_ms.percentile(0.95));
 	std::printf("capture thread:\n");
 	print_row("read + decode RGB-D", decode_rgbd_ms);
 	print_row("read + decode fisheye", decode_fisheye_ms);
@@ -864,17 +869,21 @@ int bench_live(const Arguments &p_args) {
 				last->reason.c_str());
 	}
 	std::printf("\n");
-	print_accuracy(figures, true, "the tracked trajectory's poses (lost frames have none)");
+	print_accuracy(figures, true, "the tracked trajectory, whose poses lost frames do not enter");
 	std::printf("\n");
 	print_memory(stats.tsdf);
-	std::printf("summary: mode=live latency_ms_p50=%.2f latency_ms_p95=%.2f fisheye_latency_ms_p50=%.2f fisheye_latency_ms_p95=%.2f dropped_rgbd=%llu "
-				"dropped_fisheye=%llu pushed_rgbd=%llu pushed_fisheye=%llu probe_renders=%llu probe_ms_p50=%.2f main_copy_ms_p50=%.3f "
-				"main_copy_ms_p95=%.3f real_time_factor=%.3f ate_mm=%s good=%llu poor=%llu lost=%llu\n",
-			stats.rgbd_latency.p50_ms, stats.rgbd_latency.p95_ms, stats.fisheye_latency.p50_ms, stats.fisheye_latency.p95_ms,
-			(unsigned long long)stats.rgbd_dropped, (unsigned long long)stats.fisheye_dropped, (unsigned long long)stats.rgbd_pushed,
-			(unsigned long long)stats.fisheye_pushed, (unsigned long long)stats.probe_renders, map_total.median(), main_copy_ms.median(),
-			main_copy_ms.percentile(0.95), real_time_factor, figure(figures.compared > 0, figures.ate_mm()).c_str(), (unsigned long long)stats.good,
-			(unsigned long long)stats.poor, (unsigned long long)stats.lost);
+	const bool has_rgbd_latency = stats.rgbd_latency.count > 0, has_fisheye_latency = stats.fisheye_latency.count > 0;
+	std::printf("summary: mode=live latency_ms_p50=%s latency_ms_p95=%s fisheye_latency_ms_p50=%s fisheye_latency_ms_p95=%s dropped_rgbd=%llu "
+				"dropped_fisheye=%llu fisheye_without_pose=%llu pushed_rgbd=%llu pushed_fisheye=%llu processed_rgbd=%llu integrated_fisheye=%llu "
+				"probe_renders=%llu probe_ms_p50=%s main_copy_ms_p50=%.3f main_copy_ms_p95=%.3f real_time_factor=%.3f ate_mm=%s good=%llu poor=%llu "
+				"lost=%llu\n",
+			figure(has_rgbd_latency, stats.rgbd_latency.p50_ms).c_str(), figure(has_rgbd_latency, stats.rgbd_latency.p95_ms).c_str(),
+			figure(has_fisheye_latency, stats.fisheye_latency.p50_ms).c_str(), figure(has_fisheye_latency, stats.fisheye_latency.p95_ms).c_str(),
+			(unsigned long long)stats.rgbd_dropped, (unsigned long long)stats.fisheye_dropped, (unsigned long long)stats.fisheye_without_pose,
+			(unsigned long long)stats.rgbd_pushed, (unsigned long long)stats.fisheye_pushed, (unsigned long long)stats.rgbd_processed,
+			(unsigned long long)stats.fisheye_integrated, (unsigned long long)stats.probe_renders, figure(!map_total.empty(), map_total.median()).c_str(),
+			main_copy_ms.median(), main_copy_ms.percentile(0.95), real_time_factor, figure(figures.compared > 0, figures.ate_mm()).c_str(),
+			(unsigned long long)stats.good, (unsigned long long)stats.poor, (unsigned long long)stats.lost);
 	return 0;
 }
 

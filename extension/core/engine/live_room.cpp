@@ -512,8 +512,11 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence, doubl
 			out->world_from_camera = truth;
 			out->state = TrackingState::Good;
 		}
+		// Read here, on the only thread that writes the volume: stats() never waits for a fusing.
+		const TsdfStats volume_stats = slam ? slam->volume().stats() : TsdfStats();
 		{
 			const std::lock_guard<std::mutex> lock(stats_mutex);
+			counters.tsdf = volume_stats;
 			counters.rgbd_processed++;
 			counters.good += out->state == TrackingState::Good ? 1 : 0;
 			counters.poor += out->state == TrackingState::Poor ? 1 : 0;
@@ -558,11 +561,16 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 	}
 	try {
 		if (p_wait_for_pose && cfg.coarse_poses == PoseSource::Tracked) {
-			// SLAM may not have reached this instant yet: give it a little time.
+			// SLAM may not have reached this instant yet: wait for it while it still has frames
+			// to process, at most fisheye_pose_wait_s. The coarse model then follows SLAM's lag
+			// instead of starving; newer fisheye frames meanwhile replace older ones in the mailbox.
 			const double t_rgbd = p_frame.timestamp_s + cfg.rig.fisheye_time_offset_s;
+			const double deadline = now_s() + cfg.fisheye_pose_wait_s;
 			std::unique_lock<std::mutex> lock(pose_mutex);
-			pose_advanced.wait_for(lock, std::chrono::duration<double>(cfg.fisheye_pose_wait_s),
-					[&] { return stopping || (!tracked.is_empty() && tracked.get_end_s() >= t_rgbd); });
+			while (!stopping && (tracked.is_empty() || tracked.get_end_s() < t_rgbd) && now_s() < deadline &&
+					(frames->slam_busy || frames->rgbd.pending())) {
+				pose_advanced.wait_for(lock, std::chrono::milliseconds(10));
+			}
 		}
 		Pose pose;
 		std::string error;
@@ -888,8 +896,6 @@ LiveRoomStats LiveRoom::stats() const {
 	if (slam) {
 		s.dense_frames = slam->frame_count();
 		s.dense_fused = slam->integrated_count();
-		const auto reading = slam->read_lock();
-		s.tsdf = slam->volume().stats();
 	}
 	return s;
 }

@@ -74,9 +74,10 @@ struct LiveRoomConfig {
 	// A fisheye frame may come a little after the newest tracked RGB-D frame: the tracked
 	// trajectory is extrapolated this far (seconds). Ground truth is never extrapolated.
 	double fisheye_extrapolation_s = 0.1;
-	// Threaded: a fisheye frame newer than the tracked trajectory waits this long (seconds) for
-	// SLAM to catch up before it is extrapolated.
-	double fisheye_pose_wait_s = 0.07;
+	// Threaded: a fisheye frame newer than the tracked trajectory waits for SLAM to catch up
+	// while SLAM still has frames to process, at most this long (seconds); then it is
+	// extrapolated (fisheye_extrapolation_s) or skipped.
+	double fisheye_pose_wait_s = 1.0;
 	int render_threads = 1; // threaded: worker threads for probe rendering (cores left to Godot)
 	int dense_render_scale = DenseRenderOptions().scale; // the dense pass at 1 / scale (dense_render.h)
 };
@@ -161,6 +162,8 @@ public:
 	// they ran. The nodes use it when a property changes.
 	std::string reconfigure(const std::function<void(LiveRoomConfig &)> &p_edit);
 	bool is_configured() const { return configured; }
+	// Whether the configured engine runs dense SLAM (a DenseSLAM node turned it on).
+	bool has_dense() const { return slam != nullptr; }
 	LiveRoomConfig config() const;
 	std::string configuration_error() const;
 

@@ -1,5 +1,7 @@
 #include "dense_slam.h"
 
+#include <cstring>
+
 #include "../convert/image_convert.h"
 #include "../convert/mesh_convert.h"
 #include "../convert/pose_convert.h"
@@ -22,21 +24,22 @@ DenseSLAM::TrackingState to_node_state(TrackingState p_state) {
 	return DenseSLAM::TRACKING_LOST;
 }
 
-// Godot's arrays of the dense mesh, with its vertex colours.
+// Godot's arrays of the dense mesh, with its vertex colours. Bulk copies: this runs on the main
+// thread whenever the mesh changes, and the mesh has hundreds of thousands of vertices.
 Array to_surface_arrays(const TriangleMesh &p_mesh) {
+	static_assert(sizeof(glm::vec3) == sizeof(Vector3), "glm::vec3 and Vector3 are both three floats");
 	PackedVector3Array vertices, normals;
 	PackedColorArray colors;
 	const int64_t n = int64_t(p_mesh.vertices.size());
 	vertices.resize(n);
 	normals.resize(n);
 	colors.resize(n);
+	std::memcpy(vertices.ptrw(), p_mesh.vertices.data(), size_t(n) * sizeof(Vector3));
+	std::memcpy(normals.ptrw(), p_mesh.normals.data(), size_t(n) * sizeof(Vector3));
+	Color *c = colors.ptrw();
 	for (int64_t i = 0; i < n; i++) {
-		const glm::vec3 &v = p_mesh.vertices[size_t(i)];
-		const glm::vec3 &m = p_mesh.normals[size_t(i)];
-		const glm::u8vec3 &c = p_mesh.colors[size_t(i)];
-		vertices[i] = Vector3(v.x, v.y, v.z);
-		normals[i] = Vector3(m.x, m.y, m.z);
-		colors[i] = Color(c.x / 255.0f, c.y / 255.0f, c.z / 255.0f);
+		const glm::u8vec3 &v = p_mesh.colors[size_t(i)];
+		c[i] = Color(v.x / 255.0f, v.y / 255.0f, v.z / 255.0f);
 	}
 	Array arrays = triangle_surface_arrays(vertices, normals, p_mesh.indices);
 	arrays[Mesh::ARRAY_COLOR] = colors;
@@ -195,7 +198,7 @@ bool DenseSLAM::process_rig_frame() {
 	}
 	take_mesh();
 	const std::shared_ptr<const TrackedFrame> frame = engine->tracked_frame();
-	if (!frame || frame->sequence == taken_sequence || !engine->config().dense) {
+	if (!frame || frame->sequence == taken_sequence || !engine->has_dense()) {
 		return false;
 	}
 	taken_sequence = frame->sequence;

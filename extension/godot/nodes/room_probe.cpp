@@ -136,7 +136,7 @@ void RoomProbe::_process(double p_delta) {
 		if (take_map()) {
 			emit_signal("environment_map_updated");
 		}
-	} else {
+	} else if (!engine->config_pending() && engine->room_mesh() != nullptr) {
 		update_now(); // step mode: rendered here, as the frames are
 	}
 }
