@@ -12,7 +12,8 @@
 
 Where it runs:
   default     Movie Maker under xvfb-run (no display needed), then quits
-  --window    live in a window on $DISPLAY, until the window is closed (no frames written)
+  --window    live in a window on $DISPLAY, until the window is closed (no frames written);
+              with --once, it quits when the recording has played (a real-time run, measured)
 """
 
 import argparse
@@ -39,6 +40,7 @@ def main():
     ap = argparse.ArgumentParser(prog="./roomprobe demo", description=__doc__.split("\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__.split("\n\n", 1)[1])
     ap.add_argument("--window", action="store_true", help="play live in a window on $DISPLAY instead of writing frames")
+    ap.add_argument("--once", action="store_true", help="with --window: quit when the recording has played (to measure a real-time run)")
     ap.add_argument("--no-build", action="store_true", help="skip the build")
     ap.add_argument("--no-eval", action="store_true", help="skip the evaluation")
     ap.add_argument("--scons-args", metavar="ARGS", help="arguments for scons instead of '-j<nproc>' (also $ROOMPROBE_SCONS_ARGS)")
@@ -54,7 +56,7 @@ def main():
     if not synthesise():
         return 1
     import_project()
-    if not play(opts.window):
+    if not play(opts.window, opts.once):
         return 1
     if not opts.no_eval and not evaluate():
         return 1
@@ -113,13 +115,13 @@ def import_project():
         print(f"ok ({rp.fmt_duration(r.seconds)})")
 
 
-def play(window):
+def play(window, once=False):
     cmd = rp.godot_base_args(rendering=True) + ["--resolution", SIZE]
     if not window:
         shutil.rmtree(FRAMES, ignore_errors=True)
         os.makedirs(FRAMES)
         cmd = rp.xvfb_prefix() + cmd + ["--write-movie", os.path.join(FRAMES, "frame.png"), "--fixed-fps", str(FPS)]
-    cmd += [SCENE, "--", "--recording", RECORDING, "--out", OUT] + ([] if window else ["--quit-at-end"])
+    cmd += [SCENE, "--", "--recording", RECORDING, "--out", OUT] + ([] if window and not once else ["--quit-at-end"])
     rp.header(f"play ({'window' if window else 'Movie Maker under Xvfb'}): {shlex.join(cmd)}")
     log = os.path.join(OUT, "demo.log")
     noise = rp.NoiseFilter()

@@ -98,7 +98,12 @@ struct LiveRoom::Frames {
 	};
 	Mailbox<Rgbd> rgbd;
 	Mailbox<Fisheye> fisheye;
-	std::atomic<bool> slam_busy{ false }, coarse_busy{ false };
+	// Frames a worker has finished. Every frame put is either dropped or finished, so
+	// put - dropped - done is the work still to do, with no gap between a take and its start.
+	std::atomic<uint64_t> rgbd_done{ 0 }, fisheye_done{ 0 };
+
+	bool rgbd_outstanding() const { return rgbd.put_count() - rgbd.dropped_count() > rgbd_done; }
+	bool fisheye_outstanding() const { return fisheye.put_count() - fisheye.dropped_count() > fisheye_done; }
 };
 
 LiveRoom::LiveRoom() :
@@ -295,6 +300,8 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 	}
 	frames->rgbd.reopen();
 	frames->fisheye.reopen();
+	frames->rgbd_done = 0;
+	frames->fisheye_done = 0;
 	config_error.clear();
 	configured = true;
 	return "";
@@ -327,6 +334,8 @@ bool LiveRoom::start_locked() {
 	stopping = false;
 	frames->rgbd.reopen();
 	frames->fisheye.reopen();
+	frames->rgbd_done = 0;
+	frames->fisheye_done = 0;
 	running = true;
 	slam_thread = std::thread([this] { slam_worker(); });
 	coarse_thread = std::thread([this] { coarse_worker(); });
@@ -363,9 +372,8 @@ void LiveRoom::slam_worker() {
 		if (!item) {
 			continue;
 		}
-		frames->slam_busy = true;
 		process_rgbd(item->frame, item->sequence, item->arrival_s);
-		frames->slam_busy = false;
+		frames->rgbd_done++;
 	}
 }
 
@@ -375,9 +383,8 @@ void LiveRoom::coarse_worker() {
 		if (!item) {
 			continue;
 		}
-		frames->coarse_busy = true;
 		process_fisheye(item->frame, item->sequence, item->arrival_s, true);
-		frames->coarse_busy = false;
+		frames->fisheye_done++;
 	}
 }
 
@@ -426,14 +433,7 @@ void LiveRoom::wake_probes() {
 void LiveRoom::push_rgbd(RgbdFrame p_frame) {
 	const uint64_t sequence = ++rgbd_sequence;
 	const double arrival = now_s();
-	{
-		const std::lock_guard<std::mutex> lock(stats_mutex);
-		counters.rgbd_pushed++;
-		rgbd_arrivals.emplace_back(sequence, arrival);
-		if (rgbd_arrivals.size() > ARRIVALS_KEPT) {
-			rgbd_arrivals.erase(rgbd_arrivals.begin());
-		}
-	}
+	note_arrival(sequence, arrival, &counters.rgbd_pushed, &rgbd_arrivals);
 	const std::shared_lock<std::shared_mutex> shared(lifecycle);
 	if (running) {
 		frames->rgbd.put(Frames::Rgbd{ std::move(p_frame), sequence, arrival });
@@ -445,19 +445,21 @@ void LiveRoom::push_rgbd(RgbdFrame p_frame) {
 void LiveRoom::push_fisheye(FisheyeFrame p_frame) {
 	const uint64_t sequence = ++fisheye_sequence;
 	const double arrival = now_s();
-	{
-		const std::lock_guard<std::mutex> lock(stats_mutex);
-		counters.fisheye_pushed++;
-		fisheye_arrivals.emplace_back(sequence, arrival);
-		if (fisheye_arrivals.size() > ARRIVALS_KEPT) {
-			fisheye_arrivals.erase(fisheye_arrivals.begin());
-		}
-	}
+	note_arrival(sequence, arrival, &counters.fisheye_pushed, &fisheye_arrivals);
 	const std::shared_lock<std::shared_mutex> shared(lifecycle);
 	if (running) {
 		frames->fisheye.put(Frames::Fisheye{ std::move(p_frame), sequence, arrival });
 	} else if (configured && cfg.has_rig) {
 		process_fisheye(p_frame, sequence, arrival, false);
+	}
+}
+
+void LiveRoom::note_arrival(uint64_t p_sequence, double p_arrival_s, uint64_t *io_pushed, std::vector<std::pair<uint64_t, double>> *io_arrivals) {
+	const std::lock_guard<std::mutex> lock(stats_mutex);
+	(*io_pushed)++;
+	io_arrivals->emplace_back(p_sequence, p_arrival_s);
+	if (io_arrivals->size() > ARRIVALS_KEPT) {
+		io_arrivals->erase(io_arrivals->begin());
 	}
 }
 
@@ -568,7 +570,7 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 			const double deadline = now_s() + cfg.fisheye_pose_wait_s;
 			std::unique_lock<std::mutex> lock(pose_mutex);
 			while (!stopping && (tracked.is_empty() || tracked.get_end_s() < t_rgbd) && now_s() < deadline &&
-					(frames->slam_busy || frames->rgbd.pending())) {
+					frames->rgbd_outstanding()) {
 				pose_advanced.wait_for(lock, std::chrono::milliseconds(10));
 			}
 		}
@@ -707,6 +709,7 @@ Cubemap LiveRoom::render_map(const glm::dvec3 &p_position, int p_size, const Coa
 		*r_dense = render_dense_over(slam->volume(), p_position, options, &map);
 	}
 	*r_dense_ms = ms_since(start);
+	r_dense->milliseconds = *r_dense_ms;
 	return map;
 }
 
@@ -792,7 +795,6 @@ Cubemap LiveRoom::render_at(const glm::dvec3 &p_position, int p_size, bool p_com
 	DenseRenderStats dense;
 	double coarse_ms = 0.0, dense_ms = 0.0;
 	Cubemap map = render_map(p_position, p_size, snapshot.get(), p_with_dense, &dense, &coarse_ms, &dense_ms);
-	dense.milliseconds = dense_ms;
 	if (r_dense != nullptr) {
 		*r_dense = dense;
 	}
@@ -860,7 +862,7 @@ void LiveRoom::finish() {
 	if (running) {
 		// Until both workers have taken every posted frame and finished it (at most 30 s).
 		for (int i = 0; i < 6000; i++) {
-			if (!frames->slam_busy && !frames->coarse_busy && !frames->rgbd.pending() && !frames->fisheye.pending()) {
+			if (!frames->rgbd_outstanding() && !frames->fisheye_outstanding()) {
 				break;
 			}
 			std::this_thread::sleep_for(std::chrono::milliseconds(5));

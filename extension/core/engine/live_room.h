@@ -69,7 +69,7 @@ struct LiveRoomConfig {
 	PoseSource dense_poses = PoseSource::Tracked;
 	Trajectory ground_truth; // RGB-D clock; needed by either GroundTruth
 	DenseSlamOptions slam;
-	CoarsePipelineOptions coarse; // inpaint_async is set by the engine: on when threaded
+	CoarsePipelineOptions coarse; // inpaint_async: the nodes turn it on (live), the evaluation off (deterministic)
 	int mesh_interval_frames = 15; // re-mesh the dense model every this many fused frames
 	// A fisheye frame may come a little after the newest tracked RGB-D frame: the tracked
 	// trajectory is extrapolated this far (seconds). Ground truth is never extrapolated.
@@ -240,6 +240,8 @@ private:
 	void coarse_worker();
 	void probe_worker();
 	void record_error(const std::string &p_stage, const std::string &p_what);
+	// Counts a pushed frame and keeps its push time for the latency figures.
+	void note_arrival(uint64_t p_sequence, double p_arrival_s, uint64_t *io_pushed, std::vector<std::pair<uint64_t, double>> *io_arrivals);
 	void note_latency(const ProbeMap &p_map);
 	void wake_probes();
 

@@ -1,6 +1,9 @@
 #include "dense_slam.h"
 
+#include <glm/gtc/quaternion.hpp>
+
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <limits>
 
@@ -16,6 +19,22 @@ double ms_since(Clock::time_point p_start) {
 
 bool has_model(const ModelMaps &p_maps) {
 	return !p_maps.points.empty();
+}
+
+// The last inter-frame motion p_delta (taken over p_last_dt_s) carried over p_dt_s at constant
+// velocity. Frames at a steady rate keep p_delta exactly; when frames were dropped (the live
+// engine's SLAM worker takes only the newest) the motion is scaled, so the guess stays near.
+Pose motion_over(const Pose &p_delta, double p_dt_s, double p_last_dt_s) {
+	const double k = p_last_dt_s > 0.0 && p_dt_s > 0.0 ? p_dt_s / p_last_dt_s : 1.0;
+	if (std::abs(k - 1.0) < 0.25 || !std::isfinite(k)) {
+		return p_delta;
+	}
+	const double scale = std::min(k, 10.0);
+	Pose out;
+	out.translation = p_delta.translation * scale;
+	const double angle = glm::angle(p_delta.rotation);
+	out.rotation = angle > 1e-12 ? glm::angleAxis(angle * scale, glm::axis(p_delta.rotation)) : p_delta.rotation;
+	return out;
 }
 
 } // namespace
@@ -164,7 +183,7 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 		// Constant velocity while trusted; the held pose when re-tracking after a loss.
 		Pose guess = last_pose;
 		if (opts.constant_velocity && has_previous && last_state == TrackingState::Good) {
-			guess = compose(last_pose, compose(inverse(previous_pose), last_pose));
+			guess = compose(last_pose, motion_over(compose(inverse(previous_pose), last_pose), p_frame.timestamp_s - last_time_s, last_time_s - previous_time_s));
 		}
 		out.tracking = track(depth, rgb, guess);
 		if (out.tracking.state == TrackingState::Lost) {
@@ -176,8 +195,10 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 	// A Poor pose still moves the camera (the AR view follows it); only Good ones are fused.
 	if (out.tracking.state != TrackingState::Lost) {
 		previous_pose = last_pose;
+		previous_time_s = last_time_s;
 		has_previous = integrated_frames > 0;
 		last_pose = out.tracking.world_from_camera;
+		last_time_s = p_frame.timestamp_s;
 	}
 	const bool trusted = out.tracking.state == TrackingState::Good || (opts.integrate_poor && out.tracking.state == TrackingState::Poor);
 	if (trusted) {

@@ -124,6 +124,7 @@ private:
 	ModelMaps reference; // the model raycast from last_pose
 	Pose last_pose;
 	Pose previous_pose; // the trusted pose before last_pose (constant-velocity prediction)
+	double last_time_s = 0.0, previous_time_s = 0.0; // their frames' timestamps
 	bool has_previous = false;
 	TrackingState last_state = TrackingState::Lost;
 	// Atomic: read by other threads (the engine's stats, the dense lighting of probes).
