@@ -82,6 +82,7 @@ struct LiveRoom::Probe {
 	int size = 128;
 	bool dirty = true; // moved, resized or new since its last map
 	uint64_t version = 0;
+	uint64_t rendered_generation = 0; // the input_generation its newest map was rendered from
 	std::shared_ptr<const ProbeMap> map;
 };
 
@@ -332,10 +333,9 @@ bool LiveRoom::start_locked() {
 		return false;
 	}
 	stopping = false;
-	frames->rgbd.reopen();
-	frames->fisheye.reopen();
-	frames->rgbd_done = 0;
-	frames->fisheye_done = 0;
+	// The counts go on from configure(), so that pushed = processed + dropped over stops and starts.
+	frames->rgbd.open();
+	frames->fisheye.open();
 	running = true;
 	slam_thread = std::thread([this] { slam_worker(); });
 	coarse_thread = std::thread([this] { coarse_worker(); });
@@ -392,6 +392,7 @@ void LiveRoom::probe_worker() {
 	tbb::task_arena arena(std::max(1, cfg.render_threads));
 	while (!stopping) {
 		std::vector<std::tuple<int, glm::dvec3, int>> jobs;
+		uint64_t generation = 0;
 		{
 			std::unique_lock<std::mutex> lock(probe_mutex);
 			probes_dirty.wait_for(lock, WORKER_POLL, [this] {
@@ -410,12 +411,13 @@ void LiveRoom::probe_worker() {
 				}
 			}
 			inputs_changed = false;
+			generation = input_generation;
 		}
 		for (const auto &[id, position, size] : jobs) {
 			if (stopping) {
 				break;
 			}
-			arena.execute([&, id = id, position = position, size = size] { render_one(id, position, size, 0); });
+			arena.execute([&, id = id, position = position, size = size] { render_one(id, position, size, generation); });
 		}
 	}
 }
@@ -424,6 +426,7 @@ void LiveRoom::wake_probes() {
 	{
 		const std::lock_guard<std::mutex> lock(probe_mutex);
 		inputs_changed = true;
+		input_generation++;
 	}
 	probes_dirty.notify_all();
 }
@@ -651,21 +654,24 @@ std::shared_ptr<const ProbeMap> LiveRoom::probe_map(int p_probe) const {
 
 void LiveRoom::render_probes() {
 	std::vector<std::tuple<int, glm::dvec3, int>> jobs;
+	uint64_t generation = 0;
 	{
 		const std::lock_guard<std::mutex> lock(probe_mutex);
 		for (auto &[id, probe] : probes) {
 			jobs.emplace_back(id, probe->position, probe->size);
 			probe->dirty = false;
 		}
+		generation = input_generation;
 	}
 	for (const auto &[id, position, size] : jobs) {
-		render_one(id, position, size, 0);
+		render_one(id, position, size, generation);
 	}
 }
 
 bool LiveRoom::render_probe(int p_probe) {
 	glm::dvec3 position;
 	int size = 0;
+	uint64_t generation = 0;
 	{
 		const std::lock_guard<std::mutex> lock(probe_mutex);
 		const auto it = probes.find(p_probe);
@@ -675,8 +681,9 @@ bool LiveRoom::render_probe(int p_probe) {
 		position = it->second->position;
 		size = it->second->size;
 		it->second->dirty = false;
+		generation = input_generation;
 	}
-	return render_one(p_probe, position, size, 0) != nullptr;
+	return render_one(p_probe, position, size, generation) != nullptr;
 }
 
 Cubemap LiveRoom::render_map(const glm::dvec3 &p_position, int p_size, const CoarseSnapshot *p_coarse, bool p_with_dense, DenseRenderStats *r_dense,
@@ -713,8 +720,7 @@ Cubemap LiveRoom::render_map(const glm::dvec3 &p_position, int p_size, const Coa
 	return map;
 }
 
-std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dvec3 &p_position, int p_size, uint64_t p_version) {
-	(void)p_version;
+std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dvec3 &p_position, int p_size, uint64_t p_generation) {
 	try {
 		const double start = now_s();
 		std::shared_ptr<const CoarseSnapshot> snapshot;
@@ -747,6 +753,7 @@ std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dve
 			}
 			map->version = ++it->second->version;
 			it->second->map = map;
+			it->second->rendered_generation = std::max(it->second->rendered_generation, p_generation);
 		}
 		note_latency(*map);
 		return map;
@@ -881,7 +888,27 @@ void LiveRoom::finish() {
 			last_coarse = snapshot;
 		}
 	}
-	wake_probes();
+	if (!running) {
+		return;
+	}
+	// Threaded: a render that started before the last snapshot may still be finishing. Wait until
+	// every probe has a map rendered from inputs at least this new (at most 10 s).
+	uint64_t generation = 0;
+	{
+		const std::lock_guard<std::mutex> lock(probe_mutex);
+		inputs_changed = true;
+		generation = ++input_generation;
+	}
+	probes_dirty.notify_all();
+	for (int i = 0; i < 2000; i++) {
+		{
+			const std::lock_guard<std::mutex> lock(probe_mutex);
+			if (std::all_of(probes.begin(), probes.end(), [generation](const auto &p_entry) { return p_entry.second->rendered_generation >= generation; })) {
+				break;
+			}
+		}
+		std::this_thread::sleep_for(std::chrono::milliseconds(5));
+	}
 }
 
 LiveRoomStats LiveRoom::stats() const {

@@ -215,7 +215,8 @@ public:
 	PlacementHit place_ray(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_max_distance_m = 100.0) const;
 
 	// Step mode: waits for the inpainting worker's newest completion (end of a recording).
-	// Threaded: also waits until the workers have taken every posted frame.
+	// Threaded: first waits until the workers have finished every posted frame, then until every
+	// probe has a map of the final model.
 	void finish();
 	LiveRoomStats stats() const;
 	// The SLAM and coarse models themselves, for the evaluation's figures. Step mode only (no
@@ -232,7 +233,8 @@ private:
 	void stop_locked();
 	void process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence, double p_arrival_s);
 	void process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence, double p_arrival_s, bool p_wait_for_pose);
-	std::shared_ptr<const ProbeMap> render_one(int p_probe, const glm::dvec3 &p_position, int p_size, uint64_t p_version);
+	// p_generation: input_generation when the render was decided (its inputs are at least that new).
+	std::shared_ptr<const ProbeMap> render_one(int p_probe, const glm::dvec3 &p_position, int p_size, uint64_t p_generation);
 	Cubemap render_map(const glm::dvec3 &p_position, int p_size, const CoarseSnapshot *p_coarse, bool p_with_dense, DenseRenderStats *r_dense,
 			double *r_coarse_ms, double *r_dense_ms);
 	void publish_mesh();
@@ -285,6 +287,7 @@ private:
 	std::map<int, std::shared_ptr<Probe>> probes;
 	int next_probe = 1;
 	bool inputs_changed = false; // a new fused frame or coarse snapshot since the last render
+	uint64_t input_generation = 0; // counts those changes
 
 	// Threads.
 	std::atomic<bool> running{ false };

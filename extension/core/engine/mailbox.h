@@ -52,6 +52,11 @@ public:
 		}
 		ready.notify_all();
 	}
+	// Opens it again after close(), keeping its value and counts.
+	void open() {
+		const std::lock_guard<std::mutex> lock(mutex);
+		closed = false;
+	}
 	// Opens it again, empty, with its counts at zero.
 	void reopen() {
 		const std::lock_guard<std::mutex> lock(mutex);
