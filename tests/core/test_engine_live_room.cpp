@@ -387,7 +387,16 @@ TEST_CASE("engine: step mode is the old sequential path (DenseSlam, fisheye_pose
 	// The dense mesh is published every mesh_interval_frames (15) fused frames: once in 18.
 	REQUIRE(step.mesh != nullptr);
 	CHECK(step.mesh->version == 1);
-	CHECK_FALSE(step.mesh->mesh.vertices.empty());
+	REQUIRE(step.mesh->mesh != nullptr);
+	CHECK_FALSE(step.mesh->mesh->vertices.empty());
+	// The display's regions partition the whole mesh: every triangle in exactly one region.
+	size_t region_triangles = 0;
+	for (const DenseMeshChunk &chunk : step.mesh->chunks) {
+		REQUIRE(chunk.mesh != nullptr);
+		CHECK_FALSE(chunk.mesh->indices.empty());
+		region_triangles += chunk.mesh->indices.size() / 3;
+	}
+	CHECK(region_triangles == step.mesh->mesh->indices.size() / 3);
 }
 
 // ---------------------------------------------------------------- 2. threaded = step mode

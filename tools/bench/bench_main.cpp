@@ -473,7 +473,7 @@ int bench_recording(const Arguments &p_args) {
 			if (mesh && mesh->version != mesh_version_seen) {
 				mesh_version_seen = mesh->version;
 				figures.mesh.add(push_ms - (tracked ? tracked->timings.frame_ms : 0.0));
-				figures.mesh_triangles = mesh->mesh.indices.size() / 3;
+				figures.mesh_triangles = mesh->mesh->indices.size() / 3;
 			}
 			// The probe's environment map, as RoomProbe takes it each frame.
 			start = Clock::now();
@@ -534,7 +534,7 @@ int bench_recording(const Arguments &p_args) {
 	engine.update_dense_mesh();
 	const double last_mesh_ms = ms_since(last_mesh_start);
 	if (const std::shared_ptr<const DenseMeshSnapshot> mesh = engine.dense_mesh()) {
-		figures.mesh_triangles = mesh->mesh.indices.size() / 3;
+		figures.mesh_triangles = mesh->mesh->indices.size() / 3;
 	}
 	const LiveRoomStats stats = engine.stats();
 

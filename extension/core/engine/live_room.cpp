@@ -281,6 +281,7 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 		last_coarse.reset();
 		last_mesh.reset();
 		fused_since_mesh = 0;
+		mesh_chunks.clear();
 	}
 	{
 		const std::lock_guard<std::mutex> lock(probe_mutex);
@@ -830,11 +831,29 @@ void LiveRoom::publish_mesh() {
 		return;
 	}
 	auto snapshot = std::make_shared<DenseMeshSnapshot>();
-	snapshot->mesh = slam->update_mesh();
+	auto whole = std::make_shared<TriangleMesh>(slam->update_mesh());
+	snapshot->mesh = whole;
+	// Only the regions the mesher touched are cut again.
+	const IncrementalMesher &mesher = slam->mesher_state();
+	for (auto &[region, triangles] : mesher.region_meshes(DENSE_MESH_REGION_BLOCKS, mesher.changed_regions(DENSE_MESH_REGION_BLOCKS))) {
+		if (triangles.indices.empty()) {
+			mesh_chunks.erase(region);
+			continue;
+		}
+		DenseMeshChunk chunk;
+		chunk.region = region;
+		chunk.version = ++chunk_versions;
+		chunk.mesh = std::make_shared<const TriangleMesh>(std::move(triangles));
+		mesh_chunks[region] = std::move(chunk);
+	}
+	snapshot->chunks.reserve(mesh_chunks.size());
+	for (const auto &[region, chunk] : mesh_chunks) {
+		snapshot->chunks.push_back(chunk);
+	}
 	std::string error;
 	{
 		const std::lock_guard<std::mutex> lock(placer_mutex);
-		error = placer.set_dense(snapshot->mesh);
+		error = placer.set_dense(*whole);
 	}
 	if (!error.empty()) {
 		record_error("placement", error);

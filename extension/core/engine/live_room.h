@@ -106,9 +106,21 @@ struct CoarseSnapshot {
 	CoarsePipelineTimings timings; // of the last frame
 };
 
+// The dense mesh, whole (placement, scripts) and cut into cubic regions (display): a viewer
+// replaces only the regions whose version changed, so a growing model costs the main thread
+// what changed, not the whole mesh.
+struct DenseMeshChunk {
+	glm::ivec3 region = glm::ivec3(0); // block index / DENSE_MESH_REGION_BLOCKS
+	uint64_t version = 0; // changes whenever this region's triangles do
+	std::shared_ptr<const TriangleMesh> mesh; // world metres; never empty
+};
+
+inline constexpr int DENSE_MESH_REGION_BLOCKS = 8; // 8 blocks of 8 voxels: 64 cm at 1 cm voxels
+
 struct DenseMeshSnapshot {
 	uint64_t version = 0;
-	TriangleMesh mesh; // world metres
+	std::shared_ptr<const TriangleMesh> mesh; // the whole mesh, world metres
+	std::vector<DenseMeshChunk> chunks; // every non-empty region
 };
 
 // One environment map at one probe (§4.7): the float faces, 25 SH coefficients, and the faces
@@ -277,6 +289,8 @@ private:
 	std::shared_ptr<const CoarseSnapshot> last_coarse;
 	std::shared_ptr<const DenseMeshSnapshot> last_mesh;
 	int fused_since_mesh = 0;
+	std::map<glm::ivec3, DenseMeshChunk, IvecLess> mesh_chunks; // the SLAM thread's (or step mode's)
+	uint64_t chunk_versions = 0;
 
 	mutable std::mutex placer_mutex;
 	SurfacePlacer placer;

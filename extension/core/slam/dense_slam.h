@@ -85,6 +85,8 @@ public:
 	void raycast(const Pose &p_world_from_camera, ModelMaps *r_maps) const;
 	// Re-meshes the blocks changed since the last call; returns the whole mesh.
 	const TriangleMesh &update_mesh();
+	// The incremental mesher behind update_mesh (its per-region meshes, for viewers).
+	const IncrementalMesher &mesher_state() const { return mesher; }
 
 	// One RGB-D frame: undistort, track (the first frame is taken at the initial pose), integrate
 	// when trusted, raycast the reference for the next frame.

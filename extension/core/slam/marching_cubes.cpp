@@ -273,6 +273,7 @@ int IncrementalMesher::update(const TsdfVolume &p_volume, const std::vector<glm:
 	const BlockLess less;
 	std::sort(affected.begin(), affected.end(), less);
 	affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
+	m_last_touched = affected;
 	int meshed = 0;
 	for (const glm::ivec3 &block : affected) {
 		if (p_volume.find_block(block) == nullptr) {
@@ -288,6 +289,43 @@ int IncrementalMesher::update(const TsdfVolume &p_volume, const std::vector<glm:
 		}
 	}
 	return meshed;
+}
+
+namespace {
+
+int floor_div(int p_a, int p_b) {
+	return p_a >= 0 ? p_a / p_b : -((-p_a + p_b - 1) / p_b);
+}
+
+glm::ivec3 region_of(const glm::ivec3 &p_block, int p_region_blocks) {
+	return glm::ivec3(floor_div(p_block.x, p_region_blocks), floor_div(p_block.y, p_region_blocks), floor_div(p_block.z, p_region_blocks));
+}
+
+} // namespace
+
+std::vector<glm::ivec3> IncrementalMesher::changed_regions(int p_region_blocks) const {
+	std::vector<glm::ivec3> regions;
+	for (const glm::ivec3 &block : m_last_touched) {
+		regions.push_back(region_of(block, p_region_blocks));
+	}
+	const IvecLess less;
+	std::sort(regions.begin(), regions.end(), less);
+	regions.erase(std::unique(regions.begin(), regions.end()), regions.end());
+	return regions;
+}
+
+std::map<glm::ivec3, TriangleMesh, IvecLess> IncrementalMesher::region_meshes(int p_region_blocks, const std::vector<glm::ivec3> &p_regions) const {
+	std::map<glm::ivec3, TriangleMesh, IvecLess> out;
+	for (const glm::ivec3 &region : p_regions) {
+		out[region]; // empty unless a piece falls in it
+	}
+	for (const auto &[block, piece] : m_pieces) {
+		const auto it = out.find(region_of(block, p_region_blocks));
+		if (it != out.end()) {
+			append_mesh(piece, &it->second);
+		}
+	}
+	return out;
 }
 
 TriangleMesh IncrementalMesher::mesh() const {

@@ -45,6 +45,13 @@ TriangleMesh mesh_volume(const TsdfVolume &p_volume);
 void append_mesh(const TriangleMesh &p_piece, TriangleMesh *r_mesh);
 
 // Keeps one mesh piece per block and re-meshes only what changed.
+// Orders block and region indices (std::map keys).
+struct IvecLess {
+	bool operator()(const glm::ivec3 &p_a, const glm::ivec3 &p_b) const {
+		return std::tie(p_a.x, p_a.y, p_a.z) < std::tie(p_b.x, p_b.y, p_b.z);
+	}
+};
+
 class IncrementalMesher {
 public:
 	// Re-meshes the blocks whose cubes touch a changed block: each changed block and its 7
@@ -53,7 +60,17 @@ public:
 	int update(const TsdfVolume &p_volume, const std::vector<glm::ivec3> &p_changed_blocks);
 	// The whole mesh: the pieces concatenated in sorted block order.
 	TriangleMesh mesh() const;
-	void clear() { m_pieces.clear(); }
+	// The mesh of each region of p_region_blocks^3 blocks (key: block index floor-divided by
+	// p_region_blocks) in p_regions, in one pass; a region with no triangles maps to an empty mesh.
+	// Lets a viewer replace only the regions that changed.
+	std::map<glm::ivec3, TriangleMesh, struct IvecLess> region_meshes(int p_region_blocks, const std::vector<glm::ivec3> &p_regions) const;
+	// The regions whose meshes the last update() changed (the changed blocks and the neighbours
+	// it re-meshed), for p_region_blocks.
+	std::vector<glm::ivec3> changed_regions(int p_region_blocks) const;
+	void clear() {
+		m_pieces.clear();
+		m_last_touched.clear();
+	}
 	size_t piece_count() const { return m_pieces.size(); }
 
 private:
@@ -63,6 +80,7 @@ private:
 		}
 	};
 	std::map<glm::ivec3, TriangleMesh, BlockLess> m_pieces;
+	std::vector<glm::ivec3> m_last_touched; // blocks re-meshed (or dropped) by the last update()
 };
 
 } // namespace roomprobe

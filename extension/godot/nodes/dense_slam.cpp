@@ -59,19 +59,17 @@ DenseSLAM::~DenseSLAM() {
 }
 
 void DenseSLAM::_notification(int p_what) {
-	if (p_what == NOTIFICATION_READY && mesh_instance == nullptr) {
-		// An internal child: not saved with the scene, not listed in the editor.
-		mesh_instance = memnew(MeshInstance3D);
-		mesh_instance->set_mesh(mesh);
-		mesh_instance->set_layer_mask(mesh_layers);
+	if (p_what == NOTIFICATION_READY && mesh_root == nullptr) {
+		// An internal child: not saved with the scene, not listed in the editor. It holds one
+		// MeshInstance3D per region of the dense mesh.
+		mesh_root = memnew(Node3D);
 		material.instantiate();
 		// The vertex colours are the surfaces' observed light, as the coarse atlas is.
 		material->set_shading_mode(BaseMaterial3D::SHADING_MODE_UNSHADED);
 		material->set_flag(BaseMaterial3D::FLAG_ALBEDO_FROM_VERTEX_COLOR, true);
-		mesh_instance->set_material_override(material);
-		add_child(mesh_instance, false, Node::INTERNAL_MODE_FRONT);
+		add_child(mesh_root, false, Node::INTERNAL_MODE_FRONT);
 		// The model is in world coordinates.
-		mesh_instance->set_as_top_level(true);
+		mesh_root->set_as_top_level(true);
 		set_process(!Engine::get_singleton()->is_editor_hint());
 	}
 	if (p_what == NOTIFICATION_READY) {
@@ -164,8 +162,8 @@ int DenseSLAM::get_max_blocks() const { return max_blocks; }
 
 void DenseSLAM::set_mesh_layers(uint32_t p_layers) {
 	mesh_layers = p_layers;
-	if (mesh_instance != nullptr) {
-		mesh_instance->set_layer_mask(mesh_layers);
+	for (auto &[region, view] : chunk_views) {
+		view.instance->set_layer_mask(mesh_layers);
 	}
 }
 
@@ -177,6 +175,8 @@ void DenseSLAM::set_mesh_update_interval(int p_frames) {
 }
 
 int DenseSLAM::get_mesh_update_interval() const { return mesh_update_interval; }
+void DenseSLAM::set_mesh_upload_budget(int p_triangles) { mesh_upload_budget = p_triangles; }
+int DenseSLAM::get_mesh_upload_budget() const { return mesh_upload_budget; }
 
 // ---------------------------------------------------------------- results
 
@@ -230,15 +230,56 @@ Ref<ImageTexture> DenseSLAM::get_camera_image_texture() const {
 
 void DenseSLAM::take_mesh() {
 	const std::shared_ptr<const DenseMeshSnapshot> snapshot = engine ? engine->dense_mesh() : nullptr;
-	if (!snapshot || snapshot->version == taken_mesh) {
+	if (snapshot && snapshot != shown_mesh) {
+		shown_mesh = snapshot;
+	}
+	show_chunks();
+	if (shown_mesh && shown_mesh->version != taken_mesh) {
+		taken_mesh = shown_mesh->version;
+		emit_signal("mesh_updated");
+	}
+}
+
+// Brings the displayed regions up to the newest snapshot: regions gone are removed at once;
+// changed ones are converted until mesh_upload_budget triangles this frame, the rest next frame.
+void DenseSLAM::show_chunks() {
+	if (mesh_root == nullptr || !shown_mesh) {
 		return;
 	}
-	taken_mesh = snapshot->version;
-	mesh->clear_surfaces();
-	if (!snapshot->mesh.indices.empty()) {
-		mesh->add_surface_from_arrays(Mesh::PRIMITIVE_TRIANGLES, to_surface_arrays(snapshot->mesh));
+	std::map<glm::ivec3, const DenseMeshChunk *, IvecLess> current;
+	for (const DenseMeshChunk &chunk : shown_mesh->chunks) {
+		current[chunk.region] = &chunk;
 	}
-	emit_signal("mesh_updated");
+	for (auto it = chunk_views.begin(); it != chunk_views.end();) {
+		if (current.count(it->first) == 0) {
+			it->second.instance->queue_free();
+			it = chunk_views.erase(it);
+		} else {
+			++it;
+		}
+	}
+	size_t uploaded = 0;
+	for (const auto &[region, chunk] : current) {
+		ChunkView &view = chunk_views[region];
+		if (view.version == chunk->version) {
+			continue;
+		}
+		if (mesh_upload_budget > 0 && uploaded >= size_t(mesh_upload_budget)) {
+			break;
+		}
+		if (view.instance == nullptr) {
+			view.instance = memnew(MeshInstance3D);
+			view.instance->set_layer_mask(mesh_layers);
+			view.instance->set_material_override(material);
+			mesh_root->add_child(view.instance, false, Node::INTERNAL_MODE_FRONT);
+		}
+		Ref<ArrayMesh> piece;
+		piece.instantiate();
+		piece->add_surface_from_arrays(Mesh::PRIMITIVE_TRIANGLES, to_surface_arrays(*chunk->mesh));
+		view.instance->set_mesh(piece);
+		view.version = chunk->version;
+		uploaded += chunk->mesh->indices.size() / 3;
+	}
 }
 
 void DenseSLAM::update_mesh() {
@@ -246,7 +287,11 @@ void DenseSLAM::update_mesh() {
 		return;
 	}
 	engine->update_dense_mesh();
+	// Asked for explicitly: every region now, whatever the per-frame budget.
+	const int budget = mesh_upload_budget;
+	mesh_upload_budget = 0;
 	take_mesh();
+	mesh_upload_budget = budget;
 }
 
 void DenseSLAM::reset() {
@@ -255,6 +300,11 @@ void DenseSLAM::reset() {
 		engine->edit_config([](LiveRoomConfig &) {});
 		engine->apply_config();
 	}
+	for (auto &[region, view] : chunk_views) {
+		view.instance->queue_free();
+	}
+	chunk_views.clear();
+	shown_mesh.reset();
 	mesh->clear_surfaces();
 	last_frame.reset();
 	taken_sequence = taken_mesh = 0;
@@ -296,7 +346,18 @@ Dictionary DenseSLAM::get_stats() const {
 	return d;
 }
 
-Ref<ArrayMesh> DenseSLAM::get_mesh() const { return mesh; }
+// The whole mesh as one surface, converted on request (scripts, tests): the display itself uses
+// the regions (show_chunks), so this costs nothing unless asked for.
+Ref<ArrayMesh> DenseSLAM::get_mesh() const {
+	if (shown_mesh && shown_mesh->version != whole_mesh_version) {
+		whole_mesh_version = shown_mesh->version;
+		mesh->clear_surfaces();
+		if (shown_mesh->mesh && !shown_mesh->mesh->indices.empty()) {
+			mesh->add_surface_from_arrays(Mesh::PRIMITIVE_TRIANGLES, to_surface_arrays(*shown_mesh->mesh));
+		}
+	}
+	return mesh;
+}
 
 // ---------------------------------------------------------------- placement (Embree)
 
@@ -364,6 +425,8 @@ void DenseSLAM::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_mesh_layers"), &DenseSLAM::get_mesh_layers);
 	ClassDB::bind_method(D_METHOD("set_mesh_update_interval", "frames"), &DenseSLAM::set_mesh_update_interval);
 	ClassDB::bind_method(D_METHOD("get_mesh_update_interval"), &DenseSLAM::get_mesh_update_interval);
+	ClassDB::bind_method(D_METHOD("set_mesh_upload_budget", "triangles"), &DenseSLAM::set_mesh_upload_budget);
+	ClassDB::bind_method(D_METHOD("get_mesh_upload_budget"), &DenseSLAM::get_mesh_upload_budget);
 	ClassDB::bind_method(D_METHOD("process_rig_frame"), &DenseSLAM::process_rig_frame);
 	ClassDB::bind_method(D_METHOD("get_camera_image_texture"), &DenseSLAM::get_camera_image_texture);
 	ClassDB::bind_method(D_METHOD("get_tracking_state"), &DenseSLAM::get_tracking_state);
@@ -387,6 +450,7 @@ void DenseSLAM::_bind_methods() {
 	ADD_GROUP("Mesh", "mesh_");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "mesh_layers", PROPERTY_HINT_LAYERS_3D_RENDER), "set_mesh_layers", "get_mesh_layers");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "mesh_update_interval", PROPERTY_HINT_RANGE, "1,300,1,suffix:frames"), "set_mesh_update_interval", "get_mesh_update_interval");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "mesh_upload_budget", PROPERTY_HINT_RANGE, "0,1000000,1000,suffix:triangles"), "set_mesh_upload_budget", "get_mesh_upload_budget");
 
 	BIND_ENUM_CONSTANT(TRACKING_NOT_STARTED);
 	BIND_ENUM_CONSTANT(TRACKING_GOOD);

@@ -10,6 +10,7 @@
 
 #include <rp_godot/godot.h>
 
+#include <map>
 #include <memory>
 #include <string>
 
@@ -43,6 +44,8 @@ public:
 	int get_max_blocks() const;
 	void set_mesh_layers(uint32_t p_layers);
 	uint32_t get_mesh_layers() const;
+	void set_mesh_upload_budget(int p_triangles);
+	int get_mesh_upload_budget() const;
 	void set_mesh_update_interval(int p_frames);
 	int get_mesh_update_interval() const;
 
@@ -94,14 +97,23 @@ private:
 	std::shared_ptr<LiveRoom> engine;
 	std::string find_warning;
 	uint64_t taken_sequence = 0; // of the last TrackedFrame copied
-	uint64_t taken_mesh = 0; // version of the last dense mesh shown
+	uint64_t taken_mesh = 0; // version of the last dense mesh whose signal was sent
+	std::shared_ptr<const DenseMeshSnapshot> shown_mesh; // the newest snapshot taken
+	mutable uint64_t whole_mesh_version = 0; // of the snapshot get_mesh() last converted
+	struct ChunkView {
+		uint64_t version = 0;
+		godot::MeshInstance3D *instance = nullptr;
+	};
+	std::map<glm::ivec3, ChunkView, IvecLess> chunk_views; // the displayed regions
+	int mesh_upload_budget = 20000;
 	std::shared_ptr<const TrackedFrame> last_frame;
 	int64_t processed = 0;
 	TrackingState tracking_state = TRACKING_NOT_STARTED;
 	std::string tracking_reason;
 
-	godot::Ref<godot::ArrayMesh> mesh;
-	godot::MeshInstance3D *mesh_instance = nullptr;
+	mutable godot::Ref<godot::ArrayMesh> mesh; // the whole mesh, made when get_mesh() asks
+	godot::Node3D *mesh_root = nullptr; // holds one MeshInstance3D per region
+	void show_chunks();
 	godot::Ref<godot::StandardMaterial3D> material;
 	mutable godot::Ref<godot::ImageTexture> camera_image;
 	mutable bool camera_image_wanted = false;
