@@ -71,7 +71,11 @@ func _process(_delta: float) -> void:
 	# The nodes process first (priorities -30 to -10, the probes before this script): this
 	# frame's results are in. The background is the image of the very frame whose pose the AR
 	# camera has, so the two stay in register even when the pipeline lags.
-	var background: Texture2D = _rig.get_rgb_texture() if _true_poses else _slam.get_camera_image_texture()
+	var background: Texture2D
+	if _true_poses:
+		background = _rig.get_rgb_texture()
+	else:
+		background = _slam.get_camera_image_texture()  # RigCapture's textures are then never made
 	if _video.texture != background:
 		_video.texture = background
 	if _true_poses and _rig.has_ground_truth():

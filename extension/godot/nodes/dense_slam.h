@@ -105,7 +105,7 @@ private:
 		godot::MeshInstance3D *instance = nullptr;
 	};
 	std::map<glm::ivec3, ChunkView, IvecLess> chunk_views; // the displayed regions
-	int mesh_upload_budget = 20000;
+	int mesh_upload_budget = 4000;
 	std::shared_ptr<const TrackedFrame> last_frame;
 	int64_t processed = 0;
 	TrackingState tracking_state = TRACKING_NOT_STARTED;
