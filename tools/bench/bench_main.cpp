@@ -158,18 +158,6 @@ std::string figure(bool p_has, double p_value) {
 	return text;
 }
 
-const char *state_name(TrackingState p_state) {
-	switch (p_state) {
-		case TrackingState::Good:
-			return "good";
-		case TrackingState::Poor:
-			return "poor";
-		case TrackingState::Lost:
-			return "lost";
-	}
-	return "?";
-}
-
 // What dense SLAM did over a sequence.
 struct SlamFigures {
 	Series undistort, track, integrate, raycast, process, track_integrate, mesh;
@@ -865,7 +853,7 @@ int bench_live(const Arguments &p_args) {
 	const double real_time_factor = capture_s > 0.0 ? span_s / capture_s : 0.0;
 	std::printf("  real-time factor (recording time / capture time): %.3f\n", real_time_factor);
 	if (last) {
-		std::printf("  last tracked frame: #%llu, %s%s%s\n", (unsigned long long)last->sequence, state_name(last->state), last->reason.empty() ? "" : ": ",
+		std::printf("  last tracked frame: #%llu, %s%s%s\n", (unsigned long long)last->sequence, tracking_state_name(last->state), last->reason.empty() ? "" : ": ",
 				last->reason.c_str());
 	}
 	std::printf("\n");

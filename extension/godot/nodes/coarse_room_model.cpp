@@ -152,6 +152,8 @@ bool CoarseRoomModel::set_atlas_image(const Ref<Image> &p_image) {
 	}
 	engine->apply_config();
 	ERR_FAIL_COND_V_MSG(!engine->set_atlas(atlas), false, String(("The engine has no room: " + engine->configuration_error()).c_str()));
+	hook_atlas = atlas;
+	hook_layout = pushed_layout;
 	take_snapshot();
 	return true;
 }
@@ -249,15 +251,22 @@ void CoarseRoomModel::push_room() {
 	}
 	const glm::dvec3 origin = is_inside_tree() ? to_glm(get_global_position()) : glm::dvec3(0.0);
 	char key[512];
-	std::snprintf(key, sizeof(key), "%d %.9g %.9g %d %d %d %.9g %.9g %.9g|", int(result.ok), ceiling_height, texel_size, int(inpainting),
-			int(lighting_compensation), int(pose_source), origin.x, origin.y, origin.z);
-	std::string state = key;
+	// The atlas layout: what set_atlas_image's texture belongs to.
+	std::snprintf(key, sizeof(key), "%d %.9g %.9g|", int(result.ok), ceiling_height, texel_size);
+	std::string layout = key;
 	for (int64_t i = 0; i < floorplan.size(); i++) {
 		std::snprintf(key, sizeof(key), "%.9g,%.9g;", double(floorplan[i].x), double(floorplan[i].y));
-		state += key;
+		layout += key;
 	}
+	std::snprintf(key, sizeof(key), "%d %d %d %.9g %.9g %.9g|", int(inpainting), int(lighting_compensation), int(pose_source), origin.x, origin.y,
+			origin.z);
+	const std::string state = layout + key;
+	pushed_layout = layout;
 	if (state == pushed) {
 		return; // the same room again (entering the tree, a value set twice): keep the texture
+	}
+	if (layout != hook_layout) {
+		hook_atlas.release(); // a new layout: the texture put in no longer fits
 	}
 	pushed = state;
 	const Floorplan plan = core_floorplan();
@@ -272,10 +281,15 @@ void CoarseRoomModel::push_room() {
 		p_config.coarse.lighting_model = lighting_compensation == LIGHTING_ADDITIVE ? LightingModel::ADDITIVE_PAPER : LightingModel::GAIN_ROBUST;
 		p_config.coarse_poses = pose_source == POSE_SOURCE_DENSE_SLAM ? roomprobe::PoseSource::Tracked : roomprobe::PoseSource::GroundTruth;
 	});
+	shown.reset();
 	if (own_engine) {
 		engine->apply_config();
+		if (!hook_atlas.empty()) {
+			// Moving the room (or another option) keeps the texture set_atlas_image put in.
+			engine->set_atlas(hook_atlas);
+			take_snapshot();
+		}
 	}
-	shown.reset();
 	apply_material();
 }
 

@@ -126,6 +126,9 @@ private:
 	std::string find_warning;
 	std::string pushed; // what push_room last gave the engine, to skip repeats
 	std::shared_ptr<const CoarseSnapshot> shown; // the atlas on the mesh
+	cv::Mat hook_atlas; // the last set_atlas_image texture (a room-only engine puts it back after a reconfigure)
+	std::string hook_layout; // the atlas layout it belongs to
+	std::string pushed_layout; // the atlas layout push_room last gave the engine
 };
 
 } // namespace roomprobe
