@@ -90,12 +90,10 @@ struct LiveRoom::Frames {
 	struct Rgbd {
 		RgbdFrame frame;
 		uint64_t sequence = 0;
-		double arrival_s = 0.0;
 	};
 	struct Fisheye {
 		FisheyeFrame frame;
 		uint64_t sequence = 0;
-		double arrival_s = 0.0;
 	};
 	Mailbox<Rgbd> rgbd;
 	Mailbox<Fisheye> fisheye;
@@ -275,6 +273,7 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 		const std::lock_guard<std::mutex> lock(pose_mutex);
 		tracked.clear();
 	}
+	dense_lighting.reset();
 	{
 		const std::lock_guard<std::mutex> lock(publish_mutex);
 		last_tracked.reset();
@@ -285,7 +284,6 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 	}
 	{
 		const std::lock_guard<std::mutex> lock(probe_mutex);
-		dense_lighting = DenseLighting();
 		for (auto &[id, probe] : probes) {
 			probe->dirty = true;
 			probe->map.reset();
@@ -373,7 +371,7 @@ void LiveRoom::slam_worker() {
 		if (!item) {
 			continue;
 		}
-		process_rgbd(item->frame, item->sequence, item->arrival_s);
+		process_rgbd(item->frame, item->sequence);
 		frames->rgbd_done++;
 	}
 }
@@ -384,7 +382,7 @@ void LiveRoom::coarse_worker() {
 		if (!item) {
 			continue;
 		}
-		process_fisheye(item->frame, item->sequence, item->arrival_s, true);
+		process_fisheye(item->frame, item->sequence, true);
 		frames->fisheye_done++;
 	}
 }
@@ -440,9 +438,9 @@ void LiveRoom::push_rgbd(RgbdFrame p_frame) {
 	note_arrival(sequence, arrival, &counters.rgbd_pushed, &rgbd_arrivals);
 	const std::shared_lock<std::shared_mutex> shared(lifecycle);
 	if (running) {
-		frames->rgbd.put(Frames::Rgbd{ std::move(p_frame), sequence, arrival });
+		frames->rgbd.put(Frames::Rgbd{ std::move(p_frame), sequence });
 	} else if (configured && cfg.has_rig) {
-		process_rgbd(p_frame, sequence, arrival);
+		process_rgbd(p_frame, sequence);
 	}
 }
 
@@ -452,9 +450,9 @@ void LiveRoom::push_fisheye(FisheyeFrame p_frame) {
 	note_arrival(sequence, arrival, &counters.fisheye_pushed, &fisheye_arrivals);
 	const std::shared_lock<std::shared_mutex> shared(lifecycle);
 	if (running) {
-		frames->fisheye.put(Frames::Fisheye{ std::move(p_frame), sequence, arrival });
+		frames->fisheye.put(Frames::Fisheye{ std::move(p_frame), sequence });
 	} else if (configured && cfg.has_rig) {
-		process_fisheye(p_frame, sequence, arrival, false);
+		process_fisheye(p_frame, sequence, false);
 	}
 }
 
@@ -473,8 +471,7 @@ void LiveRoom::record_error(const std::string &p_stage, const std::string &p_wha
 	counters.last_error = p_stage + ": " + p_what;
 }
 
-void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence, double p_arrival_s) {
-	(void)p_arrival_s;
+void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence) {
 	try {
 		auto out = std::make_shared<TrackedFrame>();
 		out->sequence = p_sequence;
@@ -501,7 +498,7 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence, doubl
 			out->inlier_fraction = result.tracking.inlier_fraction;
 			out->rmse_m = result.tracking.rmse_m;
 			out->timings = result.timings;
-			out->has_pose = slam->frame_count() > 0 && (result.integrated || slam->integrated_count() > 0);
+			out->has_pose = slam->integrated_count() > 0; // the model exists, so the pose means something
 			out->world_from_camera = slam->pose();
 			if (result.tracking.state != TrackingState::Lost && out->has_pose) {
 				std::string error;
@@ -560,8 +557,7 @@ bool LiveRoom::fisheye_pose(double p_fisheye_timestamp_s, Pose *r_world_from_fis
 	return fisheye_pose_at(tracked, cfg.rig, p_fisheye_timestamp_s, r_world_from_fisheye, r_error, cfg.fisheye_extrapolation_s);
 }
 
-void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence, double p_arrival_s, bool p_wait_for_pose) {
-	(void)p_arrival_s;
+void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence, bool p_wait_for_pose) {
 	if (!coarse) {
 		return;
 	}
@@ -707,14 +703,7 @@ Cubemap LiveRoom::render_map(const glm::dvec3 &p_position, int p_size, const Coa
 		options.scale = cfg.dense_render_scale;
 		options.lut = rgb_lut_active ? &rgb_lut : nullptr;
 		const auto reading = slam->read_lock(); // no frame half-fused
-		LightingChange change;
-		{
-			const std::lock_guard<std::mutex> lock(probe_mutex);
-			change = dense_lighting.update(slam->integrated_count(), cumulative);
-		}
-		options.gain = change.gain;
-		options.offset = change.offset;
-		*r_dense = render_dense_over(slam->volume(), p_position, options, &map);
+		*r_dense = dense_lighting.render_over(slam->volume(), slam->integrated_count(), cumulative, p_position, options, &map);
 	}
 	*r_dense_ms = ms_since(start);
 	r_dense->milliseconds = *r_dense_ms;
@@ -793,16 +782,17 @@ Cubemap LiveRoom::render_at(const glm::dvec3 &p_position, int p_size, bool p_com
 		const std::lock_guard<std::mutex> lock(publish_mutex);
 		snapshot = last_coarse;
 	}
+	const CoarseSnapshot *source = snapshot.get();
 	CoarseSnapshot raw;
 	if (!p_completed && coarse && !running) {
 		// The observations alone (no inpainting), straight from the pipeline: nothing writes it now.
 		raw.atlas = coarse->texture().color;
 		raw.cumulative = coarse->cumulative_lighting();
-		snapshot = std::shared_ptr<const CoarseSnapshot>(&raw, [](const CoarseSnapshot *) {});
+		source = &raw;
 	}
 	DenseRenderStats dense;
 	double coarse_ms = 0.0, dense_ms = 0.0;
-	Cubemap map = render_map(p_position, p_size, snapshot.get(), p_with_dense, &dense, &coarse_ms, &dense_ms);
+	Cubemap map = render_map(p_position, p_size, source, p_with_dense, &dense, &coarse_ms, &dense_ms);
 	if (r_dense != nullptr) {
 		*r_dense = dense;
 	}

@@ -243,8 +243,8 @@ private:
 	std::string configure_locked(const LiveRoomConfig &p_config);
 	bool start_locked();
 	void stop_locked();
-	void process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence, double p_arrival_s);
-	void process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence, double p_arrival_s, bool p_wait_for_pose);
+	void process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence);
+	void process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence, bool p_wait_for_pose);
 	// p_generation: input_generation when the render was decided (its inputs are at least that new).
 	std::shared_ptr<const ProbeMap> render_one(int p_probe, const glm::dvec3 &p_position, int p_size, uint64_t p_generation);
 	Cubemap render_map(const glm::dvec3 &p_position, int p_size, const CoarseSnapshot *p_coarse, bool p_with_dense, DenseRenderStats *r_dense,
@@ -281,7 +281,7 @@ private:
 	mutable std::mutex pose_mutex;
 	std::condition_variable pose_advanced;
 	Trajectory tracked;
-	DenseLighting dense_lighting; // under probe_mutex
+	DenseLighting dense_lighting; // thread-safe itself
 
 	// Published results.
 	mutable std::mutex publish_mutex;

@@ -23,11 +23,18 @@ Pose cubemap_face_pose(int p_face, const glm::dvec3 &p_position) {
 }
 
 LightingChange DenseLighting::update(size_t p_fused_frames, const LightingChange &p_cumulative) {
+	const std::lock_guard<std::mutex> lock(mutex);
 	if (p_fused_frames != fused_seen) {
 		fused_seen = p_fused_frames;
 		at_refresh = p_cumulative;
 	}
 	return lighting_since(p_cumulative, at_refresh);
+}
+
+void DenseLighting::reset() {
+	const std::lock_guard<std::mutex> lock(mutex);
+	fused_seen = 0;
+	at_refresh = LightingChange();
 }
 
 DenseRenderStats DenseLighting::render_over(const TsdfVolume &p_volume, size_t p_fused_frames, const LightingChange &p_cumulative,

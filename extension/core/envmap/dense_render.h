@@ -18,6 +18,7 @@
 #include <slam/tsdf_volume.h>
 
 #include <array>
+#include <mutex>
 
 namespace roomprobe {
 
@@ -54,8 +55,13 @@ public:
 	// update(), then render_dense_over with that change as p_options' gain and offset.
 	DenseRenderStats render_over(const TsdfVolume &p_volume, size_t p_fused_frames, const LightingChange &p_cumulative,
 			const glm::dvec3 &p_position, DenseRenderOptions p_options, Cubemap *io_cubemap);
+	// Forgets the refresh (a new dense model).
+	void reset();
 
 private:
+	// update() may be called by several renderers at once (the live engine's probe worker and a
+	// synchronous render); the render itself needs no lock.
+	std::mutex mutex;
 	size_t fused_seen = 0;
 	LightingChange at_refresh; // identity
 };

@@ -217,7 +217,8 @@ uint32_t CoarseRoomModel::get_room_layers() const { return room_layers; }
 // ---------------------------------------------------------------- the engine
 
 void CoarseRoomModel::connect_engine() {
-	Node *capture = is_inside_tree() ? find_collaborator(*this, rig_capture_path, "RigCapture", "rig_capture", &find_warning) : nullptr;
+	std::string unused; // get_warnings() reports it
+	Node *capture = is_inside_tree() ? find_collaborator(*this, rig_capture_path, "RigCapture", "rig_capture", &unused) : nullptr;
 	std::shared_ptr<LiveRoom> found = live_room_of(capture);
 	if (found && found == engine) {
 		return;
@@ -304,7 +305,8 @@ bool CoarseRoomModel::take_snapshot() {
 }
 
 bool CoarseRoomModel::integrate_rig_frame() {
-	if (is_inside_tree() && (!engine || own_engine) && find_collaborator(*this, rig_capture_path, "RigCapture", "rig_capture", &find_warning) != nullptr) {
+	std::string unused; // get_warnings() reports it
+	if (is_inside_tree() && (!engine || own_engine) && find_collaborator(*this, rig_capture_path, "RigCapture", "rig_capture", &unused) != nullptr) {
 		connect_engine(); // the RigCapture may have come later
 	}
 	const uint64_t before = shown ? shown->frames : 0;

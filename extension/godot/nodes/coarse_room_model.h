@@ -123,7 +123,6 @@ private:
 
 	std::shared_ptr<LiveRoom> engine;
 	bool own_engine = false; // no RigCapture: a room-only engine
-	std::string find_warning;
 	std::string pushed; // what push_room last gave the engine, to skip repeats
 	std::shared_ptr<const CoarseSnapshot> shown; // the atlas on the mesh
 	cv::Mat hook_atlas; // the last set_atlas_image texture (a room-only engine puts it back after a reconfigure)

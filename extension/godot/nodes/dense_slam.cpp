@@ -34,8 +34,9 @@ Array to_surface_arrays(const TriangleMesh &p_mesh) {
 	vertices.resize(n);
 	normals.resize(n);
 	colors.resize(n);
-	std::memcpy(vertices.ptrw(), p_mesh.vertices.data(), size_t(n) * sizeof(Vector3));
-	std::memcpy(normals.ptrw(), p_mesh.normals.data(), size_t(n) * sizeof(Vector3));
+	// Vector3 has constructors but is three floats, as glm::vec3 is: a byte copy is exact.
+	std::memcpy(static_cast<void *>(vertices.ptrw()), p_mesh.vertices.data(), size_t(n) * sizeof(Vector3));
+	std::memcpy(static_cast<void *>(normals.ptrw()), p_mesh.normals.data(), size_t(n) * sizeof(Vector3));
 	Color *c = colors.ptrw();
 	for (int64_t i = 0; i < n; i++) {
 		const glm::u8vec3 &v = p_mesh.colors[size_t(i)];
@@ -88,7 +89,8 @@ void DenseSLAM::_process(double p_delta) {
 // ---------------------------------------------------------------- the engine
 
 void DenseSLAM::connect_engine() {
-	Node *capture = find_collaborator(*this, capture_path, "RigCapture", "capture", &find_warning);
+	std::string unused; // get_warnings() reports it
+	Node *capture = find_collaborator(*this, capture_path, "RigCapture", "capture", &unused);
 	std::shared_ptr<LiveRoom> found = live_room_of(capture);
 	if (found == engine) {
 		return;

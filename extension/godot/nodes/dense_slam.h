@@ -95,7 +95,6 @@ private:
 	int mesh_update_interval = 15;
 
 	std::shared_ptr<LiveRoom> engine;
-	std::string find_warning;
 	uint64_t taken_sequence = 0; // of the last TrackedFrame copied
 	uint64_t taken_mesh = 0; // version of the last dense mesh whose signal was sent
 	std::shared_ptr<const DenseMeshSnapshot> shown_mesh; // the newest snapshot taken

@@ -272,13 +272,7 @@ void RigCapture::show_frames(bool p_signal) {
 	images_stale = true;
 	if (textures_wanted) {
 		// Only textures someone asked for cost main-thread time.
-		if (changed[STREAM_RGBD]) {
-			show_in_texture(image_from_mat(rgbd_frame.rgb), rgb_texture);
-			show_in_texture(image_from_mat(rgbd_frame.depth_m), depth_texture);
-		}
-		if (changed[STREAM_FISHEYE]) {
-			show_in_texture(image_from_mat(fisheye_frame.image), fisheye_texture);
-		}
+		update_textures(changed[STREAM_RGBD], changed[STREAM_FISHEYE]);
 	}
 	if (p_signal) {
 		for (int s = 0; s < 2; s++) {
@@ -397,15 +391,19 @@ int64_t RigCapture::get_dropped_frame_count() const {
 Ref<ImageTexture> RigCapture::get_rgb_texture() const {
 	if (!textures_wanted) {
 		textures_wanted = true;
-		if (frame_index[STREAM_RGBD] >= 0) {
-			show_in_texture(image_from_mat(rgbd_frame.rgb), rgb_texture);
-			show_in_texture(image_from_mat(rgbd_frame.depth_m), depth_texture);
-		}
-		if (frame_index[STREAM_FISHEYE] >= 0) {
-			show_in_texture(image_from_mat(fisheye_frame.image), fisheye_texture);
-		}
+		update_textures(frame_index[STREAM_RGBD] >= 0, frame_index[STREAM_FISHEYE] >= 0);
 	}
 	return rgb_texture;
+}
+
+void RigCapture::update_textures(bool p_rgbd, bool p_fisheye) const {
+	if (p_rgbd) {
+		show_in_texture(image_from_mat(rgbd_frame.rgb), rgb_texture);
+		show_in_texture(image_from_mat(rgbd_frame.depth_m), depth_texture);
+	}
+	if (p_fisheye) {
+		show_in_texture(image_from_mat(fisheye_frame.image), fisheye_texture);
+	}
 }
 
 Ref<ImageTexture> RigCapture::get_depth_texture() const {

@@ -116,6 +116,8 @@ private:
 	void start_capture();
 	void stop_capture();
 	void show_frames(bool p_signal);
+	// The textures of the newest RGB-D and / or fisheye frame (made on first use).
+	void update_textures(bool p_rgbd, bool p_fisheye) const;
 	void configure_engine();
 	void fail(const std::string &p_message);
 
