@@ -2,6 +2,8 @@
 # Runs inside a private mount namespace (see toolchain.sh): mounts what the root needs,
 # then chroots into it. The mounts vanish with the namespace, so there is nothing to undo.
 # Usage: enter.sh ROOT REPO SHARED CWD CMD [ARGS...]
+# ROOMPROBE_EXTRA_BINDS: more host folders to bind at their own paths, one a line, each before
+# the folders in it (rp_binds_sorted in toolchain.sh: the caller's paths outside the clone).
 set -euo pipefail
 root=$1 repo=$2 shared=$3 cwd=$4
 shift 4
@@ -13,6 +15,9 @@ bind() { # bind SRC at the same path inside the root
 mount -t proc proc "$root/proc"
 mount --rbind /dev "$root/dev"
 mount --rbind /sys "$root/sys"
+while IFS= read -r dir; do
+	[[ -n $dir ]] && bind "$dir"
+done <<<"${ROOMPROBE_EXTRA_BINDS:-}"
 bind "$repo"
 [[ -d $shared ]] && bind "$shared"
 # A cache outside the clone (build outputs, generated data) shared with the host, when asked for.

@@ -3,7 +3,8 @@
 # otherwise a Debian sid root (debootstrap) kept in a cache folder outside the clone.
 #
 # Sourced by ./roomprobe. Public entry point: rp_toolchain_run CMD [ARGS...]
-# runs CMD inside the toolchain with the current directory unchanged.
+# runs CMD inside the toolchain with the current directory unchanged; the folders in RP_BINDS
+# (set by rp_resolve_paths, paths.sh) are bound there at their own paths too.
 #
 # The root is entered in a private mount namespace (unshare, as root) or with
 # bubblewrap (without root). Every mount lives in that namespace only, so it goes
@@ -57,12 +58,37 @@ rp_mirror() {
 	echo "${uri%/}"
 }
 
-# Runs a command inside root $1 as root, with proc, dev, sys and the clone and shared/ at their own paths.
+# Runs a command inside root $1 as root, with proc, dev, sys and the clone and shared/ at their own
+# paths, and the folders in RP_BINDS (rp_resolve_paths) too.
 rp_enter_root() {
 	local root=$1
 	shift
 	[[ $EUID -eq 0 ]] || rp_die "entering the sid root for set-up needs root"
-	unshare --mount --propagation private -- bash "$RP_TOOLCHAIN_DIR/enter.sh" "$root" "$RP_REPO" "$RP_SHARED" "$PWD" "$@"
+	ROOMPROBE_EXTRA_BINDS=$(rp_binds_sorted) unshare --mount --propagation private -- \
+		bash "$RP_TOOLCHAIN_DIR/enter.sh" "$root" "$RP_REPO" "$RP_SHARED" "$PWD" "$@"
+}
+
+# The same without root, by bubblewrap: the root's /tmp is a fresh tmpfs, and HOME is /tmp.
+rp_bwrap_root() {
+	local root=$1 dir
+	shift
+	command -v bwrap >/dev/null 2>&1 || rp_die "without root, entering $root needs bubblewrap (apt-get install bubblewrap)"
+	local binds=()
+	while IFS= read -r dir; do
+		[[ -n $dir ]] && binds+=(--bind "$dir" "$dir")
+	done < <(rp_binds_sorted)
+	binds+=(--bind "$RP_REPO" "$RP_REPO")
+	[[ -d $RP_SHARED ]] && binds+=(--bind "$RP_SHARED" "$RP_SHARED")
+	bwrap --bind "$root" / --proc /proc --dev /dev --ro-bind /sys /sys --tmpfs /tmp \
+		--ro-bind /etc/resolv.conf /etc/resolv.conf "${binds[@]}" --chdir "$PWD" \
+		--setenv HOME /tmp --setenv PATH /usr/local/bin:/usr/bin:/bin -- "$@"
+}
+
+# RP_BINDS one a line, each folder before the folders in it (so that a bind inside another one
+# lands on top of it).
+rp_binds_sorted() {
+	((${#RP_BINDS[@]} > 0)) || return 0
+	printf '%s\n' "${RP_BINDS[@]}" | LC_ALL=C sort -u
 }
 
 # Creates or updates the cached root so that it holds every package in packages.txt.
@@ -99,6 +125,7 @@ rp_ensure_root() {
 	fi
 	cp /etc/resolv.conf "$target/etc/resolv.conf" 2>/dev/null || true
 	rp_log "installing $(rp_packages | wc -l) packages into the root (about 2 minutes the first time)"
+	local RP_BINDS=() # the set-up needs none of the caller's folders
 	# The list reaches the root as a file: the root sees the clone only once enter.sh binds it.
 	rp_packages >"$target/tmp/roomprobe-packages"
 	rp_enter_root "$target" env DEBIAN_FRONTEND=noninteractive sh -c \
@@ -134,11 +161,9 @@ rp_toolchain_run() {
 	if [[ $EUID -eq 0 ]]; then
 		rp_enter_root "$RP_ROOT" "$@"
 	else
-		command -v bwrap >/dev/null 2>&1 || rp_die "without root, entering $RP_ROOT needs bubblewrap (apt-get install bubblewrap)"
-		local binds=(--bind "$RP_REPO" "$RP_REPO")
-		[[ -d $RP_SHARED ]] && binds+=(--bind "$RP_SHARED" "$RP_SHARED")
-		bwrap --bind "$RP_ROOT" / --proc /proc --dev /dev --ro-bind /sys /sys --tmpfs /tmp \
-			--ro-bind /etc/resolv.conf /etc/resolv.conf "${binds[@]}" --chdir "$PWD" \
-			--setenv HOME /tmp --setenv PATH /usr/local/bin:/usr/bin:/bin -- "$@"
+		rp_bwrap_root "$RP_ROOT" "$@"
 	fi
 }
+
+# shellcheck source=tools/toolchain/paths.sh
+source "$RP_TOOLCHAIN_DIR/paths.sh"
