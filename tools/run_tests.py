@@ -2,6 +2,8 @@
 """RoomProbe's test runner: ./roomprobe test [OPTIONS] runs it inside the toolchain.
 
 Suites, in order (see tests/README.md):
+  host       tests/host/test_paths.sh: ./roomprobe's path arguments from outside the clone; run on the
+             host by ./roomprobe test before this runner, which reports them (--host-results)
   build      scons -j<nproc> tests=yes (or the arguments in $ROOMPROBE_SCONS_ARGS / --scons-args)
   core       every build/tests/*_tests (doctest) program
   editor     godot --headless --editor --quit: a fresh copy of the project and the project itself
@@ -28,7 +30,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import rp_godot as rp  # noqa: E402
 
-SUITES = ["build", "core", "editor", "godot", "rendering"]
+SUITES = ["host", "build", "core", "editor", "godot", "rendering"]
 LOGS = os.path.join(rp.BUILD, "test-logs")
 
 BUILD_TIMEOUT = 3600
@@ -45,6 +47,7 @@ GODOT_BAD = re.compile(r"ERROR:|SCRIPT ERROR|leaked|Leaked|ObjectDB instances le
 RUNNER_LINE = re.compile(r"^\[(PASS|FAIL|SKIP|EXPECTED-ERROR|KNOWN-ENGINE-LEAK)\] ")
 RESULT = re.compile(r"^\[(PASS|FAIL|SKIP)\] (\S+)(?:: (.*))?$")
 SUMMARY = re.compile(r"^GODOT_TESTS (\d+) passed, (\d+) failed, (\d+) skipped$")
+HOST_SUMMARY = re.compile(r"^HOST_TESTS (\d+) passed, (\d+) failed in ([\d.]+) s$")
 EXPECTED_ERROR = re.compile(r"^\[EXPECTED-ERROR\] (.*)$")
 KNOWN_LEAK = re.compile(r"^\[KNOWN-ENGINE-LEAK\] (\d+) (\S+): (.*)$")
 RD_LEAK = re.compile(r'^WARNING: (\d+) RIDs of type "([^"]+)" were leaked\.')
@@ -81,13 +84,15 @@ class Suite:
 
 
 def main():
+    # No abbreviated options: ./roomprobe reads --suite and --filter itself to run the host suite.
     ap = argparse.ArgumentParser(prog="./roomprobe test", description=__doc__.split("\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter, allow_abbrev=False,
                                  epilog="suites: " + ", ".join(SUITES))
     ap.add_argument("--suite", action="append", choices=SUITES,
                     help="run only this suite (repeatable); the build and the editor import still run first as "
                          "prerequisites, counted only when they fail")
-    ap.add_argument("--filter", metavar="SUBSTRING", help="godot suites: run only tests whose 'file::test' contains SUBSTRING")
+    ap.add_argument("--filter", metavar="SUBSTRING",
+                    help="godot and host suites: run only tests whose 'file::test' (host: 'host::test') contains SUBSTRING")
     ap.add_argument("-k", metavar="PATTERN", help="core suite: doctest -tc=PATTERN (test case names, wildcards * ?)")
     ap.add_argument("--no-build", action="store_true", help="skip the build (use what is built)")
     ap.add_argument("--scons-args", metavar="ARGS",
@@ -96,6 +101,8 @@ def main():
                     help="build the core test program with -fsanitize=thread (or address,undefined) into "
                          "build/<target>-tsan|asan/ and run only the core suite under it")
     ap.add_argument("-v", "--verbose", action="store_true", help="show every output line of every step")
+    ap.add_argument("--host-results", metavar="FILE",
+                    help="the host suite's results, written by tests/host/test_paths.sh (./roomprobe test passes it)")
     opts = ap.parse_args()
     if opts.sanitize and set(opts.suite or ["core"]) - {"build", "core"}:
         ap.error("--sanitize runs only the core suite (and the build)")
@@ -108,8 +115,13 @@ def main():
     def counted(name):
         return name in selected
 
-    # build
-    if not opts.no_build:
+    # host: already run by ./roomprobe test, outside the toolchain
+    if counted("host"):
+        results.append(suite_host(opts))
+        start -= results[-1].seconds  # the total time includes it
+
+    # build, unless only the host suite was asked for
+    if not opts.no_build and set(selected) != {"host"}:
         s = suite_build(opts)
         if counted("build") or s.failed:
             results.append(s)
@@ -127,20 +139,60 @@ def main():
         if s.failed and not os.path.isdir(os.path.join(rp.PROJECT, ".godot")):
             return finish(results, start)
 
-    # With --filter and more than one Godot suite, a suite whose files hold no matching test
-    # is not a failure; no match in any of them is (checked below).
-    godot_suites = [n for n in ("godot", "rendering") if counted(n)]
-    allow_empty = bool(opts.filter) and len(godot_suites) > 1
+    # With --filter and more than one suite that it filters, a suite with no matching test is not
+    # a failure; no match in any of them is (checked below).
+    filtered = [n for n in ("godot", "rendering", "host") if counted(n)]
+    allow_empty = bool(opts.filter) and len(filtered) > 1
     ran_godot = []
     if counted("godot"):
         ran_godot.append(suite_godot(opts, rendering=False, allow_empty=allow_empty))
     if counted("rendering"):
         ran_godot.append(suite_godot(opts, rendering=True, allow_empty=allow_empty))
     results += ran_godot
-    ran = [s for s in ran_godot if s.ran]
-    if allow_empty and ran and sum(s.passed + s.failed + s.skipped for s in ran) == 0:
+    ran = [s for s in results if s.ran and s.name in filtered]
+    if opts.filter and ran and sum(s.passed + s.failed + s.skipped for s in ran) == 0:
         ran[0].fail(f"no test matched --filter '{opts.filter}'")
     return finish(results, start)
+
+
+# ---------------------------------------------------------------------------------- host
+
+
+def suite_host(opts):
+    """The results tests/host/test_paths.sh wrote ('[PASS] host::test', '[FAIL] host::test: why', then
+    'HOST_TESTS N passed, N failed in S s'). ./roomprobe test runs it on the host first, since the
+    paths it tests are not visible in here; its output has been printed already."""
+    s = Suite("host")
+    s.logs.append(os.path.join(LOGS, "host.log"))
+    if not opts.host_results:
+        s.notes.append("the host suite runs only from ./roomprobe test, outside the toolchain")
+        return s
+    s.ran = True
+    try:
+        with open(opts.host_results) as f:
+            lines = f.read().splitlines()
+    except OSError as e:
+        s.fail(f"host: no results ({e.strerror}: {rp.relpath(opts.host_results)})")
+        return s
+    summary = None
+    for line in lines:
+        m = RESULT.match(line)
+        if m:
+            if m.group(1) == "PASS":
+                s.passed += 1
+            elif m.group(1) == "FAIL":
+                s.fail(f"{m.group(2)}: {m.group(3)}" if m.group(3) else m.group(2))
+            else:
+                s.skipped += 1
+        m = HOST_SUMMARY.match(line)
+        if m:
+            summary = (int(m.group(1)), int(m.group(2)))
+            s.seconds = float(m.group(3))
+    if summary is None:
+        s.fail("host: tests/host/test_paths.sh ended without its HOST_TESTS line")
+    elif summary != (s.passed, len(s.failures)):
+        s.fail(f"host: HOST_TESTS says {summary}, the result lines say {(s.passed, len(s.failures))}")
+    return s
 
 
 # ---------------------------------------------------------------------------------- build

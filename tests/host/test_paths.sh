@@ -1,0 +1,172 @@
+#!/usr/bin/env bash
+# The host suite: ./roomprobe's path arguments from outside the clone (tools/toolchain/paths.sh).
+# These run on the host, where the paths live, not inside the toolchain like the other suites:
+# ./roomprobe test runs this first, and tools/run_tests.py reports its results as the 'host' suite.
+#
+# Usage: tests/host/test_paths.sh [--filter SUBSTRING] RESULTS LOG
+# Runs the tests whose name ('host::...') contains SUBSTRING (default: all). RESULTS gets one
+# '[PASS] name' or '[FAIL] name: why' line a test, then 'HOST_TESTS N passed, N failed in S s';
+# LOG gets every command and its output.
+# Each test runs ./roomprobe verbs on a scratch folder from mktemp -d, outside the clone.
+set -uo pipefail
+
+repo=$(cd "$(dirname "$(readlink -f "$0")")/../.." && pwd)
+filter=
+if [[ ${1:-} == --filter ]]; then
+	filter=$2
+	shift 2
+fi
+[[ $# -eq 2 ]] || { echo "usage: $0 [--filter SUBSTRING] RESULTS LOG" >&2; exit 2; }
+results=$(realpath -m -- "$1") log=$(realpath -m -- "$2")
+# shellcheck source=tools/toolchain/toolchain.sh
+source "$repo/tools/toolchain/toolchain.sh"
+kind=$(rp_toolchain_kind) || exit 1
+
+scratch=$(mktemp -d "${TMPDIR:-/tmp}/roomprobe-host-test.XXXXXX") || exit 1
+scratch=$(realpath "$scratch")
+cleanup() {
+	rm -rf -- "$scratch"
+	# The mount points enter.sh made in the root (empty folders), and anything a failed test wrote
+	# there: the path is unique to this run.
+	[[ $kind == host ]] || rm -rf -- "${RP_ROOT:?}$scratch"
+}
+trap cleanup EXIT
+: >"$results"
+: >"$log"
+
+# rp ARGS...: ./roomprobe ARGS from the current folder; its output (both streams) in $out and the
+# log, its exit status in $rc.
+rp() {
+	printf '\n$ (cd %q && ./roomprobe%s)\n' "$PWD" "$(printf ' %q' "$@")" >>"$log"
+	out=$("$repo/roomprobe" "$@" 2>&1)
+	rc=$?
+	printf '%s\n[exit status %d]\n' "$out" "$rc" >>"$log"
+}
+
+# check WHAT COMMAND...: WHAT is one of the test's failures unless COMMAND succeeds.
+check() {
+	"${@:2}" || failures+=("$1")
+}
+says() { grep -qF -- "$1" <<<"$out"; }
+no_files_in_root() { # nothing was written inside the toolchain root at the host path $1
+	[[ $kind == host ]] || [[ -z $(find "$RP_ROOT$1" ! -type d 2>/dev/null | head -n1) ]]
+}
+png_count() { find "$1" -maxdepth 1 -name '*.png' 2>/dev/null | wc -l; }
+frame_lines() { local n; n=$(grep -cv '^#' "$1" 2>/dev/null); echo "${n:-0}"; }
+
+# A TUM RGB-D sequence of 3 frames (tests/host/make_tum.py), made by the toolchain's Python in the
+# clone, then copied out of it: $scratch/tum-seq.
+tum_sequence() {
+	[[ -d $scratch/tum-seq ]] && return 0
+	local made=$repo/build/test-data/host-tum
+	rm -rf -- "$made"
+	rp shell python3 tests/host/make_tum.py "$made" 3 && cp -r -- "$made" "$scratch/tum-seq"
+}
+
+test_synth_out_outside_clone() {
+	local dir=$scratch/synth
+	rp synth --scene living_room --out "$dir" --seconds 0.2 --cubemap-size 8 --no-calibration --seed 3
+	check "synth exited with status $rc" test "$rc" -eq 0
+	check "synth did not print '-> $dir'" says "-> $dir"
+	local f
+	for f in rig.yaml room.yaml synth.yaml rgb.txt depth.txt fisheye.txt groundtruth/rgb_trajectory.txt groundtruth/cubemaps.txt; do
+		check "no $dir/$f" test -s "$dir/$f"
+	done
+	check "rgb/ holds $(png_count "$dir/rgb") PNGs for $(frame_lines "$dir/rgb.txt") lines of rgb.txt" \
+		test "$(png_count "$dir/rgb")" -eq "$(frame_lines "$dir/rgb.txt")"
+	check "no RGB frames" test "$(png_count "$dir/rgb")" -gt 0
+	check "rgb/000000.png is not a PNG" grep -q PNG <(head -c 8 "$dir/rgb/000000.png" 2>/dev/null)
+	check "files written inside the toolchain root at $RP_ROOT$dir" no_files_in_root "$dir"
+}
+
+test_eval_outside_clone() {
+	local rec=$scratch/synth
+	if [[ ! -d $rec ]]; then # when run alone
+		rp synth --scene living_room --out "$rec" --seconds 0.2 --cubemap-size 8 --no-calibration --seed 3
+		check "synth exited with status $rc" test "$rc" -eq 0
+	fi
+	rp eval --recording "$rec" --out "$scratch/eval" --cubemap-size 8 --max-cubemaps 1 --no-dense --quiet
+	check "eval exited with status $rc" test "$rc" -eq 0
+	check "no 'baseline' row in eval's table" grep -q '^baseline' <<<"$out"
+	check "no $scratch/eval/ground_truth.exr" test -s "$scratch/eval/ground_truth.exr"
+	check "no $scratch/eval/coarse_inpaint.png" test -s "$scratch/eval/coarse_inpaint.png"
+	check "files written inside the toolchain root at $RP_ROOT$scratch/eval" no_files_in_root "$scratch/eval"
+}
+
+test_bench_tum_outside_clone() {
+	tum_sequence || { failures+=("could not make the TUM sequence (see the log)"); return; }
+	rp bench slam --tum "$scratch/tum-seq" --frames 3
+	check "bench exited with status $rc" test "$rc" -eq 0
+	check "bench did not read $scratch/tum-seq" says "roomprobe_bench slam --tum $scratch/tum-seq"
+	check "no 'summary: mode=tum frames=3' line" grep -q '^summary: mode=tum frames=3 ' <<<"$out"
+}
+
+test_relative_paths_from_another_folder() {
+	tum_sequence || { failures+=("could not make the TUM sequence (see the log)"); return; }
+	mkdir -p "$scratch/work"
+	cd "$scratch/work" || return
+	rp synth --scene two_rooms --out rel-out --seconds 0.1 --cubemap-size 8 --no-calibration
+	check "synth exited with status $rc" test "$rc" -eq 0
+	check "synth did not print '-> $scratch/work/rel-out'" says "-> $scratch/work/rel-out"
+	rp bench slam --tum ../tum-seq --frames 1
+	check "bench exited with status $rc" test "$rc" -eq 0
+	check "bench did not read $scratch/tum-seq" says "roomprobe_bench slam --tum $scratch/tum-seq"
+	cd "$repo" || return
+	check "no $scratch/work/rel-out/rgb.txt" test -s "$scratch/work/rel-out/rgb.txt"
+	check "rel-out was made in the clone" test ! -e "$repo/rel-out"
+	check "files written inside the toolchain root at $RP_ROOT$scratch/work" no_files_in_root "$scratch/work"
+}
+
+test_missing_parent_refused() {
+	local out_dir=$scratch/missing/out
+	rp synth --scene living_room --out "$out_dir" --seconds 0.1
+	check "synth --out with a missing parent exited with status $rc" test "$rc" -ne 0
+	check "the message does not name 'synth --out $out_dir'" says "error: synth --out $out_dir: the folder $scratch/missing does not exist"
+	rp synth --scene living_room "--out=$out_dir"
+	check "synth --out=... with a missing parent exited with status $rc" test "$rc" -ne 0
+	check "the message does not name 'synth --out $out_dir' (--out=)" says "error: synth --out $out_dir:"
+	rp bench slam --tum "$scratch" --save-trajectory "$scratch/missing/trajectory.txt"
+	check "bench --save-trajectory with a missing folder exited with status $rc" test "$rc" -ne 0
+	check "the message does not name 'bench --save-trajectory'" says "error: bench --save-trajectory $scratch/missing/trajectory.txt: the folder $scratch/missing does not exist"
+	check "$scratch/missing was made" test ! -e "$scratch/missing"
+}
+
+test_unusable_paths_refused() {
+	rp bench slam --tum "$scratch/no-such-sequence"
+	check "bench --tum with a missing folder exited with status $rc" test "$rc" -ne 0
+	check "the message does not name 'bench --tum'" says "error: bench --tum $scratch/no-such-sequence: no such file or folder"
+	# An output folder to be made must not be made when another argument is refused.
+	rp synth --scene living_room --out "$scratch/not-made" --rig "$scratch/no-such-rig.yaml"
+	check "synth with a missing --rig exited with status $rc" test "$rc" -ne 0
+	check "the message does not name 'synth --rig'" says "error: synth --rig $scratch/no-such-rig.yaml: no such file or folder"
+	check "--out was made although --rig was refused" test ! -e "$scratch/not-made"
+	if [[ $kind == sysroot ]]; then # the host's own toolchain sees every path: nothing to refuse
+		rp synth --scene living_room --out /proc/roomprobe-host-test
+		check "synth --out /proc/... exited with status $rc" test "$rc" -ne 0
+		check "the message does not name 'synth --out /proc/...'" says "error: synth --out /proc/roomprobe-host-test: the toolchain root has its own /proc"
+	fi
+}
+
+tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused)
+passed=0 failed=0 start=$(date +%s.%N)
+for t in "${tests[@]}"; do
+	name=host::$t
+	[[ $name == *"$filter"* ]] || continue
+	printf '\n### %s\n' "$name" >>"$log"
+	failures=()
+	cd "$repo" || exit 1
+	"test_$t"
+	if ((${#failures[@]} == 0)); then
+		line="[PASS] $name"
+		passed=$((passed + 1))
+	else
+		line="[FAIL] $name: $(printf '%s; ' "${failures[@]}")"
+		line=${line%; }
+		failed=$((failed + 1))
+	fi
+	echo "$line" >>"$results"
+	echo "    $line"
+done
+seconds=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
+echo "HOST_TESTS $passed passed, $failed failed in $seconds s" >>"$results"
+((failed == 0))
