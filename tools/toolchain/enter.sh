@@ -2,8 +2,8 @@
 # Runs inside a private mount namespace (see toolchain.sh): mounts what the root needs,
 # then chroots into it. The mounts vanish with the namespace, so there is nothing to undo.
 # Usage: enter.sh ROOT REPO SHARED CWD CMD [ARGS...]
-# ROOMPROBE_EXTRA_BINDS: more host folders to bind at their own paths, one a line, each before
-# the folders in it (rp_binds_sorted in toolchain.sh: the caller's paths outside the clone).
+# ROOMPROBE_EXTRA_BINDS: more host folders to bind at their own paths, one a line (rp_binds_sorted
+# in toolchain.sh: the folders of the caller's paths outside the clone).
 set -euo pipefail
 root=$1 repo=$2 shared=$3 cwd=$4
 shift 4

@@ -84,11 +84,12 @@ rp_bwrap_root() {
 		--setenv HOME /tmp --setenv PATH /usr/local/bin:/usr/bin:/bin -- "$@"
 }
 
-# RP_BINDS one a line, each folder before the folders in it (so that a bind inside another one
-# lands on top of it).
+# RP_BINDS one a line, sorted, less those inside another one (which the recursive bind of that one
+# shows already).
 rp_binds_sorted() {
 	((${#RP_BINDS[@]} > 0)) || return 0
-	printf '%s\n' "${RP_BINDS[@]}" | LC_ALL=C sort -u
+	printf '%s\n' "${RP_BINDS[@]}" | LC_ALL=C sort -u |
+		awk '{ for (i = 1; i <= n; i++) if ($0 == kept[i] || index($0, kept[i] "/") == 1) next; kept[++n] = $0; print }'
 }
 
 # Creates or updates the cached root so that it holds every package in packages.txt.
