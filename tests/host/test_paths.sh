@@ -7,7 +7,8 @@
 # Runs the tests whose name ('host::...') contains SUBSTRING (default: all). RESULTS gets one
 # '[PASS] name' or '[FAIL] name: why' line a test, then 'HOST_TESTS N passed, N failed in S s';
 # LOG gets every command and its output.
-# Each test runs ./roomprobe verbs on a scratch folder from mktemp -d, outside the clone.
+# Each test runs ./roomprobe verbs on a scratch folder from mktemp -d, outside the clone; none
+# needs ../shared (living_room gets --hdri none).
 set -uo pipefail
 
 repo=$(cd "$(dirname "$(readlink -f "$0")")/../.." && pwd)
@@ -63,11 +64,18 @@ tum_sequence() {
 	rp shell python3 tests/host/make_tum.py "$made" 3 && cp -r -- "$made" "$scratch/tum-seq"
 }
 
+# The synthetic rig with fx 531.25 instead of 525, outside the clone: $scratch/rig/rig.yaml.
+outside_rig() {
+	mkdir -p "$scratch/rig" && sed 's/^  fx: 525.0$/  fx: 531.25/' calib/synthetic_rig.yaml >"$scratch/rig/rig.yaml"
+}
+
 test_synth_out_outside_clone() {
 	local dir=$scratch/synth
-	rp synth --scene living_room --out "$dir" --seconds 0.2 --cubemap-size 8 --no-calibration --seed 3
+	outside_rig
+	rp synth --scene living_room --hdri none --rig "$scratch/rig/rig.yaml" --out "$dir" --seconds 0.2 --cubemap-size 8 --no-calibration --seed 3
 	check "synth exited with status $rc" test "$rc" -eq 0
 	check "synth did not print '-> $dir'" says "-> $dir"
+	check "synth did not use --rig $scratch/rig/rig.yaml (fx 531.25)" grep -q '^ *fx: 531.25$' "$dir/rig.yaml"
 	local f
 	for f in rig.yaml room.yaml synth.yaml rgb.txt depth.txt fisheye.txt groundtruth/rgb_trajectory.txt groundtruth/cubemaps.txt; do
 		check "no $dir/$f" test -s "$dir/$f"
@@ -82,7 +90,7 @@ test_synth_out_outside_clone() {
 test_eval_outside_clone() {
 	local rec=$scratch/synth
 	if [[ ! -d $rec ]]; then # when run alone
-		rp synth --scene living_room --out "$rec" --seconds 0.2 --cubemap-size 8 --no-calibration --seed 3
+		rp synth --scene living_room --hdri none --out "$rec" --seconds 0.2 --cubemap-size 8 --no-calibration --seed 3
 		check "synth exited with status $rc" test "$rc" -eq 0
 	fi
 	rp eval --recording "$rec" --out "$scratch/eval" --cubemap-size 8 --max-cubemaps 1 --no-dense --quiet
@@ -119,10 +127,10 @@ test_relative_paths_from_another_folder() {
 
 test_missing_parent_refused() {
 	local out_dir=$scratch/missing/out
-	rp synth --scene living_room --out "$out_dir" --seconds 0.1
+	rp synth --scene living_room --hdri none --out "$out_dir" --seconds 0.1
 	check "synth --out with a missing parent exited with status $rc" test "$rc" -ne 0
 	check "the message does not name 'synth --out $out_dir'" says "error: synth --out $out_dir: the folder $scratch/missing does not exist"
-	rp synth --scene living_room "--out=$out_dir"
+	rp synth --scene living_room --hdri none "--out=$out_dir"
 	check "synth --out=... with a missing parent exited with status $rc" test "$rc" -ne 0
 	check "the message does not name 'synth --out $out_dir' (--out=)" says "error: synth --out $out_dir:"
 	rp bench slam --tum "$scratch" --save-trajectory "$scratch/missing/trajectory.txt"
@@ -136,12 +144,12 @@ test_unusable_paths_refused() {
 	check "bench --tum with a missing folder exited with status $rc" test "$rc" -ne 0
 	check "the message does not name 'bench --tum'" says "error: bench --tum $scratch/no-such-sequence: no such file or folder"
 	# An output folder to be made must not be made when another argument is refused.
-	rp synth --scene living_room --out "$scratch/not-made" --rig "$scratch/no-such-rig.yaml"
+	rp synth --scene living_room --hdri none --out "$scratch/not-made" --rig "$scratch/no-such-rig.yaml"
 	check "synth with a missing --rig exited with status $rc" test "$rc" -ne 0
 	check "the message does not name 'synth --rig'" says "error: synth --rig $scratch/no-such-rig.yaml: no such file or folder"
 	check "--out was made although --rig was refused" test ! -e "$scratch/not-made"
 	if [[ $kind == sysroot ]]; then # the host's own toolchain sees every path: nothing to refuse
-		rp synth --scene living_room --out /proc/roomprobe-host-test
+		rp synth --scene living_room --hdri none --out /proc/roomprobe-host-test
 		check "synth --out /proc/... exited with status $rc" test "$rc" -ne 0
 		check "the message does not name 'synth --out /proc/...'" says "error: synth --out /proc/roomprobe-host-test: the toolchain root has its own /proc"
 	fi
