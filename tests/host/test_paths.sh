@@ -157,13 +157,22 @@ test_unusable_paths_refused() {
 
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused)
 passed=0 failed=0 start=$(date +%s.%N)
+# The verbs build what they run anyway; building it first says so, and fails once when it does not build.
+echo "    building roomprobe_synth, roomprobe_eval and roomprobe_bench"
+cd "$repo" || exit 1
+rp build -Q build/bin/roomprobe_synth build/bin/roomprobe_eval build/bin/roomprobe_bench
+built=$rc
 for t in "${tests[@]}"; do
 	name=host::$t
 	[[ $name == *"$filter"* ]] || continue
 	printf '\n### %s\n' "$name" >>"$log"
 	failures=()
 	cd "$repo" || exit 1
-	"test_$t"
+	if ((built == 0)); then
+		"test_$t"
+	else
+		failures=("the tools did not build (see $log)")
+	fi
 	if ((${#failures[@]} == 0)); then
 		line="[PASS] $name"
 		passed=$((passed + 1))
