@@ -15,6 +15,7 @@ bind() { # bind SRC at the same path inside the root
 mount -t proc proc "$root/proc"
 mount --rbind /dev "$root/dev"
 mount --rbind /sys "$root/sys"
+# The caller's folders first: should one of them hold the clone, the clone's bind lands on top.
 while IFS= read -r dir; do
 	[[ -n $dir ]] && bind "$dir"
 done <<<"${ROOMPROBE_EXTRA_BINDS:-}"
