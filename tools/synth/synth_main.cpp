@@ -1,6 +1,6 @@
 // roomprobe_synth: renders a synthetic RoomProbe recording with ground truth (extension/core/synth/).
 //
-//   roomprobe_synth --scene two_rooms|living_room --out DIR [--seconds 10] [--seed N]
+//   roomprobe_synth --scene two_rooms|living_room|panorama_room --out DIR [--seconds 10] [--seed N]
 //                   [--rig calib/synthetic_rig.yaml] [--hdri PATH|none] [--cubemap-size 128]
 //                   [--fisheye-rate 12] [--rgbd-rate 30] [--fisheye-hdr] [--exr-float] [--no-calibration]
 //                   [--threads N]
@@ -26,13 +26,15 @@ constexpr const char *DEFAULT_HDRI = "../shared/data/hdri/lebombo_1k.hdr";
 
 void usage(std::FILE *p_out) {
 	std::fprintf(p_out,
-			"usage: roomprobe_synth --scene two_rooms|living_room --out DIR [options]\n"
-			"  --scene NAME        two_rooms (the paper's Figure 4) or living_room\n"
+			"usage: roomprobe_synth --scene two_rooms|living_room|panorama_room --out DIR [options]\n"
+			"  --scene NAME        two_rooms (the paper's Figure 4), living_room, or panorama_room\n"
+			"                      (flat walls showing the panorama, the camera sweeping along one)\n"
 			"  --out DIR           the recording folder; must not exist or be empty\n"
 			"  --seconds S         length of the recording (default 10)\n"
 			"  --seed N            trajectory and noise seed, an unsigned integer (default 1)\n"
 			"  --rig PATH          rig file (default calib/synthetic_rig.yaml)\n"
-			"  --hdri PATH|none    living_room's window view (default %s; none: a procedural sky)\n"
+			"  --hdri PATH|none    living_room's window view, panorama_room's walls (default %s;\n"
+			"                      none: a procedural sky in living_room's window)\n"
 			"  --cubemap-size N    ground-truth cubemap face size in pixels (default 128)\n"
 			"  --rgbd-rate HZ      RGB-D frame rate (default 30)\n"
 			"  --fisheye-rate HZ   fisheye frame rate (default 12)\n"
@@ -104,7 +106,7 @@ int main(int argc, char **argv) {
 			return 0;
 		} else if (arg == "--scene") {
 			if (!value(&scene_name)) {
-				return fail("--scene needs a value (two_rooms or living_room)");
+				return fail("--scene needs a value (two_rooms, living_room or panorama_room)");
 			}
 		} else if (arg == "--out") {
 			if (!value(&out) || out.empty()) {
@@ -164,7 +166,7 @@ int main(int argc, char **argv) {
 		known = known || name == scene_name;
 	}
 	if (!known) {
-		return fail("unknown scene '" + scene_name + "' (known: two_rooms, living_room)");
+		return fail("unknown scene '" + scene_name + "' (known: two_rooms, living_room, panorama_room)");
 	}
 	namespace fs = std::filesystem;
 	std::error_code ec;
@@ -192,6 +194,17 @@ int main(int argc, char **argv) {
 			}
 		}
 		scene_options.panorama_path = hdri == "none" ? "" : hdri;
+	} else if (scene_name == "panorama_room") {
+		if (hdri == "none") {
+			return fail("panorama_room's walls are a panorama: --hdri none does not apply, pass --hdri PATH");
+		}
+		if (!hdri_given) {
+			hdri = DEFAULT_HDRI;
+			if (!fs::exists(hdri, ec)) {
+				return fail(std::string("panorama_room's walls show a panorama, and ") + DEFAULT_HDRI + " is missing: pass --hdri PATH");
+			}
+		}
+		scene_options.panorama_path = hdri;
 	}
 	std::unique_ptr<tbb::global_control> thread_limit;
 	if (threads > 0.0) {
@@ -209,6 +222,9 @@ int main(int argc, char **argv) {
 	std::printf("roomprobe_synth: %s, %.3g s, seed %llu, %d threads -> %s\n", scene_name.c_str(), options.duration_s,
 			static_cast<unsigned long long>(options.seed),
 			static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)), out.c_str());
+	if (scene.scene.panorama_scale > 0.0) {
+		std::printf("  the walls' radiance: %.4g x the panorama (%s)\n", scene.scene.panorama_scale, scene_options.panorama_path.c_str());
+	}
 	const synth::SequenceResult result = synth::write_sequence(out, rig.rig, scene.scene, options);
 	if (!result.ok) {
 		return fail(result.error);

@@ -340,6 +340,10 @@ Color SynthRenderer::emission(const Material &p_material, const Hit &p_hit, cons
 			return p_material.emission_scale;
 		case Emission::Panorama:
 			return p_material.emission_scale * (scene_data.panorama ? scene_data.panorama->lookup(p_direction) : procedural_sky(p_direction));
+		case Emission::ProjectedPanorama: {
+			const glm::dvec3 from_center = p_hit.point - scene_data.panorama_center;
+			return p_material.emission_scale * (scene_data.panorama ? scene_data.panorama->lookup(from_center) : procedural_sky(from_center));
+		}
 		case Emission::Screen: {
 			const double x = p_hit.u_m / std::max(1e-9, p_material.screen_width_m);
 			const double y = p_hit.v_m / std::max(1e-9, p_material.screen_height_m);

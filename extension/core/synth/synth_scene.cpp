@@ -475,10 +475,73 @@ SceneResult make_living_room(const SceneOptions &p_options) {
 	return result;
 }
 
+SceneResult make_panorama_room(const SceneOptions &p_options) {
+	SceneResult result;
+	Scene &scene = result.scene;
+	scene.name = "panorama_room";
+	if (p_options.panorama_path.empty()) {
+		result.error = "panorama_room needs a panorama (SceneOptions::panorama_path, --hdri)";
+		return result;
+	}
+	PanoramaLoadResult panorama = load_panorama(p_options.panorama_path);
+	if (!panorama.ok) {
+		result.error = panorama.error;
+		return result;
+	}
+	scene.panorama = panorama.panorama;
+	scene.has_room = true;
+	scene.room.floorplan = living_room();
+	scene.room.floorplan.ceiling_height_m = 2.6;
+	const double width = 5.0, depth = 4.0, ceiling = scene.room.floorplan.ceiling_height_m;
+	const glm::dvec3 centre(0.5 * width, 0.5 * ceiling, 0.5 * depth);
+	// Unlit: what the RGB camera sees is the photograph itself, with no shading to confuse a
+	// photometric term, and the cubemap at the centre is the panorama (times the scale).
+	scene.panorama_center = centre;
+	scene.panorama_scale = panorama_exposure_scale(*scene.panorama);
+	Material painted = emissive("panorama", Emission::ProjectedPanorama, Color(static_cast<float>(scene.panorama_scale)));
+	painted.unlit = true;
+	const int material = add_material(&scene, painted);
+	scene.room.wall_materials = { material };
+	scene.room.floor_material = material;
+	scene.room.ceiling_material = material;
+	scene.ambient = Color(0.0f);
+	scene.background = Color(0.0f);
+	scene.probe_position = centre;
+	scene.look_target = centre;
+	scene.camera_height_m = 1.4;
+	// In front of wall 0 (z = 0, the panorama's middle: -Z is its centre column), 1.5 m away:
+	// with the RGB-D camera's 63 x 49 degree view, the wall fills the frame.
+	scene.trajectory = TrajectoryKind::WallSweep;
+	scene.wall_sweep.wall_point = { 0.5 * width, 0.0, 0.0 };
+	scene.wall_sweep.normal = { 0.0, 0.0, 1.0 };
+	scene.wall_sweep.half_length_m = 0.9;
+	scene.wall_sweep.distance_m = 1.5;
+	result.ok = true;
+	return result;
+}
+
 } // namespace
 
+double panorama_exposure_scale(const Panorama &p_panorama) {
+	// Rows weighted by sin(polar angle), the solid angle of their texels.
+	double log_sum = 0.0, weight_sum = 0.0;
+	for (int y = 0; y < p_panorama.height; ++y) {
+		const double weight = std::sin(PI * (y + 0.5) / p_panorama.height);
+		for (int x = 0; x < p_panorama.width; ++x) {
+			const float *p = &p_panorama.rgb[(static_cast<size_t>(y) * p_panorama.width + x) * 3];
+			const double luminance = 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+			log_sum += weight * std::log(1e-4 + luminance); // the offset keeps black texels finite
+			weight_sum += weight;
+		}
+	}
+	if (!(weight_sum > 0.0)) {
+		return 1.0;
+	}
+	return PANORAMA_KEY / std::exp(log_sum / weight_sum);
+}
+
 std::vector<std::string> scene_names() {
-	return { "two_rooms", "living_room" };
+	return { "two_rooms", "living_room", "panorama_room" };
 }
 
 SceneResult make_scene(const std::string &p_name, const SceneOptions &p_options) {
@@ -493,8 +556,11 @@ SceneResult make_scene(const std::string &p_name, const SceneOptions &p_options)
 	if (p_name == "living_room") {
 		return make_living_room(p_options);
 	}
+	if (p_name == "panorama_room") {
+		return make_panorama_room(p_options);
+	}
 	SceneResult result;
-	result.error = "unknown scene '" + p_name + "' (known: two_rooms, living_room)";
+	result.error = "unknown scene '" + p_name + "' (known: two_rooms, living_room, panorama_room)";
 	return result;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 // Synthetic scenes for the synthetic rig (paper §5 support): plain data that synth_renderer.h
-// turns into an Embree scene. Two reference scenes: the paper's Figure-4 two rooms and a convex
-// living room. Conventions as in math/pose.h: world Y up, metres.
+// turns into an Embree scene. Three reference scenes: the paper's Figure-4 two rooms, a convex
+// living room, and a bare box room painted with a real panorama (flat walls whose only texture is
+// the photograph, for the dense tracker). Conventions as in math/pose.h: world Y up, metres.
 //
 // Appearance model (see synth_renderer.h): radiance = emitted + albedo * (ambient + direct / pi),
 // all linear RGB. Albedo comes from procedural, deliberately high-frequency textures evaluated
@@ -74,6 +75,9 @@ enum class Emission {
 	Constant, // emission_scale
 	Panorama, // emission_scale * scene.panorama(ray direction): a window onto a scene at infinity
 	Screen, // emission_scale * screen_content(u / screen_width, v / screen_height, time)
+	// emission_scale * scene.panorama(hit point - scene.panorama_center): the panorama painted on
+	// the surface as seen from that point, so that from there the room looks like the photograph.
+	ProjectedPanorama,
 };
 
 struct Material {
@@ -150,6 +154,19 @@ inline bool is_on(double p_from_s, double p_until_s, double p_time_s) {
 
 // ---------------------------------------------------------------- scenes
 
+// How the hand-held camera of a scene's recording moves (HandheldTrajectory, synth_sequence.h).
+enum class TrajectoryKind {
+	Orbit, // round look_target (the table) at orbit_radius_m, looking at it
+	WallSweep, // facing one wall from about wall_sweep.distance_m, sweeping sideways along it
+};
+
+struct WallSweepParams {
+	glm::dvec3 wall_point = glm::dvec3(0.0); // on the wall, at the middle of the sweep (y unused)
+	glm::dvec3 normal = glm::dvec3(0.0, 0.0, 1.0); // the wall's horizontal unit normal, into the room
+	double half_length_m = 0.9; // the sweep goes this far either side of wall_point
+	double distance_m = 1.5; // the camera's mean distance from the wall
+};
+
 struct Scene {
 	std::string name;
 	std::vector<Material> materials;
@@ -161,13 +178,17 @@ struct Scene {
 	std::vector<Light> lights;
 	Color ambient = Color(0.0f); // radiance += albedo * ambient on every lit surface
 	Color background = Color(0.0f); // radiance of rays that hit nothing
-	std::shared_ptr<const Panorama> panorama; // for Emission::Panorama; null: a procedural sky
+	std::shared_ptr<const Panorama> panorama; // for Emission::Panorama and ProjectedPanorama; null: a procedural sky
+	glm::dvec3 panorama_center = glm::dvec3(0.0); // Emission::ProjectedPanorama's point of view
+	double panorama_scale = 0.0; // panorama_room: radiance = panorama_scale x panorama (0: no projected panorama)
 
 	// Where things are, for the sequence and the tests.
 	glm::dvec3 probe_position = glm::dvec3(0.0); // the ground-truth cubemaps' centre
-	glm::dvec3 look_target = glm::dvec3(0.0); // what the hand-held camera looks at (the table)
-	double orbit_radius_m = 1.5; // the hand-held camera's distance from look_target, horizontally
+	TrajectoryKind trajectory = TrajectoryKind::Orbit; // how the hand-held camera moves (synth_sequence.h)
+	glm::dvec3 look_target = glm::dvec3(0.0); // Orbit: what the hand-held camera looks at (the table)
+	double orbit_radius_m = 1.5; // Orbit: the hand-held camera's distance from look_target, horizontally
 	double camera_height_m = 1.45; // its mean height
+	WallSweepParams wall_sweep; // WallSweep: the wall and how far from it
 	glm::dvec3 ceiling_light_center = glm::dvec3(0.0); // the switched light's panel (living_room)
 	double ceiling_light_half_size_m = 0.0; // its half width; 0: there is none
 	double light_switch_s = ALWAYS; // when it switches on
@@ -175,7 +196,9 @@ struct Scene {
 
 struct SceneOptions {
 	double duration_s = 10.0; // the ceiling light (living_room) switches on at duration_s / 2
-	std::string panorama_path; // the window's view (living_room); empty: a procedural sky
+	// The window's view (living_room; empty: a procedural sky), or the photograph the walls show
+	// (panorama_room; required there).
+	std::string panorama_path;
 };
 
 struct SceneResult {
@@ -188,8 +211,17 @@ struct SceneResult {
 // near the probe in the left room, a wardrobe and a bookshelf occluding walls.
 // "living_room": living_room(), a table with objects, a window showing the panorama, a screen
 // whose picture changes, a floor lamp and a ceiling light that switches on half-way.
+// "panorama_room": a bare 5 x 4 x 2.6 m box whose walls, floor and ceiling show the panorama as
+// seen from the room's centre (unlit, scaled by panorama_exposure_scale), and a WallSweep
+// trajectory in front of wall 0 (z = 0).
 SceneResult make_scene(const std::string &p_name, const SceneOptions &p_options);
 std::vector<std::string> scene_names();
+
+// The scale panorama_room puts on its panorama so that 8-bit images at exposure 1 show its
+// texture: PANORAMA_KEY / the panorama's log-average luminance (over the sphere, by solid angle),
+// Reinhard's "key" exposure, so any HDR photograph lands mid-grey on average.
+inline constexpr double PANORAMA_KEY = 0.18;
+double panorama_exposure_scale(const Panorama &p_panorama);
 
 // Adds a material and returns its index.
 int add_material(Scene *r_scene, const Material &p_material);

@@ -183,9 +183,16 @@ void write_pose(cv::FileStorage &p_fs, const std::string &p_name, const Pose &p_
 
 HandheldTrajectory make_handheld_trajectory(const Scene &p_scene, uint64_t p_seed) {
 	HandheldTrajectory trajectory;
+	trajectory.kind = p_scene.trajectory;
 	trajectory.target = p_scene.look_target;
 	trajectory.radius_m = p_scene.orbit_radius_m;
 	trajectory.height_m = p_scene.camera_height_m;
+	trajectory.wall = p_scene.wall_sweep;
+	if (p_scene.trajectory == TrajectoryKind::WallSweep) {
+		// Draws of their own (indices 4, 5), so the orbit's draws stay what they were.
+		trajectory.sweep_period_s = 9.0 + 2.0 * uniform_from(p_seed, 4);
+		trajectory.sweep_sign = uniform_from(p_seed, 5) < 0.5 ? 1.0 : -1.0;
+	}
 	trajectory.start_angle_rad = 2.0 * PI * uniform_from(p_seed, 1);
 	const double speed = 0.3 + 0.15 * uniform_from(p_seed, 2);
 	trajectory.angular_speed_rad_s = uniform_from(p_seed, 3) < 0.5 ? speed : -speed;
@@ -199,6 +206,25 @@ Pose HandheldTrajectory::world_from_rgb(double p_t_s) const {
 	const double t = p_t_s;
 	const auto &p = phases;
 	auto wave = [&](double p_period_s, int p_phase) { return std::sin(2.0 * PI * t / p_period_s + p[p_phase]); };
+	if (kind == TrajectoryKind::WallSweep) {
+		const glm::dvec3 up(0.0, 1.0, 0.0);
+		const glm::dvec3 normal = glm::normalize(glm::dvec3(wall.normal.x, 0.0, wall.normal.z));
+		const glm::dvec3 along = glm::cross(up, normal);
+		// At rest at one end at t = 0, the other at half the period; the hand's own wobble on top.
+		const double s = -sweep_sign * wall.half_length_m * std::cos(2.0 * PI * t / sweep_period_s) + 0.04 * wave(2.7, 0);
+		const double distance = wall.distance_m + 0.22 * wave(6.1, 1) + 0.02 * wave(1.1, 3);
+		const double height = height_m + 0.08 * wave(4.1, 2) + 0.012 * wave(1.3, 3);
+		const glm::dvec3 on_wall(wall.wall_point.x, 0.0, wall.wall_point.z);
+		const glm::dvec3 position = on_wall + s * along + distance * normal + glm::dvec3(0.0, height, 0.0);
+		const double yaw = 0.08 * wave(3.3, 4) + 0.006 * wave(0.37, 8);
+		const double pitch = 0.05 * wave(2.9, 5) + 0.005 * wave(0.41, 9);
+		const double roll = 0.05 * wave(2.3, 7) + 0.004 * wave(0.29, 8);
+		const glm::dvec3 level = std::cos(yaw) * -normal + std::sin(yaw) * along;
+		Pose pose;
+		pose.rotation = look_rotation(std::cos(pitch) * level + std::sin(pitch) * up, roll);
+		pose.translation = position;
+		return pose;
+	}
 	const double angle = start_angle_rad + angular_speed_rad_s * t + 0.08 * wave(3.7, 0);
 	const double radius = radius_m + 0.08 * wave(5.3, 1);
 	const double height = height_m + 0.1 * wave(4.1, 2) + 0.015 * wave(1.3, 3);
@@ -577,6 +603,7 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 		}
 		info << "roomprobe_synth" << 1;
 		info << "scene" << p_scene.name;
+		info << "trajectory" << (p_scene.trajectory == TrajectoryKind::WallSweep ? "wall_sweep" : "orbit");
 		info << "seed" << std::to_string(p_options.seed);
 		info << "duration_s" << p_options.duration_s;
 		info << "rgbd_rate_hz" << p_options.rgbd_rate_hz;
@@ -591,6 +618,10 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 		info << "rgb_exposure" << p_options.rgbd.exposure;
 		info << "depth_noise" << (p_options.rgbd.depth_noise ? 1 : 0);
 		info << "cubemap_ldr_exposure" << p_options.cubemap_ldr_exposure;
+		if (p_scene.panorama_scale > 0.0) {
+			// The surfaces' radiance over the panorama's values (panorama_room).
+			info << "panorama_scale" << p_scene.panorama_scale;
+		}
 	} catch (const cv::Exception &e) {
 		result.error = info_path + ": cannot write (" + e.what() + ")";
 		return result;

@@ -1,8 +1,8 @@
 #pragma once
-// A synthetic recording: a hand-held trajectory of the rig around the table of a synth Scene,
-// RGB-D frames at one rate and fisheye frames at another on their own clock, ground-truth
-// trajectories of both cameras, ground-truth cubemaps at the probe for every fisheye frame
-// (recording/recording_writer.h, docs/recording-format.md), and checkerboard views of both
+// A synthetic recording: a hand-held trajectory of the rig in a synth Scene (round the table, or
+// along a wall), RGB-D frames at one rate and fisheye frames at another on their own clock,
+// ground-truth trajectories of both cameras, ground-truth cubemaps at the probe for every fisheye
+// frame (recording/recording_writer.h, docs/recording-format.md), and checkerboard views of both
 // cameras for calibration (calibration/ in the recording folder).
 
 #include "synth_renderer.h"
@@ -21,16 +21,30 @@ namespace roomprobe::synth {
 
 // ---------------------------------------------------------------- the hand-held trajectory
 
-// A smooth (sums of sines), deterministic orbit around scene.look_target: radius about
-// scene.orbit_radius_m, height about scene.camera_height_m with a sinusoidal bob, the RGB camera
-// looking at the target with small yaw/pitch/roll jitter and tremor. Defined for every t (also
-// outside the recording), so the pose at any instant is exact.
+// A smooth (sums of sines), deterministic hand-held path, of the kind the scene asks for
+// (Scene::trajectory). Defined for every t (also outside the recording), so the pose at any
+// instant is exact.
+//
+// Orbit: round scene.look_target, radius about scene.orbit_radius_m, height about
+// scene.camera_height_m with a sinusoidal bob, the RGB camera looking at the target with small
+// yaw/pitch/roll jitter and tremor.
+//
+// WallSweep: facing the wall of scene.wall_sweep from about distance_m (+- 0.22 m, slowly: the
+// hand moves forward and back), height about scene.camera_height_m, sweeping sideways along the
+// wall from one end of [-half_length_m, half_length_m] about wall_point to the other and back
+// (a cosine, at rest at the ends; one round trip in 9 to 11 s, drawn from the seed, as is which
+// end it starts from), with hand-held yaw (+- 5 degrees), pitch (+- 3) and roll (+- 3) wander
+// and tremor. The camera's view stays on the wall: the depth camera sees one plane.
 struct HandheldTrajectory {
-	glm::dvec3 target = glm::dvec3(0.0);
-	double radius_m = 1.5;
+	TrajectoryKind kind = TrajectoryKind::Orbit;
+	glm::dvec3 target = glm::dvec3(0.0); // Orbit
+	double radius_m = 1.5; // Orbit
 	double height_m = 1.45;
-	double start_angle_rad = 0.0;
-	double angular_speed_rad_s = 0.4; // signed: the direction round the table
+	double start_angle_rad = 0.0; // Orbit
+	double angular_speed_rad_s = 0.4; // Orbit; signed: the direction round the table
+	WallSweepParams wall; // WallSweep
+	double sweep_period_s = 10.0; // WallSweep: one round trip
+	double sweep_sign = 1.0; // WallSweep: +1 starts at the -along end (along = up x normal), -1 at the other
 	std::array<double, 10> phases = {}; // of the wobbles, from the seed
 
 	Pose world_from_rgb(double p_t_s) const; // t on the RGB-D clock
