@@ -6,6 +6,8 @@
 #include <cmath>
 #include <chrono>
 #include <limits>
+#include <numbers>
+#include <vector>
 
 namespace roomprobe {
 
@@ -69,6 +71,8 @@ std::string DenseSlam::configure(const PinholeParams &p_camera, const Pose &p_in
 	last_state = TrackingState::Lost;
 	frames = 0;
 	integrated_frames = 0;
+	relocalise_attempts = 0;
+	relocalised_frames = 0;
 	configured = true;
 	return "";
 }
@@ -117,6 +121,66 @@ void DenseSlam::undistort(const RgbdFrame &p_frame, cv::Mat *r_depth, cv::Mat *r
 }
 
 TrackingResult DenseSlam::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_initial_world_from_camera) const {
+	return track_with(tracker, p_depth_m, p_rgb, p_initial_world_from_camera);
+}
+
+TrackingResult DenseSlam::relocalise(const cv::Mat &p_depth_m, const cv::Mat &p_rgb) const {
+	// Candidates: coarse levels only (the finest is the refinement's), and a jump limit that lets a
+	// candidate's solve cover the distance between candidates.
+	IcpOptions coarse = opts.icp;
+	coarse.iterations[0] = 0;
+	coarse.max_jump_m = opts.relocalise_max_m;
+	coarse.max_jump_deg = opts.relocalise_max_deg;
+	const IcpTracker search(coarse);
+	std::vector<Pose> starts = { last_pose };
+	const double step_rad = opts.relocalise_step_deg * std::numbers::pi / 180.0;
+	for (int axis = 0; axis < 3; axis++) {
+		for (const double sign : { -1.0, 1.0 }) {
+			glm::dvec3 offset(0.0);
+			offset[axis] = sign;
+			Pose moved;
+			moved.translation = offset * opts.relocalise_step_m;
+			starts.push_back(compose(last_pose, moved));
+			Pose turned;
+			turned.rotation = glm::angleAxis(sign * step_rad, glm::normalize(offset * sign));
+			starts.push_back(compose(last_pose, turned));
+		}
+	}
+	TrackingResult best;
+	best.reason = "relocalisation: no starting pose around the held one tracked";
+	best.world_from_camera = last_pose;
+	bool found = false;
+	for (const Pose &start : starts) {
+		const TrackingResult candidate = track_with(search, p_depth_m, p_rgb, start);
+		if (candidate.state == TrackingState::Good && (!found || candidate.inlier_fraction > best.inlier_fraction)) {
+			best = candidate;
+			found = true;
+		}
+	}
+	if (!found) {
+		return best;
+	}
+	TrackingResult refined = track(p_depth_m, p_rgb, best.world_from_camera);
+	const double away_m = translation_difference_m(refined.world_from_camera, last_pose);
+	const double away_deg = rotation_difference_deg(refined.world_from_camera, last_pose);
+	if (refined.state == TrackingState::Good && (away_m > opts.relocalise_max_m || away_deg > opts.relocalise_max_deg)) {
+		refined.state = TrackingState::Lost;
+		refined.reason = "relocalisation: the best pose is " + std::to_string(away_m) + " m and " + std::to_string(away_deg) +
+				" deg from the held one, beyond the search's limits";
+	}
+	if (refined.state != TrackingState::Good) {
+		refined.state = TrackingState::Lost;
+		refined.world_from_camera = last_pose;
+		if (refined.reason.empty()) {
+			refined.reason = "relocalisation: the refined pose is not good";
+		}
+		return refined;
+	}
+	refined.relocalised = true;
+	return refined;
+}
+
+TrackingResult DenseSlam::track_with(const IcpTracker &p_tracker, const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_initial_world_from_camera) const {
 	if (!has_model(reference)) {
 		TrackingResult lost;
 		lost.state = TrackingState::Lost;
@@ -133,7 +197,7 @@ TrackingResult DenseSlam::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, 
 		}
 		camera = camera.level(1);
 	}
-	return tracker.track(depth, rgb, camera, reference, p_initial_world_from_camera);
+	return p_tracker.track(depth, rgb, camera, reference, p_initial_world_from_camera);
 }
 
 IntegrationStats DenseSlam::integrate(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_world_from_camera) {
@@ -186,6 +250,16 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 			guess = compose(last_pose, motion_over(compose(inverse(previous_pose), last_pose), p_frame.timestamp_s - last_time_s, last_time_s - previous_time_s));
 		}
 		out.tracking = track(depth, rgb, guess);
+		if (out.tracking.state == TrackingState::Lost && opts.relocalise && has_model(reference)) {
+			relocalise_attempts++;
+			TrackingResult found = relocalise(depth, rgb);
+			if (found.state == TrackingState::Good) {
+				out.tracking = found;
+				relocalised_frames++;
+			} else {
+				out.tracking.reason += "; " + found.reason;
+			}
+		}
 		if (out.tracking.state == TrackingState::Lost) {
 			out.tracking.world_from_camera = last_pose;
 		}
@@ -196,7 +270,7 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 	if (out.tracking.state != TrackingState::Lost) {
 		previous_pose = last_pose;
 		previous_time_s = last_time_s;
-		has_previous = integrated_frames > 0;
+		has_previous = integrated_frames > 0 && !out.tracking.relocalised; // no velocity across a loss
 		last_pose = out.tracking.world_from_camera;
 		last_time_s = p_frame.timestamp_s;
 	}

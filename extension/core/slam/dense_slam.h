@@ -9,9 +9,11 @@
 // and process(), which runs a frame through them in order.
 //
 // Tracking states (slam_types.h): Good frames are integrated; Poor ones move the pose but are not
-// integrated (unless integrate_poor); when Lost the last trusted pose is held, nothing is integrated, and each new
-// frame tries to re-track against the model from that pose, so tracking resumes when the camera
-// comes back near where it was lost.
+// integrated (unless integrate_poor); when Lost the last trusted pose is held, nothing is
+// integrated, and each new frame tries to re-track against the model from that pose and, failing
+// that, relocalises: a wider search from starting poses around it (DenseSlamOptions), so that
+// tracking resumes when the camera comes back near where it was lost. A pose the search cannot
+// explain stays Lost.
 //
 // World frame: the caller's, through the initial pose (a recording's room.yaml initial_rgb_pose
 // puts the dense model in the room's frame, where the coarse model is).
@@ -51,6 +53,17 @@ struct DenseSlamOptions {
 	// by about 3 mm a frame (out/demo/recording), which natively rendered 320x240 frames do not
 	// (tests/core/test_slam_dense.cpp): not understood yet, so not the default.
 	int tracking_level = 0;
+	// Relocalisation: when a frame is Lost and the model exists, it is tracked again from 13
+	// starting poses: the held pose, and the held pose moved by +-relocalise_step_m along each
+	// camera axis and turned by +-relocalise_step_deg about each. The best Good result (most
+	// inliers) is refined once more from there, and taken only if it is Good and within
+	// relocalise_max_m and relocalise_max_deg of the held pose. About 13 coarse ICP solves per
+	// lost frame (a few tens of ms at 640x480), only while lost.
+	bool relocalise = true;
+	double relocalise_step_m = 0.1; // metres
+	double relocalise_step_deg = 10.0; // degrees
+	double relocalise_max_m = 0.35; // metres from the held pose
+	double relocalise_max_deg = 25.0; // degrees from the held pose
 };
 
 // Wall-clock milliseconds of one process() call, by stage.
@@ -100,6 +113,9 @@ public:
 	TrackingState state() const { return last_state; }
 	size_t frame_count() const { return frames; }
 	size_t integrated_count() const { return integrated_frames; }
+	// Lost frames the relocalisation search ran on, and those it recovered (Good again).
+	size_t relocalisation_attempts() const { return relocalise_attempts; }
+	size_t relocalisation_count() const { return relocalised_frames; }
 	const TsdfVolume &volume() const { return tsdf; }
 	TsdfVolume &volume() { return tsdf; }
 	// For readers on other threads (a probe's dense pass): while held, no frame is being fused, so
@@ -111,6 +127,9 @@ public:
 
 private:
 	void undistort(const RgbdFrame &p_frame, cv::Mat *r_depth, cv::Mat *r_rgb) const;
+	TrackingResult track_with(const IcpTracker &p_tracker, const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_initial_world_from_camera) const;
+	// The wider search after a loss, around the held pose (see DenseSlamOptions::relocalise).
+	TrackingResult relocalise(const cv::Mat &p_depth_m, const cv::Mat &p_rgb) const;
 	// Empty when p_frame fits the camera, else why not.
 	std::string check_frame(const RgbdFrame &p_frame) const;
 
@@ -132,6 +151,8 @@ private:
 	// Atomic: read by other threads (the engine's stats, the dense lighting of probes).
 	std::atomic<size_t> frames = 0;
 	std::atomic<size_t> integrated_frames = 0;
+	std::atomic<size_t> relocalise_attempts = 0;
+	std::atomic<size_t> relocalised_frames = 0;
 	mutable std::shared_mutex volume_mutex;
 };
 

@@ -145,7 +145,19 @@ struct IcpKernelParams {
 	float min_normal_cos = 0.8f; // cos of the largest angle between the two normals
 	float colour_weight = 0.0f; // metres per unit intensity; 0: no colour row
 	float max_colour_difference = 0.1f; // intensity difference beyond which the colour row is dropped
+	// Noise weighting (icp_tracker.h IcpOptions): a row at depth z is scaled by
+	// min(1, noise_reference_sigma_m / (noise_a_m + noise_b_per_m2 (z - noise_c_m)^2)).
+	float noise_a_m = 0.0012f, noise_b_per_m2 = 0.0f, noise_c_m = 0.4f;
+	float noise_reference_sigma_m = 0.0012f;
 };
+
+// The weight of a reading at camera depth p_z_m (see IcpKernelParams): 1 when nearer than the
+// reference depth, falling as 1 / sigma(z) beyond.
+inline float depth_noise_weight(const IcpKernelParams &p_params, float p_z_m) {
+	const float d = p_z_m - p_params.noise_c_m;
+	const float sigma = p_params.noise_a_m + p_params.noise_b_per_m2 * d * d;
+	return sigma > p_params.noise_reference_sigma_m ? p_params.noise_reference_sigma_m / sigma : 1.0f;
+}
 
 // One row of the least-squares system: residual + jacobian . xi, with xi = (omega, delta_t) the
 // update of the pose, a rotation omega (radians, world axes) about the camera centre and a
@@ -173,7 +185,8 @@ inline float sample_bilinear(const float *p_image, size_t p_stride, int p_width,
 // model's camera, and paired with the model point and normal at the nearest pixel. Returns the
 // number of rows written to r_rows: 0 (no inlier pair), 1 (point-to-plane, r_rows[0]) or 2 (and
 // the photometric row r_rows[1], when the model has intensity and the weight is not 0).
-// r_squared_distance gets the squared point-to-plane residual of an inlier (metres^2).
+// r_squared_distance gets the squared point-to-plane residual of an inlier (metres^2, unweighted
+// by the noise weight its rows carry).
 inline int icp_correspondence(const glm::vec3 &p_vertex, const glm::vec3 &p_normal, float p_intensity, const IcpKernelParams &p_params,
 		const IcpModelView &p_model, IcpRow *r_rows, float *r_squared_distance) {
 	if (!(p_vertex.z > 0.0f) || std::isnan(p_normal.x)) {
@@ -204,17 +217,20 @@ inline int icp_correspondence(const glm::vec3 &p_vertex, const glm::vec3 &p_norm
 	if (glm::dot(normal, model_normal) < p_params.min_normal_cos) {
 		return 0;
 	}
-	// Point-to-plane: r = n . (p - m); d r / d omega = offset x n, d r / d delta_t = n.
+	// Point-to-plane: r = n . (p - m); d r / d omega = offset x n, d r / d delta_t = n. Both
+	// scaled by the reading's noise weight.
+	const float weight = depth_noise_weight(p_params, p_vertex.z);
 	const float residual = glm::dot(model_normal, difference);
-	const glm::vec3 moment = glm::cross(offset, model_normal);
+	const glm::vec3 moment = glm::cross(offset, model_normal) * weight;
+	const glm::vec3 weighted_normal = model_normal * weight;
 	IcpRow &row = r_rows[0];
 	row.jacobian[0] = moment.x;
 	row.jacobian[1] = moment.y;
 	row.jacobian[2] = moment.z;
-	row.jacobian[3] = model_normal.x;
-	row.jacobian[4] = model_normal.y;
-	row.jacobian[5] = model_normal.z;
-	row.residual = residual;
+	row.jacobian[3] = weighted_normal.x;
+	row.jacobian[4] = weighted_normal.y;
+	row.jacobian[5] = weighted_normal.z;
+	row.residual = residual * weight;
 	*r_squared_distance = residual * residual;
 	if (p_model.intensity == nullptr || p_params.colour_weight == 0.0f || std::isnan(p_intensity)) {
 		return 1;
@@ -235,7 +251,7 @@ inline int icp_correspondence(const glm::vec3 &p_vertex, const glm::vec3 &p_norm
 	const float inv_z = 1.0f / in_model.z;
 	const glm::vec3 dq(p_model.camera.fx * gx * inv_z, p_model.camera.fy * gy * inv_z,
 			-(p_model.camera.fx * gx * in_model.x + p_model.camera.fy * gy * in_model.y) * inv_z * inv_z);
-	const glm::vec3 a = glm::transpose(p_model.camera_from_world_rotation) * dq * p_params.colour_weight;
+	const glm::vec3 a = glm::transpose(p_model.camera_from_world_rotation) * dq * (p_params.colour_weight * weight);
 	const glm::vec3 colour_moment = glm::cross(offset, a);
 	IcpRow &colour = r_rows[1];
 	colour.jacobian[0] = colour_moment.x;
@@ -244,7 +260,7 @@ inline int icp_correspondence(const glm::vec3 &p_vertex, const glm::vec3 &p_norm
 	colour.jacobian[3] = a.x;
 	colour.jacobian[4] = a.y;
 	colour.jacobian[5] = a.z;
-	colour.residual = p_params.colour_weight * (model_intensity - p_intensity);
+	colour.residual = p_params.colour_weight * weight * (model_intensity - p_intensity);
 	return 2;
 }
 

@@ -24,6 +24,9 @@ struct NormalSystem {
 	double h[6][6] = {}; // upper triangle of J^T J
 	double g[6] = {}; // J^T r
 	double sum_squared = 0.0; // of the point-to-plane residuals, metres^2
+	// Traces of the rotation and translation blocks of the point-to-plane rows alone: the scale
+	// of the geometry's information, against which colour's is measured too (condition()).
+	double geometry_trace_rotation = 0.0, geometry_trace_translation = 0.0;
 	int inliers = 0;
 
 	void add(const IcpRow &p_row) {
@@ -43,6 +46,8 @@ struct NormalSystem {
 			g[i] += p_other.g[i];
 		}
 		sum_squared += p_other.sum_squared;
+		geometry_trace_rotation += p_other.geometry_trace_rotation;
+		geometry_trace_translation += p_other.geometry_trace_translation;
 		inliers += p_other.inliers;
 	}
 };
@@ -125,6 +130,9 @@ NormalSystem accumulate(const FramePyramid &p_frame, int p_level, const IcpKerne
 						system.add(rows_out[k]);
 					}
 					if (count > 0) {
+						const float *j = rows_out[0].jacobian;
+						system.geometry_trace_rotation += double(j[0]) * j[0] + double(j[1]) * j[1] + double(j[2]) * j[2];
+						system.geometry_trace_translation += double(j[3]) * j[3] + double(j[4]) * j[4] + double(j[5]) * j[5];
 						system.sum_squared += squared;
 						++system.inliers;
 					}
@@ -139,25 +147,111 @@ NormalSystem accumulate(const FramePyramid &p_frame, int p_level, const IcpKerne
 	return total;
 }
 
-// Solves the system; false when it is degenerate (the smallest eigenvalue of J^T J below
-// p_min_ratio times the largest: some motion is not constrained). r_ratio gets that ratio.
-bool solve(const NormalSystem &p_system, double p_min_ratio, cv::Vec6d *r_xi, double *r_ratio) {
-	cv::Matx66d h;
-	cv::Vec6d g;
+// The normal equations made unit-free: S H S with S scaling the rotation and the translation
+// blocks of the geometry's rows to unit trace. An eigenvalue is then the information along its
+// direction as a share of the geometry's: a plane seen alone gives about 1 along its normal and
+// 0.5 for each of its two tilts, and only a noise floor (about 0.002) to sliding along it or
+// turning about its normal. Photometric rows add on the same scale (not renormalised: their
+// information is texture, not noise, and must not dilute the geometry's).
+struct Conditioning {
+	cv::Vec6d eigenvalues; // descending
+	cv::Matx66d eigenvectors; // rows, in the scaled space
+	cv::Vec6d scale; // the diagonal of S
+	cv::Matx66d h; // the full, unscaled J^T J
+	cv::Vec6d g; // J^T r
+	bool ok = false; // finite, and some information at all
+};
+
+Conditioning condition(const NormalSystem &p_system) {
+	Conditioning c;
 	for (int i = 0; i < 6; ++i) {
 		for (int j = i; j < 6; ++j) {
-			h(i, j) = h(j, i) = p_system.h[i][j];
+			c.h(i, j) = c.h(j, i) = p_system.h[i][j];
 		}
-		g[i] = p_system.g[i];
+		c.g[i] = p_system.g[i];
 	}
-	cv::Mat eigenvalues;
-	cv::eigen(cv::Mat(h), eigenvalues);
-	const double largest = eigenvalues.at<double>(0), smallest = eigenvalues.at<double>(5);
-	*r_ratio = largest > 0.0 ? smallest / largest : 0.0;
-	if (!(*r_ratio >= p_min_ratio)) {
+	const double rotation_trace = p_system.geometry_trace_rotation, translation_trace = p_system.geometry_trace_translation;
+	if (!(rotation_trace > 0.0) || !(translation_trace > 0.0) || !std::isfinite(rotation_trace + translation_trace)) {
+		return c;
+	}
+	for (int i = 0; i < 3; ++i) {
+		c.scale[i] = 1.0 / std::sqrt(rotation_trace);
+		c.scale[i + 3] = 1.0 / std::sqrt(translation_trace);
+	}
+	cv::Matx66d scaled;
+	for (int i = 0; i < 6; ++i) {
+		for (int j = 0; j < 6; ++j) {
+			scaled(i, j) = c.h(i, j) * c.scale[i] * c.scale[j];
+		}
+	}
+	cv::Mat values, vectors;
+	if (!cv::eigen(cv::Mat(scaled), values, vectors)) {
+		return c;
+	}
+	for (int i = 0; i < 6; ++i) {
+		c.eigenvalues[i] = values.at<double>(i);
+		for (int j = 0; j < 6; ++j) {
+			c.eigenvectors(i, j) = vectors.at<double>(i, j);
+		}
+	}
+	c.ok = std::isfinite(c.eigenvalues[0]) && c.eigenvalues[0] > 0.0;
+	return c;
+}
+
+// The Gauss-Newton step in the directions whose share of the information is at least
+// p_min_constraint; the others are not moved (their estimate stays where the guess put it). False
+// when no direction is constrained or the step is not finite.
+bool solve(const Conditioning &p_conditioning, double p_min_constraint, cv::Vec6d *r_xi) {
+	if (!p_conditioning.ok) {
 		return false;
 	}
-	return cv::solve(h, -g, *r_xi, cv::DECOMP_CHOLESKY);
+	cv::Vec6d scaled_g, step_scaled;
+	for (int i = 0; i < 6; ++i) {
+		scaled_g[i] = p_conditioning.g[i] * p_conditioning.scale[i];
+	}
+	int used = 0;
+	for (int k = 0; k < 6; ++k) {
+		const double lambda = p_conditioning.eigenvalues[k];
+		if (!(lambda >= p_min_constraint)) {
+			continue;
+		}
+		double along = 0.0;
+		for (int i = 0; i < 6; ++i) {
+			along += p_conditioning.eigenvectors(k, i) * scaled_g[i];
+		}
+		for (int i = 0; i < 6; ++i) {
+			step_scaled[i] -= along / lambda * p_conditioning.eigenvectors(k, i);
+		}
+		++used;
+	}
+	for (int i = 0; i < 6; ++i) {
+		(*r_xi)[i] = step_scaled[i] * p_conditioning.scale[i];
+		if (!std::isfinite((*r_xi)[i])) {
+			return false;
+		}
+	}
+	return used > 0;
+}
+
+std::string format(double p_value, int p_decimals) {
+	char buffer[64];
+	std::snprintf(buffer, sizeof(buffer), "%.*f", p_decimals, p_value);
+	return buffer;
+}
+
+// "translation along (0.98, 0.00, -0.17)" or "rotation about (...)", world axes: the weakest
+// direction of p_conditioning, by which of its parts (both unit-free) is larger.
+std::string weakest_direction(const Conditioning &p_conditioning) {
+	const int k = 5;
+	glm::dvec3 rotation, translation;
+	for (int i = 0; i < 3; ++i) {
+		rotation[i] = p_conditioning.eigenvectors(k, i);
+		translation[i] = p_conditioning.eigenvectors(k, i + 3);
+	}
+	const bool translating = glm::length(translation) >= glm::length(rotation);
+	const glm::dvec3 axis = glm::normalize(translating ? translation : rotation);
+	return std::string(translating ? "translation along (" : "rotation about (") + format(axis.x, 2) + ", " + format(axis.y, 2) + ", " +
+			format(axis.z, 2) + ")";
 }
 
 // x' = exp(omega) (x - c) + c + delta_t, c the camera centre: world_from_camera gets its rotation
@@ -180,6 +274,11 @@ IcpKernelParams kernel_params(const IcpOptions &p_options, const Pose &p_pose, i
 	params.min_normal_cos = float(std::cos(p_options.max_normal_angle_deg * std::numbers::pi / 180.0));
 	params.colour_weight = p_colour ? float(p_options.colour_weight) : 0.0f;
 	params.max_colour_difference = float(p_options.max_colour_difference);
+	const auto sigma = [&](double p_z) { return p_options.noise_a_m + p_options.noise_b_per_m2 * (p_z - p_options.noise_c_m) * (p_z - p_options.noise_c_m); };
+	params.noise_a_m = float(p_options.noise_a_m);
+	params.noise_b_per_m2 = float(p_options.noise_b_per_m2);
+	params.noise_c_m = float(p_options.noise_c_m);
+	params.noise_reference_sigma_m = float(sigma(std::max(p_options.noise_reference_m, p_options.noise_c_m)));
 	return params;
 }
 
@@ -208,12 +307,6 @@ TrackingResult lost(const Pose &p_initial, const std::string &p_reason, int p_it
 	return result;
 }
 
-std::string format(double p_value, int p_decimals) {
-	char buffer[64];
-	std::snprintf(buffer, sizeof(buffer), "%.*f", p_decimals, p_value);
-	return buffer;
-}
-
 } // namespace
 
 double rotation_difference_deg(const Pose &p_a, const Pose &p_b) {
@@ -228,7 +321,8 @@ double translation_difference_m(const Pose &p_a, const Pose &p_b) {
 
 TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, const ModelMaps &p_model,
 		const Pose &p_initial_world_from_camera) const {
-	const bool colour = options.colour_weight != 0.0;
+	// Colour takes part only where both sides have it: a depth-only caller tracks on geometry.
+	const bool colour = options.colour_weight != 0.0 && !p_rgb.empty() && !p_model.colors.empty();
 	const std::string input_error = check_inputs(p_depth_m, p_rgb, p_camera, p_model, colour);
 	if (!input_error.empty()) {
 		return lost(p_initial_world_from_camera, input_error, 0);
@@ -242,27 +336,43 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 	}
 	const int levels = std::clamp(options.levels, 1, IcpOptions::MAX_LEVELS);
 	const FramePyramid frame = build_frame_pyramid(depth, colour ? p_rgb : cv::Mat(), p_camera, levels, float(options.pyramid_band_m), options.surface);
-	ModelIntensity intensity;
-	if (colour) {
-		intensity = model_intensity(p_model);
-	}
-	const IcpModelView model = model_view(p_model, colour ? &intensity : nullptr);
+	ModelIntensity intensity; // made when the colour term is first needed
+	const IcpModelView geometry_model = model_view(p_model, nullptr);
+	IcpModelView colour_model = geometry_model;
+	auto system_at = [&](int p_level, const Pose &p_pose, bool p_colour) {
+		if (p_colour && intensity.intensity.empty()) {
+			intensity = model_intensity(p_model);
+			colour_model = model_view(p_model, &intensity);
+		}
+		return accumulate(frame, p_level, kernel_params(options, p_pose, p_level, p_colour), p_colour ? colour_model : geometry_model);
+	};
 
 	Pose pose = p_initial_world_from_camera;
 	int iterations = 0;
+	bool colour_used = false;
+	Conditioning finest;
 	for (int level = levels - 1; level >= 0; --level) {
+		bool colour_level = colour && options.colour_always;
 		for (int i = 0; i < options.iterations[size_t(level)]; ++i) {
-			const NormalSystem system = accumulate(frame, level, kernel_params(options, pose, level, colour), model);
+			NormalSystem system = system_at(level, pose, colour_level);
+			Conditioning conditioning = condition(system);
+			if (i == 0 && colour && !colour_level && conditioning.ok && conditioning.eigenvalues[5] < options.min_constraint) {
+				// The geometry leaves a direction free at this level: the photometric rows constrain it.
+				colour_level = true;
+				system = system_at(level, pose, true);
+				conditioning = condition(system);
+			}
 			if (system.inliers < options.min_correspondences) {
 				return lost(p_initial_world_from_camera,
 						"too few correspondences at level " + std::to_string(level) + ": " + std::to_string(system.inliers), iterations);
 			}
 			cv::Vec6d xi;
-			double ratio = 0.0;
-			if (!solve(system, options.min_eigenvalue_ratio, &xi, &ratio)) {
-				return lost(p_initial_world_from_camera, "degenerate geometry at level " + std::to_string(level) +
-								": eigenvalue ratio " + format(ratio, 9) + " below " + format(options.min_eigenvalue_ratio, 9),
-						iterations);
+			if (!solve(conditioning, options.min_constraint, &xi)) {
+				return lost(p_initial_world_from_camera, "degenerate: no direction constrained at level " + std::to_string(level), iterations);
+			}
+			if (level == 0) {
+				finest = conditioning;
+				colour_used = colour_level;
 			}
 			pose = apply_update(pose, xi);
 			++iterations;
@@ -275,12 +385,17 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 	}
 
 	// The support of the final pose, at the finest level, geometry only.
-	const NormalSystem final_system = accumulate(frame, 0, kernel_params(options, pose, 0, false), model);
+	const NormalSystem final_system = system_at(0, pose, false);
+	if (!finest.ok) {
+		finest = condition(final_system);
+	}
 	TrackingResult result;
 	result.world_from_camera = pose;
 	result.iterations = iterations;
 	result.inlier_fraction = double(final_system.inliers) / double(valid);
 	result.rmse_m = final_system.inliers > 0 ? std::sqrt(final_system.sum_squared / final_system.inliers) : 0.0;
+	result.constraint = finest.ok ? finest.eigenvalues[5] : 0.0;
+	result.colour_used = colour_used;
 
 	const double jump_m = translation_difference_m(pose, p_initial_world_from_camera);
 	const double jump_deg = rotation_difference_deg(pose, p_initial_world_from_camera);
@@ -297,9 +412,17 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 		TrackingResult held = lost(p_initial_world_from_camera, reason, iterations);
 		held.inlier_fraction = result.inlier_fraction;
 		held.rmse_m = result.rmse_m;
+		held.constraint = result.constraint;
+		held.colour_used = result.colour_used;
 		return held;
 	}
-	if (result.inlier_fraction < options.good_inlier_fraction) {
+	if (!(result.constraint >= options.min_constraint)) {
+		// Nothing fixes this direction: the estimate along it is the guess, not a measurement.
+		result.state = TrackingState::Poor;
+		result.reason = std::string("flat geometry: ") + (finest.ok ? weakest_direction(finest) : std::string("the pose")) +
+				" unconstrained (its share of the information " + format(result.constraint, 4) + " below " + format(options.min_constraint, 4) +
+				(colour ? ", even with the colour term)" : "; the colour term is off or has no colour)");
+	} else if (result.inlier_fraction < options.good_inlier_fraction) {
 		result.state = TrackingState::Poor;
 		result.reason = "weak support: inlier fraction " + format(result.inlier_fraction, 3) + " below " + format(options.good_inlier_fraction, 3);
 	} else if (result.rmse_m > options.max_good_rmse_m) {

@@ -30,19 +30,39 @@ struct IcpOptions {
 	double max_distance_m = 0.1;
 	double coarse_distance_growth = 2.0; // factor per level, >= 1
 	double max_normal_angle_deg = 30.0;
-	double min_depth_m = 0.3, max_depth_m = 5.0; // depth readings used, metres along z
+	// Depth readings used, metres along z: real depth cameras (Kinect, RealSense, Azure Kinect) read
+	// up to about 8 m. Far readings are noisier; their rows are weighted by the noise model below
+	// rather than cut.
+	double min_depth_m = 0.3, max_depth_m = 8.0;
+	// Axial noise of a reading at depth z: sigma(z) = a + b (z - c)^2 metres (Nguyen et al. 2012, a
+	// Kinect; the synthetic rig uses the same model). A row at depth z weighs
+	// min(1, sigma(noise_reference_m) / sigma(z)): readings nearer than noise_reference_m weigh 1.
+	// noise_b_per_m2 = 0: every reading weighs 1.
+	double noise_a_m = 0.0012, noise_b_per_m2 = 0.0019, noise_c_m = 0.4;
+	double noise_reference_m = 1.5;
 	double pyramid_band_m = 0.05; // downsampling averages depths within this of a block's nearest, metres
 	SurfaceOptions surface; // smoothing and normals of the frame
 	// Photometric term: weight in metres per unit intensity (intensity in [0, 1], mean of R, G, B),
 	// so that an intensity difference of 0.1 weighs as 0.1 * weight metres of point-to-plane
 	// distance. 0: geometry only (the rgb image may then be empty).
-	double colour_weight = 0.0;
+	double colour_weight = 0.3;
+	// false (default): the photometric rows join a level's solve only when its geometry leaves a
+	// direction weakly constrained (see min_constraint): a flat wall, a floor, a corridor. Colour
+	// and depth of real cameras are often not registered to the pixel (Kinect v1), and where the
+	// geometry is enough, colour only adds that error and costs time. true: at every level.
+	bool colour_always = false;
 	double max_colour_difference = 0.1; // intensity (in [0, 1]) difference beyond which a pixel's colour row is an outlier
 
 	// Tracking state.
 	double min_valid_fraction = 0.05; // valid depth pixels / all, below: Lost
 	int min_correspondences = 100; // inlier pairs at any level, below: Lost
-	double min_eigenvalue_ratio = 1e-5; // smallest / largest eigenvalue of J^T J, below: Lost (degenerate)
+	// Conditioning. Each solve's normal equations are scaled to be unit-free (the rotation and the
+	// translation blocks to unit trace), so that a direction's eigenvalue is the share of the
+	// frame's information that constrains it (a plane seen alone: about 1 along its normal, 0.5 for
+	// each tilt, a noise floor of about 0.001 along it and about it). Directions below min_constraint are not updated
+	// (their estimate stays at the initial guess), and a final pose with such a direction is Poor,
+	// with a reason naming it ("flat geometry: translation along ... unconstrained").
+	double min_constraint = 0.004;
 	double lost_inlier_fraction = 0.2; // inliers / valid depth pixels at the finest level, below: Lost
 	double good_inlier_fraction = 0.5; // below (and not Lost): Poor
 	double max_good_rmse_m = 0.02; // point-to-plane RMS of the inliers above which the pose is Poor, metres

@@ -38,6 +38,12 @@ struct TrackingResult {
 	double inlier_fraction = 0.0; // inlier correspondences / valid depth pixels, at the finest level
 	double rmse_m = 0.0; // point-to-plane RMS residual of the inliers at the finest level, metres
 	int iterations = 0; // Gauss-Newton iterations over all levels
+	// The weakest direction's share of the information at the final pose (icp_tracker.h
+	// min_constraint; geometry, plus colour where it was used): about 0.3 for a room corner seen
+	// whole, near 0 for a flat wall.
+	double constraint = 0.0;
+	bool colour_used = false; // the photometric rows took part at the finest level
+	bool relocalised = false; // found by the wider search after a loss (dense_slam.h)
 };
 
 } // namespace roomprobe
