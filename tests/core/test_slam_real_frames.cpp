@@ -64,9 +64,13 @@ TEST_CASE("dense SLAM: 400 real Kinect frames (7-Scenes) track with no frame los
 	options.icp.max_distance_m = env_or("RP_MAXDIST", options.icp.max_distance_m);
 	options.icp.levels = int(env_or("RP_LEVELS", options.icp.levels));
 	options.icp.min_constraint = env_or("RP_MINC", options.icp.min_constraint);
-	options.icp.noise_b_per_m2 = env_or("RP_NOISEB", options.icp.noise_b_per_m2);
-	options.icp.noise_reference_m = env_or("RP_NOISEREF", options.icp.noise_reference_m);
+	options.icp.depth_noise.b_per_m2 = env_or("RP_NOISEB", options.icp.depth_noise.b_per_m2);
+	options.icp.depth_noise.reference_m = env_or("RP_NOISEREF", options.icp.depth_noise.reference_m);
 	options.icp.colour_always = env_or("RP_CALWAYS", 0) != 0;
+	options.icp.iterations[0] = int(env_or("RP_IT0", options.icp.iterations[0]));
+	options.icp.iterations[1] = int(env_or("RP_IT1", options.icp.iterations[1]));
+	options.icp.max_normal_angle_deg = env_or("RP_NANG", options.icp.max_normal_angle_deg);
+	options.icp.surface.smoothing_radius_px = int(env_or("RP_SMOOTH", options.icp.surface.smoothing_radius_px));
 	DenseSlam slam(options);
 	Pose first;
 	REQUIRE(load_pose(k_dir + "/frame-000000.pose.txt", &first));

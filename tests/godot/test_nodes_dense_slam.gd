@@ -153,3 +153,33 @@ func test_without_a_recording_it_says_why() -> void:
 	assert_true(" ".join(slam.get_warnings()).contains("does not lead to a RigCapture"), str(slam.get_warnings()))
 	assert_eq(slam.get_tracking_state(), 0)
 	assert_true(slam.get_stats().is_empty())
+
+
+func test_tracking_settings_reach_the_engine_and_bad_values_warn() -> void:
+	_scene = Node3D.new()
+	var rig = fixture_rig()
+	_scene.add_child(rig)
+	var slam = ClassDB.instantiate("DenseSLAM")
+	slam.name = "SLAM"
+	_scene.add_child(slam)
+	add_to_tree(_scene)
+	assert_true(rig.open(), rig.get_last_error())
+	slam.capture = NodePath("../Rig")
+	assert_eq(slam.colour_weight, 0.3)
+	assert_eq(slam.tracking_max_depth, 8.0)
+	assert_eq(slam.fusion_max_depth, 4.0)
+	for bad in [["colour_weight", -1.0], ["tracking_max_depth", 0.1], ["fusion_max_depth", NAN], ["tracking_max_depth", INF]]:
+		slam.set(bad[0], bad[1])
+		assert_true(" ".join(slam.get_warnings()).contains("colour_weight in 0..100"), "%s = %s: %s" % [bad[0], bad[1], slam.get_warnings()])
+		assert_false(slam.process_rig_frame(), "%s = %s still processes frames" % [bad[0], bad[1]])
+	slam.colour_weight = 0.0
+	slam.tracking_max_depth = 6.0
+	slam.fusion_max_depth = 3.0
+	assert_false(" ".join(slam.get_warnings()).contains("colour_weight in 0..100"), str(slam.get_warnings()))
+	# Geometry only still tracks the living room, which constrains every direction.
+	var tracked := 0
+	while tracked < 3 and rig.step():
+		if slam.process_rig_frame():
+			tracked += 1
+			assert_eq(slam.get_tracking_state(), 1, slam.get_tracking_reason())
+	assert_eq(tracked, 3)

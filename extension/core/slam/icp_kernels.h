@@ -145,7 +145,7 @@ struct IcpKernelParams {
 	float min_normal_cos = 0.8f; // cos of the largest angle between the two normals
 	float colour_weight = 0.0f; // metres per unit intensity; 0: no colour row
 	float max_colour_difference = 0.1f; // intensity difference beyond which the colour row is dropped
-	// Noise weighting (icp_tracker.h IcpOptions): a row at depth z is scaled by
+	// Noise weighting (slam_types.h DepthNoiseModel): a row at depth z is scaled by
 	// min(1, noise_reference_sigma_m / (noise_a_m + noise_b_per_m2 (z - noise_c_m)^2)).
 	float noise_a_m = 0.0012f, noise_b_per_m2 = 0.0f, noise_c_m = 0.4f;
 	float noise_reference_sigma_m = 0.0012f;

@@ -274,11 +274,11 @@ IcpKernelParams kernel_params(const IcpOptions &p_options, const Pose &p_pose, i
 	params.min_normal_cos = float(std::cos(p_options.max_normal_angle_deg * std::numbers::pi / 180.0));
 	params.colour_weight = p_colour ? float(p_options.colour_weight) : 0.0f;
 	params.max_colour_difference = float(p_options.max_colour_difference);
-	const auto sigma = [&](double p_z) { return p_options.noise_a_m + p_options.noise_b_per_m2 * (p_z - p_options.noise_c_m) * (p_z - p_options.noise_c_m); };
-	params.noise_a_m = float(p_options.noise_a_m);
-	params.noise_b_per_m2 = float(p_options.noise_b_per_m2);
-	params.noise_c_m = float(p_options.noise_c_m);
-	params.noise_reference_sigma_m = float(sigma(std::max(p_options.noise_reference_m, p_options.noise_c_m)));
+	const DepthNoiseModel &noise = p_options.depth_noise;
+	params.noise_a_m = float(noise.a_m);
+	params.noise_b_per_m2 = float(noise.b_per_m2);
+	params.noise_c_m = float(noise.c_m);
+	params.noise_reference_sigma_m = float(noise.sigma_m(std::max(noise.reference_m, noise.c_m)));
 	return params;
 }
 

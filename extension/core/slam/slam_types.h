@@ -10,6 +10,18 @@
 
 namespace roomprobe {
 
+// Axial noise of a depth reading at z metres: sigma(z) = a + b (z - c)^2 metres (Nguyen et al.
+// 2012, a Kinect; the synthetic rig's depth uses the same model). Tracking weighs a reading by
+// min(1, sigma(reference_m) / sigma(z)): readings nearer than reference_m weigh 1, farther ones
+// less, so that far readings count by their noise instead of being cut. b = 0: all weigh 1.
+struct DepthNoiseModel {
+	double a_m = 0.0012;
+	double b_per_m2 = 0.0019;
+	double c_m = 0.4;
+	double reference_m = 0.5;
+	double sigma_m(double p_z_m) const { return a_m + b_per_m2 * (p_z_m - c_m) * (p_z_m - c_m); }
+};
+
 // The dense model seen from one camera pose: the raycast of the TSDF (tsdf_volume.h), and the
 // reference that ICP (icp_tracker.h) aligns the next depth frame to. All maps have the camera's
 // size; a pixel whose ray met no surface holds NaN in points and normals (and 0 in colors).

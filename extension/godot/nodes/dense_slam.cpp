@@ -108,18 +108,28 @@ void DenseSLAM::disconnect_engine() {
 	}
 }
 
+bool DenseSLAM::settings_valid() const {
+	const double min_depth_m = roomprobe::IcpOptions().min_depth_m;
+	return voxel_size > 0.0 && truncation_distance > voxel_size && max_blocks >= 1 && max_blocks <= (1 << 22) && colour_weight >= 0.0 &&
+			colour_weight <= 100.0 && tracking_max_depth > min_depth_m && tracking_max_depth <= 100.0 && fusion_max_depth > min_depth_m &&
+			fusion_max_depth <= 100.0;
+}
+
 // The volume's settings into the engine (applied by RigCapture, which restarts the model).
 void DenseSLAM::push_settings() {
 	if (!engine) {
 		return;
 	}
-	const bool valid = voxel_size > 0.0 && truncation_distance > voxel_size && max_blocks >= 1 && max_blocks <= (1 << 22);
+	const bool valid = settings_valid();
 	engine->edit_config([&](LiveRoomConfig &p_config) {
 		p_config.dense = valid;
 		p_config.dense_poses = roomprobe::PoseSource::Tracked;
 		p_config.slam.tsdf.voxel_size_m = float(voxel_size);
 		p_config.slam.tsdf.truncation_m = float(truncation_distance);
 		p_config.slam.tsdf.max_blocks = max_blocks;
+		p_config.slam.icp.colour_weight = colour_weight;
+		p_config.slam.icp.max_depth_m = tracking_max_depth;
+		p_config.slam.tsdf.max_depth_m = float(fusion_max_depth);
 		p_config.mesh_interval_frames = std::max(1, mesh_update_interval);
 	});
 	update_configuration_warnings();
@@ -154,6 +164,27 @@ void DenseSLAM::set_truncation_distance(double p_metres) {
 }
 
 double DenseSLAM::get_truncation_distance() const { return truncation_distance; }
+
+void DenseSLAM::set_colour_weight(double p_metres_per_intensity) {
+	colour_weight = p_metres_per_intensity;
+	push_settings();
+}
+
+double DenseSLAM::get_colour_weight() const { return colour_weight; }
+
+void DenseSLAM::set_tracking_max_depth(double p_metres) {
+	tracking_max_depth = p_metres;
+	push_settings();
+}
+
+double DenseSLAM::get_tracking_max_depth() const { return tracking_max_depth; }
+
+void DenseSLAM::set_fusion_max_depth(double p_metres) {
+	fusion_max_depth = p_metres;
+	push_settings();
+}
+
+double DenseSLAM::get_fusion_max_depth() const { return fusion_max_depth; }
 
 void DenseSLAM::set_max_blocks(int p_blocks) {
 	max_blocks = p_blocks;
@@ -397,8 +428,8 @@ PackedStringArray DenseSLAM::get_warnings() const {
 	} else if (capture == nullptr) {
 		warnings.push_back("No RigCapture in the scene: add one, or set capture to it.");
 	}
-	if (!(voxel_size > 0.0) || !(truncation_distance > voxel_size) || max_blocks < 1 || max_blocks > (1 << 22)) {
-		warnings.push_back("RGB-D frames are not being processed: voxel_size must be > 0, truncation_distance larger than voxel_size, max_blocks in 1..4194304.");
+	if (!settings_valid()) {
+		warnings.push_back("RGB-D frames are not being processed: voxel_size must be > 0, truncation_distance larger than voxel_size, max_blocks in 1..4194304, colour_weight in 0..100, tracking_max_depth and fusion_max_depth above 0.3 m and at most 100 m.");
 	}
 	if (engine && !engine->config_pending() && !engine->configuration_error().empty()) {
 		warnings.push_back(String(("RGB-D frames are not being processed: " + engine->configuration_error()).c_str()));
@@ -417,6 +448,12 @@ void DenseSLAM::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_camera"), &DenseSLAM::get_camera_path);
 	ClassDB::bind_method(D_METHOD("set_coarse_model", "path"), &DenseSLAM::set_coarse_model_path);
 	ClassDB::bind_method(D_METHOD("get_coarse_model"), &DenseSLAM::get_coarse_model_path);
+	ClassDB::bind_method(D_METHOD("set_colour_weight", "metres_per_intensity"), &DenseSLAM::set_colour_weight);
+	ClassDB::bind_method(D_METHOD("get_colour_weight"), &DenseSLAM::get_colour_weight);
+	ClassDB::bind_method(D_METHOD("set_tracking_max_depth", "metres"), &DenseSLAM::set_tracking_max_depth);
+	ClassDB::bind_method(D_METHOD("get_tracking_max_depth"), &DenseSLAM::get_tracking_max_depth);
+	ClassDB::bind_method(D_METHOD("set_fusion_max_depth", "metres"), &DenseSLAM::set_fusion_max_depth);
+	ClassDB::bind_method(D_METHOD("get_fusion_max_depth"), &DenseSLAM::get_fusion_max_depth);
 	ClassDB::bind_method(D_METHOD("set_voxel_size", "metres"), &DenseSLAM::set_voxel_size);
 	ClassDB::bind_method(D_METHOD("get_voxel_size"), &DenseSLAM::get_voxel_size);
 	ClassDB::bind_method(D_METHOD("set_truncation_distance", "metres"), &DenseSLAM::set_truncation_distance);
@@ -449,6 +486,9 @@ void DenseSLAM::_bind_methods() {
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "voxel_size", PROPERTY_HINT_RANGE, "0.002,0.1,0.001,suffix:m"), "set_voxel_size", "get_voxel_size");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "truncation_distance", PROPERTY_HINT_RANGE, "0.005,0.5,0.001,suffix:m"), "set_truncation_distance", "get_truncation_distance");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "max_blocks", PROPERTY_HINT_RANGE, "1,4194304,1"), "set_max_blocks", "get_max_blocks");
+	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "colour_weight", PROPERTY_HINT_RANGE, "0,10,0.01,or_greater"), "set_colour_weight", "get_colour_weight");
+	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "tracking_max_depth", PROPERTY_HINT_RANGE, "0.5,20,0.1,or_greater,suffix:m"), "set_tracking_max_depth", "get_tracking_max_depth");
+	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "fusion_max_depth", PROPERTY_HINT_RANGE, "0.5,20,0.1,or_greater,suffix:m"), "set_fusion_max_depth", "get_fusion_max_depth");
 	ADD_GROUP("Mesh", "mesh_");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "mesh_layers", PROPERTY_HINT_LAYERS_3D_RENDER), "set_mesh_layers", "get_mesh_layers");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "mesh_update_interval", PROPERTY_HINT_RANGE, "1,300,1,suffix:frames"), "set_mesh_update_interval", "get_mesh_update_interval");

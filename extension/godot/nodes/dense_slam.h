@@ -42,6 +42,12 @@ public:
 	double get_truncation_distance() const;
 	void set_max_blocks(int p_blocks);
 	int get_max_blocks() const;
+	void set_colour_weight(double p_metres_per_intensity);
+	double get_colour_weight() const;
+	void set_tracking_max_depth(double p_metres);
+	double get_tracking_max_depth() const;
+	void set_fusion_max_depth(double p_metres);
+	double get_fusion_max_depth() const;
 	void set_mesh_layers(uint32_t p_layers);
 	uint32_t get_mesh_layers() const;
 	void set_mesh_upload_budget(int p_triangles);
@@ -83,6 +89,7 @@ private:
 	void disconnect_engine();
 	void push_settings();
 	void take_mesh();
+	bool settings_valid() const;
 	void set_state(TrackingState p_state, const std::string &p_reason);
 
 	godot::NodePath capture_path;
@@ -91,6 +98,9 @@ private:
 	double voxel_size = 0.01;
 	double truncation_distance = 0.04;
 	int max_blocks = 40000;
+	double colour_weight = 0.3;
+	double tracking_max_depth = 8.0;
+	double fusion_max_depth = 4.0;
 	uint32_t mesh_layers = 1;
 	int mesh_update_interval = 15;
 
