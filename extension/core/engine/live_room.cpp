@@ -497,6 +497,9 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence) {
 			out->integrated = result.integrated;
 			out->inlier_fraction = result.tracking.inlier_fraction;
 			out->rmse_m = result.tracking.rmse_m;
+			out->constraint = result.tracking.constraint;
+			out->colour_used = result.tracking.colour_used;
+			out->relocalised = result.tracking.relocalised;
 			out->timings = result.timings;
 			out->has_pose = slam->integrated_count() > 0; // the model exists, so the pose means something
 			out->world_from_camera = slam->pose();
@@ -934,6 +937,8 @@ LiveRoomStats LiveRoom::stats() const {
 	if (slam) {
 		s.dense_frames = slam->frame_count();
 		s.dense_fused = slam->integrated_count();
+		s.relocalisation_attempts = slam->relocalisation_attempts();
+		s.relocalisations = slam->relocalisation_count();
 	}
 	return s;
 }

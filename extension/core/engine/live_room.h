@@ -94,6 +94,8 @@ struct TrackedFrame {
 	std::string reason;
 	bool integrated = false;
 	double inlier_fraction = 0.0, rmse_m = 0.0;
+	double constraint = 0.0; // the weakest direction's share of the information (slam_types.h)
+	bool colour_used = false, relocalised = false;
 	DenseSlamTimings timings;
 };
 
@@ -157,6 +159,7 @@ struct LiveRoomStats {
 	// From a frame's push to the first probe map that includes it.
 	LatencySummary rgbd_latency, fisheye_latency;
 	size_t dense_frames = 0, dense_fused = 0;
+	size_t relocalisation_attempts = 0, relocalisations = 0; // lost frames searched, and found again
 	TsdfStats tsdf;
 };
 

@@ -374,6 +374,10 @@ Dictionary DenseSLAM::get_stats() const {
 	d.set("frame_ms", last_frame->timings.frame_ms);
 	d.set("inlier_fraction", last_frame->inlier_fraction);
 	d.set("rmse_m", last_frame->rmse_m);
+	d.set("constraint", last_frame->constraint);
+	d.set("colour_used", last_frame->colour_used);
+	d.set("relocalisation_attempts", int64_t(s.relocalisation_attempts));
+	d.set("relocalisations", int64_t(s.relocalisations));
 	d.set("latency_ms_p50", s.rgbd_latency.p50_ms);
 	d.set("latency_ms_p95", s.rgbd_latency.p95_ms);
 	return d;
