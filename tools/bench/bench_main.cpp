@@ -56,8 +56,8 @@
 #include <engine/live_room.h>
 #include <envmap/cubemap.h>
 #include <envmap/dense_render.h>
-#include <pipeline/coarse_pipeline.h>
 #include <eval/trajectory_metrics.h>
+#include <pipeline/coarse_pipeline.h>
 #include <recording/frames_dataset.h>
 #include <recording/recording_reader.h>
 #include <recording/tum_dataset.h>
