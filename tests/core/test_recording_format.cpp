@@ -731,10 +731,16 @@ TEST_CASE("damaged recording: malformed room.yaml fails open, naming the file an
 	CHECK_FALSE(status.ok);
 	CHECK(contains(status.error, "room.yaml: probe: unknown field"));
 
+	// Without room.yaml the recording has no room (SLAM only), and its cubemaps are an issue.
 	fs::remove(folder / "room.yaml");
 	status = reader.open(folder.string());
-	CHECK_FALSE(status.ok);
-	CHECK(contains(status.error, "room.yaml: missing"));
+	REQUIRE_MESSAGE(status.ok, status.error);
+	CHECK_FALSE(reader.has_room());
+	CHECK(reader.ground_truth_cubemap_count() == 0);
+	const RecordingIssue *cubemaps = find_issue(reader, "no ground-truth cubemaps");
+	REQUIRE(cubemaps != nullptr);
+	CHECK(contains(cubemaps->file, "cubemaps.txt"));
+	check_plays_on(reader, 3, 2);
 }
 
 TEST_CASE("damaged recording: a missing rig.yaml or index fails open, naming the file") {
@@ -782,4 +788,91 @@ TEST_CASE("damaged recording: broken ground truth is an issue, not a failure") {
 	CHECK(missing->line == 3);
 	CHECK(reader.ground_truth_cubemap_count() == 0);
 	check_plays_on(reader, 3, 2);
+}
+
+// ------------------------------------------------------------------------------------ SLAM only
+
+TEST_CASE("SLAM-only recording: no room and a rig without a fisheye write and read back") {
+	const fs::path folder = scratch_folder("slam_only");
+	Rig rig = make_rig();
+	rig.fisheye = OmniParams(); // an RGB-D camera alone
+	RecordingWriter writer;
+	const RecordingStatus opened = writer.open_without_room(folder.string(), rig);
+	REQUIRE_MESSAGE(opened.ok, opened.error);
+	for (int i = 0; i < 3; i++) {
+		const RecordingStatus added = writer.add_rgbd(make_rgbd(i));
+		CHECK_MESSAGE(added.ok, added.error);
+		CHECK(writer.add_ground_truth_pose(RecordingStream::Rgbd, rgb_time(i), gt_rgb_pose(i)).ok);
+	}
+	const RecordingStatus fisheye = writer.add_fisheye(make_gray_fisheye());
+	CHECK_FALSE(fisheye.ok);
+	CHECK(contains(fisheye.error, "the rig has no fisheye"));
+	CubemapFaces faces;
+	for (cv::Mat &face : faces) {
+		face = cv::Mat(CUBE_SIZE, CUBE_SIZE, CV_32FC3, cv::Scalar::all(1.0));
+	}
+	const RecordingStatus cube = writer.add_ground_truth_cubemap(10.0, 0, faces);
+	CHECK_FALSE(cube.ok);
+	CHECK(contains(cube.error, "has no room"));
+	REQUIRE(writer.close().ok);
+	CHECK_FALSE(fs::exists(folder / "room.yaml"));
+	CHECK_FALSE(fs::exists(folder / "fisheye.txt"));
+	CHECK_FALSE(fs::exists(folder / "fisheye"));
+
+	RecordingReader reader;
+	const RecordingStatus status = reader.open(folder.string());
+	REQUIRE_MESSAGE(status.ok, status.error);
+	CHECK_MESSAGE(reader.get_issues().empty(), all_issues(reader));
+	CHECK_FALSE(reader.has_room());
+	CHECK_FALSE(reader.get_rig().has_fisheye());
+	check_plays_on(reader, 3, 0);
+	const RgbdFrameResult frame = reader.read_rgbd(1);
+	REQUIRE_MESSAGE(frame.ok, frame.error);
+	CHECK(frame.frame.rgb.at<cv::Vec3b>(7, 9) == rgb_pattern(1, 9, 7));
+	CHECK(frame.frame.depth_m.at<float>(7, 9) == doctest::Approx(depth_units(1, 9, 7) * 0.001));
+	REQUIRE(reader.has_ground_truth_trajectory(RecordingStream::Rgbd));
+	CHECK(reader.ground_truth_trajectory(RecordingStream::Rgbd).size() == 3);
+
+	// A stray fisheye.txt beside a rig without a fisheye: its frames are an issue, left out.
+	write_text(folder / "fisheye.txt", "9.99 fisheye/000000.png\n");
+	REQUIRE(reader.open(folder.string()).ok);
+	const RecordingIssue *stray = find_issue(reader, "has no fisheye");
+	REQUIRE(stray != nullptr);
+	CHECK(contains(stray->file, "fisheye.txt"));
+	CHECK(reader.fisheye_count() == 0);
+}
+
+TEST_CASE("SLAM-only recording: a rig with a fisheye, but no fisheye frames and no room") {
+	const fs::path folder = scratch_folder("no_room_no_fisheye_frames");
+	RecordingWriter writer;
+	REQUIRE(writer.open_without_room(folder.string(), make_rig()).ok);
+	for (int i = 0; i < 2; i++) {
+		CHECK(writer.add_rgbd(make_rgbd(i)).ok);
+	}
+	REQUIRE(writer.close().ok);
+	CHECK(fs::exists(folder / "fisheye.txt")); // the rig has a fisheye: its index, empty
+
+	RecordingReader reader;
+	const RecordingStatus status = reader.open(folder.string());
+	REQUIRE_MESSAGE(status.ok, status.error);
+	CHECK(reader.get_issues().empty());
+	CHECK_FALSE(reader.has_room());
+	CHECK(reader.get_rig().has_fisheye());
+	check_plays_on(reader, 2, 0);
+
+	// The fisheye's index stays required while the rig has a fisheye.
+	fs::remove(folder / "fisheye.txt");
+	const RecordingStatus missing = reader.open(folder.string());
+	CHECK_FALSE(missing.ok);
+	CHECK(contains(missing.error, "fisheye.txt: missing"));
+
+	// A new recording written into this folder without a room drops the old room.yaml.
+	const fs::path reused = scratch_folder("room_then_none");
+	write_recording(reused, 1);
+	RecordingWriteOptions options;
+	options.allow_non_empty_folder = true;
+	REQUIRE(writer.open_without_room(reused.string(), make_rig(), options).ok);
+	REQUIRE(writer.close().ok);
+	REQUIRE(reader.open(reused.string()).ok);
+	CHECK_FALSE(reader.has_room());
 }

@@ -287,3 +287,46 @@ TEST_CASE("rig file: save_rig refuses an invalid rig or an unwritable path, nami
 	const std::string unwritable = (dir.path / "no_such_dir" / "rig.yaml").string();
 	CHECK(contains(save_rig(unwritable, synthetic.rig), unwritable + ": "));
 }
+
+TEST_CASE("rig file: an RGB-D camera alone (no fisheye) saves and loads; a fisheye field alone is an error") {
+	TempDir dir("rig_no_fisheye");
+	const RigLoadResult synthetic = load_rig(synthetic_rig_path());
+	REQUIRE_MESSAGE(synthetic.ok, synthetic.error);
+	Rig rgbd_only;
+	rgbd_only.rgb = synthetic.rig.rgb;
+	rgbd_only.depth_scale_m = 0.0002;
+	CHECK_FALSE(rgbd_only.has_fisheye());
+	CHECK(synthetic.rig.has_fisheye());
+	CHECK(check_rig(rgbd_only).empty());
+
+	const std::string path = (dir.path / "rgbd_only.yaml").string();
+	REQUIRE(save_rig(path, rgbd_only).empty());
+	const std::string text = read_text(path);
+	CHECK_FALSE(contains(text, "fisheye:"));
+	CHECK_FALSE(contains(text, "rgb_from_fisheye"));
+	CHECK_FALSE(contains(text, "fisheye_time_offset_s"));
+	const RigLoadResult loaded = load_rig(path);
+	REQUIRE_MESSAGE(loaded.ok, loaded.error);
+	CHECK_FALSE(loaded.rig.has_fisheye());
+	check_same_rig(loaded.rig, rgbd_only);
+
+	// Half a fisheye: the width set, the height not.
+	Rig half = rgbd_only;
+	half.fisheye.width = 100;
+	CHECK(contains(check_rig(half), "fisheye.height: must be positive"));
+
+	// The synthetic rig less its fisheye fields loads as an RGB-D camera alone; less only some of
+	// them, the missing one is named.
+	const std::string good = read_text(synthetic_rig_path());
+	const std::string without_fisheye = replace_block(good, "\nfisheye:\n", "\n# x_rgb", "\n");
+	const std::string without_all = replace_once(replace_block(without_fisheye, "\nrgb_from_fisheye:\n", "\n# The synthetic", "\n"),
+			"fisheye_time_offset_s: 0.0137\n", "");
+	const RigLoadResult alone = load_rig(dir.write("without_all.yaml", without_all));
+	REQUIRE_MESSAGE(alone.ok, alone.error);
+	CHECK_FALSE(alone.rig.has_fisheye());
+	CHECK(alone.rig.rgb.fx == 525.0);
+	const std::string only_fisheye_gone = dir.write("without_fisheye.yaml", without_fisheye);
+	const RigLoadResult partial = load_rig(only_fisheye_gone);
+	CHECK_FALSE(partial.ok);
+	CHECK(contains(partial.error, only_fisheye_gone + ": fisheye: missing"));
+}

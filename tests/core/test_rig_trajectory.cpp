@@ -216,6 +216,58 @@ TEST_CASE("trajectory: TUM files round trip at full precision") {
 	CHECK(contains(save_tum_trajectory("/nonexistent_dir/x.txt", trajectory), "/nonexistent_dir/x.txt"));
 }
 
+TEST_CASE("trajectory: TumTrajectoryWriter's poses and comments read back through load_tum_trajectory") {
+	TempFile file("writer_trajectory.txt");
+	const std::vector<TimedPose> samples = motion_samples(3.0, 40, 11);
+	TumTrajectoryWriter writer;
+	REQUIRE(writer.open(file.path.string(), { "tracked by a test", "frames: all" }) == "");
+	CHECK(writer.is_open());
+	// Every third frame "lost": a comment in place of its pose, as the bench writes them.
+	std::vector<TimedPose> written;
+	for (size_t i = 0; i < samples.size(); i++) {
+		if (i % 3 == 2) {
+			REQUIRE(writer.add_comment("lost at " + std::to_string(samples[i].t_s) + ":\ntoo few correspondences") == "");
+			continue;
+		}
+		REQUIRE(writer.add_pose(samples[i]) == "");
+		written.push_back(samples[i]);
+	}
+	// Refused, and the file goes on: a timestamp not after the last, and a non-unit rotation.
+	CHECK(contains(writer.add_pose(samples[1]), "is not after"));
+	TimedPose bad = samples.back();
+	bad.t_s += 1.0;
+	bad.world_from_camera.rotation = glm::dquat(2.0, 0.0, 0.0, 0.0);
+	CHECK(contains(writer.add_pose(bad), "unit quaternion"));
+	REQUIRE(writer.close() == "");
+
+	std::ifstream in(file.path);
+	std::string first_line;
+	std::getline(in, first_line);
+	CHECK(first_line == "# tracked by a test");
+
+	const TrajectoryLoadResult loaded = load_tum_trajectory(file.path.string());
+	REQUIRE_MESSAGE(loaded.ok, loaded.error);
+	REQUIRE(loaded.trajectory.size() == written.size());
+	for (size_t i = 0; i < written.size(); i++) {
+		CAPTURE(i);
+		CHECK(loaded.trajectory.get_samples()[i].t_s == written[i].t_s);
+		check_same_pose(loaded.trajectory.get_samples()[i].world_from_camera, written[i].world_from_camera, 1e-15);
+	}
+
+	// save_tum_trajectory writes its header the same way.
+	Trajectory trajectory;
+	std::string error;
+	REQUIRE(trajectory.set_samples(written, &error));
+	REQUIRE(save_tum_trajectory(file.path.string(), trajectory, { "saved" }) == "");
+	const TrajectoryLoadResult saved = load_tum_trajectory(file.path.string());
+	REQUIRE_MESSAGE(saved.ok, saved.error);
+	CHECK(saved.trajectory.size() == written.size());
+
+	TumTrajectoryWriter unwritable;
+	CHECK(contains(unwritable.open("/nonexistent_dir/x.txt"), "/nonexistent_dir/x.txt: cannot open"));
+	CHECK(contains(unwritable.add_pose(samples[0]), "/nonexistent_dir/x.txt"));
+}
+
 TEST_CASE("trajectory: TUM files with comments, blank lines and 4-decimal quaternions load") {
 	TempFile file("tum_comments.txt");
 	const std::string path = file.write(

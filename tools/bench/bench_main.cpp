@@ -15,9 +15,25 @@
 // dense pass's cost at three raycast scales and two sizes on the final model, ATE against the
 // ground truth, and the TSDF's memory. Reading and decoding the images is not timed.
 //
-// slam --tum DIR: dense SLAM alone (DenseSlam: the engine needs a rig with a fisheye, which a TUM
-// sequence has not) from the ground-truth pose of the first frame that has one; the same timings
-// and ATE.
+// A recording without a room (no room.yaml) or without a fisheye stream is SLAM-only: slam runs
+// dense SLAM alone on it (as below) and says what it skips; live refuses it.
+//
+// slam --tum DIR, slam --7scenes DIR: dense SLAM alone (DenseSlam: the engine needs a rig with a
+// fisheye, which datasets have not) on a TUM RGB-D sequence or a 7-Scenes-layout folder of frames
+// (recording/frames_dataset.h), from the ground-truth pose of the first frame that has one; the
+// same timings, ATE and RPE, and the time per frame.
+//
+// Accuracy (eval/trajectory_metrics.h): ATE and RPE (per frame and per second) of every processed
+// frame's reported pose (the held one when Lost) against the ground truth, no alignment (SLAM
+// starts in the ground truth's world frame). The targets (TARGET ...) are printed for synthetic
+// recordings only (those with synth.yaml, made by ./roomprobe synth), never for real data.
+// --save-trajectory FILE writes the tracked poses in TUM's format (TumTrajectoryWriter): one line
+// per frame tracked Good or Poor; a Lost frame, whose pose is not known, is a '#' comment with
+// its reason, as is a Poor frame's reason before its line.
+//
+// SLAM settings (--voxel-size-m, --colour-weight, --icp-depth-range, --tsdf-depth-range,
+// --max-jump) change DenseSlamOptions for every mode; --intrinsics or --rig replace the RGB-D
+// camera's intrinsics. The effective settings are printed first.
 //
 // live --recording DIR: the engine threaded (start()), the recording played in real time (x
 // --speed) by a capture thread that sleeps until each event's instant, reads and decodes the frame
@@ -29,8 +45,10 @@
 // Each benchmark ends with one line 'summary: mode=... key=value ...'. Prints figures; asserts
 // nothing (the targets are reported as met or not).
 //
-// usage: roomprobe_bench slam (--recording DIR | --tum DIR) [--frames N] [--threads N] [--probe-size N]
-//        roomprobe_bench live --recording DIR [--speed X] [--frames N] [--threads N] [--probe-size N]
+// usage: roomprobe_bench slam (--recording DIR | --tum DIR | --7scenes DIR) [--frames N] [--threads N] [--probe-size N]
+//                             [--intrinsics FX,FY,CX,CY | --rig FILE] [--save-trajectory FILE] [--voxel-size-m V]
+//                             [--colour-weight W] [--icp-depth-range MIN,MAX] [--tsdf-depth-range MIN,MAX] [--max-jump M,DEG]
+//        roomprobe_bench live --recording DIR [--speed X] [--frames N] [--threads N] [--probe-size N] [the same camera and SLAM options]
 
 #include "../common/cli.h"
 
@@ -38,7 +56,9 @@
 #include <engine/live_room.h>
 #include <envmap/cubemap.h>
 #include <envmap/dense_render.h>
+#include <eval/trajectory_metrics.h>
 #include <pipeline/coarse_pipeline.h>
+#include <recording/frames_dataset.h>
 #include <recording/recording_reader.h>
 #include <recording/tum_dataset.h>
 #include <rig/fisheye_pose.h>
@@ -56,6 +76,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <thread>
@@ -163,44 +184,8 @@ struct SlamFigures {
 	Series undistort, track, integrate, raycast, process, track_integrate, mesh;
 	int good = 0, poor = 0, lost = 0;
 	size_t mesh_triangles = 0;
-	// Accuracy: frames with a ground-truth pose at their timestamp.
-	int compared = 0;
-	double sum_squared_m2 = 0.0, max_error_m = 0.0, sum_squared_rot_deg2 = 0.0;
-	double max_error_t_s = 0.0;
-	double path_m = 0.0; // ground-truth path length over the compared frames
-	bool has_last_truth = false;
-	glm::dvec3 last_truth = glm::dvec3(0.0);
-
-	double ate_mm() const { return compared == 0 ? 0.0 : 1000.0 * std::sqrt(sum_squared_m2 / double(compared)); }
+	Trajectory reported; // every frame's reported pose (the held one when Lost), for ATE and RPE
 };
-
-double rotation_error_deg(const glm::dquat &p_a, const glm::dquat &p_b) {
-	const double d = std::min(1.0, std::abs(glm::dot(p_a, p_b)));
-	return 2.0 * std::acos(d) * 180.0 / M_PI;
-}
-
-// Adds the error of p_pose at p_t_s against p_truth, when the ground truth has a pose there.
-void record_error(const Pose &p_pose, double p_t_s, const Trajectory *p_truth, SlamFigures *r_figures) {
-	Pose truth;
-	std::string error;
-	if (p_truth == nullptr || p_truth->is_empty() || !p_truth->pose_at(p_t_s, &truth, &error)) {
-		return;
-	}
-	const double e = glm::length(p_pose.translation - truth.translation);
-	const double r = rotation_error_deg(p_pose.rotation, truth.rotation);
-	r_figures->compared++;
-	r_figures->sum_squared_m2 += e * e;
-	r_figures->sum_squared_rot_deg2 += r * r;
-	if (e > r_figures->max_error_m) {
-		r_figures->max_error_m = e;
-		r_figures->max_error_t_s = p_t_s;
-	}
-	if (r_figures->has_last_truth) {
-		r_figures->path_m += glm::length(truth.translation - r_figures->last_truth);
-	}
-	r_figures->last_truth = truth.translation;
-	r_figures->has_last_truth = true;
-}
 
 void record_timings(const DenseSlamTimings &p_timings, bool p_integrated, SlamFigures *r_figures) {
 	r_figures->undistort.add(p_timings.undistort_ms);
@@ -227,30 +212,125 @@ void record_state(TrackingState p_state, SlamFigures *r_figures) {
 	}
 }
 
-// One frame as the engine published it: its timings, state and (reported, the held one when
-// Lost, as the application would use it) pose against p_truth.
-void record_tracked_frame(const TrackedFrame &p_frame, const Trajectory *p_truth, SlamFigures *r_figures) {
-	record_timings(p_frame.timings, p_frame.integrated, r_figures);
-	record_state(p_frame.state, r_figures);
-	if (p_frame.has_pose) {
-		record_error(p_frame.world_from_camera, p_frame.timestamp_s, p_truth, r_figures);
+void record_pose(double p_t_s, const Pose &p_pose, SlamFigures *r_figures) {
+	std::string error;
+	if (!r_figures->reported.append(TimedPose{ p_t_s, p_pose }, &error)) {
+		std::fprintf(stderr, "roomprobe_bench: pose at %.6f s left out of the accuracy: %s\n", p_t_s, error.c_str());
 	}
 }
 
-void print_accuracy(const SlamFigures &p_figures, bool p_synthetic, const char *p_what) {
+// --save-trajectory FILE: the tracked poses in TUM's format as they come, one line per frame
+// tracked Good or Poor; a Poor frame's line follows a comment with its reason, a Lost frame has
+// only a comment (no pose is known there: the tracker holds its last one).
+class TrajectoryFile {
+public:
+	// False after printing the problem.
+	bool open(const std::string &p_path, const std::string &p_source, const std::string &p_world) {
+		if (p_path.empty()) {
+			return true;
+		}
+		const std::string error = writer.open(p_path,
+				{ "RoomProbe roomprobe_bench " + p_source + ": the tracked RGB-D camera, world_from_camera, seconds and metres",
+						"one pose line per frame tracked good or poor; a poor frame's line follows '# <t> poor: <reason>';",
+						"a lost frame has only the comment '# <t> lost: <reason>' (the tracker held its last pose there)", "world frame: " + p_world });
+		if (!error.empty()) {
+			std::fprintf(stderr, "roomprobe_bench: --save-trajectory: %s\n", error.c_str());
+			return false;
+		}
+		return true;
+	}
+	void add(double p_t_s, const Pose &p_pose, TrackingState p_state, const std::string &p_reason) {
+		if (!writer.is_open() || failed) {
+			return;
+		}
+		char time[32];
+		std::snprintf(time, sizeof(time), "%.6f", p_t_s);
+		std::string error;
+		if (p_state != TrackingState::Good) {
+			error = writer.add_comment(std::string(time) + " " + tracking_state_name(p_state) + ": " + (p_reason.empty() ? "-" : p_reason));
+		}
+		if (error.empty() && p_state != TrackingState::Lost) {
+			error = writer.add_pose(TimedPose{ p_t_s, p_pose });
+		}
+		report(error);
+	}
+	void close(const std::string &p_path) {
+		if (!writer.is_open()) {
+			return;
+		}
+		report(writer.close());
+		if (!failed) {
+			std::printf("  trajectory saved: %s (TUM format; lost frames as comments)\n", p_path.c_str());
+		}
+	}
+
+private:
+	void report(const std::string &p_error) {
+		if (!p_error.empty() && !failed) {
+			std::fprintf(stderr, "roomprobe_bench: --save-trajectory: %s\n", p_error.c_str());
+			failed = true;
+		}
+	}
+
+	TumTrajectoryWriter writer;
+	bool failed = false;
+};
+
+// One frame as the engine published it: its timings, state and (reported, the held one when
+// Lost, as the application would use it) pose.
+void record_tracked_frame(const TrackedFrame &p_frame, SlamFigures *r_figures, TrajectoryFile *r_file) {
+	record_timings(p_frame.timings, p_frame.integrated, r_figures);
+	record_state(p_frame.state, r_figures);
+	if (p_frame.has_pose) {
+		record_pose(p_frame.timestamp_s, p_frame.world_from_camera, r_figures);
+		r_file->add(p_frame.timestamp_s, p_frame.world_from_camera, p_frame.state, p_frame.reason);
+	}
+}
+
+// ATE and RPE of a trajectory against the ground truth (eval/trajectory_metrics.h).
+struct Accuracy {
+	AbsoluteTrajectoryError ate;
+	RelativePoseError per_frame, per_second;
+	bool has() const { return ate.count > 0; }
+};
+
+// p_targets: print the issue's target (synthetic recordings only).
+Accuracy print_accuracy(const Trajectory &p_estimate, const Trajectory &p_truth, const SlamFigures &p_figures, bool p_targets, const char *p_what) {
+	Accuracy accuracy;
+	accuracy.ate = absolute_trajectory_error(p_estimate, p_truth);
+	accuracy.per_frame = relative_pose_error(p_estimate, p_truth, 1.0, RpeDelta::Frames);
+	accuracy.per_second = relative_pose_error(p_estimate, p_truth, 1.0, RpeDelta::Seconds);
 	std::printf("accuracy of %s (against the ground truth at the same timestamps, same world frame, no alignment):\n", p_what);
 	std::printf("  tracking states: %d good, %d poor, %d lost\n", p_figures.good, p_figures.poor, p_figures.lost);
-	if (p_figures.compared == 0) {
-		std::printf("  no ground-truth poses at the frames' timestamps: no ATE\n");
-		return;
+	if (!accuracy.has()) {
+		std::printf("  no ground-truth poses at the frames' timestamps: no ATE or RPE\n");
+		return accuracy;
 	}
-	const double rmse_mm = p_figures.ate_mm();
-	std::printf("  frames compared: %d (ground-truth path %.0f mm)\n", p_figures.compared, 1000.0 * p_figures.path_m);
-	std::printf("  ATE RMSE (translation): %.2f mm   max %.2f mm (t = %.3f s)   rotation RMSE %.3f deg\n", rmse_mm, 1000.0 * p_figures.max_error_m,
-			p_figures.max_error_t_s, std::sqrt(p_figures.sum_squared_rot_deg2 / double(p_figures.compared)));
-	if (p_synthetic) {
-		std::printf("  TARGET ATE RMSE <= %.0f mm on the synthetic sequences: %s\n", TARGET_ATE_MM, met(rmse_mm <= TARGET_ATE_MM));
+	const AbsoluteTrajectoryError &ate = accuracy.ate;
+	std::printf("  frames compared: %zu (ground-truth path %.0f mm)\n", ate.count, 1000.0 * ate.path_m);
+	std::printf("  ATE RMSE (translation): %.2f mm   max %.2f mm (t = %.3f s)   rotation RMSE %.3f deg\n", 1000.0 * ate.rmse_m, 1000.0 * ate.max_m,
+			ate.max_at_s, ate.rotation_rmse_deg);
+	for (const auto &[rpe, unit] : { std::pair{ &accuracy.per_frame, "frame" }, std::pair{ &accuracy.per_second, "s" } }) {
+		if (rpe->pairs == 0) {
+			std::printf("  RPE per %s: no pairs\n", unit);
+			continue;
+		}
+		std::printf("  RPE per %-5s (%4zu pairs): translation RMSE %.2f mm (mean %.2f, max %.2f)   rotation RMSE %.3f deg (mean %.3f, max %.3f)\n",
+				unit, rpe->pairs, 1000.0 * rpe->translation_rmse_m, 1000.0 * rpe->translation_mean_m, 1000.0 * rpe->translation_max_m,
+				rpe->rotation_rmse_deg, rpe->rotation_mean_deg, rpe->rotation_max_deg);
 	}
+	if (p_targets) {
+		std::printf("  TARGET ATE RMSE <= %.0f mm on the synthetic sequences: %s\n", TARGET_ATE_MM, met(1000.0 * ate.rmse_m <= TARGET_ATE_MM));
+	}
+	return accuracy;
+}
+
+// The accuracy keys of a summary line.
+std::string accuracy_summary(const Accuracy &p_accuracy) {
+	const bool rpe = p_accuracy.per_frame.pairs > 0;
+	return "ate_mm=" + figure(p_accuracy.has(), 1000.0 * p_accuracy.ate.rmse_m) + " ate_max_mm=" + figure(p_accuracy.has(), 1000.0 * p_accuracy.ate.max_m) +
+			" rpe_mm_per_frame=" + figure(rpe, 1000.0 * p_accuracy.per_frame.translation_rmse_m) +
+			" rpe_deg_per_frame=" + figure(rpe, p_accuracy.per_frame.rotation_rmse_deg);
 }
 
 void print_memory(const TsdfStats &p_stats) {
@@ -282,28 +362,53 @@ void print_slam_target(const SlamFigures &p_figures, int p_width, int p_height) 
 
 struct Arguments {
 	std::string mode; // slam or live
-	std::string recording, tum;
+	std::string recording, tum, seven_scenes;
 	long frames = -1; // RGB-D frames to process; -1: all
 	int threads = 0; // 0: the libraries' defaults
 	int probe_size = 0; // 0: the mode's default
 	double speed = 1.0; // live: playback speed
+	std::string rig_file; // --rig: the RGB-D camera of this rig file
+	bool has_intrinsics = false; // --intrinsics fx,fy,cx,cy
+	double intrinsics[4] = { 0.0, 0.0, 0.0, 0.0 };
+	std::string save_trajectory; // --save-trajectory FILE
+	DenseSlamOptions slam; // the defaults, with --voxel-size-m, --colour-weight and the ranges applied
 };
 
 void print_usage(std::FILE *p_out) {
 	std::fprintf(p_out,
-			"usage: roomprobe_bench slam (--recording DIR | --tum DIR) [--frames N] [--threads N] [--probe-size N]\n"
+			"usage: roomprobe_bench slam (--recording DIR | --tum DIR | --7scenes DIR) [--frames N] [--threads N] [--probe-size N]\n"
+			"                            [--intrinsics FX,FY,CX,CY | --rig FILE] [--save-trajectory FILE] [SLAM settings]\n"
 			"       roomprobe_bench live --recording DIR [--speed X] [--frames N] [--threads N] [--probe-size N]\n"
+			"                            [--intrinsics FX,FY,CX,CY | --rig FILE] [SLAM settings]\n"
 			"  slam --recording DIR  a RoomProbe recording through the engine (LiveRoom) in step mode: SLAM, coarse model,\n"
-			"                        one probe's map after every RGB-D frame; per-stage timings, full frame, ATE\n"
-			"  slam --tum DIR        a TUM RGB-D sequence (rgb.txt, depth.txt, groundtruth.txt): dense SLAM only\n"
+			"                        one probe's map after every RGB-D frame; per-stage timings, full frame, ATE, RPE. A SLAM-only\n"
+			"                        recording (no room.yaml or no fisheye stream) runs dense SLAM alone, saying what it skips\n"
+			"  slam --tum DIR        a TUM RGB-D sequence (rgb.txt, depth.txt, groundtruth.txt): dense SLAM alone\n"
+			"  slam --7scenes DIR    a 7-Scenes-layout folder (frame-NNNNNN.color.jpg, .depth.png in mm, .pose.txt,\n"
+			"                        camera-intrinsics.txt; frames at 30 Hz): dense SLAM alone\n"
 			"  live --recording DIR  the recording played in real time into the threaded engine (start()), the probe map\n"
 			"                        polled at 60 Hz like Godot's main loop; frames dropped, latency, ATE\n"
 			"  --frames N            stop after N RGB-D frames (default: all)\n"
 			"  --threads N           worker threads for OpenCV and TBB (default: the libraries')\n"
 			"  --probe-size N        the probe's cubemap face size (default: slam %d, live %d)\n"
 			"  --speed X             live: playback speed (default 1: real time)\n"
-			"Each benchmark ends with one line 'summary: mode=... key=value ...'.\n",
-			STEP_PROBE_SIZE, LIVE_PROBE_SIZE);
+			"  --intrinsics FX,FY,CX,CY  the RGB-D camera's pinhole intrinsics, pixels, no distortion, instead of the source's\n"
+			"                        (TUM: the freiburg set its folder names, else ROS's default; 7-Scenes: camera-intrinsics.txt)\n"
+			"  --rig FILE            the RGB-D camera (rgb: intrinsics, distortion, size) of a rig file (calib/README.md)\n"
+			"                        instead of the source's; the depth scale and any fisheye stay the source's\n"
+			"  --save-trajectory FILE  slam: the tracked poses in TUM format (timestamp tx ty tz qx qy qz qw), one line per frame\n"
+			"                        tracked good or poor; lost frames (no pose known) and poor ones' reasons as '#' comments\n"
+			"SLAM settings (DenseSlamOptions; the effective ones are printed first):\n"
+			"  --voxel-size-m V      TSDF voxel edge, metres (default %.3f)\n"
+			"  --colour-weight W     ICP's photometric term, metres per unit intensity; 0: geometry only (default %.2f)\n"
+			"  --icp-depth-range MIN,MAX   depth readings ICP uses, metres along z (default %.2f,%.2f)\n"
+			"  --tsdf-depth-range MIN,MAX  depth readings fused into the TSDF, metres along z (default %.2f,%.2f)\n"
+			"  --max-jump M,DEG      largest move from the predicted pose believed per frame, metres and degrees (default %.2f,%.0f)\n"
+			"Targets are printed only for synthetic recordings (synth.yaml). Each benchmark ends with one line\n"
+			"'summary: mode=... key=value ...'.\n",
+			STEP_PROBE_SIZE, LIVE_PROBE_SIZE, double(TsdfOptions().voxel_size_m), DenseSlamOptions().icp.colour_weight, DenseSlamOptions().icp.min_depth_m,
+			DenseSlamOptions().icp.max_depth_m, double(TsdfOptions().min_depth_m), double(TsdfOptions().max_depth_m), DenseSlamOptions().icp.max_jump_m,
+			DenseSlamOptions().icp.max_jump_deg);
 }
 
 int usage(const char *p_error) {
@@ -312,6 +417,47 @@ int usage(const char *p_error) {
 	}
 	print_usage(stderr);
 	return 2;
+}
+
+void print_settings(const DenseSlamOptions &p_slam) {
+	const TsdfOptions &tsdf = p_slam.tsdf;
+	const IcpOptions &icp = p_slam.icp;
+	std::printf("  SLAM settings: voxel %.1f mm, truncation %.0f mm, TSDF depth %.2f..%.2f m; ICP depth %.2f..%.2f m, colour weight %.3f, "
+				"max jump %.3f m / %.1f deg, %d levels; raycast level %d, tracking level %d, fuse poor frames %s\n",
+			1000.0 * tsdf.voxel_size_m, 1000.0 * tsdf.truncation_m, double(tsdf.min_depth_m), double(tsdf.max_depth_m), icp.min_depth_m, icp.max_depth_m,
+			icp.colour_weight, icp.max_jump_m, icp.max_jump_deg, icp.levels, p_slam.raycast_level, p_slam.tracking_level, p_slam.integrate_poor ? "yes" : "no");
+}
+
+// The RGB-D camera --rig or --intrinsics gives on top of p_base, the source's own (--intrinsics
+// keeps its size, drops its distortion). Unchanged, with an empty note, when neither is given.
+// False after printing the problem.
+bool camera_from_arguments(const Arguments &p_args, const PinholeParams &p_base, PinholeParams *r_camera, std::string *r_note) {
+	*r_camera = p_base;
+	r_note->clear();
+	if (!p_args.rig_file.empty()) {
+		const RigLoadResult rig = load_rig(p_args.rig_file);
+		if (!rig.ok) {
+			std::fprintf(stderr, "roomprobe_bench: --rig: %s\n", rig.error.c_str());
+			return false;
+		}
+		*r_camera = rig.rig.rgb;
+		*r_note = "--rig " + p_args.rig_file;
+	} else if (p_args.has_intrinsics) {
+		*r_camera = PinholeParams();
+		r_camera->width = p_base.width;
+		r_camera->height = p_base.height;
+		r_camera->fx = p_args.intrinsics[0];
+		r_camera->fy = p_args.intrinsics[1];
+		r_camera->cx = p_args.intrinsics[2];
+		r_camera->cy = p_args.intrinsics[3];
+		*r_note = "--intrinsics";
+	}
+	return true;
+}
+
+bool is_synthetic_recording(const std::string &p_folder) {
+	std::error_code ec;
+	return std::filesystem::exists(std::filesystem::path(p_folder) / "synth.yaml", ec);
 }
 
 // ---------------------------------------------------------------- recording: the engine's setup
@@ -337,6 +483,11 @@ struct RecordingSetup {
 	glm::dvec3 probe = glm::dvec3(0.0);
 	bool probe_from_file = false;
 	size_t rgbd_total = 0; // RGB-D frames to play (--frames)
+	bool synthetic = false; // made by ./roomprobe synth (synth.yaml): the targets apply
+	PinholeParams camera; // the RGB-D camera SLAM uses (the rig's, or --rig's or --intrinsics')
+	std::string camera_note; // where it comes from when not the rig ("--intrinsics")
+	// Why the engine cannot run (no room, no fisheye stream): dense SLAM alone then. Empty: it can.
+	std::string engine_skip;
 };
 
 // Opens p_args.recording and builds the configuration; false after printing the problem.
@@ -347,13 +498,30 @@ bool open_recording(const Arguments &p_args, int p_probe_size, RecordingSetup *r
 		return false;
 	}
 	const RecordingReader &reader = r_setup->reader;
-	if (!reader.has_room()) {
-		std::fprintf(stderr, "roomprobe_bench: --recording %s: no room.yaml room\n", p_args.recording.c_str());
-		return false;
-	}
 	if (reader.rgbd_count() == 0) {
 		std::fprintf(stderr, "roomprobe_bench: --recording %s: no usable RGB-D frames\n", p_args.recording.c_str());
 		return false;
+	}
+	if (!camera_from_arguments(p_args, reader.get_rig().rgb, &r_setup->camera, &r_setup->camera_note)) {
+		return false;
+	}
+	const PinholeParams &rig_rgb = reader.get_rig().rgb;
+	if (r_setup->camera.width != rig_rgb.width || r_setup->camera.height != rig_rgb.height) {
+		std::fprintf(stderr, "roomprobe_bench: --rig %s: its RGB-D camera is %dx%d, the recording's images %dx%d\n", p_args.rig_file.c_str(),
+				r_setup->camera.width, r_setup->camera.height, rig_rgb.width, rig_rgb.height);
+		return false;
+	}
+	r_setup->synthetic = is_synthetic_recording(p_args.recording);
+	r_setup->rgbd_total = p_args.frames > 0 ? std::min(reader.rgbd_count(), size_t(p_args.frames)) : reader.rgbd_count();
+	if (!reader.has_room()) {
+		r_setup->engine_skip = "no room (no room.yaml)";
+	} else if (!reader.get_rig().has_fisheye()) {
+		r_setup->engine_skip = "no fisheye stream (the rig has no fisheye)";
+	} else if (reader.fisheye_count() == 0) {
+		r_setup->engine_skip = "no fisheye stream (no fisheye frames)";
+	}
+	if (!r_setup->engine_skip.empty()) {
+		return true; // SLAM only: no engine to configure
 	}
 	RigPhotometry photometry;
 	std::string error;
@@ -365,6 +533,8 @@ bool open_recording(const Arguments &p_args, int p_probe_size, RecordingSetup *r
 	LiveRoomConfig &config = r_setup->config;
 	config.has_rig = true;
 	config.rig = reader.get_rig();
+	config.rig.rgb = r_setup->camera;
+	config.slam = p_args.slam;
 	config.photometry = photometry;
 	config.has_room = true;
 	config.floorplan = room.floorplan;
@@ -380,7 +550,6 @@ bool open_recording(const Arguments &p_args, int p_probe_size, RecordingSetup *r
 	config.coarse.cubemap_size = p_probe_size;
 	config.mesh_interval_frames = MESH_INTERVAL;
 	r_setup->probe = probe_position(room, &r_setup->probe_from_file);
-	r_setup->rgbd_total = p_args.frames > 0 ? std::min(reader.rgbd_count(), size_t(p_args.frames)) : reader.rgbd_count();
 	return true;
 }
 
@@ -392,9 +561,13 @@ void print_recording_header(const char *p_mode, const Arguments &p_args, const R
 	std::printf("roomprobe_bench %s --recording %s\n", p_mode, p_args.recording.c_str());
 	std::printf("  RGB-D %dx%d, %zu of %zu frames; fisheye %dx%d, %zu frames in the recording; %zu recording issues\n", rig.rgb.width, rig.rgb.height,
 			p_setup.rgbd_total, reader.rgbd_count(), rig.fisheye.width, rig.fisheye.height, reader.fisheye_count(), reader.get_issues().size());
-	std::printf("  probe %s at [%.2f %.2f %.2f], %d^2; voxel %.0f mm, truncation %.0f mm; coarse texel %.0f mm, async inpainting, gain lighting\n",
+	std::printf("  intrinsics (%s): fx %.3f fy %.3f cx %.3f cy %.3f%s; depth scale %.6f m per unit\n",
+			p_setup.camera_note.empty() ? "rig.yaml" : p_setup.camera_note.c_str(), rig.rgb.fx, rig.rgb.fy, rig.rgb.cx, rig.rgb.cy,
+			has_pinhole_distortion(rig.rgb) ? " (with distortion)" : "", rig.depth_scale_m);
+	std::printf("  probe %s at [%.2f %.2f %.2f], %d^2; coarse texel %.0f mm, async inpainting, gain lighting\n",
 			p_setup.probe_from_file ? "0" : "(none in room.yaml: floorplan centre)", p_setup.probe.x, p_setup.probe.y, p_setup.probe.z, p_probe_size,
-			1000.0 * slam.tsdf.voxel_size_m, 1000.0 * slam.tsdf.truncation_m, 1000.0 * p_setup.config.coarse.texel_size_m);
+			1000.0 * p_setup.config.coarse.texel_size_m);
+	print_settings(slam);
 	if (photometry.known) {
 		std::printf("  photometry (synth.yaml): fisheye exposure %.3f, RGB exposure %.3f, vignetting edge gain %.3f\n", photometry.fisheye_exposure,
 				photometry.rgb_exposure, photometry.fisheye_vignetting_edge_gain);
@@ -407,6 +580,21 @@ void print_recording_header(const char *p_mode, const Arguments &p_args, const R
 			tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
 }
 
+// What dense SLAM alone runs on: a TUM sequence, a 7-Scenes-layout folder or a SLAM-only recording.
+struct DenseSource {
+	const char *mode = ""; // the summary's mode: tum, 7scenes, recording
+	std::string option; // "--tum DIR", for messages
+	const RecordingReader *reader = nullptr;
+	PinholeParams camera; // the RGB-D camera SLAM uses
+	std::string camera_note; // where it comes from
+	bool synthetic = false; // the targets apply
+	bool has_start_pose = false; // room.yaml's initial pose at frame 0; else the ground truth's first
+	Pose start_pose;
+	std::string skipped; // what is not run and why ("no fisheye stream: ...")
+};
+
+int bench_dense(const Arguments &p_args, const DenseSource &p_source);
+
 // ---------------------------------------------------------------- slam --recording (step mode)
 
 int bench_recording(const Arguments &p_args) {
@@ -416,6 +604,19 @@ int bench_recording(const Arguments &p_args) {
 		return 1;
 	}
 	const RecordingReader &reader = setup.reader;
+	if (!setup.engine_skip.empty()) {
+		DenseSource source;
+		source.mode = "recording";
+		source.option = "--recording " + p_args.recording;
+		source.reader = &reader;
+		source.camera = setup.camera;
+		source.camera_note = setup.camera_note.empty() ? "rig.yaml" : setup.camera_note;
+		source.synthetic = setup.synthetic;
+		source.has_start_pose = reader.has_room();
+		source.start_pose = reader.has_room() ? reader.get_room().initial_rgb_pose : Pose();
+		source.skipped = setup.engine_skip + ": coarse model and probes skipped, dense SLAM alone (DenseSlam)";
+		return bench_dense(p_args, source);
+	}
 	const Rig &rig = setup.config.rig;
 	const glm::dvec3 probe = setup.probe;
 	const Trajectory &truth = setup.config.ground_truth;
@@ -427,6 +628,10 @@ int bench_recording(const Arguments &p_args) {
 	}
 	const int probe_id = engine.add_probe(probe, probe_size);
 	print_recording_header("slam", p_args, setup, probe_size);
+	TrajectoryFile trajectory_file;
+	if (!trajectory_file.open(p_args.save_trajectory, "slam --recording " + p_args.recording, "the room's (room.yaml's initial pose)")) {
+		return 1;
+	}
 
 	SlamFigures figures;
 	Series occlusion, lighting, update, inpaint, coarse_frame;
@@ -453,7 +658,7 @@ int bench_recording(const Arguments &p_args) {
 			push_rgbd.add(push_ms);
 			const std::shared_ptr<const TrackedFrame> tracked = engine.tracked_frame();
 			if (tracked) {
-				record_tracked_frame(*tracked, &truth, &figures);
+				record_tracked_frame(*tracked, &figures, &trajectory_file);
 			}
 			// The engine re-meshes inside push_rgbd every MESH_INTERVAL fused frames: its cost is the
 			// call's time beyond SLAM's own (meshing and the placement BVH).
@@ -567,7 +772,9 @@ int bench_recording(const Arguments &p_args) {
 	std::printf("  median-based %.2f ms (%.2f + %.3f x %.2f)   mean-based %.2f ms   paper %.2f ms (GPU system, incl. rendering the scene)\n", full_median,
 			live_frame.median(), fisheye_per_rgbd, push_fisheye.median(), full_mean, PAPER_FRAME_MS);
 	std::printf("  (re-meshing is inside push_rgbd: in the mean, rarely in the median)\n");
-	print_slam_target(figures, rig.rgb.width, rig.rgb.height);
+	if (setup.synthetic) {
+		print_slam_target(figures, rig.rgb.width, rig.rgb.height);
+	}
 
 	// The dense pass's cost options on the final model: the engine's coarse map at the probe
 	// (render_at without the dense model), then render_dense_over on the engine's TSDF at each scale.
@@ -609,7 +816,7 @@ int bench_recording(const Arguments &p_args) {
 	}
 
 	std::printf("\n");
-	print_accuracy(figures, true, "the engine's tracked RGB-D poses, the held pose when lost");
+	const Accuracy accuracy = print_accuracy(figures.reported, truth, figures, setup.synthetic, "the engine's tracked RGB-D poses, the held pose when lost");
 	if (!fisheye_error_mm.empty()) {
 		std::printf("  fisheye poses from the tracked trajectory: position error median %.2f mm, max %.2f mm (against the ground truth's)\n",
 				fisheye_error_mm.median(), fisheye_error_mm.percentile(1.0));
@@ -617,10 +824,11 @@ int bench_recording(const Arguments &p_args) {
 	std::printf("\n");
 	print_memory(stats.tsdf);
 	std::printf("  dense mesh: %zu triangles\n", figures.mesh_triangles);
+	trajectory_file.close(p_args.save_trajectory);
 	std::printf("summary: mode=slam frames=%zu fisheye_frames=%zu track_ms_p50=%.2f integrate_ms_p50=%.2f slam_ms_p50=%.2f probe_ms_p50=%.2f "
-				"frame_ms_p50=%.2f frame_ms_mean=%.2f ate_mm=%s good=%d poor=%d lost=%d\n",
+				"frame_ms_p50=%.2f frame_ms_mean=%.2f %s good=%d poor=%d lost=%d\n",
 			rgbd_done, fisheye_integrated, figures.track.median(), figures.integrate.median(), figures.process.median(), map_total.median(), full_median,
-			full_mean, figure(figures.compared > 0, figures.ate_mm()).c_str(), figures.good, figures.poor, figures.lost);
+			full_mean, accuracy_summary(accuracy).c_str(), figures.good, figures.poor, figures.lost);
 	return 0;
 }
 
@@ -630,6 +838,11 @@ int bench_live(const Arguments &p_args) {
 	const int probe_size = p_args.probe_size > 0 ? p_args.probe_size : LIVE_PROBE_SIZE;
 	RecordingSetup setup;
 	if (!open_recording(p_args, probe_size, &setup)) {
+		return 1;
+	}
+	if (!setup.engine_skip.empty()) {
+		std::fprintf(stderr, "roomprobe_bench: live --recording %s: %s, so no engine to play it into (slam runs dense SLAM alone on it)\n",
+				p_args.recording.c_str(), setup.engine_skip.c_str());
 		return 1;
 	}
 	const RecordingReader &reader = setup.reader;
@@ -798,9 +1011,6 @@ int bench_live(const Arguments &p_args) {
 	figures.poor = int(stats.poor);
 	figures.lost = int(stats.lost);
 	const Trajectory tracked = engine.trajectory();
-	for (const TimedPose &sample : tracked.get_samples()) {
-		record_error(sample.world_from_camera, sample.t_s, &truth, &figures);
-	}
 	const std::shared_ptr<const TrackedFrame> last = engine.tracked_frame();
 
 	std::printf("  pushed: %zu RGB-D, %zu fisheye frames; %zu unreadable\n\n", rgbd_pushed, fisheye_pushed, frames_failed);
@@ -857,80 +1067,87 @@ int bench_live(const Arguments &p_args) {
 				last->reason.c_str());
 	}
 	std::printf("\n");
-	print_accuracy(figures, true, "the tracked trajectory, whose poses lost frames do not enter");
+	const Accuracy accuracy = print_accuracy(tracked, truth, figures, setup.synthetic, "the tracked trajectory, whose poses lost frames do not enter");
 	std::printf("\n");
 	print_memory(stats.tsdf);
 	const bool has_rgbd_latency = stats.rgbd_latency.count > 0, has_fisheye_latency = stats.fisheye_latency.count > 0;
 	std::printf("summary: mode=live latency_ms_p50=%s latency_ms_p95=%s fisheye_latency_ms_p50=%s fisheye_latency_ms_p95=%s dropped_rgbd=%llu "
 				"dropped_fisheye=%llu fisheye_without_pose=%llu pushed_rgbd=%llu pushed_fisheye=%llu processed_rgbd=%llu integrated_fisheye=%llu "
-				"probe_renders=%llu probe_ms_p50=%s main_copy_ms_p50=%.3f main_copy_ms_p95=%.3f real_time_factor=%.3f ate_mm=%s good=%llu poor=%llu "
-				"lost=%llu\n",
+				"probe_renders=%llu probe_ms_p50=%s main_copy_ms_p50=%.3f main_copy_ms_p95=%.3f real_time_factor=%.3f %s good=%llu "
+				"poor=%llu lost=%llu\n",
 			figure(has_rgbd_latency, stats.rgbd_latency.p50_ms).c_str(), figure(has_rgbd_latency, stats.rgbd_latency.p95_ms).c_str(),
 			figure(has_fisheye_latency, stats.fisheye_latency.p50_ms).c_str(), figure(has_fisheye_latency, stats.fisheye_latency.p95_ms).c_str(),
 			(unsigned long long)stats.rgbd_dropped, (unsigned long long)stats.fisheye_dropped, (unsigned long long)stats.fisheye_without_pose,
 			(unsigned long long)stats.rgbd_pushed, (unsigned long long)stats.fisheye_pushed, (unsigned long long)stats.rgbd_processed,
 			(unsigned long long)stats.fisheye_integrated, (unsigned long long)stats.probe_renders, figure(!map_total.empty(), map_total.median()).c_str(),
-			main_copy_ms.median(), main_copy_ms.percentile(0.95), real_time_factor, figure(figures.compared > 0, figures.ate_mm()).c_str(),
+			main_copy_ms.median(), main_copy_ms.percentile(0.95), real_time_factor, accuracy_summary(accuracy).c_str(),
 			(unsigned long long)stats.good, (unsigned long long)stats.poor, (unsigned long long)stats.lost);
 	return 0;
 }
 
-// ---------------------------------------------------------------- slam --tum (DenseSlam alone)
+// ---------------------------------------------------------------- dense SLAM alone (DenseSlam)
 
-int bench_tum(const Arguments &p_args) {
-	TumDatasetOptions options;
-	TumCamera camera = TumCamera::RosDefault;
-	const bool named = tum_camera_from_folder_name(p_args.tum, &camera);
-	options.rgb = tum_camera_intrinsics(camera);
-	RecordingReader reader;
-	const RecordingStatus status = open_tum_dataset(p_args.tum, &reader, options);
-	if (!status.ok) {
-		std::fprintf(stderr, "roomprobe_bench: --tum: %s\n", status.error.c_str());
-		return 1;
-	}
+int bench_dense(const Arguments &p_args, const DenseSource &p_source) {
+	const RecordingReader &reader = *p_source.reader;
+	const char *option = p_source.option.c_str();
 	if (reader.rgbd_count() == 0) {
-		std::fprintf(stderr, "roomprobe_bench: --tum %s: no usable RGB-D frames (rgb.txt and depth.txt pair none)\n", p_args.tum.c_str());
+		std::fprintf(stderr, "roomprobe_bench: %s: no usable RGB-D frames\n", option);
+		for (size_t i = 0; i < reader.get_issues().size() && i < 5; i++) {
+			std::fprintf(stderr, "  issue: %s\n", to_string(reader.get_issues()[i]).c_str());
+		}
 		return 1;
 	}
 	const Trajectory &truth = reader.ground_truth_trajectory(RecordingStream::Rgbd);
-	// Start at the first frame the ground truth covers, at its pose: then both share the world frame.
+	// From room.yaml's initial pose at frame 0; else from the first frame the ground truth covers,
+	// at its pose, so that both share the world frame; else from the identity (timings only).
 	size_t first = 0;
-	Pose initial;
-	bool has_initial = false;
-	for (; first < reader.rgbd_count() && !truth.is_empty(); first++) {
-		std::string error;
-		if (truth.pose_at(reader.get_rgbd_ref(first).rgb.timestamp_s, &initial, &error)) {
-			has_initial = true;
-			break;
+	Pose initial = p_source.start_pose;
+	std::string start;
+	if (p_source.has_start_pose) {
+		start = "room.yaml's initial pose at frame 0";
+	} else {
+		for (; first < reader.rgbd_count() && !truth.is_empty(); first++) {
+			std::string error;
+			if (truth.pose_at(reader.get_rgbd_ref(first).rgb.timestamp_s, &initial, &error)) {
+				char text[96];
+				std::snprintf(text, sizeof(text), "the ground-truth pose of frame %zu (t = %.4f s)", first, reader.get_rgbd_ref(first).rgb.timestamp_s);
+				start = text;
+				break;
+			}
+		}
+		if (start.empty()) {
+			first = 0;
+			initial = Pose();
+			start = "the identity (no ground-truth pose at any frame: no ATE or RPE)";
 		}
 	}
-	if (!has_initial) {
-		first = 0; // no ground truth: the identity, timings only
-	}
-	DenseSlam slam;
-	const std::string error = slam.configure(reader.get_rig().rgb, initial);
+	DenseSlam slam(p_args.slam);
+	const std::string error = slam.configure(p_source.camera, initial);
 	if (!error.empty()) {
-		std::fprintf(stderr, "roomprobe_bench: --tum %s: %s\n", p_args.tum.c_str(), error.c_str());
+		std::fprintf(stderr, "roomprobe_bench: %s: %s\n", option, error.c_str());
 		return 1;
 	}
 	const size_t available = reader.rgbd_count() - first;
 	const size_t total = p_args.frames > 0 ? std::min(available, size_t(p_args.frames)) : available;
-	const PinholeParams &rgb = reader.get_rig().rgb;
-	std::printf("roomprobe_bench slam --tum %s\n", p_args.tum.c_str());
-	std::printf("  %zu RGB-D pairs (%zu processed, from frame %zu), %zu issues; intrinsics %s: fx %.3f fy %.3f cx %.3f cy %.3f%s\n", reader.rgbd_count(),
-			total, first, reader.get_issues().size(),
-			!named ? "ROS default (folder name gives no freiburg1/2/3)" : camera == TumCamera::Freiburg1 ? "Freiburg1" : camera == TumCamera::Freiburg2 ? "Freiburg2" : "Freiburg3",
-			rgb.fx, rgb.fy, rgb.cx, rgb.cy, has_pinhole_distortion(rgb) ? " (with distortion)" : "");
+	const PinholeParams &rgb = p_source.camera;
+	std::printf("roomprobe_bench slam %s\n", option);
+	if (!p_source.skipped.empty()) {
+		std::printf("  %s\n", p_source.skipped.c_str());
+	}
+	std::printf("  RGB-D %dx%d: %zu frames (%zu processed, from frame %zu), %zu issues; depth scale %.6f m per unit\n", rgb.width, rgb.height,
+			reader.rgbd_count(), total, first, reader.get_issues().size(), reader.get_rig().depth_scale_m);
+	std::printf("  intrinsics (%s): fx %.3f fy %.3f cx %.3f cy %.3f%s\n", p_source.camera_note.c_str(), rgb.fx, rgb.fy, rgb.cx, rgb.cy,
+			has_pinhole_distortion(rgb) ? " (with distortion)" : "");
 	for (size_t i = 0; i < reader.get_issues().size() && i < 5; i++) {
 		std::printf("  issue: %s\n", to_string(reader.get_issues()[i]).c_str());
 	}
-	if (!has_initial) {
-		std::printf("  no ground-truth pose at any frame: starting at the identity, no ATE\n");
-	} else {
-		std::printf("  start: ground-truth pose at t = %.4f s\n", reader.get_rgbd_ref(first).rgb.timestamp_s);
+	std::printf("  start: %s\n", start.c_str());
+	print_settings(p_args.slam);
+	std::printf("  threads: OpenCV %d, TBB %zu\n", cv::getNumThreads(), tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+	TrajectoryFile trajectory_file;
+	if (!trajectory_file.open(p_args.save_trajectory, "slam " + p_source.option, p_source.has_start_pose ? "the room's (room.yaml's initial pose)" : "the ground truth's (SLAM starts at its pose of the first frame it covers)")) {
+		return 1;
 	}
-	std::printf("  threads: OpenCV %d, TBB %zu\n", cv::getNumThreads(),
-			tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
 
 	SlamFigures figures;
 	size_t done = 0, failed = 0;
@@ -945,26 +1162,85 @@ int bench_tum(const Arguments &p_args) {
 		record_timings(result.timings, result.integrated, &figures);
 		record_state(result.tracking.state, &figures);
 		// The reported pose (the held one when Lost), as the application would use it.
-		record_error(result.tracking.world_from_camera, frame.frame.timestamp_s, has_initial ? &truth : nullptr, &figures);
+		record_pose(frame.frame.timestamp_s, result.tracking.world_from_camera, &figures);
+		trajectory_file.add(frame.frame.timestamp_s, result.tracking.world_from_camera, result.tracking.state, result.tracking.reason);
 		done++;
 	}
 	if (done == 0) {
-		std::fprintf(stderr, "roomprobe_bench: --tum %s: no RGB-D frame could be read\n", p_args.tum.c_str());
+		std::fprintf(stderr, "roomprobe_bench: %s: no RGB-D frame could be read\n", option);
 		return 1;
 	}
 	std::printf("  processed %zu frames, %zu unreadable\n\n", done, failed);
 	print_table_header("per-stage timings, ms (paper: Table 1, for reference)");
 	print_slam_rows(figures, "");
-	print_slam_target(figures, rgb.width, rgb.height);
+	std::printf("  time per frame (DenseSlam::process, median): %.2f ms; tracking + integration median %.2f ms\n", figures.process.median(),
+			figures.track_integrate.median());
+	if (p_source.synthetic) {
+		print_slam_target(figures, rgb.width, rgb.height);
+	}
 	std::printf("\n");
-	print_accuracy(figures, false, "tracked RGB-D poses, the held pose when lost");
+	const Accuracy accuracy = print_accuracy(figures.reported, truth, figures, p_source.synthetic, "tracked RGB-D poses, the held pose when lost");
 	std::printf("\n");
 	print_memory(slam.volume().stats());
-	std::printf("summary: mode=tum frames=%zu track_ms_p50=%.2f integrate_ms_p50=%.2f slam_ms_p50=%.2f track_integrate_ms_p50=%.2f ate_mm=%s good=%d "
+	trajectory_file.close(p_args.save_trajectory);
+	std::printf("summary: mode=%s frames=%zu track_ms_p50=%.2f integrate_ms_p50=%.2f slam_ms_p50=%.2f track_integrate_ms_p50=%.2f %s good=%d "
 				"poor=%d lost=%d\n",
-			done, figures.track.median(), figures.integrate.median(), figures.process.median(), figures.track_integrate.median(),
-			figure(figures.compared > 0, figures.ate_mm()).c_str(), figures.good, figures.poor, figures.lost);
+			p_source.mode, done, figures.track.median(), figures.integrate.median(), figures.process.median(), figures.track_integrate.median(),
+			accuracy_summary(accuracy).c_str(), figures.good, figures.poor, figures.lost);
 	return 0;
+}
+
+int bench_tum(const Arguments &p_args) {
+	TumDatasetOptions options;
+	TumCamera camera = TumCamera::RosDefault;
+	const bool named = tum_camera_from_folder_name(p_args.tum, &camera);
+	DenseSource source;
+	source.camera_note = !named ? "ROS default: the folder name gives no freiburg1/2/3"
+			: camera == TumCamera::Freiburg1		   ? "Freiburg1"
+			: camera == TumCamera::Freiburg2		   ? "Freiburg2"
+													   : "Freiburg3";
+	std::string note;
+	if (!camera_from_arguments(p_args, tum_camera_intrinsics(camera), &options.rgb, &note)) {
+		return 1;
+	}
+	source.camera_note = note.empty() ? source.camera_note : note;
+	RecordingReader reader;
+	const RecordingStatus status = open_tum_dataset(p_args.tum, &reader, options);
+	if (!status.ok) {
+		std::fprintf(stderr, "roomprobe_bench: --tum: %s\n", status.error.c_str());
+		return 1;
+	}
+	source.mode = "tum";
+	source.option = "--tum " + p_args.tum;
+	source.reader = &reader;
+	source.camera = reader.get_rig().rgb;
+	return bench_dense(p_args, source);
+}
+
+int bench_7scenes(const Arguments &p_args) {
+	FramesDatasetOptions options;
+	DenseSource source;
+	source.camera_note = "camera-intrinsics.txt";
+	PinholeParams from_images; // width and height 0: the images'
+	std::string note;
+	if (!camera_from_arguments(p_args, from_images, &options.intrinsics, &note)) {
+		return 1;
+	}
+	if (!note.empty()) {
+		options.override_intrinsics = true;
+		source.camera_note = note;
+	}
+	RecordingReader reader;
+	const RecordingStatus status = open_frames_dataset(p_args.seven_scenes, &reader, options);
+	if (!status.ok) {
+		std::fprintf(stderr, "roomprobe_bench: --7scenes: %s\n", status.error.c_str());
+		return 1;
+	}
+	source.mode = "7scenes";
+	source.option = "--7scenes " + p_args.seven_scenes;
+	source.reader = &reader;
+	source.camera = reader.get_rig().rgb;
+	return bench_dense(p_args, source);
 }
 
 } // namespace
@@ -1010,10 +1286,56 @@ int main(int argc, char **argv) {
 				return usage("--probe-size needs a face size in texels, 1 to 4096");
 			}
 			args.probe_size = int(n);
+		} else if (arg == "--7scenes" && args.mode == "slam") {
+			if (!cursor.value(&args.seven_scenes)) {
+				return usage("--7scenes needs a folder");
+			}
 		} else if (arg == "--speed" && args.mode == "live") {
 			if (!cursor.positive_number(&args.speed)) {
 				return usage("--speed needs a number > 0");
 			}
+		} else if (arg == "--rig") {
+			if (!cursor.value(&args.rig_file)) {
+				return usage("--rig needs a rig file");
+			}
+		} else if (arg == "--intrinsics") {
+			if (!cursor.number_list(4, args.intrinsics) || !(args.intrinsics[0] > 0.0) || !(args.intrinsics[1] > 0.0)) {
+				return usage("--intrinsics needs FX,FY,CX,CY in pixels, the focal lengths > 0");
+			}
+			args.has_intrinsics = true;
+		} else if (arg == "--save-trajectory" && args.mode == "slam") {
+			if (!cursor.value(&args.save_trajectory)) {
+				return usage("--save-trajectory needs a file");
+			}
+		} else if (arg == "--voxel-size-m") {
+			double v = 0.0;
+			if (!cursor.positive_number(&v) || v > 1.0) {
+				return usage("--voxel-size-m needs a voxel edge in metres, > 0 and <= 1");
+			}
+			args.slam.tsdf.voxel_size_m = float(v);
+		} else if (arg == "--colour-weight") {
+			if (!cursor.non_negative_number(&args.slam.icp.colour_weight)) {
+				return usage("--colour-weight needs a number >= 0 (metres per unit intensity; 0: geometry only)");
+			}
+		} else if (arg == "--icp-depth-range" || arg == "--tsdf-depth-range") {
+			double range[2];
+			if (!cursor.number_list(2, range) || !(range[0] >= 0.0) || !(range[1] > range[0])) {
+				return usage((arg + " needs MIN,MAX in metres, 0 <= MIN < MAX").c_str());
+			}
+			if (arg == "--icp-depth-range") {
+				args.slam.icp.min_depth_m = range[0];
+				args.slam.icp.max_depth_m = range[1];
+			} else {
+				args.slam.tsdf.min_depth_m = float(range[0]);
+				args.slam.tsdf.max_depth_m = float(range[1]);
+			}
+		} else if (arg == "--max-jump") {
+			double jump[2];
+			if (!cursor.number_list(2, jump) || !(jump[0] > 0.0) || !(jump[1] > 0.0)) {
+				return usage("--max-jump needs M,DEG, both > 0 (metres and degrees)");
+			}
+			args.slam.icp.max_jump_m = jump[0];
+			args.slam.icp.max_jump_deg = jump[1];
 		} else if (arg == "--help" || arg == "-h") {
 			print_usage(stdout);
 			return 0;
@@ -1024,8 +1346,15 @@ int main(int argc, char **argv) {
 	if (args.mode == "live" && args.recording.empty()) {
 		return usage("live needs --recording");
 	}
-	if (args.recording.empty() && args.tum.empty()) {
-		return usage("--recording or --tum is required");
+	const int sources = int(!args.recording.empty()) + int(!args.tum.empty()) + int(!args.seven_scenes.empty());
+	if (sources == 0) {
+		return usage("--recording, --tum or --7scenes is required");
+	}
+	if (sources > 1 && !args.save_trajectory.empty()) {
+		return usage("--save-trajectory takes one source (--recording, --tum or --7scenes), not several");
+	}
+	if (!args.rig_file.empty() && args.has_intrinsics) {
+		return usage("--rig and --intrinsics both give the RGB-D camera: take one");
 	}
 	// OpenCV's parallel_for_ (SLAM kernels) and TBB (coarse model, cubemaps) each have a pool.
 	std::unique_ptr<tbb::global_control> tbb_threads;
@@ -1045,6 +1374,12 @@ int main(int argc, char **argv) {
 			std::printf("\n");
 		}
 		rc = bench_tum(args);
+	}
+	if (rc == 0 && !args.seven_scenes.empty()) {
+		if (!args.recording.empty() || !args.tum.empty()) {
+			std::printf("\n");
+		}
+		rc = bench_7scenes(args);
 	}
 	return rc;
 }

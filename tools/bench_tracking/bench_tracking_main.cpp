@@ -1,9 +1,18 @@
 // RoomProbe's ICP tracker (extension/core/slam/icp_tracker.h) against OpenCV contrib's rgbd
-// odometry (cv::rgbd::ICPOdometry, cv::rgbd::FastICPOdometry), frame-to-frame on the synthetic
-// living room at 640x480 with Kinect-like depth noise: per-frame median time and ATE RMSE, in one
-// process, so that the ratios mean something. Prints figures; asserts nothing.
+// odometry (cv::rgbd::ICPOdometry, cv::rgbd::FastICPOdometry), all frame-to-frame: each tracker
+// estimates the motion from the previous frame to the current one and chains it onto its own
+// previous estimate (the full pose chain, as a visual odometry runs), from the ground truth's pose
+// of the first frame. Per-frame median time, ATE RMSE and RPE (eval/trajectory_metrics.h: no
+// alignment, the same convention as roomprobe_bench), in one process, so that the ratios mean
+// something. Prints figures; asserts nothing.
+//
+// Synthetic (no option): the living room at 640x480 with Kinect-like depth noise, rendered here.
+// Dataset (--7scenes DIR or --tum DIR): real frames through the readers (recording/
+// frames_dataset.h, recording/tum_dataset.h), undistorted first when the camera has distortion;
+// ends with one line 'summary: mode=tracking ... key=value ...'.
 //
 // usage: build/bin/roomprobe_bench_tracking [frames=30] [passes=3] [rig=calib/synthetic_rig.yaml]
+//        build/bin/roomprobe_bench_tracking (--7scenes DIR | --tum DIR) [--frames N] [--passes N]
 
 #include <io/opencv.h>
 
@@ -12,7 +21,12 @@
 #include <opencv2/rgbd.hpp>
 #pragma GCC diagnostic pop
 
+#include "../common/cli.h"
+
 #include "camera/pinhole_camera.h"
+#include "eval/trajectory_metrics.h"
+#include "recording/frames_dataset.h"
+#include "recording/tum_dataset.h"
 #include "rig/rig.h"
 #include "slam/icp_tracker.h"
 #include "synth/synth_renderer.h"
@@ -35,6 +49,7 @@ namespace {
 
 struct Frame {
 	double time_s = 0.0;
+	bool has_truth = true; // false: the ground truth has no pose at this frame
 	Pose truth; // world_from_camera
 	cv::Mat depth_m; // CV_32FC1, NaN = none
 	cv::Mat rgb; // CV_8UC3 R, G, B
@@ -68,19 +83,32 @@ using TrackFunction = std::function<bool(const Frame &p_previous, const Pose &p_
 
 struct Figures {
 	double median_ms = 0.0;
-	double ate_rmse_mm = 0.0;
+	AbsoluteTrajectoryError ate;
+	RelativePoseError rpe; // per frame
 	int failures = 0;
 };
 
 // Tracks the frames with every tracker, interleaved frame by frame so that a busy machine slows
-// them alike; p_passes times over, the per-frame times of all passes pooled for the median.
+// them alike; p_passes times over, the per-frame times of all passes pooled for the median. Each
+// starts at frame 0's true pose; the accuracy is the last pass's.
 std::vector<Figures> run(const std::vector<Frame> &p_frames, int p_passes, const std::vector<TrackFunction> &p_trackers) {
 	const size_t n = p_trackers.size();
 	std::vector<std::vector<double>> times_ms(n);
 	std::vector<Figures> figures(n);
+	Trajectory truth;
+	std::vector<TimedPose> true_samples;
+	for (const Frame &frame : p_frames) {
+		if (frame.has_truth) {
+			true_samples.push_back({ frame.time_s, frame.truth });
+		}
+	}
+	std::string error;
+	if (!truth.set_samples(std::move(true_samples), &error)) {
+		std::fprintf(stderr, "ground truth: %s\n", error.c_str());
+	}
 	for (int pass = 0; pass < p_passes; ++pass) {
 		std::vector<Pose> poses(n, p_frames[0].truth);
-		std::vector<double> sum_squared(n, 0.0);
+		std::vector<std::vector<TimedPose>> estimates(n, std::vector<TimedPose>{ { p_frames[0].time_s, p_frames[0].truth } });
 		std::vector<int> failures(n, 0);
 		for (size_t i = 1; i < p_frames.size(); ++i) {
 			for (size_t k = 0; k < n; ++k) {
@@ -90,12 +118,16 @@ std::vector<Figures> run(const std::vector<Frame> &p_frames, int p_passes, const
 				times_ms[k].push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
 				failures[k] += ok ? 0 : 1;
 				poses[k] = next;
-				const double error = glm::length(next.translation - p_frames[i].truth.translation);
-				sum_squared[k] += error * error;
+				estimates[k].push_back({ p_frames[i].time_s, next });
 			}
 		}
 		for (size_t k = 0; k < n; ++k) {
-			figures[k].ate_rmse_mm = 1000.0 * std::sqrt(sum_squared[k] / double(p_frames.size() - 1));
+			Trajectory estimate;
+			if (!estimate.set_samples(std::move(estimates[k]), &error)) {
+				std::fprintf(stderr, "tracker %zu: %s\n", k, error.c_str());
+			}
+			figures[k].ate = absolute_trajectory_error(estimate, truth);
+			figures[k].rpe = relative_pose_error(estimate, truth, 1.0, RpeDelta::Frames);
 			figures[k].failures = failures[k];
 		}
 	}
@@ -159,13 +191,164 @@ void print_breakdown(const std::vector<Frame> &p_frames, const IcpOptions &p_opt
 }
 
 void print(const char *p_name, const Figures &p_figures, const Figures &p_reference) {
-	std::printf("  %-44s %8.2f ms  (x%5.2f)   ATE RMSE %7.2f mm   failed frames %d\n", p_name, p_figures.median_ms,
-			p_figures.median_ms / p_reference.median_ms, p_figures.ate_rmse_mm, p_figures.failures);
+	std::printf("  %-44s %8.2f ms  (x%5.2f)   ATE RMSE %8.2f mm   RPE/frame %6.2f mm %6.3f deg   failed frames %d\n", p_name, p_figures.median_ms,
+			p_figures.median_ms / p_reference.median_ms, 1000.0 * p_figures.ate.rmse_m, 1000.0 * p_figures.rpe.translation_rmse_m,
+			p_figures.rpe.rotation_rmse_deg, p_figures.failures);
+}
+
+// The four trackers on the same frames, as both modes run them.
+struct Comparison {
+	std::vector<Figures> figures; // ours, ours with colour, ICPOdometry, FastICPOdometry
+	static constexpr const char *KEYS[4] = { "ours", "ours_colour", "cv_icp", "cv_fast_icp" };
+};
+
+Comparison compare(const std::vector<Frame> &p_frames, int p_passes, const PinholeParams &p_camera) {
+	const PinholeIntrinsics intrinsics = pinhole_intrinsics(p_camera);
+	const cv::Mat k = (cv::Mat_<double>(3, 3) << p_camera.fx, 0.0, p_camera.cx, 0.0, p_camera.fy, p_camera.cy, 0.0, 0.0, 1.0);
+	IcpOptions ours;
+	IcpOptions ours_colour = ours;
+	ours_colour.colour_weight = 0.1;
+	// OpenCV's defaults, with our depth range.
+	const float min_depth = float(ours.min_depth_m), max_depth = float(ours.max_depth_m);
+	Comparison comparison;
+	comparison.figures = run(p_frames, p_passes,
+			{ roomprobe_tracker(ours, intrinsics), roomprobe_tracker(ours_colour, intrinsics),
+					opencv_tracker(cv::rgbd::ICPOdometry::create(k, min_depth, max_depth)), opencv_tracker(cv::rgbd::FastICPOdometry::create(k)) });
+	const std::vector<Figures> &f = comparison.figures;
+	std::printf("per-frame median time (ratio to RoomProbe IcpTracker), ATE RMSE of translation, RPE per frame (translation, rotation):\n");
+	print("RoomProbe IcpTracker (make_model_maps+track)", f[0], f[0]);
+	print("RoomProbe IcpTracker, colour weight 0.1", f[1], f[0]);
+	print("cv::rgbd::ICPOdometry", f[2], f[0]);
+	print("cv::rgbd::FastICPOdometry", f[3], f[0]);
+	print_breakdown(p_frames, ours, intrinsics);
+	return comparison;
+}
+
+// --7scenes DIR or --tum DIR: the frames through the reader, undistorted when the camera has
+// distortion (the trackers take pinhole images), from the first frame the ground truth covers.
+bool load_dataset(const std::string &p_kind, const std::string &p_folder, long p_max_frames, std::vector<Frame> *r_frames, PinholeParams *r_camera) {
+	RecordingReader reader;
+	RecordingStatus status;
+	if (p_kind == "7scenes") {
+		status = open_frames_dataset(p_folder, &reader);
+	} else {
+		TumDatasetOptions options;
+		TumCamera camera = TumCamera::RosDefault;
+		tum_camera_from_folder_name(p_folder, &camera);
+		options.rgb = tum_camera_intrinsics(camera);
+		status = open_tum_dataset(p_folder, &reader, options);
+	}
+	if (!status.ok) {
+		std::fprintf(stderr, "--%s: %s\n", p_kind.c_str(), status.error.c_str());
+		return false;
+	}
+	for (const RecordingIssue &issue : reader.get_issues()) {
+		std::printf("  issue: %s\n", to_string(issue).c_str());
+	}
+	const Trajectory &truth = reader.ground_truth_trajectory(RecordingStream::Rgbd);
+	if (truth.is_empty()) {
+		std::fprintf(stderr, "--%s %s: no ground-truth trajectory, so no start pose and no accuracy\n", p_kind.c_str(), p_folder.c_str());
+		return false;
+	}
+	PinholeParams camera = reader.get_rig().rgb;
+	cv::Mat map_x, map_y;
+	if (has_pinhole_distortion(camera)) {
+		const cv::Mat k = (cv::Mat_<double>(3, 3) << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0);
+		const cv::Mat d = (cv::Mat_<double>(1, 5) << camera.k1, camera.k2, camera.p1, camera.p2, camera.k3);
+		cv::initUndistortRectifyMap(k, d, cv::Mat(), k, cv::Size(camera.width, camera.height), CV_32FC1, map_x, map_y);
+		camera.k1 = camera.k2 = camera.p1 = camera.p2 = camera.k3 = 0.0;
+	}
+	r_frames->clear();
+	for (size_t i = 0; i < reader.rgbd_count() && (p_max_frames <= 0 || long(r_frames->size()) < p_max_frames); i++) {
+		RgbdFrameResult read = reader.read_rgbd(i);
+		if (!read.ok) {
+			std::fprintf(stderr, "%s (frame skipped)\n", read.error.c_str());
+			continue;
+		}
+		Frame frame;
+		frame.time_s = read.frame.timestamp_s;
+		std::string error;
+		frame.has_truth = truth.pose_at(frame.time_s, &frame.truth, &error);
+		if (r_frames->empty() && !frame.has_truth) {
+			continue; // start where the ground truth does
+		}
+		frame.depth_m = read.frame.depth_m;
+		frame.rgb = read.frame.rgb;
+		if (!map_x.empty()) {
+			cv::remap(read.frame.depth_m, frame.depth_m, map_x, map_y, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+			cv::remap(read.frame.rgb, frame.rgb, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+		}
+		frame.mask = frame.depth_m == frame.depth_m; // not NaN
+		cv::cvtColor(frame.rgb, frame.gray, cv::COLOR_RGB2GRAY);
+		r_frames->push_back(frame);
+	}
+	if (r_frames->size() < 2) {
+		std::fprintf(stderr, "--%s %s: fewer than 2 usable frames with a ground-truth start\n", p_kind.c_str(), p_folder.c_str());
+		return false;
+	}
+	*r_camera = camera;
+	return true;
+}
+
+int run_dataset(int p_argc, char **p_argv) {
+	std::string kind, folder;
+	long frames = 0, passes = 1;
+	cli::Arguments cursor(p_argc, p_argv, 1);
+	std::string arg;
+	while (cursor.next(&arg)) {
+		if (arg == "--7scenes" || arg == "--tum") {
+			kind = arg.substr(2);
+			if (!cursor.value(&folder)) {
+				std::fprintf(stderr, "%s needs a folder\n", arg.c_str());
+				return 2;
+			}
+		} else if (arg == "--frames" || arg == "--passes") {
+			if (!cursor.positive_integer(arg == "--frames" ? &frames : &passes)) {
+				std::fprintf(stderr, "%s needs a positive integer\n", arg.c_str());
+				return 2;
+			}
+		} else {
+			std::fprintf(stderr, "unknown argument %s\nusage: roomprobe_bench_tracking (--7scenes DIR | --tum DIR) [--frames N] [--passes N]\n", arg.c_str());
+			return 2;
+		}
+	}
+	if (kind.empty()) {
+		std::fprintf(stderr, "usage: roomprobe_bench_tracking (--7scenes DIR | --tum DIR) [--frames N] [--passes N]\n");
+		return 2;
+	}
+	std::printf("roomprobe_bench_tracking --%s %s\n", kind.c_str(), folder.c_str());
+	std::vector<Frame> loaded;
+	PinholeParams camera;
+	if (!load_dataset(kind, folder, frames, &loaded, &camera)) {
+		return 1;
+	}
+	double path_m = 0.0;
+	for (size_t i = 1; i < loaded.size(); ++i) {
+		path_m += glm::length(loaded[i].truth.translation - loaded[i - 1].truth.translation);
+	}
+	std::printf("  %zu frames %dx%d from t = %.3f s, frame-to-frame, %ld passes, %d OpenCV threads; fx %.2f fy %.2f cx %.2f cy %.2f\n", loaded.size(),
+			camera.width, camera.height, loaded[0].time_s, passes, cv::getNumThreads(), camera.fx, camera.fy, camera.cx, camera.cy);
+	std::printf("  ground-truth path: %.1f mm; accuracy against the ground truth, from its pose of the first frame, no alignment\n", path_m * 1000.0);
+	const Comparison comparison = compare(loaded, int(passes), camera);
+	std::string summary = "summary: mode=tracking source=" + kind + " frames=" + std::to_string(loaded.size());
+	for (size_t k = 0; k < comparison.figures.size(); k++) {
+		const Figures &f = comparison.figures[k];
+		char text[256];
+		std::snprintf(text, sizeof(text), " %s_ms_p50=%.2f %s_ate_mm=%.2f %s_rpe_mm=%.2f %s_rpe_deg=%.3f %s_failed=%d", Comparison::KEYS[k], f.median_ms,
+				Comparison::KEYS[k], 1000.0 * f.ate.rmse_m, Comparison::KEYS[k], 1000.0 * f.rpe.translation_rmse_m, Comparison::KEYS[k],
+				f.rpe.rotation_rmse_deg, Comparison::KEYS[k], f.failures);
+		summary += text;
+	}
+	std::printf("%s\n", summary.c_str());
+	return 0;
 }
 
 } // namespace
 
 int main(int p_argc, char **p_argv) {
+	if (p_argc > 1 && std::string(p_argv[1]).rfind("--", 0) == 0) {
+		return run_dataset(p_argc, p_argv);
+	}
 	const int count = p_argc > 1 ? std::max(2, std::atoi(p_argv[1])) : 30;
 	const int passes = p_argc > 2 ? std::max(1, std::atoi(p_argv[2])) : 3;
 	const synth::SceneResult scene = synth::make_scene("living_room", synth::SceneOptions());
@@ -195,23 +378,6 @@ int main(int p_argc, char **p_argv) {
 	}
 	std::printf("  ground-truth path: %.1f mm\n", path_m * 1000.0);
 
-	const PinholeIntrinsics intrinsics = pinhole_intrinsics(camera);
-	const cv::Mat k = (cv::Mat_<double>(3, 3) << camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0);
-	IcpOptions ours;
-	IcpOptions ours_colour = ours;
-	ours_colour.colour_weight = 0.1;
-	// OpenCV's defaults, with our depth range.
-	const float min_depth = float(ours.min_depth_m), max_depth = float(ours.max_depth_m);
-	const std::vector<Figures> figures = run(frames, passes,
-			{ roomprobe_tracker(ours, intrinsics), roomprobe_tracker(ours_colour, intrinsics),
-					opencv_tracker(cv::rgbd::ICPOdometry::create(k, min_depth, max_depth)), opencv_tracker(cv::rgbd::FastICPOdometry::create(k)) });
-	const Figures &icp = figures[0], &icp_colour = figures[1], &cv_icp = figures[2], &cv_fast = figures[3];
-
-	std::printf("per-frame median time (ratio to RoomProbe IcpTracker), ATE RMSE of translation:\n");
-	print("RoomProbe IcpTracker (make_model_maps+track)", icp, icp);
-	print("RoomProbe IcpTracker, colour weight 0.1", icp_colour, icp);
-	print("cv::rgbd::ICPOdometry", cv_icp, icp);
-	print("cv::rgbd::FastICPOdometry", cv_fast, icp);
-	print_breakdown(frames, ours, intrinsics);
+	compare(frames, passes, camera);
 	return 0;
 }

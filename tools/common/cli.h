@@ -2,6 +2,8 @@
 // The command-line tools' argument walking (tools/<name>/*_main.cpp): one argument at a time,
 // with the value that follows an option checked where it is read.
 
+#include <cmath>
+#include <cstddef>
 #include <cstdlib>
 #include <string>
 
@@ -54,6 +56,43 @@ public:
 			return false;
 		}
 		*r_value = x;
+		return true;
+	}
+
+	// The value as a number >= 0 (false otherwise).
+	bool non_negative_number(double *r_value) {
+		std::string v;
+		if (!value(&v)) {
+			return false;
+		}
+		char *end = nullptr;
+		const double x = std::strtod(v.c_str(), &end);
+		if (end == v.c_str() || *end != '\0' || !(x >= 0.0) || !std::isfinite(x)) {
+			return false;
+		}
+		*r_value = x;
+		return true;
+	}
+	// The value as exactly p_count finite numbers separated by commas ("0.3,8"); false otherwise.
+	bool number_list(size_t p_count, double *r_values) {
+		std::string v;
+		if (!value(&v)) {
+			return false;
+		}
+		const char *at = v.c_str();
+		for (size_t i = 0; i < p_count; i++) {
+			char *end = nullptr;
+			const double x = std::strtod(at, &end);
+			if (end == at || !std::isfinite(x)) {
+				return false;
+			}
+			r_values[i] = x;
+			const bool last = i + 1 == p_count;
+			if (last ? *end != '\0' : *end != ',') {
+				return false;
+			}
+			at = end + 1;
+		}
 		return true;
 	}
 

@@ -326,6 +326,125 @@ std::string decode_png(const std::string &p_path, cv::Mat *r_image) {
 	});
 }
 
+namespace {
+
+// EOI may be followed by a little padding; a cut-short file has none within this many last bytes.
+constexpr size_t JPEG_TAIL_BYTES = 64;
+
+// The header checks of read_jpeg_info on bytes in memory (a whole file): "" or the problem.
+std::string parse_jpeg(const std::vector<uint8_t> &p_bytes, JpegInfo *r_info) {
+	const size_t size = p_bytes.size();
+	if (size < 2 || p_bytes[0] != 0xff || p_bytes[1] != 0xd8) {
+		return "not a JPEG file (no start-of-image marker)";
+	}
+	bool found_end = false;
+	for (size_t i = size >= JPEG_TAIL_BYTES ? size - JPEG_TAIL_BYTES : 0; i + 1 < size; i++) {
+		found_end = found_end || (p_bytes[i] == 0xff && p_bytes[i + 1] == 0xd9);
+	}
+	size_t at = 2;
+	while (true) {
+		// Markers: 0xff (any fill 0xff), then the code; all but the standalone ones have a length.
+		if (at >= size || p_bytes[at] != 0xff) {
+			return at >= size ? "truncated: the JPEG ends at byte " + std::to_string(size) + ", before its frame header"
+							  : "corrupt JPEG: no marker at byte " + std::to_string(at);
+		}
+		while (at < size && p_bytes[at] == 0xff) {
+			at++;
+		}
+		if (at >= size) {
+			return "truncated: the JPEG ends at byte " + std::to_string(size) + ", inside a marker";
+		}
+		const uint8_t code = p_bytes[at++];
+		if (code == 0x01 || (code >= 0xd0 && code <= 0xd7)) {
+			continue;
+		}
+		if (code == 0xd9 || code == 0xda) {
+			return "corrupt JPEG: no frame header (SOF) before its image data";
+		}
+		if (at + 2 > size) {
+			return "truncated: the JPEG ends at byte " + std::to_string(size) + ", inside a segment";
+		}
+		const size_t length = (size_t(p_bytes[at]) << 8) | p_bytes[at + 1];
+		if (length < 2 || at + length > size) {
+			return "truncated: the JPEG ends at byte " + std::to_string(size) + ", inside a segment that needs " + std::to_string(at + length) + " bytes";
+		}
+		const bool frame_header = code >= 0xc0 && code <= 0xcf && code != 0xc4 && code != 0xc8 && code != 0xcc;
+		if (frame_header) {
+			if (length < 8) {
+				return "corrupt JPEG: a frame header of " + std::to_string(length) + " bytes";
+			}
+			JpegInfo info;
+			info.height = (int(p_bytes[at + 3]) << 8) | p_bytes[at + 4];
+			info.width = (int(p_bytes[at + 5]) << 8) | p_bytes[at + 6];
+			info.components = p_bytes[at + 7];
+			if (info.width == 0 || info.height == 0) {
+				return "corrupt JPEG: zero width or height in its frame header";
+			}
+			if (!found_end) {
+				return "truncated: the JPEG has no end-of-image marker (EOI) in its last " + std::to_string(JPEG_TAIL_BYTES) + " bytes";
+			}
+			*r_info = info;
+			return std::string();
+		}
+		at += length;
+	}
+}
+
+std::string read_whole_file(const std::string &p_path, std::vector<uint8_t> *r_bytes) {
+	if (!file_exists(p_path)) {
+		return p_path + ": missing";
+	}
+	std::ifstream file(p_path, std::ios::binary);
+	if (!file) {
+		return p_path + ": cannot be opened for reading";
+	}
+	r_bytes->assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+	if (file.bad()) {
+		return p_path + ": read error";
+	}
+	return std::string();
+}
+
+} // namespace
+
+bool is_jpeg_path(const std::string &p_path) {
+	std::string extension = fs::path(p_path).extension().string();
+	std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+	return extension == ".jpg" || extension == ".jpeg";
+}
+
+std::string read_jpeg_info(const std::string &p_path, JpegInfo *r_info) {
+	// Datasets' JPEGs are tens of kilobytes: reading the whole file is simpler than seeking.
+	std::vector<uint8_t> bytes;
+	const std::string error = read_whole_file(p_path, &bytes);
+	if (!error.empty()) {
+		return error;
+	}
+	const std::string problem = parse_jpeg(bytes, r_info);
+	return problem.empty() ? problem : p_path + ": " + problem;
+}
+
+std::string decode_jpeg(const std::string &p_path, cv::Mat *r_image) {
+	std::vector<uint8_t> bytes;
+	const std::string error = read_whole_file(p_path, &bytes);
+	if (!error.empty()) {
+		return error;
+	}
+	JpegInfo info;
+	const std::string problem = parse_jpeg(bytes, &info);
+	if (!problem.empty()) {
+		return p_path + ": " + problem;
+	}
+	return catch_all(p_path, [&]() -> std::string {
+		cv::Mat image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+		if (image.empty()) {
+			return p_path + ": corrupt JPEG (OpenCV could not decode it)";
+		}
+		*r_image = image;
+		return std::string();
+	});
+}
+
 std::string write_png(const std::string &p_path, const cv::Mat &p_image) {
 	return catch_all(p_path, [&]() -> std::string {
 		if (!cv::imwrite(p_path, p_image)) {

@@ -57,6 +57,20 @@ std::string check_png_bytes(const std::vector<uint8_t> &p_bytes);
 // Reads and decodes a PNG (cv::IMREAD_UNCHANGED: BGR order, 16 bits kept) after checking it is
 // complete. Errors: missing, unreadable, truncated, corrupt.
 std::string decode_png(const std::string &p_path, cv::Mat *r_image);
+// The frame header of a JPEG (its SOFn segment).
+struct JpegInfo {
+	int width = 0;
+	int height = 0;
+	int components = 0; // 1 gray, 3 colour (YCbCr), 4 CMYK
+};
+// True for a path ending in .jpg or .jpeg (any case): colour images some datasets store so.
+bool is_jpeg_path(const std::string &p_path);
+// Reads the markers up to the frame header (SOFn) and checks that an end-of-image marker (EOI)
+// closes the file, so that a file cut short is caught without decoding it. Errors: missing, not
+// a JPEG, truncated, corrupt.
+std::string read_jpeg_info(const std::string &p_path, JpegInfo *r_info);
+// Reads and decodes a JPEG (BGR or gray, as cv::imdecode gives it) after those checks.
+std::string decode_jpeg(const std::string &p_path, cv::Mat *r_image);
 // Writes a PNG (BGR or gray, as cv::imwrite takes it).
 std::string write_png(const std::string &p_path, const cv::Mat &p_image);
 

@@ -57,8 +57,19 @@ std::string describe_png(const recording_io::PngInfo &p_info) {
 	return std::to_string(p_info.bit_depth) + "-bit " + png_color_name(p_info.color_type);
 }
 
-// The checks open() can make from a PNG's header: "" or the problem, naming the file.
-std::string check_rgb_png(const std::string &p_path, const Rig &p_rig) {
+// The checks open() can make from an image's header: "" or the problem, naming the file.
+std::string check_rgb_image(const std::string &p_path, const Rig &p_rig) {
+	if (recording_io::is_jpeg_path(p_path)) {
+		recording_io::JpegInfo jpeg;
+		const std::string error = recording_io::read_jpeg_info(p_path, &jpeg);
+		if (!error.empty()) {
+			return error;
+		}
+		if (jpeg.components != 3) {
+			return p_path + ": an RGB image must be a colour JPEG (3 components); this has " + std::to_string(jpeg.components);
+		}
+		return size_problem(p_path, jpeg.width, jpeg.height, "RGB-D camera", p_rig.rgb.width, p_rig.rgb.height);
+	}
 	recording_io::PngInfo info;
 	const std::string error = recording_io::read_png_info(p_path, &info);
 	if (!error.empty()) {
@@ -169,10 +180,10 @@ void read_cubemap_index(const std::string &p_folder, const std::string &p_path, 
 	}
 }
 
-// Decodes an 8-bit colour PNG into CV_8UC3 R, G, B.
+// Decodes an 8-bit colour PNG or a colour JPEG into CV_8UC3 R, G, B.
 std::string decode_rgb8(const std::string &p_path, cv::Mat *r_rgb) {
 	cv::Mat image;
-	const std::string error = recording_io::decode_png(p_path, &image);
+	const std::string error = recording_io::is_jpeg_path(p_path) ? recording_io::decode_jpeg(p_path, &image) : recording_io::decode_png(p_path, &image);
 	if (!error.empty()) {
 		return error;
 	}
@@ -237,7 +248,7 @@ void recording_io::pair_and_check_rgbd(const std::vector<FrameRef> &p_rgb, const
 	for (const auto &[rgb, depth] : pairs) {
 		const FrameRef &rgb_ref = p_rgb[rgb];
 		const FrameRef &depth_ref = p_depth[depth];
-		const std::string rgb_problem = check_rgb_png(join(r_contents->folder, rgb_ref.path), r_contents->rig);
+		const std::string rgb_problem = check_rgb_image(join(r_contents->folder, rgb_ref.path), r_contents->rig);
 		const std::string depth_problem = check_depth_png(join(r_contents->folder, depth_ref.path), r_contents->rig);
 		if (!rgb_problem.empty()) {
 			r_contents->issues.push_back({ p_rgb_index, rgb_ref.line, rgb_problem + "; RGB-D frame skipped" });
@@ -269,15 +280,19 @@ RecordingStatus RecordingReader::open(const std::string &p_folder, const Recordi
 	}
 	read.rig = rig.rig;
 
-	const RoomLoadResult room = load_room_file(join(p_folder, "room.yaml"));
-	if (!room.ok) {
-		status.error = room.error;
-		return status;
+	// room.yaml: without one the recording is SLAM-only (no coarse model, no probes).
+	const std::string room_path = join(p_folder, "room.yaml");
+	if (fs::exists(room_path, ec)) {
+		const RoomLoadResult room = load_room_file(room_path);
+		if (!room.ok) {
+			status.error = room.error;
+			return status;
+		}
+		read.has_room = true;
+		read.room = room.room;
 	}
-	read.has_room = true;
-	read.room = room.room;
 
-	// The three indexes: required, may list no frames.
+	// The indexes: required, may list no frames; fisheye.txt only when the rig has a fisheye.
 	const std::string rgb_index = join(p_folder, "rgb.txt");
 	const std::string depth_index = join(p_folder, "depth.txt");
 	const std::string fisheye_index = join(p_folder, "fisheye.txt");
@@ -285,11 +300,19 @@ RecordingStatus RecordingReader::open(const std::string &p_folder, const Recordi
 	std::vector<FrameRef> depth;
 	std::vector<FrameRef> fisheye;
 	for (const auto &[path, frames] : { std::pair{ &rgb_index, &rgb }, std::pair{ &depth_index, &depth }, std::pair{ &fisheye_index, &fisheye } }) {
+		if (frames == &fisheye && !read.rig.has_fisheye() && !fs::exists(fisheye_index, ec)) {
+			continue;
+		}
 		const std::string error = recording_io::read_frame_index(*path, frames, &read.issues);
 		if (!error.empty()) {
 			status.error = error;
 			return status;
 		}
+	}
+	if (!read.rig.has_fisheye() && !fisheye.empty()) {
+		read.issues.push_back({ fisheye_index, 0,
+				"rig.yaml has no fisheye, so the " + std::to_string(fisheye.size()) + " fisheye frames listed here are left out" });
+		fisheye.clear();
 	}
 
 	recording_io::pair_and_check_rgbd(rgb, rgb_index, depth, depth_index, p_options.max_rgb_depth_difference_s, false, &read);
@@ -320,7 +343,11 @@ RecordingStatus RecordingReader::open(const std::string &p_folder, const Recordi
 	}
 	const std::string cubemap_index = join(p_folder, "groundtruth/cubemaps.txt");
 	if (fs::exists(cubemap_index, ec)) {
-		read_cubemap_index(p_folder, cubemap_index, read.room, &read);
+		if (read.has_room) {
+			read_cubemap_index(p_folder, cubemap_index, read.room, &read);
+		} else {
+			read.issues.push_back({ cubemap_index, 0, "the recording has no room.yaml, whose probes the cubemaps are at; no ground-truth cubemaps" });
+		}
 	}
 
 	open_contents(std::move(read));

@@ -6,6 +6,8 @@
 // backwards, whose image is missing, cut short or of the wrong size or type, or that has no
 // partner within the association window, is listed in get_issues() (file and line) and left
 // out; the rest plays on. Only an unusable rig.yaml, room.yaml or frame index fails open().
+// A recording may be SLAM-only: no room.yaml (has_room() false) and a rig without a fisheye
+// (then no fisheye.txt either).
 // Reading a frame re-checks its images and returns an error naming the image file, so that a
 // file that goes bad after open() is one lost frame, not a crash.
 //
@@ -55,8 +57,10 @@ public:
 	RecordingReader &operator=(const RecordingReader &) = delete;
 
 	// Reads p_folder's rig.yaml, room.yaml, rgb.txt, depth.txt, fisheye.txt and any ground truth.
-	// Fails (error naming the file and field or line) only when rig.yaml, room.yaml or one of the
-	// three indexes is missing or unusable; problems with single frames are issues.
+	// Fails (error naming the file and field or line) only when rig.yaml or one of the indexes is
+	// missing or unusable, or room.yaml is there but unusable; problems with single frames are
+	// issues. A missing room.yaml means no room; fisheye.txt may be missing when the rig has no
+	// fisheye (frames listed in one are then an issue and left out).
 	RecordingStatus open(const std::string &p_folder, const RecordingReadOptions &p_options = RecordingReadOptions());
 	// Plays contents read by some other reader (e.g. open_tum_dataset()). Builds the event list.
 	void open_contents(RecordingContents p_contents);
@@ -75,7 +79,8 @@ public:
 	const RgbdFrameRef &get_rgbd_ref(size_t p_index) const { return contents.rgbd[p_index]; }
 	const FrameRef &get_fisheye_ref(size_t p_index) const { return contents.fisheye[p_index]; }
 
-	// Decodes RGB-D frame p_index (0 <= p_index < rgbd_count()): rgb CV_8UC3 in R, G, B order,
+	// Decodes RGB-D frame p_index (0 <= p_index < rgbd_count()): rgb (a PNG, or a JPEG for
+	// datasets that store colour so) CV_8UC3 in R, G, B order,
 	// depth_m CV_32FC1 metres with NaN for no reading. The error names the image file: missing,
 	// truncated, corrupt, wrong size for the rig, wrong type.
 	RgbdFrameResult read_rgbd(size_t p_index) const;

@@ -98,6 +98,14 @@ std::string RecordingWriter::append_line(std::ofstream &p_index, const std::stri
 }
 
 RecordingStatus RecordingWriter::open(const std::string &p_folder, const Rig &p_rig, const RoomInfo &p_room, const RecordingWriteOptions &p_options) {
+	return open_folder(p_folder, p_rig, &p_room, p_options);
+}
+
+RecordingStatus RecordingWriter::open_without_room(const std::string &p_folder, const Rig &p_rig, const RecordingWriteOptions &p_options) {
+	return open_folder(p_folder, p_rig, nullptr, p_options);
+}
+
+RecordingStatus RecordingWriter::open_folder(const std::string &p_folder, const Rig &p_rig, const RoomInfo *p_room, const RecordingWriteOptions &p_options) {
 	if (opened) {
 		return fail(p_folder + ": this writer is already writing " + folder + "; close() it first");
 	}
@@ -106,7 +114,7 @@ RecordingStatus RecordingWriter::open(const std::string &p_folder, const Rig &p_
 	if (!problem.empty()) {
 		return fail(path("rig.yaml") + ": " + problem);
 	}
-	problem = check_room(p_room);
+	problem = p_room != nullptr ? check_room(*p_room) : std::string();
 	if (!problem.empty()) {
 		return fail(path("room.yaml") + ": " + problem);
 	}
@@ -123,9 +131,9 @@ RecordingStatus RecordingWriter::open(const std::string &p_folder, const Rig &p_
 			return fail(p_folder + ": cannot list the folder (" + ec.message() + ")");
 		}
 	}
-	// Into a used folder (allowed by the options): a previous recording's ground truth must not pass
-	// for this one's, as it would if this one wrote none.
-	for (const char *stale : { TRAJECTORY_FILES[0], TRAJECTORY_FILES[1], "groundtruth/cubemaps.txt" }) {
+	// Into a used folder (allowed by the options): a previous recording's ground truth, room or
+	// fisheye index must not pass for this one's, as it would if this one wrote none.
+	for (const char *stale : { TRAJECTORY_FILES[0], TRAJECTORY_FILES[1], "groundtruth/cubemaps.txt", "room.yaml", "fisheye.txt" }) {
 		fs::remove(path(stale), ec);
 		if (ec) {
 			return fail(path(stale) + ": cannot remove the previous recording's file (" + ec.message() + ")");
@@ -133,6 +141,9 @@ RecordingStatus RecordingWriter::open(const std::string &p_folder, const Rig &p_
 	}
 	std::string error;
 	for (const char *sub : { "rgb", "depth", "fisheye" }) {
+		if (std::string(sub) == "fisheye" && !p_rig.has_fisheye()) {
+			continue;
+		}
 		if (!create_folder(path(sub), &error)) {
 			return fail(error);
 		}
@@ -141,9 +152,11 @@ RecordingStatus RecordingWriter::open(const std::string &p_folder, const Rig &p_
 	if (!error.empty()) {
 		return fail(error);
 	}
-	error = save_room_file(path("room.yaml"), p_room);
-	if (!error.empty()) {
-		return fail(error);
+	if (p_room != nullptr) {
+		error = save_room_file(path("room.yaml"), *p_room);
+		if (!error.empty()) {
+			return fail(error);
+		}
 	}
 	struct Index {
 		std::ofstream *stream;
@@ -160,6 +173,9 @@ RecordingStatus RecordingWriter::open(const std::string &p_folder, const Rig &p_
 	for (const Index &index : indexes) {
 		index.stream->close();
 		index.stream->clear();
+		if (index.stream == &fisheye_index && !p_rig.has_fisheye()) {
+			continue; // an RGB-D camera alone: no fisheye.txt
+		}
 		index.stream->open(path(index.name), std::ios::out | std::ios::trunc | std::ios::binary);
 		*index.stream << index.header;
 		index.stream->flush();
@@ -171,7 +187,8 @@ RecordingStatus RecordingWriter::open(const std::string &p_folder, const Rig &p_
 		}
 	}
 	rig = p_rig;
-	room = p_room;
+	has_room = p_room != nullptr;
+	room = has_room ? *p_room : RoomInfo();
 	options = p_options;
 	rgbd_count = 0;
 	fisheye_count = 0;
@@ -251,6 +268,9 @@ RecordingStatus RecordingWriter::add_fisheye(const FisheyeFrame &p_frame) {
 	if (!opened) {
 		return fail("RecordingWriter::add_fisheye: no recording is open");
 	}
+	if (!rig.has_fisheye()) {
+		return fail(path("fisheye.txt") + ": the rig has no fisheye (an RGB-D camera alone), so the recording takes no fisheye frames");
+	}
 	const cv::Mat &image = p_frame.image;
 	const bool hdr_type = image.type() == CV_32FC3;
 	const bool ldr_type = image.type() == CV_8UC1 || image.type() == CV_8UC3;
@@ -328,6 +348,9 @@ RecordingStatus RecordingWriter::add_ground_truth_cubemap(double p_t_s, int p_pr
 	}
 	if (has_cubemap_time && p_t_s < last_cubemap_time_s) {
 		return fail(index_path + ": timestamp " + format_number(p_t_s) + " is before the previous cubemap's " + format_number(last_cubemap_time_s));
+	}
+	if (!has_room) {
+		return fail(index_path + ": the recording has no room, and ground-truth cubemaps are at the room's probes");
 	}
 	if (p_probe_index < 0 || size_t(p_probe_index) >= room.probes.size()) {
 		return fail(index_path + ": probe index " + std::to_string(p_probe_index) + " is not one of the room's " + std::to_string(room.probes.size()) + " probes");

@@ -35,9 +35,12 @@ public:
 	~RecordingWriter();
 
 	// Creates p_folder (and its parents) if need be, writes rig.yaml and room.yaml, and starts
-	// the three frame indexes. The rig and room must pass check_rig() and check_room().
+	// the three frame indexes (two when the rig has no fisheye: no fisheye.txt). The rig and room
+	// must pass check_rig() and check_room().
 	RecordingStatus open(const std::string &p_folder, const Rig &p_rig, const RoomInfo &p_room,
 			const RecordingWriteOptions &p_options = RecordingWriteOptions());
+	// The same for a recording without a room (SLAM only): no room.yaml, and no ground-truth cubemaps.
+	RecordingStatus open_without_room(const std::string &p_folder, const Rig &p_rig, const RecordingWriteOptions &p_options = RecordingWriteOptions());
 	bool is_open() const { return opened; }
 
 	// Writes rgb/NNNNNN.png and depth/NNNNNN.png and their index lines. rgb: CV_8UC3 R, G, B, the
@@ -46,7 +49,8 @@ public:
 	// size. Timestamps must be finite and increase strictly within rgb.txt and within depth.txt.
 	RecordingStatus add_rgbd(const RgbdFrame &p_frame);
 	// Writes fisheye/NNNNNN.png (CV_8UC1 or CV_8UC3 R, G, B) or fisheye/NNNNNN.exr (CV_32FC3,
-	// hdr set) and its index line; the rig's fisheye size; strictly increasing timestamps.
+	// hdr set) and its index line; the rig's fisheye size; strictly increasing timestamps. An
+	// error when the rig has no fisheye.
 	RecordingStatus add_fisheye(const FisheyeFrame &p_frame);
 	// Appends a ground-truth pose (world_from_camera) of one stream's camera at p_t_s on that
 	// camera's clock; strictly increasing per stream. Written at close().
@@ -54,7 +58,8 @@ public:
 	// Writes groundtruth/cubemaps/NNNNNN.exr (the six CV_32FC3 N x N faces as an N x 6N strip,
 	// cubemap_layout.h), with NNNNNN.png next to it when p_ldr_faces are given (six CV_8UC3
 	// R, G, B faces of the same size; all empty for none), and its line in cubemaps.txt.
-	// p_probe_index must be one of the room's probes; timestamps (RGB-D clock) must not decrease.
+	// p_probe_index must be one of the room's probes (an error without a room); timestamps (RGB-D
+	// clock) must not decrease.
 	RecordingStatus add_ground_truth_cubemap(double p_t_s, int p_probe_index, const CubemapFaces &p_faces,
 			const CubemapFaces &p_ldr_faces = CubemapFaces());
 
@@ -67,6 +72,7 @@ public:
 	size_t get_fisheye_count() const { return fisheye_count; }
 
 private:
+	RecordingStatus open_folder(const std::string &p_folder, const Rig &p_rig, const RoomInfo *p_room, const RecordingWriteOptions &p_options);
 	RecordingStatus fail(std::string p_error) const;
 	std::string append_line(std::ofstream &p_index, const std::string &p_index_name, const std::string &p_line);
 	std::string path(const std::string &p_relative) const;
@@ -74,6 +80,7 @@ private:
 	bool opened = false;
 	std::string folder;
 	Rig rig;
+	bool has_room = false;
 	RoomInfo room;
 	RecordingWriteOptions options;
 	std::ofstream rgb_index;

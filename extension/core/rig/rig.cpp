@@ -80,6 +80,9 @@ std::string check_rig(const Rig &p_rig) {
 	c.finite("rgb.k3", rgb.k3);
 	c.positive("depth_scale_m", p_rig.depth_scale_m);
 
+	if (!p_rig.has_fisheye()) {
+		return c.error;
+	}
 	const OmniParams &fisheye = p_rig.fisheye;
 	c.positive("fisheye.width", fisheye.width);
 	c.positive("fisheye.height", fisheye.height);
@@ -206,10 +209,25 @@ bool read_rig(YamlFieldReader &p_reader, const cv::FileNode &p_root, Rig *r_rig)
 		return p_reader.fail("roomprobe_rig", "unknown version " + std::to_string(version) + " (this build reads version " +
 						std::to_string(RIG_FILE_VERSION) + ")");
 	}
-	return p_reader.check_keys(p_root, "",
-				   { "roomprobe_rig", "rgb", "depth_scale_m", "fisheye", "rgb_from_fisheye", "fisheye_time_offset_s" }) &&
-			read_rgb(p_reader, p_root, &r_rig->rgb) && p_reader.real(p_root, "", "depth_scale_m", &r_rig->depth_scale_m) &&
-			read_fisheye(p_reader, p_root, &r_rig->fisheye) && read_extrinsic(p_reader, p_root, &r_rig->rgb_from_fisheye) &&
+	if (!p_reader.check_keys(p_root, "", { "roomprobe_rig", "rgb", "depth_scale_m", "fisheye", "rgb_from_fisheye", "fisheye_time_offset_s" },
+				{ "roomprobe_rig", "rgb", "depth_scale_m" }) ||
+			!read_rgb(p_reader, p_root, &r_rig->rgb) || !p_reader.real(p_root, "", "depth_scale_m", &r_rig->depth_scale_m)) {
+		return false;
+	}
+	// An RGB-D camera alone leaves out all three fisheye fields; one of them alone is a mistake.
+	const char *fisheye_fields[3] = { "fisheye", "rgb_from_fisheye", "fisheye_time_offset_s" };
+	int present = 0;
+	for (const char *field : fisheye_fields) {
+		const cv::FileNode node = p_root[field];
+		present += node.empty() || node.isNone() ? 0 : 1;
+	}
+	if (present == 0) {
+		r_rig->fisheye = OmniParams();
+		r_rig->rgb_from_fisheye = Pose();
+		r_rig->fisheye_time_offset_s = 0.0;
+		return true;
+	}
+	return read_fisheye(p_reader, p_root, &r_rig->fisheye) && read_extrinsic(p_reader, p_root, &r_rig->rgb_from_fisheye) &&
 			p_reader.real(p_root, "", "fisheye_time_offset_s", &r_rig->fisheye_time_offset_s);
 }
 
@@ -290,6 +308,23 @@ RigLoadResult load_rig(const std::string &p_path) {
 
 // ---------------------------------------------------------------------------------- writing
 
+namespace {
+
+std::string write_text(const std::string &p_path, const std::string &p_text) {
+	std::ofstream file(p_path, std::ios::binary | std::ios::trunc);
+	if (!file) {
+		return p_path + ": cannot open for writing";
+	}
+	file << p_text;
+	file.flush();
+	if (!file) {
+		return p_path + ": write error";
+	}
+	return std::string();
+}
+
+} // namespace
+
 std::string save_rig(const std::string &p_path, const Rig &p_rig) {
 	// Never write a file that load_rig would refuse.
 	const std::string problem = check_rig(p_rig);
@@ -314,6 +349,11 @@ std::string save_rig(const std::string &p_path, const Rig &p_rig) {
 		storage << "k1" << rgb.k1 << "k2" << rgb.k2 << "p1" << rgb.p1 << "p2" << rgb.p2 << "k3" << rgb.k3;
 		storage << "}";
 		storage << "depth_scale_m" << p_rig.depth_scale_m;
+		if (!p_rig.has_fisheye()) {
+			storage.writeComment("An RGB-D camera alone: no fisheye, so no extrinsic and no clock offset either.");
+			text = storage.releaseAndGetString();
+			return write_text(p_path, text);
+		}
 		storage.writeComment("Fisheye, unified omnidirectional model (cv::omnidir): pixels, xi unitless, degrees.");
 		storage << "fisheye" << "{";
 		storage << "model" << FISHEYE_MODEL << "width" << fisheye.width << "height" << fisheye.height;
@@ -335,16 +375,7 @@ std::string save_rig(const std::string &p_path, const Rig &p_rig) {
 	} catch (const std::exception &e) {
 		return p_path + ": cannot write the rig file: " + e.what();
 	}
-	std::ofstream file(p_path, std::ios::binary | std::ios::trunc);
-	if (!file) {
-		return p_path + ": cannot open for writing";
-	}
-	file << text;
-	file.flush();
-	if (!file) {
-		return p_path + ": write error";
-	}
-	return std::string();
+	return write_text(p_path, text);
 }
 
 } // namespace roomprobe

@@ -12,9 +12,13 @@ namespace roomprobe {
 struct Rig {
 	PinholeParams rgb; // the RGB-D camera; depth is registered to it
 	double depth_scale_m = 0.001; // metres per unit of the 16-bit depth images
+	// Width and height 0: the rig has no fisheye (an RGB-D camera alone, for SLAM-only recordings
+	// and datasets); then rgb_from_fisheye and fisheye_time_offset_s mean nothing.
 	OmniParams fisheye;
 	Pose rgb_from_fisheye; // fixed extrinsic: fisheye frame -> RGB-D camera frame
 	double fisheye_time_offset_s = 0.0; // add to a fisheye timestamp to get RGB-D clock time
+
+	bool has_fisheye() const { return fisheye.width != 0 || fisheye.height != 0; }
 };
 
 struct RigLoadResult {
@@ -23,8 +27,10 @@ struct RigLoadResult {
 	Rig rig;
 };
 
+// A file without the fisheye, rgb_from_fisheye and fisheye_time_offset_s fields (all three left
+// out together) gives a rig without a fisheye.
 RigLoadResult load_rig(const std::string &p_path);
-// Writes the rig file; returns an empty string, or the error naming the file.
+// Writes the rig file (without the fisheye's three fields when the rig has no fisheye); returns an empty string, or the error naming the file.
 std::string save_rig(const std::string &p_path, const Rig &p_rig);
 
 // The version of the schema that load_rig reads and save_rig writes (the roomprobe_rig field).
@@ -32,7 +38,8 @@ inline constexpr int RIG_FILE_VERSION = 1;
 // A rotation in a rig file may be this far off unit norm (it is then normalised).
 inline constexpr double RIG_UNIT_TOLERANCE = 1e-6;
 // Checks the values (positive sizes and focal lengths, finite numbers, a unit rotation, a lens
-// angle the unified model can project): an empty string, or "field: problem", e.g.
+// angle the unified model can project; none of the fisheye's for a rig without one): an empty
+// string, or "field: problem", e.g.
 // "fisheye.fx: must be positive (got -1)". load_rig and save_rig both apply it.
 std::string check_rig(const Rig &p_rig);
 

@@ -236,26 +236,92 @@ TrajectoryLoadResult load_tum_trajectory(const std::string &p_path) {
 	return result;
 }
 
-std::string save_tum_trajectory(const std::string &p_path, const Trajectory &p_trajectory) {
-	std::ofstream file(p_path, std::ios::out | std::ios::trunc);
-	if (!file) {
-		return p_path + ": cannot open for writing";
+std::string save_tum_trajectory(const std::string &p_path, const Trajectory &p_trajectory, const std::vector<std::string> &p_header) {
+	TumTrajectoryWriter writer;
+	std::string error = writer.open(p_path, p_header);
+	for (size_t i = 0; error.empty() && i < p_trajectory.size(); i++) {
+		error = writer.add_pose(p_trajectory.get_samples()[i]);
 	}
-	file << "# timestamp tx ty tz qx qy qz qw\n";
-	for (const TimedPose &sample : p_trajectory.get_samples()) {
-		const glm::dquat &q = sample.world_from_camera.rotation;
-		const glm::dvec3 &t = sample.world_from_camera.translation;
-		const double values[8] = { sample.t_s, t.x, t.y, t.z, q.x, q.y, q.z, q.w };
-		for (int i = 0; i < 8; i++) {
-			file << (i ? " " : "") << format_double(values[i]);
+	const std::string closed = writer.close();
+	return error.empty() ? closed : error;
+}
+
+std::string TumTrajectoryWriter::open(const std::string &p_path, const std::vector<std::string> &p_header) {
+	close();
+	path = p_path;
+	error.clear();
+	has_last = false;
+	file.clear();
+	file.open(p_path, std::ios::out | std::ios::trunc | std::ios::binary);
+	if (!file) {
+		error = p_path + ": cannot open for writing";
+		return error;
+	}
+	for (const std::string &line : p_header) {
+		add_comment(line);
+	}
+	return write("# timestamp tx ty tz qx qy qz qw\n");
+}
+
+std::string TumTrajectoryWriter::add_pose(const TimedPose &p_sample) {
+	if (!error.empty() || !file.is_open()) {
+		return error.empty() ? "TumTrajectoryWriter::add_pose: no file is open" : error;
+	}
+	TimedPose sample = p_sample;
+	std::string problem;
+	if (!check_sample(&sample, path + ": pose at " + format_double(p_sample.t_s), Trajectory::UNIT_TOLERANCE, &problem)) {
+		return problem; // this pose is left out; the file stays good
+	}
+	if (has_last && !(sample.t_s > last_t_s)) {
+		return path + ": timestamp " + format_double(sample.t_s) + " is not after the previous pose's (" + format_double(last_t_s) + ")";
+	}
+	const glm::dquat &q = sample.world_from_camera.rotation;
+	const glm::dvec3 &t = sample.world_from_camera.translation;
+	const double values[8] = { sample.t_s, t.x, t.y, t.z, q.x, q.y, q.z, q.w };
+	std::string line;
+	for (int i = 0; i < 8; i++) {
+		line += (i ? " " : "") + format_double(values[i]);
+	}
+	has_last = true;
+	last_t_s = sample.t_s;
+	return write(line + "\n");
+}
+
+std::string TumTrajectoryWriter::add_comment(const std::string &p_text) {
+	std::string text;
+	size_t start = 0;
+	while (true) {
+		const size_t end = p_text.find('\n', start);
+		text += "# " + p_text.substr(start, end == std::string::npos ? std::string::npos : end - start) + "\n";
+		if (end == std::string::npos) {
+			break;
 		}
-		file << '\n';
+		start = end + 1;
+	}
+	return write(text);
+}
+
+std::string TumTrajectoryWriter::write(const std::string &p_text) {
+	if (!error.empty() || !file.is_open()) {
+		return error.empty() ? "TumTrajectoryWriter: no file is open" : error;
+	}
+	file << p_text;
+	if (!file) {
+		error = path + ": write error";
+	}
+	return error;
+}
+
+std::string TumTrajectoryWriter::close() {
+	if (!file.is_open()) {
+		return error;
 	}
 	file.flush();
-	if (!file) {
-		return p_path + ": write error";
+	if (!file && error.empty()) {
+		error = path + ": write error";
 	}
-	return std::string();
+	file.close();
+	return error;
 }
 
 } // namespace roomprobe

@@ -4,6 +4,7 @@
 
 #include <math/pose.h>
 
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -57,8 +58,38 @@ struct TrajectoryLoadResult {
 // An empty trajectory is an error.
 inline constexpr double TUM_UNIT_TOLERANCE = 1e-3;
 TrajectoryLoadResult load_tum_trajectory(const std::string &p_path);
-// Writes it in the same format, every number with enough digits to read back the same double.
-// Returns an empty string, or the error naming the file.
-std::string save_tum_trajectory(const std::string &p_path, const Trajectory &p_trajectory);
+// Writes it in the same format, every number with enough digits to read back the same double,
+// after p_header's lines as '#' comments. Returns an empty string, or the error naming the file.
+std::string save_tum_trajectory(const std::string &p_path, const Trajectory &p_trajectory, const std::vector<std::string> &p_header = {});
+
+// Writes a TUM trajectory file pose by pose, as a tracker gives them, with '#' comment lines
+// anywhere (load_tum_trajectory and TUM's own tools skip them). Each call returns an empty
+// string or the error naming the file; after an error the writer writes nothing more.
+class TumTrajectoryWriter {
+public:
+	TumTrajectoryWriter() = default;
+	TumTrajectoryWriter(const TumTrajectoryWriter &) = delete;
+	TumTrajectoryWriter &operator=(const TumTrajectoryWriter &) = delete;
+	~TumTrajectoryWriter() { close(); }
+
+	// Creates (or empties) p_path and writes p_header's lines as comments, then the column line
+	// '# timestamp tx ty tz qx qy qz qw'.
+	std::string open(const std::string &p_path, const std::vector<std::string> &p_header = {});
+	bool is_open() const { return file.is_open(); }
+	// One pose line; timestamps must increase strictly, poses be finite with a unit rotation.
+	std::string add_pose(const TimedPose &p_sample);
+	// '# ' + p_text (each line of it, when it has several).
+	std::string add_comment(const std::string &p_text);
+	std::string close();
+
+private:
+	std::string write(const std::string &p_text);
+
+	std::ofstream file;
+	std::string path;
+	std::string error;
+	bool has_last = false;
+	double last_t_s = 0.0;
+};
 
 } // namespace roomprobe
