@@ -12,8 +12,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -63,10 +61,6 @@ SweepRun run_sweep(const DenseSlamOptions &p_options) {
 		run.error_m.push_back(e);
 		sum_sq += e * e;
 		const TrackingState state = run.frames.back().tracking.state;
-		if (std::getenv("RP_VERBOSE") != nullptr) {
-			std::printf("%zu %s c=%.4f e=%.1fmm %s\n", run.frames.size() - 1, tracking_state_name(state), run.frames.back().tracking.constraint, e * 1000.0,
-					run.frames.back().tracking.reason.c_str());
-		}
 		run.good += state == TrackingState::Good;
 		run.poor += state == TrackingState::Poor;
 		run.lost += state == TrackingState::Lost;
@@ -90,12 +84,7 @@ TEST_CASE("flat walls: with the default settings the 10-s sweep along a photogra
 	if (skip_without_panorama()) {
 		return;
 	}
-	DenseSlamOptions options;
-	if (std::getenv("RP_CW") != nullptr) {
-		options.icp.colour_weight = std::atof(std::getenv("RP_CW"));
-	}
-	options.icp.colour_always = std::getenv("RP_CALWAYS") != nullptr;
-	const SweepRun run = run_sweep(options);
+	const SweepRun run = run_sweep(DenseSlamOptions());
 	int colour_frames = 0;
 	for (const DenseSlamFrame &frame : run.frames) {
 		colour_frames += frame.tracking.colour_used;

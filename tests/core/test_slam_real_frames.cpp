@@ -1,21 +1,27 @@
 // slam/dense_slam.h on real frames: 400 consecutive frames of a Kinect v1 (Microsoft 7-Scenes,
-// ../shared/data/rgbd-7scenes, see its README) tracked frame to model against the dataset's
-// reference poses.
+// ../shared/data/rgbd-7scenes, see its README), read by recording/frames_dataset.h and tracked
+// frame to model against the dataset's reference poses (KinectFusion's, not motion capture).
+//
+// Tolerances. The reference is itself a tracker's output: frame to frame it is good to a few
+// millimetres (its median step is 7 mm and moves smoothly), but it is not free of drift or
+// jumps (between frames 121 and 122 it moves 36 mm and 1.4 degrees while the images move about
+// 6 mm). So the per-frame relative error is held to the reference's "few millimetres" (median
+// under 3 mm, RMSE under 5 mm: one 36-mm jump over 399 pairs alone adds 1.8 mm to the RMSE),
+// and the absolute error, which accumulates both trackers' drift, to 2 % of the path length
+// (what frame-to-model trackers of this kind drift by on real sequences).
 
 #include <io/opencv.h>
 
+#include "eval/trajectory_metrics.h"
+#include "recording/frames_dataset.h"
 #include "slam/dense_slam.h"
 
 #include <doctest/doctest.h>
 
-#include <glm/geometric.hpp>
-
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <fstream>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -25,93 +31,74 @@ namespace {
 
 const std::string k_dir = std::string(ROOMPROBE_SHARED_DATA) + "/rgbd-7scenes";
 
-bool load_pose(const std::string &p_path, Pose *r_pose) {
-	std::ifstream in(p_path);
-	glm::dmat4 m(1.0);
-	for (int r = 0; r < 4; r++) {
-		for (int c = 0; c < 4; c++) {
-			if (!(in >> m[c][r])) {
-				return false;
-			}
-		}
+// Evaluated when the tests register, so that the skip shows in doctest's count.
+const bool k_data_missing = [] {
+	const bool missing = !std::filesystem::exists(k_dir + "/camera-intrinsics.txt");
+	if (missing) {
+		std::fprintf(stderr, "test_slam_real_frames: skipping the real-frame tracking test: %s is missing\n", k_dir.c_str());
 	}
-	*r_pose = pose_from_matrix(m);
-	return true;
-}
-
-double env_or(const char *p_name, double p_default) {
-	const char *v = std::getenv(p_name);
-	return v != nullptr ? std::atof(v) : p_default;
-}
+	return missing;
+}();
 
 } // namespace
 
-TEST_CASE("dense SLAM: 400 real Kinect frames (7-Scenes) track with no frame lost") {
-	PinholeParams camera;
-	camera.width = 640;
-	camera.height = 480;
-	camera.fx = camera.fy = 585.0;
-	camera.cx = 320.0;
-	camera.cy = 240.0;
-	const int frames = int(env_or("RP_FRAMES", 400));
-	DenseSlamOptions options;
-	options.icp.colour_weight = env_or("RP_CW", options.icp.colour_weight);
-	options.icp.max_depth_m = env_or("RP_ICP_MAX", options.icp.max_depth_m);
-	options.tsdf.max_depth_m = float(env_or("RP_TSDF_MAX", options.tsdf.max_depth_m));
-	options.tsdf.voxel_size_m = float(env_or("RP_VOXEL", options.tsdf.voxel_size_m));
-	options.tsdf.truncation_m = float(env_or("RP_TRUNC", options.tsdf.truncation_m));
-	options.raycast_level = int(env_or("RP_RAYLEVEL", options.raycast_level));
-	options.icp.max_distance_m = env_or("RP_MAXDIST", options.icp.max_distance_m);
-	options.icp.levels = int(env_or("RP_LEVELS", options.icp.levels));
-	options.icp.min_constraint = env_or("RP_MINC", options.icp.min_constraint);
-	options.icp.depth_noise.b_per_m2 = env_or("RP_NOISEB", options.icp.depth_noise.b_per_m2);
-	options.icp.depth_noise.reference_m = env_or("RP_NOISEREF", options.icp.depth_noise.reference_m);
-	options.icp.colour_always = env_or("RP_CALWAYS", 0) != 0;
-	options.icp.iterations[0] = int(env_or("RP_IT0", options.icp.iterations[0]));
-	options.icp.iterations[1] = int(env_or("RP_IT1", options.icp.iterations[1]));
-	options.icp.max_normal_angle_deg = env_or("RP_NANG", options.icp.max_normal_angle_deg);
-	options.icp.surface.smoothing_radius_px = int(env_or("RP_SMOOTH", options.icp.surface.smoothing_radius_px));
-	DenseSlam slam(options);
-	Pose first;
-	REQUIRE(load_pose(k_dir + "/frame-000000.pose.txt", &first));
-	REQUIRE(slam.configure(camera, first) == "");
-	double sum_sq = 0.0, max_m = 0.0, track_ms = 0.0;
+TEST_CASE("dense SLAM: 400 real Kinect frames (7-Scenes) track with no frame lost, within the reference's accuracy" * doctest::skip(k_data_missing)) {
+	RecordingReader reader;
+	const RecordingStatus opened = open_frames_dataset(k_dir, &reader);
+	REQUIRE_MESSAGE(opened.ok, opened.error);
+	REQUIRE(reader.rgbd_count() == 400);
+	REQUIRE(reader.has_ground_truth_trajectory(RecordingStream::Rgbd));
+	const Trajectory &truth = reader.ground_truth_trajectory(RecordingStream::Rgbd);
+
+	DenseSlam slam; // the defaults: what ships
+	REQUIRE(slam.configure(reader.get_rig().rgb, truth.get_samples().front().world_from_camera) == "");
+	std::vector<TimedPose> tracked;
+	std::vector<double> track_ms;
 	int good = 0, poor = 0, lost = 0;
-	for (int i = 0; i < frames; i++) {
-		char name[64];
-		std::snprintf(name, sizeof(name), "/frame-%06d", i);
-		const std::string base = k_dir + name;
-		cv::Mat depth16 = cv::imread(base + ".depth.png", cv::IMREAD_UNCHANGED);
-		cv::Mat bgr = cv::imread(base + ".color.jpg", cv::IMREAD_COLOR);
-		REQUIRE(!depth16.empty());
-		RgbdFrame frame;
-		frame.timestamp_s = i / 30.0;
-		depth16.convertTo(frame.depth_m, CV_32FC1, 0.001);
-		frame.depth_m.setTo(std::numeric_limits<float>::quiet_NaN(), depth16 == 0);
-		cv::cvtColor(bgr, frame.rgb, cv::COLOR_BGR2RGB);
-		const DenseSlamFrame out = slam.process(frame);
-		track_ms += out.timings.track_ms;
-		Pose truth;
-		REQUIRE(load_pose(base + ".pose.txt", &truth));
+	std::string first_problem;
+	for (size_t i = 0; i < reader.rgbd_count(); i++) {
+		const RgbdFrameResult frame = reader.read_rgbd(i);
+		REQUIRE_MESSAGE(frame.ok, frame.error);
+		const DenseSlamFrame out = slam.process(frame.frame);
 		good += out.tracking.state == TrackingState::Good;
 		poor += out.tracking.state == TrackingState::Poor;
 		lost += out.tracking.state == TrackingState::Lost;
-		if (std::getenv("RP_VERBOSE") != nullptr) {
-			std::printf("frame %d %s c=%.4f col=%d: %s\n", i, tracking_state_name(out.tracking.state), out.tracking.constraint, int(out.tracking.colour_used), out.tracking.reason.c_str());
+		if (out.tracking.state != TrackingState::Good && first_problem.empty()) {
+			first_problem = "frame " + std::to_string(i) + ": " + out.tracking.reason;
 		}
-		if (std::getenv("RP_DUMP") != nullptr) {
-			static FILE *f = std::fopen(std::getenv("RP_DUMP"), "w");
-			const Pose &p = slam.pose();
-			std::fprintf(f, "%d %f %f %f %f %f %f %f %f %f %f %f %f %f %f\n", i, p.translation.x, p.translation.y, p.translation.z, p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z,
-					truth.translation.x, truth.translation.y, truth.translation.z, truth.rotation.w, truth.rotation.x, truth.rotation.y, truth.rotation.z);
-			std::fflush(f);
+		tracked.push_back({ frame.frame.timestamp_s, slam.pose() });
+		if (i > 0) {
+			track_ms.push_back(out.timings.track_ms);
 		}
-		const double e = translation_difference_m(slam.pose(), truth);
-		sum_sq += e * e;
-		max_m = std::max(max_m, e);
 	}
-	const double ate_m = std::sqrt(sum_sq / frames);
-	std::printf("7-Scenes: ATE %.1f mm max %.1f mm, good %d poor %d lost %d, track %.1f ms/frame\n", ate_m * 1000.0, max_m * 1000.0, good, poor,
-			lost, track_ms / frames);
+	Trajectory estimate;
+	std::string error;
+	REQUIRE_MESSAGE(estimate.set_samples(tracked, &error), error);
+	const AbsoluteTrajectoryError ate = absolute_trajectory_error(estimate, truth);
+	const RelativePoseError rpe = relative_pose_error(estimate, truth, 1.0, RpeDelta::Frames);
+	const RelativePoseError rpe_second = relative_pose_error(estimate, truth, 1.0, RpeDelta::Seconds);
+	std::vector<double> per_frame_m;
+	const std::vector<TimedPose> &samples = estimate.get_samples();
+	for (size_t i = 1; i < samples.size(); i++) {
+		Pose a, b;
+		REQUIRE(truth.pose_at(samples[i - 1].t_s, &a, &error));
+		REQUIRE(truth.pose_at(samples[i].t_s, &b, &error));
+		const Pose motion_error = compose(inverse(compose(inverse(a), b)), compose(inverse(samples[i - 1].world_from_camera), samples[i].world_from_camera));
+		per_frame_m.push_back(glm::length(motion_error.translation));
+	}
+	std::nth_element(per_frame_m.begin(), per_frame_m.begin() + long(per_frame_m.size() / 2), per_frame_m.end());
+	const double rpe_median_m = per_frame_m[per_frame_m.size() / 2];
+	std::nth_element(track_ms.begin(), track_ms.begin() + long(track_ms.size() / 2), track_ms.end());
+	MESSAGE("7-Scenes, 400 frames: good " << good << ", poor " << poor << ", lost " << lost << "; ATE RMSE " << ate.rmse_m * 1000.0 << " mm (max "
+										  << ate.max_m * 1000.0 << " mm, rotation " << ate.rotation_rmse_deg << " deg) over a " << ate.path_m
+										  << " m path; RPE per frame " << rpe.translation_rmse_m * 1000.0 << " mm RMSE (median " << rpe_median_m * 1000.0
+										  << " mm), " << rpe.rotation_rmse_deg << " deg; per second " << rpe_second.translation_rmse_m * 1000.0 << " mm, "
+										  << rpe_second.rotation_rmse_deg << " deg; tracking " << track_ms[track_ms.size() / 2] << " ms a frame (median, this build)");
+	CAPTURE(first_problem);
 	CHECK(lost == 0);
+	CHECK(good >= 396); // at most 1 % poor: a poor frame is not fused, but the camera keeps its pose
+	CHECK(ate.count == 400);
+	CHECK(ate.rmse_m <= 0.02 * ate.path_m);
+	CHECK(rpe_median_m <= 0.003);
+	CHECK(rpe.translation_rmse_m <= 0.005);
 }
