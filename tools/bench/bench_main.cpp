@@ -31,7 +31,7 @@
 // per frame tracked Good or Poor; a Lost frame, whose pose is not known, is a '#' comment with
 // its reason, as is a Poor frame's reason before its line.
 //
-// SLAM settings (--voxel-size-m, --colour-weight, --icp-depth-range, --tsdf-depth-range, --noise-reference-m,
+// SLAM settings (--voxel-size-m, --colour-weight, --colour-always, --icp-depth-range, --tsdf-depth-range, --noise-reference-m,
 // --max-jump) change DenseSlamOptions for every mode; --intrinsics or --rig replace the RGB-D
 // camera's intrinsics. The effective settings are printed first.
 //
@@ -404,6 +404,7 @@ void print_usage(std::FILE *p_out) {
 			"  --icp-depth-range MIN,MAX   depth readings ICP uses, metres along z (default %.2f,%.2f)\n"
 			"  --tsdf-depth-range MIN,MAX  depth readings fused into the TSDF, metres along z (default %.2f,%.2f)\n"
 			"  --max-jump M,DEG      largest move from the predicted pose believed per frame, metres and degrees (default %.2f,%.0f)\n"
+			"  --colour-always       the photometric term at every level, not only where the geometry leaves a direction free\n"
 			"  --noise-reference-m R ICP weighs a depth reading by its noise relative to one at R metres (nearer ones weigh 1);\n"
 			"                        0: all readings weigh 1 (default %.2f)\n"
 			"Targets are printed only for synthetic recordings (synth.yaml). Each benchmark ends with one line\n"
@@ -425,9 +426,9 @@ void print_settings(const DenseSlamOptions &p_slam) {
 	const TsdfOptions &tsdf = p_slam.tsdf;
 	const IcpOptions &icp = p_slam.icp;
 	std::printf("  SLAM settings: voxel %.1f mm, truncation %.0f mm, TSDF depth %.2f..%.2f m; ICP depth %.2f..%.2f m, colour weight %.3f, "
-				"max jump %.3f m / %.1f deg, noise reference %.2f m, %d levels; raycast level %d, tracking level %d, fuse poor frames %s\n",
+				"colour %s, max jump %.3f m / %.1f deg, noise reference %.2f m, %d levels; raycast level %d, tracking level %d, fuse poor frames %s\n",
 			1000.0 * tsdf.voxel_size_m, 1000.0 * tsdf.truncation_m, double(tsdf.min_depth_m), double(tsdf.max_depth_m), icp.min_depth_m, icp.max_depth_m,
-			icp.colour_weight, icp.max_jump_m, icp.max_jump_deg, icp.depth_noise.b_per_m2 > 0.0 ? icp.depth_noise.reference_m : 0.0, icp.levels, p_slam.raycast_level, p_slam.tracking_level, p_slam.integrate_poor ? "yes" : "no");
+			icp.colour_weight, icp.colour_always ? "at every level" : "where the geometry is weak", icp.max_jump_m, icp.max_jump_deg, icp.depth_noise.b_per_m2 > 0.0 ? icp.depth_noise.reference_m : 0.0, icp.levels, p_slam.raycast_level, p_slam.tracking_level, p_slam.integrate_poor ? "yes" : "no");
 }
 
 // The RGB-D camera --rig or --intrinsics gives on top of p_base, the source's own (--intrinsics
@@ -1315,6 +1316,8 @@ int main(int argc, char **argv) {
 				return usage("--voxel-size-m needs a voxel edge in metres, > 0 and <= 1");
 			}
 			args.slam.tsdf.voxel_size_m = float(v);
+		} else if (arg == "--colour-always") {
+			args.slam.icp.colour_always = true;
 		} else if (arg == "--noise-reference-m") {
 			if (!cursor.non_negative_number(&args.slam.icp.depth_noise.reference_m)) {
 				return usage("--noise-reference-m needs a depth in metres >= 0 (0: every reading weighs 1)");

@@ -198,16 +198,16 @@ void print(const char *p_name, const Figures &p_figures, const Figures &p_refere
 
 // The four trackers on the same frames, as both modes run them.
 struct Comparison {
-	std::vector<Figures> figures; // ours, ours with colour, ICPOdometry, FastICPOdometry
+	std::vector<Figures> figures; // ours (defaults), ours with colour at every level, ICPOdometry, FastICPOdometry
 	static constexpr const char *KEYS[4] = { "ours", "ours_colour", "cv_icp", "cv_fast_icp" };
 };
 
 Comparison compare(const std::vector<Frame> &p_frames, int p_passes, const PinholeParams &p_camera) {
 	const PinholeIntrinsics intrinsics = pinhole_intrinsics(p_camera);
 	const cv::Mat k = (cv::Mat_<double>(3, 3) << p_camera.fx, 0.0, p_camera.cx, 0.0, p_camera.fy, p_camera.cy, 0.0, 0.0, 1.0);
-	IcpOptions ours;
+	IcpOptions ours; // the defaults: colour only where the geometry leaves a direction free
 	IcpOptions ours_colour = ours;
-	ours_colour.colour_weight = 0.1;
+	ours_colour.colour_always = true;
 	// OpenCV's defaults, with our depth range.
 	const float min_depth = float(ours.min_depth_m), max_depth = float(ours.max_depth_m);
 	Comparison comparison;
@@ -217,7 +217,7 @@ Comparison compare(const std::vector<Frame> &p_frames, int p_passes, const Pinho
 	const std::vector<Figures> &f = comparison.figures;
 	std::printf("per-frame median time (ratio to RoomProbe IcpTracker), ATE RMSE of translation, RPE per frame (translation, rotation):\n");
 	print("RoomProbe IcpTracker (make_model_maps+track)", f[0], f[0]);
-	print("RoomProbe IcpTracker, colour weight 0.1", f[1], f[0]);
+	print("RoomProbe IcpTracker, colour at every level", f[1], f[0]);
 	print("cv::rgbd::ICPOdometry", f[2], f[0]);
 	print("cv::rgbd::FastICPOdometry", f[3], f[0]);
 	print_breakdown(p_frames, ours, intrinsics);

@@ -228,6 +228,17 @@ int add_material(Scene *r_scene, const Material &p_material) {
 
 namespace {
 
+// Loads the panorama at p_path into r_scene; false with r_error set when it cannot be read.
+bool load_scene_panorama(const std::string &p_path, Scene *r_scene, std::string *r_error) {
+	PanoramaLoadResult panorama = load_panorama(p_path);
+	if (!panorama.ok) {
+		*r_error = panorama.error;
+		return false;
+	}
+	r_scene->panorama = panorama.panorama;
+	return true;
+}
+
 Material textured(const std::string &p_name, Pattern p_pattern, Color p_a, Color p_b, double p_scale_m, double p_angle_rad = 0.0, uint32_t p_seed = 0) {
 	Material m;
 	m.name = p_name;
@@ -380,13 +391,8 @@ SceneResult make_living_room(const SceneOptions &p_options) {
 	SceneResult result;
 	Scene &scene = result.scene;
 	scene.name = "living_room";
-	if (!p_options.panorama_path.empty()) {
-		PanoramaLoadResult panorama = load_panorama(p_options.panorama_path);
-		if (!panorama.ok) {
-			result.error = panorama.error;
-			return result;
-		}
-		scene.panorama = panorama.panorama;
+	if (!p_options.panorama_path.empty() && !load_scene_panorama(p_options.panorama_path, &scene, &result.error)) {
+		return result;
 	}
 	scene.has_room = true;
 	scene.room.floorplan = living_room();
@@ -483,12 +489,9 @@ SceneResult make_panorama_room(const SceneOptions &p_options) {
 		result.error = "panorama_room needs a panorama (SceneOptions::panorama_path, --hdri)";
 		return result;
 	}
-	PanoramaLoadResult panorama = load_panorama(p_options.panorama_path);
-	if (!panorama.ok) {
-		result.error = panorama.error;
+	if (!load_scene_panorama(p_options.panorama_path, &scene, &result.error)) {
 		return result;
 	}
-	scene.panorama = panorama.panorama;
 	scene.has_room = true;
 	scene.room.floorplan = living_room();
 	scene.room.floorplan.ceiling_height_m = 2.6;
