@@ -274,9 +274,11 @@ IcpKernelParams kernel_params(const IcpOptions &p_options, const Pose &p_pose, i
 	params.min_normal_cos = float(std::cos(p_options.max_normal_angle_deg * std::numbers::pi / 180.0));
 	params.colour_weight = p_colour ? float(p_options.colour_weight) : 0.0f;
 	params.max_colour_difference = float(p_options.max_colour_difference);
+	// Noise weights at the finest level only: the coarse levels are there to bring a large step
+	// in, and that needs the far surfaces' leverage as much as the near ones'.
 	const DepthNoiseModel &noise = p_options.depth_noise;
 	params.noise_a_m = float(noise.a_m);
-	params.noise_b_per_m2 = float(noise.b_per_m2);
+	params.noise_b_per_m2 = p_level == 0 ? float(noise.b_per_m2) : 0.0f;
 	params.noise_c_m = float(noise.c_m);
 	params.noise_reference_sigma_m = float(noise.sigma_m(std::max(noise.reference_m, noise.c_m)));
 	return params;
