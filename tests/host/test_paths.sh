@@ -103,10 +103,16 @@ test_eval_outside_clone() {
 
 test_bench_tum_outside_clone() {
 	tum_sequence || { failures+=("could not make the TUM sequence (see the log)"); return; }
-	rp bench slam --tum "$scratch/tum-seq" --frames 3
+	# Issue #10's command: intrinsics given, the trajectory saved outside the clone.
+	mkdir -p "$scratch/trajectories"
+	rp bench slam --tum "$scratch/tum-seq" --frames 3 --intrinsics 525,525,319.5,239.5 --save-trajectory "$scratch/trajectories/T.txt"
 	check "bench exited with status $rc" test "$rc" -eq 0
 	check "bench did not read $scratch/tum-seq" says "roomprobe_bench slam --tum $scratch/tum-seq"
 	check "no 'summary: mode=tum frames=3' line" grep -q '^summary: mode=tum frames=3 ' <<<"$out"
+	# TUM format: 'timestamp tx ty tz qx qy qz qw', one line per tracked frame (3 here, all good).
+	check "$scratch/trajectories/T.txt does not hold 3 lines of 8 numbers" \
+		test "$(grep -cE '^[0-9.eE+-]+( [0-9.eE+-]+){7}$' "$scratch/trajectories/T.txt" 2>/dev/null)" -eq 3
+	check "files written inside the toolchain root at $RP_ROOT$scratch/trajectories" no_files_in_root "$scratch/trajectories"
 }
 
 test_relative_paths_from_another_folder() {
