@@ -8,6 +8,8 @@
 #include "recording/recording_writer.h"
 #include "recording/room_file.h"
 
+#include "recording_test_issues.h"
+
 #include <doctest/doctest.h>
 
 #include <glm/gtc/quaternion.hpp>
@@ -22,6 +24,8 @@
 
 using namespace roomprobe;
 namespace fs = std::filesystem;
+
+using recording_test::all_issues;
 
 namespace {
 
@@ -221,14 +225,6 @@ const RecordingIssue *find_issue(const RecordingReader &p_reader, const std::str
 		}
 	}
 	return nullptr;
-}
-
-std::string all_issues(const RecordingReader &p_reader) {
-	std::string text;
-	for (const RecordingIssue &issue : p_reader.get_issues()) {
-		text += to_string(issue) + "\n";
-	}
-	return text;
 }
 
 // Every frame left in the recording reads, and the event list holds them all.

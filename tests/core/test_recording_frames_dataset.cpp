@@ -4,6 +4,8 @@
 
 #include "recording/frames_dataset.h"
 
+#include "recording_test_issues.h"
+
 #include <doctest/doctest.h>
 
 #include <glm/gtc/quaternion.hpp>
@@ -19,6 +21,8 @@
 
 using namespace roomprobe;
 namespace fs = std::filesystem;
+
+using recording_test::all_issues;
 
 namespace {
 
@@ -107,14 +111,6 @@ const RecordingIssue *find_issue(const RecordingReader &p_reader, const std::str
 		}
 	}
 	return nullptr;
-}
-
-std::string all_issues(const RecordingReader &p_reader) {
-	std::string text;
-	for (const RecordingIssue &issue : p_reader.get_issues()) {
-		text += to_string(issue) + "\n";
-	}
-	return text;
 }
 
 double rotation_distance(const glm::dquat &p_a, const glm::dquat &p_b) {

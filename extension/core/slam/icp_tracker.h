@@ -2,7 +2,8 @@
 // Frame-to-model tracking of the RGB-D camera (paper §4.2, InfiniTAM's ICP tracker): the pose of
 // a depth frame relative to a reference (ModelMaps, the TSDF's raycast or another frame) by
 // point-to-plane ICP with projective data association, coarse to fine over a depth pyramid, with
-// an optional photometric term; and whether the pose can be trusted (TrackingState).
+// a photometric term where the geometry leaves a direction free; the conditioning of each solve;
+// and whether the pose can be trusted (TrackingState).
 
 #include <io/opencv.h>
 
