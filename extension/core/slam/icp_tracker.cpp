@@ -157,17 +157,13 @@ struct Conditioning {
 	cv::Vec6d eigenvalues; // descending
 	cv::Matx66d eigenvectors; // rows, in the scaled space
 	cv::Vec6d scale; // the diagonal of S
-	cv::Matx66d h; // the full, unscaled J^T J
-	cv::Vec6d g; // J^T r
+	cv::Vec6d g; // J^T r, unscaled
 	bool ok = false; // finite, and some information at all
 };
 
 Conditioning condition(const NormalSystem &p_system) {
 	Conditioning c;
 	for (int i = 0; i < 6; ++i) {
-		for (int j = i; j < 6; ++j) {
-			c.h(i, j) = c.h(j, i) = p_system.h[i][j];
-		}
 		c.g[i] = p_system.g[i];
 	}
 	const double rotation_trace = p_system.geometry_trace_rotation, translation_trace = p_system.geometry_trace_translation;
@@ -181,7 +177,8 @@ Conditioning condition(const NormalSystem &p_system) {
 	cv::Matx66d scaled;
 	for (int i = 0; i < 6; ++i) {
 		for (int j = 0; j < 6; ++j) {
-			scaled(i, j) = c.h(i, j) * c.scale[i] * c.scale[j];
+			// h holds the upper triangle only.
+			scaled(i, j) = p_system.h[std::min(i, j)][std::max(i, j)] * c.scale[i] * c.scale[j];
 		}
 	}
 	cv::Mat values, vectors;

@@ -6,6 +6,7 @@
 #include <camera/pinhole_camera.h>
 #include <recording/cubemap_layout.h>
 #include <room/room_mesh.h>
+#include <slam/slam_types.h>
 
 #include <embree4/rtcore.h>
 #include <glm/geometric.hpp>
@@ -443,8 +444,7 @@ cv::Mat to_srgb8(const cv::Mat &p_linear, double p_exposure) {
 // ---------------------------------------------------------------- RGB-D
 
 double kinect_depth_sigma_m(double p_z_m) {
-	const double d = p_z_m - 0.4;
-	return 0.0012 + 0.0019 * d * d;
+	return DepthNoiseModel().sigma_m(p_z_m); // the model the tracker weighs readings by
 }
 
 uint64_t mix_seed(uint64_t p_a, uint64_t p_b) {

@@ -99,7 +99,8 @@ float srgb8_to_linear(uint8_t p_code);
 
 // ---------------------------------------------------------------- the RGB-D camera
 
-// Kinect-like axial noise (Nguyen et al. 2012): sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 metres.
+// Kinect-like axial noise (Nguyen et al. 2012): sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 metres,
+// slam_types.h's DepthNoiseModel with its defaults.
 double kinect_depth_sigma_m(double p_z_m);
 
 struct RgbdOptions {
