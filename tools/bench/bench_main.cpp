@@ -1193,6 +1193,21 @@ int bench_dense(const Arguments &p_args, const DenseSource &p_source) {
 	return 0;
 }
 
+// Dense SLAM over a dataset the caller opened into p_reader (--tum, --7scenes): the error of
+// opening, or the benchmark.
+int bench_dataset(const Arguments &p_args, const RecordingStatus &p_opened, const char *p_mode, const std::string &p_folder,
+		const RecordingReader &p_reader, DenseSource p_source) {
+	if (!p_opened.ok) {
+		std::fprintf(stderr, "roomprobe_bench: --%s: %s\n", p_mode, p_opened.error.c_str());
+		return 1;
+	}
+	p_source.mode = p_mode;
+	p_source.option = std::string("--") + p_mode + " " + p_folder;
+	p_source.reader = &p_reader;
+	p_source.camera = p_reader.get_rig().rgb;
+	return bench_dense(p_args, p_source);
+}
+
 int bench_tum(const Arguments &p_args) {
 	TumDatasetOptions options;
 	TumCamera camera = TumCamera::RosDefault;
@@ -1208,16 +1223,7 @@ int bench_tum(const Arguments &p_args) {
 	}
 	source.camera_note = note.empty() ? source.camera_note : note;
 	RecordingReader reader;
-	const RecordingStatus status = open_tum_dataset(p_args.tum, &reader, options);
-	if (!status.ok) {
-		std::fprintf(stderr, "roomprobe_bench: --tum: %s\n", status.error.c_str());
-		return 1;
-	}
-	source.mode = "tum";
-	source.option = "--tum " + p_args.tum;
-	source.reader = &reader;
-	source.camera = reader.get_rig().rgb;
-	return bench_dense(p_args, source);
+	return bench_dataset(p_args, open_tum_dataset(p_args.tum, &reader, options), "tum", p_args.tum, reader, source);
 }
 
 int bench_7scenes(const Arguments &p_args) {
@@ -1234,16 +1240,7 @@ int bench_7scenes(const Arguments &p_args) {
 		source.camera_note = note;
 	}
 	RecordingReader reader;
-	const RecordingStatus status = open_frames_dataset(p_args.seven_scenes, &reader, options);
-	if (!status.ok) {
-		std::fprintf(stderr, "roomprobe_bench: --7scenes: %s\n", status.error.c_str());
-		return 1;
-	}
-	source.mode = "7scenes";
-	source.option = "--7scenes " + p_args.seven_scenes;
-	source.reader = &reader;
-	source.camera = reader.get_rig().rgb;
-	return bench_dense(p_args, source);
+	return bench_dataset(p_args, open_frames_dataset(p_args.seven_scenes, &reader, options), "7scenes", p_args.seven_scenes, reader, source);
 }
 
 } // namespace
