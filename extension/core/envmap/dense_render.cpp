@@ -65,7 +65,7 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 	const std::array<float, 256> &lut = p_options.lut != nullptr ? *p_options.lut : identity;
 	for (int f = 0; f < 6; f++) {
 		ModelMaps maps;
-		p_volume.raycast(face_camera, cubemap_face_pose(f, p_position), p_options.near_m, p_options.far_m, &maps);
+		p_volume.raycast(face_camera, cubemap_face_pose(f, p_position), p_options.near_m, p_options.far_m, &maps, nullptr, false);
 		cv::Mat &face = io_cubemap->faces[size_t(f)];
 		for (int v = 0; v < size; v++) {
 			const int lv = std::min(low - 1, v * low / size);

@@ -42,8 +42,11 @@ std::array<double, SH_COEFFICIENTS> sh_basis(const glm::dvec3 &p_direction);
 // Projects a cubemap onto the basis: c_i = sum over texels of L(texel) y_i(d) dOmega, with
 // d the texel centre's direction (cubemap_direction) and dOmega its exact solid angle
 // (cubemap_texel_solid_angle). A cubemap that is not is_valid_cubemap gives all zeros.
-// Parallel over face rows (TBB), deterministic.
-ShCoefficients project_sh(const Cubemap &p_cubemap);
+// Parallel over face rows (TBB), deterministic. Faces larger than p_max_face_size are first
+// box-filtered (cv::INTER_AREA) to that size (0: always the full faces); the per-texel
+// y_i dOmega of each size is computed once and kept.
+inline constexpr int SH_PROJECTION_FACE_SIZE = 64;
+ShCoefficients project_sh(const Cubemap &p_cubemap, int p_max_face_size = SH_PROJECTION_FACE_SIZE);
 
 // sum_i c_i y_i(p_direction): the band-limited function at a direction.
 glm::dvec3 evaluate_sh(const ShCoefficients &p_coefficients, const glm::dvec3 &p_direction);

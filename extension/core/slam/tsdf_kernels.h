@@ -275,8 +275,8 @@ inline bool tsdf_update_voxel(const TsdfFrameView &p_frame, const glm::vec3 &p_w
 		const float *r0 = p_frame.depth + size_t(v0) * p_frame.depth_stride + size_t(u0);
 		const float *r1 = r0 + p_frame.depth_stride;
 		const float d00 = r0[0], d10 = r0[1], d01 = r1[0], d11 = r1[1];
-		const float lo = std::fmin(std::fmin(d00, d10), std::fmin(d01, d11));
-		const float hi = std::fmax(std::fmax(d00, d10), std::fmax(d01, d11));
+		const float lo = std::min(std::min(d00, d10), std::min(d01, d11)); // NaN: all_valid is false
+		const float hi = std::max(std::max(d00, d10), std::max(d01, d11));
 		const bool all_valid = tsdf_depth_valid(d00, p_frame.min_depth_m, p_frame.max_depth_m) && tsdf_depth_valid(d10, p_frame.min_depth_m, p_frame.max_depth_m) && tsdf_depth_valid(d01, p_frame.min_depth_m, p_frame.max_depth_m) && tsdf_depth_valid(d11, p_frame.min_depth_m, p_frame.max_depth_m);
 		if (all_valid && hi - lo < 0.5f * p_frame.truncation_m) {
 			const float fx = pixel.x - float(u0), fy = pixel.y - float(v0);
@@ -294,10 +294,10 @@ inline bool tsdf_update_voxel(const TsdfFrameView &p_frame, const glm::vec3 &p_w
 	if (eta < -p_frame.truncation_m || (!has_plane && eta < p_frame.truncation_m)) {
 		return false; // hidden behind the observed surface, or near one seen too poorly
 	}
-	const float sdf = std::fmin(1.0f, eta / p_frame.truncation_m);
+	const float sdf = std::min(1.0f, eta / p_frame.truncation_m);
 	// Slanted readings count less (cos^2 of the view angle): their depth is the least certain
 	// and the tangent plane the poorest stand-in for the surface away from the reading.
-	const float c = has_plane ? std::fmin(1.0f, slope) : 0.0f;
+	const float c = has_plane ? std::min(1.0f, slope) : 0.0f;
 	const int add = std::max(1, int(std::lround(c * c * float(TSDF_WEIGHT_UNIT))));
 	const float w = float(r_voxel->weight);
 	r_voxel->tsdf = (r_voxel->tsdf * w + sdf * float(add)) / (w + float(add));
@@ -381,6 +381,8 @@ struct TsdfRayParams {
 	glm::mat3 world_from_camera_rotation = glm::mat3(1.0f);
 	float min_depth_m = 0.3f, max_depth_m = 4.0f; // along the optical axis
 	glm::vec3 bounds_min = glm::vec3(0.0f), bounds_max = glm::vec3(0.0f); // allocated blocks, world
+	// The normal costs six trilinear reads a hit; a cubemap's dense pass needs none.
+	bool normals = true;
 };
 
 // Finds the surface along the ray parameter range [p_t0, p_t1] by refining a bracket
@@ -456,16 +458,20 @@ inline bool tsdf_raycast_pixel(const TsdfView &p_view, const TsdfRayParams &p_ra
 		if (have_prev && f_prev > 0.0f && f <= 0.0f) {
 			const float ts = tsdf_refine_crossing(p_view, origin_grid, dir_grid, t_prev, f_prev, t, f, &cache);
 			const glm::vec3 gs = origin_grid + ts * dir_grid;
-			glm::vec3 gradient;
-			if (!tsdf_gradient(p_view, gs, &cache, &gradient) || !(glm::dot(gradient, gradient) > 0.0f)) {
-				return false;
-			}
-			glm::vec3 n = glm::normalize(gradient);
-			if (glm::dot(n, dir) > 0.0f) {
-				n = -n;
+			if (p_ray.normals) {
+				glm::vec3 gradient;
+				if (!tsdf_gradient(p_view, gs, &cache, &gradient) || !(glm::dot(gradient, gradient) > 0.0f)) {
+					return false;
+				}
+				glm::vec3 n = glm::normalize(gradient);
+				if (glm::dot(n, dir) > 0.0f) {
+					n = -n;
+				}
+				r_hit->normal = n;
+			} else {
+				r_hit->normal = glm::vec3(std::numeric_limits<float>::quiet_NaN());
 			}
 			r_hit->point = p_ray.origin + ts * dir;
-			r_hit->normal = n;
 			r_hit->depth = ts * dir_camera.z;
 			if (!tsdf_trilinear_color(p_view, gs, &cache, &r_hit->rgb)) {
 				r_hit->rgb = glm::vec3(0.0f);
@@ -478,7 +484,7 @@ inline bool tsdf_raycast_pixel(const TsdfView &p_view, const TsdfRayParams &p_ra
 		// Far from the surface the tsdf is about the distance to it (sphere tracing, with a margin
 		// for where it over-estimates it: concave corners); near it, half-voxel steps keep the
 		// bracket tight.
-		t += f > 0.0f ? std::fmax(fine_step, 0.8f * f * p_view.truncation) : fine_step;
+		t += f > 0.0f ? std::max(fine_step, 0.8f * f * p_view.truncation) : fine_step;
 	}
 	return false;
 }

@@ -502,7 +502,7 @@ void TsdfVolume::raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_
 }
 
 void TsdfVolume::raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_min_depth_m, float p_max_depth_m, ModelMaps *r_maps,
-		RaycastStats *r_stats) const {
+		RaycastStats *r_stats, bool p_normals) const {
 	const float nan = std::numeric_limits<float>::quiet_NaN();
 	r_maps->camera = p_camera;
 	r_maps->world_from_camera = p_world_from_camera;
@@ -529,6 +529,7 @@ void TsdfVolume::raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_
 	ray.max_depth_m = p_max_depth_m;
 	ray.bounds_min = m_bounds_min;
 	ray.bounds_max = m_bounds_max;
+	ray.normals = p_normals;
 	const cv::Mat ranges = depth_ranges(p_camera, p_world_from_camera, p_min_depth_m, p_max_depth_m);
 	std::vector<long long> steps(size_t(p_camera.height), 0);
 	std::vector<int> hits(size_t(p_camera.height), 0);

@@ -95,9 +95,10 @@ public:
 	// world frame, depth = camera z; NaN and colour 0 where no surface was met). Parallel over rows.
 	void raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, ModelMaps *r_maps, RaycastStats *r_stats = nullptr) const;
 	// The same within [p_min_depth_m, p_max_depth_m] of camera z instead of the options' depth
-	// range (a probe's cubemap faces: surfaces a few centimetres away count).
+	// range (a probe's cubemap faces: surfaces a few centimetres away count). Without
+	// p_normals, normals stay NaN and a hit costs six trilinear reads less (a dense pass).
 	void raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_min_depth_m, float p_max_depth_m, ModelMaps *r_maps,
-			RaycastStats *r_stats = nullptr) const;
+			RaycastStats *r_stats = nullptr, bool p_normals = true) const;
 
 	// Trilinear tsdf (normalised, [-1, 1]) and colour (0..255, zero when no voxel around has one)
 	// at a world point (metres); false where a voxel around it is unallocated or unobserved.
