@@ -22,7 +22,7 @@ namespace roomprobe {
 constexpr int TSDF_BLOCK_SIDE = 8; // voxels along each side of a block
 constexpr int TSDF_BLOCK_VOXELS = TSDF_BLOCK_SIDE * TSDF_BLOCK_SIDE * TSDF_BLOCK_SIDE;
 // Voxel weights count observations in fixed point: a head-on reading adds this much, a slanted
-// one less (tsdf_update_voxel).
+// one less (tsdf_update_voxel_at).
 constexpr int TSDF_WEIGHT_UNIT = 32;
 
 // One voxel: 12 bytes.
@@ -247,12 +247,14 @@ inline float tsdf_depth_slope(const float *p_depth, size_t p_stride, const Pinho
 	return std::fabs(glm::dot(n, x)) / (len * x.z);
 }
 
-// Folds one frame into one voxel at world point p_world: the signed distance to the tangent
+// Folds one frame into one voxel: the signed distance to the tangent
 // plane of the reading on the voxel's ray (tsdf_depth_slope), truncated to [-1, 1] and skipped
 // well behind the surface, averaged with a capped weight; the colour only within color_band of
 // the surface, where the pixel really shows this voxel. True when the voxel changed.
-inline bool tsdf_update_voxel(const TsdfFrameView &p_frame, const glm::vec3 &p_world, TsdfVoxel *r_voxel) {
-	const glm::vec3 pc = p_frame.camera_from_world_rotation * p_world + p_frame.camera_from_world_translation;
+// p_camera_point: the voxel's point in the camera's frame (tsdf_volume.cpp steps through a
+// block's voxels there).
+inline bool tsdf_update_voxel_at(const TsdfFrameView &p_frame, const glm::vec3 &p_camera_point, TsdfVoxel *r_voxel) {
+	const glm::vec3 &pc = p_camera_point;
 	glm::vec2 pixel;
 	if (!p_frame.camera.project(pc, &pixel)) {
 		return false;
@@ -268,6 +270,12 @@ inline bool tsdf_update_voxel(const TsdfFrameView &p_frame, const glm::vec3 &p_w
 	}
 	float depth = p_frame.depth[size_t(v) * p_frame.depth_stride + size_t(u)];
 	if (!tsdf_depth_valid(depth, p_frame.min_depth_m, p_frame.max_depth_m)) {
+		return false;
+	}
+	// Most voxels of a block lie well behind the reading: skip them before the bilinear depth,
+	// which differs from this reading by less than half the band, and the slope factor, at
+	// least min_slope where it counts (below, eta >= -truncation is needed to change anything).
+	if (depth - pc.z < -p_frame.truncation_m * (0.5f + 1.0f / std::max(p_frame.min_slope, 1e-3f))) {
 		return false;
 	}
 	const int u0 = int(std::floor(pixel.x)), v0 = int(std::floor(pixel.y));

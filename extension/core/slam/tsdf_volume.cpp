@@ -377,6 +377,9 @@ IntegrationStats TsdfVolume::integrate(const cv::Mat &p_depth_m, const cv::Mat &
 	frame.slope_stride = slope.step1();
 	frame.min_slope = m_options.min_slope;
 	const float vs = m_options.voxel_size_m;
+	const glm::vec3 step_x = frame.camera_from_world_rotation[0] * vs; // glm: [i] is column i
+	const glm::vec3 step_y = frame.camera_from_world_rotation[1] * vs;
+	const glm::vec3 step_z = frame.camera_from_world_rotation[2] * vs;
 	std::vector<uint8_t> changed(visible.size(), 0);
 	cv::parallel_for_(cv::Range(0, int(visible.size())), [&](const cv::Range &p_range) {
 		for (int i = p_range.start; i < p_range.end; i++) {
@@ -384,11 +387,15 @@ IntegrationStats TsdfVolume::integrate(const cv::Mat &p_depth_m, const cv::Mat &
 			const glm::ivec3 base = m_slot_block[size_t(slot)] * TSDF_BLOCK_SIDE;
 			TsdfVoxel *voxels = &m_voxels[size_t(slot) * TSDF_BLOCK_VOXELS];
 			bool any = false;
+			// The voxels in the camera's frame, stepped by the rotated grid axes (a voxel's point
+			// is its block's origin plus x, y, z steps: adds instead of a matrix product each).
+			const glm::vec3 origin = frame.camera_from_world_rotation * (glm::vec3(base) * vs) + frame.camera_from_world_translation;
+			TsdfVoxel *voxel = voxels;
 			for (int z = 0; z < TSDF_BLOCK_SIDE; z++) {
 				for (int y = 0; y < TSDF_BLOCK_SIDE; y++) {
-					for (int x = 0; x < TSDF_BLOCK_SIDE; x++) {
-						const glm::ivec3 local(x, y, z);
-						any |= tsdf_update_voxel(frame, glm::vec3(base + local) * vs, &voxels[tsdf_local_index(local)]);
+					glm::vec3 pc = origin + float(y) * step_y + float(z) * step_z;
+					for (int x = 0; x < TSDF_BLOCK_SIDE; x++, voxel++, pc += step_x) {
+						any |= tsdf_update_voxel_at(frame, pc, voxel);
 					}
 				}
 			}
