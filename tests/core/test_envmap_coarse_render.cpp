@@ -201,3 +201,32 @@ TEST_CASE("a coarse render samples the atlas bilinearly without bleeding across 
 	// An atlas of the wrong size gives no cubemap.
 	CHECK(!is_valid_cubemap(renderer.render(cv::Mat(4, 4, CV_32FC3), origin, n)));
 }
+
+TEST_CASE("a coarse render through kept rays equals the first render, follows the atlas, and is rebuilt after eviction") {
+	const RoomMesh mesh = build(l_room());
+	const cv::Mat atlas = position_atlas(mesh);
+	const CoarseCubemapRenderer renderer(mesh);
+	const glm::dvec3 origin(1.3, 1.1, 0.9);
+	const int n = 32;
+	const Cubemap first = renderer.render(atlas, origin, n);
+	REQUIRE(is_valid_cubemap(first));
+	const auto max_difference = [&](const Cubemap &p_a, const Cubemap &p_b, double p_scale_b) {
+		double worst = 0.0;
+		for (int f = 0; f < 6; f++) {
+			worst = std::max(worst, cv::norm(p_a.faces[size_t(f)] * p_scale_b, p_b.faces[size_t(f)], cv::NORM_INF));
+		}
+		return worst;
+	};
+	// The same position again (kept rays), then more positions than are kept, then again.
+	CHECK(max_difference(first, renderer.render(atlas, origin, n), 1.0) == 0.0);
+	for (int i = 0; i < CoarseCubemapRenderer::MAX_CACHED_LOOKUPS + 1; i++) {
+		const Cubemap other = renderer.render(atlas, origin + glm::dvec3(0.1 * (i + 1), 0.0, 0.0), n);
+		CHECK(max_difference(first, other, 1.0) > 0.01); // another position sees other points
+	}
+	CHECK(max_difference(first, renderer.render(atlas, origin, n), 1.0) == 0.0);
+	// The kept rays hold no colours: a new atlas shows at once.
+	const cv::Mat doubled = atlas * 2.0;
+	CHECK(max_difference(first, renderer.render(doubled, origin, n), 2.0) < 1e-5);
+	// Another size at the same position is its own set of rays.
+	CHECK(renderer.render(atlas, origin, n / 2).size == n / 2);
+}

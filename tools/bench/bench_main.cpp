@@ -51,6 +51,7 @@
 //        roomprobe_bench live --recording DIR [--speed X] [--frames N] [--threads N] [--probe-size N] [the same camera and SLAM options]
 
 #include "../common/cli.h"
+#include "opencv_peers.h"
 
 #include <camera/pinhole_camera.h>
 #include <engine/live_room.h>
@@ -77,6 +78,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <string>
 #include <thread>
@@ -100,6 +102,11 @@ double ms_between(Clock::time_point p_from, Clock::time_point p_to) {
 constexpr double TARGET_SLAM_MS = 33.0; // tracking + integration, median, 640x480
 constexpr double TARGET_ATE_MM = 10.0; // ATE RMSE on the synthetic sequences
 constexpr double PAPER_FRAME_MS = 47.42; // Table 1's total
+// Issue #11's per-stage targets on this project's 2-core machine (medians, ms), and the ratios
+// against the peers run in the same process (the peer's time over ours), which hold on any machine.
+constexpr double TARGET_TRACKING_MS = 8.0, TARGET_INTEGRATION_MS = 6.0, TARGET_RAYCAST_MS = 4.0;
+constexpr double TARGET_COARSE_MS = 6.0, TARGET_PROBE_MS = 8.0, TARGET_FULL_FRAME_MS = 25.0;
+constexpr double TARGET_INTEGRATION_RATIO = 10.0, TARGET_RAYCAST_RATIO = 3.0, TARGET_ICP_RATIO = 3.0;
 // As the live nodes: DenseSLAM's mesh_update_interval.
 constexpr int MESH_INTERVAL = 15;
 // The probe's map size: RoomProbe's default in step mode, and the live benchmark's.
@@ -371,6 +378,7 @@ struct Arguments {
 	bool has_intrinsics = false; // --intrinsics fx,fy,cx,cy
 	double intrinsics[4] = { 0.0, 0.0, 0.0, 0.0 };
 	std::string save_trajectory; // --save-trajectory FILE
+	bool peers = true; // slam --recording: OpenCV's TSDF and ICP on the same frames (--no-peers: not)
 	DenseSlamOptions slam; // the defaults, with --voxel-size-m, --colour-weight and the ranges applied
 };
 
@@ -398,6 +406,9 @@ void print_usage(std::FILE *p_out) {
 			"                        instead of the source's; the depth scale and any fisheye stay the source's\n"
 			"  --save-trajectory FILE  slam: the tracked poses in TUM format (timestamp tx ty tz qx qy qz qw), one line per frame\n"
 			"                        tracked good or poor; lost frames (no pose known) and poor ones' reasons as '#' comments\n"
+			"  --no-peers            slam --recording: skip the peers (OpenCV contrib's HASHTSDF volume integrating and raycasting\n"
+			"                        the fused frames at the tracked poses, cv::rgbd::ICPOdometry frame to frame), run after the\n"
+			"                        engine; their medians over ours are the summary's opencv_*_ratio keys\n"
 			"SLAM settings (DenseSlamOptions; the effective ones are printed first):\n"
 			"  --voxel-size-m V      TSDF voxel edge, metres (default %.3f)\n"
 			"  --colour-weight W     ICP's photometric term, metres per unit intensity; 0: geometry only (default %.2f)\n"
@@ -598,6 +609,102 @@ struct DenseSource {
 
 int bench_dense(const Arguments &p_args, const DenseSource &p_source);
 
+// ---------------------------------------------------------------- issue #11's speed targets and peers
+
+// Peer time over ours (NaN: the peer did not run).
+struct PeerRatios {
+	double integration = std::numeric_limits<double>::quiet_NaN();
+	double raycast = std::numeric_limits<double>::quiet_NaN();
+	double icp = std::numeric_limits<double>::quiet_NaN();
+};
+
+struct SpeedFigures {
+	double tracking_ms = 0.0, integration_ms = 0.0, raycast_ms = 0.0, coarse_ms = 0.0, probe_ms = 0.0, full_frame_ms = 0.0;
+	int probe_size = 0;
+};
+
+double ratio(const Series &p_peer, double p_ours_ms) {
+	return p_peer.empty() || !(p_ours_ms > 0.0) ? std::numeric_limits<double>::quiet_NaN() : p_peer.median() / p_ours_ms;
+}
+
+Series series_of(const std::vector<double> &p_values) {
+	Series s;
+	s.values = p_values;
+	return s;
+}
+
+// OpenCV's TSDF and ICP on the frames our engine fused, at the poses it tracked (opencv_peers.h).
+PeerRatios print_opencv_peers(const std::vector<bench::PeerFrame> &p_frames, const RecordingSetup &p_setup, const SlamFigures &p_figures) {
+	const DenseSlamOptions &slam = p_setup.config.slam;
+	bench::PeerSettings settings;
+	settings.camera = pinhole_intrinsics(p_setup.camera); // timing only: distortion, if any, is not taken out of the peer's depth
+	settings.voxel_size_m = slam.tsdf.voxel_size_m;
+	settings.truncation_m = slam.tsdf.truncation_m;
+	settings.min_depth_m = slam.tsdf.min_depth_m;
+	settings.max_depth_m = slam.tsdf.max_depth_m;
+	settings.max_weight = slam.tsdf.max_weight;
+	settings.raycast_level = std::clamp(slam.raycast_level, 0, 4);
+	const bench::PeerTimings peer = bench::run_opencv_peers(p_frames, settings);
+	const Series integrate = series_of(peer.integrate_ms), raycast = series_of(peer.raycast_ms), icp = series_of(peer.icp_ms);
+	PeerRatios ratios;
+	ratios.integration = ratio(integrate, p_figures.integrate.median());
+	ratios.raycast = ratio(raycast, p_figures.raycast.median());
+	ratios.icp = ratio(icp, p_figures.track.median());
+	std::printf("\npeers on the same %zu fused frames at the tracked poses (OpenCV %s contrib rgbd, run after the engine, same threads), medians:\n",
+			p_frames.size(), CV_VERSION);
+	std::printf("  %-58s %10s %10s %12s\n", "stage", "peer ms", "ours ms", "peer / ours");
+	std::printf("  %-58s %10.2f %10.2f %12.2f\n", ("integration: cv::kinfu " + peer.volume + ", same voxel, truncation, depth range").c_str(),
+			integrate.median(), p_figures.integrate.median(), ratios.integration);
+	char name[96];
+	std::snprintf(name, sizeof(name), "raycast %dx%d from the same poses", peer.raycast_width, peer.raycast_height);
+	std::printf("  %-58s %10.2f %10.2f %12.2f\n", name, raycast.median(), p_figures.raycast.median(), ratios.raycast);
+	std::printf("  %-58s %10.2f %10.2f %12.2f\n", "tracking: cv::rgbd::ICPOdometry frame to frame (ours: to the model)", icp.median(),
+			p_figures.track.median(), ratios.icp);
+	if (!peer.error.empty()) {
+		std::printf("  peer error: %s\n", peer.error.c_str());
+	}
+	return ratios;
+}
+
+void print_speed_target(const char *p_name, double p_ms, double p_target_ms) {
+	std::printf("  TARGET %-52s <= %5.1f ms: %8.2f ms  %s\n", p_name, p_target_ms, p_ms, met(p_ms <= p_target_ms));
+}
+
+void print_ratio_target(const char *p_name, double p_ratio, double p_target) {
+	if (std::isnan(p_ratio)) {
+		std::printf("  TARGET %-52s >= %5.1f  : peer not run\n", p_name, p_target);
+		return;
+	}
+	std::printf("  TARGET %-52s >= %5.1f  : %8.2f     %s\n", p_name, p_target, p_ratio, met(p_ratio >= p_target));
+}
+
+// Issue #11's table: the milliseconds on this project's 2-core machine, the ratios anywhere.
+void print_speed_targets(const SpeedFigures &p_speed, const PeerRatios &p_ratios) {
+	std::printf("\nspeed targets (issue #11; medians; the ms targets are for a 256^2 probe on this project's 2-core machine):\n");
+	print_speed_target("tracking", p_speed.tracking_ms, TARGET_TRACKING_MS);
+	print_speed_target("integration", p_speed.integration_ms, TARGET_INTEGRATION_MS);
+	print_speed_target("reference raycast", p_speed.raycast_ms, TARGET_RAYCAST_MS);
+	print_speed_target("coarse stage per fisheye frame", p_speed.coarse_ms, TARGET_COARSE_MS);
+	char name[64];
+	std::snprintf(name, sizeof(name), "probe map at %d^2", p_speed.probe_size);
+	print_speed_target(name, p_speed.probe_ms, TARGET_PROBE_MS);
+	print_speed_target("full frame: SLAM + fisheye share x coarse + probe", p_speed.full_frame_ms, TARGET_FULL_FRAME_MS);
+	print_ratio_target("integration, OpenCV HASHTSDF's time / ours", p_ratios.integration, TARGET_INTEGRATION_RATIO);
+	print_ratio_target("raycast, OpenCV HASHTSDF's time / ours", p_ratios.raycast, TARGET_RAYCAST_RATIO);
+	print_ratio_target("tracking, OpenCV ICPOdometry's time / ours", p_ratios.icp, TARGET_ICP_RATIO);
+}
+
+std::string speed_summary(const SpeedFigures &p_speed, const PeerRatios &p_ratios) {
+	char line[512];
+	std::snprintf(line, sizeof(line), "tracking_ms=%.2f integration_ms=%.2f raycast_ms=%.2f coarse_ms=%.2f probe_ms=%.2f full_frame_ms=%.2f", p_speed.tracking_ms,
+			p_speed.integration_ms, p_speed.raycast_ms, p_speed.coarse_ms, p_speed.probe_ms, p_speed.full_frame_ms);
+	std::string out = line;
+	out += " opencv_integration_ratio=" + figure(!std::isnan(p_ratios.integration), p_ratios.integration);
+	out += " opencv_raycast_ratio=" + figure(!std::isnan(p_ratios.raycast), p_ratios.raycast);
+	out += " opencv_icp_ratio=" + figure(!std::isnan(p_ratios.icp), p_ratios.icp);
+	return out;
+}
+
 // ---------------------------------------------------------------- slam --recording (step mode)
 
 int bench_recording(const Arguments &p_args) {
@@ -641,6 +748,7 @@ int bench_recording(const Arguments &p_args) {
 	Series map_coarse, map_dense, map_sh, map_mips, map_total;
 	Series push_rgbd, push_fisheye, render_call, live_frame;
 	Series fisheye_error_mm;
+	std::vector<bench::PeerFrame> peer_frames; // the fused frames at their tracked poses
 	uint64_t coarse_frames_seen = 0, mesh_version_seen = 0;
 	size_t rgbd_done = 0, fisheye_pushed = 0, frames_failed = 0, occlusion_skipped = 0, fisheye_integrated = 0;
 	for (const PlaybackEvent &event : reader.get_events()) {
@@ -655,6 +763,7 @@ int bench_recording(const Arguments &p_args) {
 				continue;
 			}
 			rgbd_done++;
+			const cv::Mat depth_for_peers = p_args.peers ? frame.frame.depth_m : cv::Mat(); // shared, never written
 			Clock::time_point start = Clock::now();
 			engine.push_rgbd(std::move(frame.frame));
 			const double push_ms = ms_since(start);
@@ -662,6 +771,9 @@ int bench_recording(const Arguments &p_args) {
 			const std::shared_ptr<const TrackedFrame> tracked = engine.tracked_frame();
 			if (tracked) {
 				record_tracked_frame(*tracked, &figures, &trajectory_file);
+				if (p_args.peers && tracked->integrated) {
+					peer_frames.push_back({ depth_for_peers, tracked->world_from_camera });
+				}
 			}
 			// The engine re-meshes inside push_rgbd every MESH_INTERVAL fused frames: its cost is the
 			// call's time beyond SLAM's own (meshing and the placement BVH).
@@ -828,10 +940,21 @@ int bench_recording(const Arguments &p_args) {
 	print_memory(stats.tsdf);
 	std::printf("  dense mesh: %zu triangles\n", figures.mesh_triangles);
 	trajectory_file.close(p_args.save_trajectory);
+
+	const PeerRatios ratios = p_args.peers ? print_opencv_peers(peer_frames, setup, figures) : PeerRatios();
+	SpeedFigures speed;
+	speed.tracking_ms = figures.track.median();
+	speed.integration_ms = figures.integrate.median();
+	speed.raycast_ms = figures.raycast.median();
+	speed.coarse_ms = push_fisheye.median();
+	speed.probe_ms = map_total.median();
+	speed.full_frame_ms = full_median;
+	speed.probe_size = probe_size;
+	print_speed_targets(speed, ratios);
 	std::printf("summary: mode=slam frames=%zu fisheye_frames=%zu track_ms_p50=%.2f integrate_ms_p50=%.2f slam_ms_p50=%.2f probe_ms_p50=%.2f "
-				"frame_ms_p50=%.2f frame_ms_mean=%.2f %s good=%d poor=%d lost=%d\n",
+				"frame_ms_p50=%.2f frame_ms_mean=%.2f %s %s good=%d poor=%d lost=%d\n",
 			rgbd_done, fisheye_integrated, figures.track.median(), figures.integrate.median(), figures.process.median(), map_total.median(), full_median,
-			full_mean, accuracy_summary(accuracy).c_str(), figures.good, figures.poor, figures.lost);
+			full_mean, speed_summary(speed, ratios).c_str(), accuracy_summary(accuracy).c_str(), figures.good, figures.poor, figures.lost);
 	return 0;
 }
 
@@ -1313,6 +1436,8 @@ int main(int argc, char **argv) {
 				return usage("--voxel-size-m needs a voxel edge in metres, > 0 and <= 1");
 			}
 			args.slam.tsdf.voxel_size_m = float(v);
+		} else if (arg == "--no-peers" && args.mode == "slam") {
+			args.peers = false;
 		} else if (arg == "--colour-always") {
 			args.slam.icp.colour_always = true;
 		} else if (arg == "--noise-reference-m") {

@@ -123,7 +123,7 @@ bool CoarseCubemapRenderer::texel_on_surface(int p_x, int p_y) const {
 	return on_surface[size_t(p_y) * size_t(mesh.atlas_width) + size_t(p_x)] != 0;
 }
 
-cv::Vec3f CoarseCubemapRenderer::sample(const cv::Mat &p_atlas_color, int p_chart, const glm::dvec2 &p_atlas) const {
+CoarseCubemapRenderer::Taps CoarseCubemapRenderer::texel_taps(int p_chart, const glm::dvec2 &p_atlas) const {
 	const Chart &chart = mesh.charts[size_t(p_chart)];
 	// The last texel whose centre lies within the chart's used extent, per axis.
 	const int last_x = chart.x + std::clamp(int(std::floor(chart.used_w_texels - 0.5)), 0, std::max(0, chart.w - 1));
@@ -140,41 +140,109 @@ cv::Vec3f CoarseCubemapRenderer::sample(const cv::Mat &p_atlas_color, int p_char
 	const int xs[4] = { x0, x1, x0, x1 };
 	const int ys[4] = { y0, y0, y1, y1 };
 	const double ws[4] = { (1.0 - ax) * (1.0 - ay), ax * (1.0 - ay), (1.0 - ax) * ay, ax * ay };
-	double sum[3] = { 0.0, 0.0, 0.0 };
+	const auto index = [&](int p_x, int p_y) { return uint32_t(p_y) * uint32_t(mesh.atlas_width) + uint32_t(p_x); };
+	Taps taps;
 	double weight = 0.0;
 	for (int i = 0; i < 4; i++) {
-		if (ws[i] <= 0.0 || !texel_on_surface(xs[i], ys[i])) {
-			continue;
+		taps.index[i] = index(xs[i], ys[i]);
+		if (ws[i] > 0.0 && texel_on_surface(xs[i], ys[i])) {
+			weight += ws[i];
 		}
-		const cv::Vec3f &c = p_atlas_color.at<cv::Vec3f>(ys[i], xs[i]);
-		for (int k = 0; k < 3; k++) {
-			sum[k] += ws[i] * c[k];
-		}
-		weight += ws[i];
 	}
 	if (weight <= 0.0) {
 		// No surface texel among the taps (a sliver of floor or ceiling between texel centres):
 		// the nearest tap.
-		return p_atlas_color.at<cv::Vec3f>(ay < 0.5 ? y0 : y1, ax < 0.5 ? x0 : x1);
+		taps.index[0] = index(ax < 0.5 ? x0 : x1, ay < 0.5 ? y0 : y1);
+		taps.weight[0] = 1.0f;
+		return taps;
+	}
+	for (int i = 0; i < 4; i++) {
+		if (ws[i] > 0.0 && texel_on_surface(xs[i], ys[i])) {
+			taps.weight[i] = std::max(float(ws[i]), std::numeric_limits<float>::min()); // > 0: the tap is used
+		}
+	}
+	return taps;
+}
+
+namespace {
+
+// The atlas as one array of texels (a copy only when the Mat is a view with gaps).
+cv::Mat continuous(const cv::Mat &p_atlas_color) {
+	return p_atlas_color.isContinuous() ? p_atlas_color : p_atlas_color.clone();
+}
+
+} // namespace
+
+cv::Vec3f CoarseCubemapRenderer::gather(const cv::Vec3f *p_atlas, const Taps &p_taps) {
+	// In double, divided by the weights' own sum: where the taps agree the result is their value
+	// exactly (a chart id, a flat colour), as float weights normalised beforehand would not give.
+	double sum[3] = { 0.0, 0.0, 0.0 }, weight = 0.0;
+	for (int i = 0; i < 4; i++) {
+		if (p_taps.weight[i] > 0.0f) { // unused taps are never read: texels off the surface may hold anything
+			const cv::Vec3f &c = p_atlas[p_taps.index[i]];
+			const double w = p_taps.weight[i];
+			sum[0] += w * c[0];
+			sum[1] += w * c[1];
+			sum[2] += w * c[2];
+			weight += w;
+		}
+	}
+	if (!(weight > 0.0)) {
+		return cv::Vec3f(0.0f, 0.0f, 0.0f); // the ray hit nothing
 	}
 	return cv::Vec3f(float(sum[0] / weight), float(sum[1] / weight), float(sum[2] / weight));
+}
+
+std::shared_ptr<const CoarseCubemapRenderer::Lookup> CoarseCubemapRenderer::lookup(const glm::dvec3 &p_position, int p_size) const {
+	{
+		const std::lock_guard<std::mutex> lock(lookup_mutex);
+		for (auto it = lookups.begin(); it != lookups.end(); ++it) {
+			if ((*it)->size == p_size && (*it)->position == p_position) {
+				lookups.splice(lookups.begin(), lookups, it);
+				return lookups.front();
+			}
+		}
+	}
+	auto built = std::make_shared<Lookup>();
+	built->position = p_position;
+	built->size = p_size;
+	built->taps.resize(size_t(6) * size_t(p_size) * size_t(p_size));
+	tbb::parallel_for(tbb::blocked_range<int>(0, 6 * p_size), [&](const tbb::blocked_range<int> &p_rows) {
+		for (int row = p_rows.begin(); row != p_rows.end(); row++) {
+			const int face = row / p_size;
+			const int v = row % p_size;
+			Taps *out = &built->taps[size_t(row) * size_t(p_size)];
+			for (int u = 0; u < p_size; u++) {
+				RoomRayHit hit;
+				if (intersect_room(mesh, p_position, cubemap_direction(face, u, v, p_size), &hit)) {
+					out[u] = texel_taps(hit.chart, hit.atlas);
+				}
+			}
+		}
+	});
+	const std::lock_guard<std::mutex> lock(lookup_mutex);
+	lookups.push_front(built);
+	while (int(lookups.size()) > MAX_CACHED_LOOKUPS) {
+		lookups.pop_back();
+	}
+	return built;
 }
 
 Cubemap CoarseCubemapRenderer::render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size) const {
 	if (p_size <= 0 || p_atlas_color.type() != CV_32FC3 || p_atlas_color.cols != mesh.atlas_width || p_atlas_color.rows != mesh.atlas_height) {
 		return Cubemap();
 	}
+	const std::shared_ptr<const Lookup> taps = lookup(p_position, p_size);
+	const cv::Mat atlas = continuous(p_atlas_color);
 	Cubemap cubemap = make_cubemap(p_size);
 	tbb::parallel_for(tbb::blocked_range<int>(0, 6 * p_size), [&](const tbb::blocked_range<int> &p_rows) {
 		for (int row = p_rows.begin(); row != p_rows.end(); row++) {
 			const int face = row / p_size;
 			const int v = row % p_size;
 			cv::Vec3f *out = cubemap.faces[size_t(face)].ptr<cv::Vec3f>(v);
+			const Taps *in = &taps->taps[size_t(row) * size_t(p_size)];
 			for (int u = 0; u < p_size; u++) {
-				RoomRayHit hit;
-				if (intersect_room(mesh, p_position, cubemap_direction(face, u, v, p_size), &hit)) {
-					out[u] = sample(p_atlas_color, hit.chart, hit.atlas);
-				}
+				out[u] = gather(atlas.ptr<cv::Vec3f>(), in[u]);
 			}
 		}
 	});

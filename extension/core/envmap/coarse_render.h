@@ -19,6 +19,9 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <list>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 namespace roomprobe {
@@ -46,21 +49,40 @@ public:
 	// p_atlas_color (CV_32FC3, the mesh's atlas size; CoarseTexture::color). Directions that hit
 	// nothing (a position outside the room) are black. Returns an invalid (size 0) cubemap when
 	// the atlas has the wrong size or type. Parallel over face rows (TBB).
+	// The rays and taps depend only on the position and size, not on the atlas: they are kept for
+	// the last MAX_CACHED_LOOKUPS (position, size) pairs (24 bytes a texel: 9 MiB at 256^2), so a
+	// probe that does not move costs a gather of four taps a texel. Safe to call from any thread.
 	Cubemap render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size = 256) const;
 	Cubemap render(const CoarseTexture &p_texture, const glm::dvec3 &p_position, int p_size = 256) const {
 		return render(p_texture.color, p_position, p_size);
 	}
 
-	// The atlas colour at continuous atlas position p_atlas (texel units, see RoomRayHit) on
-	// chart p_chart: bilinear over the chart's surface texels, clamped to the chart.
-	cv::Vec3f sample(const cv::Mat &p_atlas_color, int p_chart, const glm::dvec2 &p_atlas) const;
-
 	// Whether atlas texel (x, y) lies on the room surface (texel_to_world succeeds).
 	bool texel_on_surface(int p_x, int p_y) const;
 
+	static constexpr int MAX_CACHED_LOOKUPS = 8;
+
 private:
+	// The taps of one cubemap texel: the atlas at continuous atlas position (texel units, see
+	// RoomRayHit) on its chart, bilinear over the chart's surface texels, clamped to the chart:
+	// up to four atlas texels with their bilinear weights (gather divides by their sum).
+	struct Taps {
+		uint32_t index[4] = { 0, 0, 0, 0 }; // atlas texels, row-major
+		float weight[4] = { 0.0f, 0.0f, 0.0f, 0.0f }; // > 0 for used taps; all 0 where the ray hits nothing
+	};
+	struct Lookup {
+		glm::dvec3 position = glm::dvec3(0.0);
+		int size = 0;
+		std::vector<Taps> taps; // face-major, then rows, then columns
+	};
+	Taps texel_taps(int p_chart, const glm::dvec2 &p_atlas) const;
+	static cv::Vec3f gather(const cv::Vec3f *p_atlas, const Taps &p_taps);
+	std::shared_ptr<const Lookup> lookup(const glm::dvec3 &p_position, int p_size) const;
+
 	const RoomMesh &mesh;
 	std::vector<uint8_t> on_surface; // atlas_width * atlas_height, row-major
+	mutable std::mutex lookup_mutex;
+	mutable std::list<std::shared_ptr<const Lookup>> lookups; // most recently used first
 };
 
 } // namespace roomprobe
