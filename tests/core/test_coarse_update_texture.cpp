@@ -200,3 +200,45 @@ TEST_CASE("coarse update: keeping the best observation is closer to the truth th
 						  << " ms (render " << 1000.0 * render_s / frames << " ms)");
 	CHECK(mae_best <= mae_last);
 }
+
+TEST_CASE("coarse update: the lighting estimate's sparse samples are the 'last' policy's update on its grid") {
+	const RoomMesh mesh = build(living_room());
+	const TexelGeometry geometry = make_texel_geometry(mesh);
+	const OmniParams params = test_rig().fisheye;
+	const Pose corner = upward_fisheye(glm::dvec3(0.6, 1.1, 0.7));
+	// A frame with structure, so that a wrong pixel shows: a gradient in x and y.
+	cv::Mat image(params.height, params.width, CV_32FC3);
+	for (int y = 0; y < image.rows; y++) {
+		for (int x = 0; x < image.cols; x++) {
+			image.at<cv::Vec3f>(y, x) = cv::Vec3f(float(x) / 100.0f, float(y) / 100.0f, 1.0f);
+		}
+	}
+	cv::Mat mask(mesh.atlas_height, mesh.atlas_width, CV_8UC1, cv::Scalar(255));
+	mask(cv::Rect(0, 0, mesh.atlas_width / 3, mesh.atlas_height)) = 0; // an occluded third
+	cv::Mat only(mesh.atlas_height, mesh.atlas_width, CV_8UC1, cv::Scalar(255));
+	only(cv::Rect(0, 0, mesh.atlas_width, mesh.atlas_height / 2)) = 0; // "observed before": the lower half
+	const int step = 2;
+	TextureUpdateOptions options;
+	CoarseTexture last = make_coarse_texture(mesh);
+	options.policy = TextureUpdatePolicy::Last;
+	update_coarse_texture(mesh, geometry, params, corner, image, &mask, &last, options);
+	cv::Mat samples, visible;
+	sample_coarse_texels(geometry, params, corner, image, &mask, only, step, options, &samples, &visible);
+	int compared = 0, mismatched = 0;
+	for (int y = 0; y < mesh.atlas_height; y++) {
+		for (int x = 0; x < mesh.atlas_width; x++) {
+			const bool expected = x % step == 0 && y % step == 0 && only.at<uint8_t>(y, x) != 0 && last.updated.at<uint8_t>(y, x) != 0;
+			if ((visible.at<uint8_t>(y, x) != 0) != expected) {
+				mismatched++;
+			} else if (expected) {
+				compared++;
+				mismatched += cv::norm(samples.at<cv::Vec3f>(y, x) - last.color.at<cv::Vec3f>(y, x)) == 0.0 ? 0 : 1;
+			}
+		}
+	}
+	CHECK(compared > 1000);
+	CHECK(mismatched == 0);
+	// Wrong inputs: nothing is visible.
+	sample_coarse_texels(geometry, params, corner, image, &mask, cv::Mat(), step, options, &samples, &visible);
+	CHECK(cv::countNonZero(visible) == 0);
+}

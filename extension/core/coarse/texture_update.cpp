@@ -79,7 +79,120 @@ cv::Vec3f bilinear(const cv::Mat &p_image, double p_x, double p_y, float p_scale
 	return (top * (1.0f - fy) + bottom * fy) * p_scale;
 }
 
+// The fisheye image's sample at a pixel, as linear R, G, B (8-bit images scaled to [0, 1]).
+cv::Vec3f sample_image(const cv::Mat &p_image, const glm::dvec2 &p_pixel) {
+	switch (p_image.type()) {
+		case CV_8UC1:
+			return bilinear<uint8_t, 1>(p_image, p_pixel.x, p_pixel.y, 1.0f / 255.0f);
+		case CV_8UC3:
+			return bilinear<uint8_t, 3>(p_image, p_pixel.x, p_pixel.y, 1.0f / 255.0f);
+		default:
+			return bilinear<float, 3>(p_image, p_pixel.x, p_pixel.y, 1.0f);
+	}
+}
+
+// One frame's fisheye, as the per-texel visibility test needs it.
+struct FisheyeView {
+	const OmniParams *params = nullptr;
+	glm::dmat3 rotation = glm::dmat3(1.0); // fisheye from world
+	glm::dvec3 translation = glm::dvec3(0.0);
+	glm::dvec3 camera = glm::dvec3(0.0); // the fisheye's centre, world
+	int cols = 0, rows = 0;
+	double margin = 0.0; // rim_margin_px
+	bool has_circle = false;
+	double circle_cx = 0.0, circle_cy = 0.0, radius = 0.0;
+};
+
+FisheyeView fisheye_view(const OmniParams &p_params, const Pose &p_world_from_fisheye, const cv::Mat &p_image, const TextureUpdateOptions &p_options) {
+	FisheyeView view;
+	const Pose fisheye_from_world = inverse(p_world_from_fisheye);
+	view.params = &p_params;
+	view.rotation = glm::mat3_cast(fisheye_from_world.rotation);
+	view.translation = fisheye_from_world.translation;
+	view.camera = p_world_from_fisheye.translation;
+	view.cols = p_image.cols;
+	view.rows = p_image.rows;
+	view.margin = p_options.rim_margin_px;
+	view.has_circle = p_params.circle_radius > 0.0;
+	view.circle_cx = view.has_circle ? p_params.circle_cx : 0.5 * (view.cols - 1);
+	view.circle_cy = view.has_circle ? p_params.circle_cy : 0.5 * (view.rows - 1);
+	view.radius = view.has_circle ? p_params.circle_radius : 0.5 * std::hypot(double(view.cols), double(view.rows));
+	return view;
+}
+
+// Where the fisheye sees texel i: false for the back of the surface, outside the image or the
+// image circle's rim. r_r: the pixel's distance from the circle centre.
+bool observe_texel(const FisheyeView &p_view, const TexelGeometry &p_geometry, size_t p_i, glm::dvec2 *r_pixel, double *r_cos_view, double *r_distance,
+		double *r_r) {
+	const glm::dvec3 &point = p_geometry.points[p_i];
+	const glm::dvec3 to_camera = p_view.camera - point;
+	const double distance = glm::length(to_camera);
+	if (!(distance > 1e-9)) {
+		return false;
+	}
+	const double cos_view = glm::dot(p_geometry.normals[p_i], to_camera) / distance;
+	if (cos_view <= 0.0) {
+		return false; // the back of the surface
+	}
+	glm::dvec2 pixel;
+	if (!project_omni(*p_view.params, p_view.rotation * point + p_view.translation, &pixel)) {
+		return false;
+	}
+	const double margin = p_view.margin;
+	if (!(pixel.x >= margin && pixel.y >= margin && pixel.x <= p_view.cols - 1 - margin && pixel.y <= p_view.rows - 1 - margin)) {
+		return false;
+	}
+	const double r = std::hypot(pixel.x - p_view.circle_cx, pixel.y - p_view.circle_cy);
+	if (p_view.has_circle && r > p_view.radius - margin) {
+		return false;
+	}
+	*r_pixel = pixel;
+	*r_cos_view = cos_view;
+	*r_distance = distance;
+	*r_r = r;
+	return true;
+}
+
+bool valid_image_type(const cv::Mat &p_image) {
+	const int type = p_image.type();
+	return !p_image.empty() && (type == CV_8UC1 || type == CV_8UC3 || type == CV_32FC3);
+}
+
 } // namespace
+
+void sample_coarse_texels(const TexelGeometry &p_geometry, const OmniParams &p_params, const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image,
+		const cv::Mat *p_visibility_mask, const cv::Mat &p_only, int p_step, const TextureUpdateOptions &p_options, cv::Mat *r_samples, cv::Mat *r_visible) {
+	const int w = p_geometry.width, h = p_geometry.height;
+	r_samples->create(h, w, CV_32FC3);
+	r_visible->create(h, w, CV_8UC1);
+	r_visible->setTo(cv::Scalar::all(0));
+	if (!valid_image_type(p_fisheye_image) || p_only.size() != cv::Size(w, h) || p_only.type() != CV_8UC1 ||
+			(p_visibility_mask && (p_visibility_mask->size() != cv::Size(w, h) || p_visibility_mask->type() != CV_8UC1))) {
+		return;
+	}
+	const FisheyeView view = fisheye_view(p_params, p_world_from_fisheye, p_fisheye_image, p_options);
+	const int step = std::max(1, p_step);
+	tbb::parallel_for(tbb::blocked_range<int>(0, (h + step - 1) / step), [&](const tbb::blocked_range<int> &p_rows) {
+		for (int row = p_rows.begin(); row < p_rows.end(); ++row) {
+			const int y = row * step;
+			const uint8_t *only_row = p_only.ptr<uint8_t>(y);
+			const uint8_t *mask_row = p_visibility_mask ? p_visibility_mask->ptr<uint8_t>(y) : nullptr;
+			cv::Vec3f *sample_row = r_samples->ptr<cv::Vec3f>(y);
+			uint8_t *visible_row = r_visible->ptr<uint8_t>(y);
+			for (int x = 0; x < w; x += step) {
+				const size_t i = size_t(y) * w + x;
+				glm::dvec2 pixel;
+				double cos_view, distance, r;
+				if (only_row[x] == 0 || p_geometry.charts[i] < 0 || (mask_row && mask_row[x] == 0) ||
+						!observe_texel(view, p_geometry, i, &pixel, &cos_view, &distance, &r)) {
+					continue;
+				}
+				sample_row[x] = sample_image(p_fisheye_image, pixel);
+				visible_row[x] = 255;
+			}
+		}
+	});
+}
 
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const OmniParams &p_params,
 		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask,
@@ -90,8 +203,7 @@ TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeom
 	if (!io_texture || p_geometry.width != w || p_geometry.height != h || p_fisheye_image.empty()) {
 		return stats;
 	}
-	const int type = p_fisheye_image.type();
-	if (type != CV_8UC1 && type != CV_8UC3 && type != CV_32FC3) {
+	if (!valid_image_type(p_fisheye_image)) {
 		return stats;
 	}
 	CoarseTexture &tex = *io_texture;
@@ -103,16 +215,10 @@ TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeom
 		return stats;
 	}
 
-	const Pose fisheye_from_world = inverse(p_world_from_fisheye);
-	const glm::dmat3 rotation = glm::mat3_cast(fisheye_from_world.rotation);
-	const glm::dvec3 translation = fisheye_from_world.translation;
-	const glm::dvec3 camera = p_world_from_fisheye.translation;
-	const int cols = p_fisheye_image.cols, rows = p_fisheye_image.rows;
-	const double margin = p_options.rim_margin_px;
-	const bool has_circle = p_params.circle_radius > 0.0;
-	const double circle_cx = has_circle ? p_params.circle_cx : 0.5 * (cols - 1);
-	const double circle_cy = has_circle ? p_params.circle_cy : 0.5 * (rows - 1);
-	const double radius = has_circle ? p_params.circle_radius : 0.5 * std::hypot(double(cols), double(rows));
+	const FisheyeView view = fisheye_view(p_params, p_world_from_fisheye, p_fisheye_image, p_options);
+	const glm::dmat3 &rotation = view.rotation;
+	const glm::dvec3 &translation = view.translation;
+	const double radius = view.radius;
 	const bool best = p_options.policy == TextureUpdatePolicy::Best;
 	const double keep_fraction = 1.0 - std::clamp(p_options.replace_epsilon, 0.0, 1.0);
 
@@ -132,24 +238,9 @@ TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeom
 					continue;
 				}
 				const glm::dvec3 &point = p_geometry.points[i];
-				const glm::dvec3 to_camera = camera - point;
-				const double distance = glm::length(to_camera);
-				if (!(distance > 1e-9)) {
-					continue;
-				}
-				const double cos_view = glm::dot(p_geometry.normals[i], to_camera) / distance;
-				if (cos_view <= 0.0) {
-					continue; // the back of the surface
-				}
 				glm::dvec2 pixel;
-				if (!project_omni(p_params, rotation * point + translation, &pixel)) {
-					continue;
-				}
-				if (!(pixel.x >= margin && pixel.y >= margin && pixel.x <= cols - 1 - margin && pixel.y <= rows - 1 - margin)) {
-					continue;
-				}
-				const double r = std::hypot(pixel.x - circle_cx, pixel.y - circle_cy);
-				if (has_circle && r > radius - margin) {
+				double cos_view, distance, r;
+				if (!observe_texel(view, p_geometry, i, &pixel, &cos_view, &distance, &r)) {
 					continue;
 				}
 				++visible;
@@ -172,19 +263,7 @@ TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeom
 						continue;
 					}
 				}
-				cv::Vec3f sample;
-				switch (type) {
-					case CV_8UC1:
-						sample = bilinear<uint8_t, 1>(p_fisheye_image, pixel.x, pixel.y, 1.0f / 255.0f);
-						break;
-					case CV_8UC3:
-						sample = bilinear<uint8_t, 3>(p_fisheye_image, pixel.x, pixel.y, 1.0f / 255.0f);
-						break;
-					default:
-						sample = bilinear<float, 3>(p_fisheye_image, pixel.x, pixel.y, 1.0f);
-						break;
-				}
-				color_row[x] = sample;
+				color_row[x] = sample_image(p_fisheye_image, pixel);
 				// Best: the best quality ever seen, not the new (possibly epsilon-worse) one's, so that
 				// a run of slightly worse views cannot ratchet the reference down (measured: with the
 				// new one's, epsilon = 0.1 came out worse than the "last" policy).

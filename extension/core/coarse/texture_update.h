@@ -83,6 +83,14 @@ struct TextureUpdateStats {
 	double seconds = 0.0; // wall-clock time of the update
 };
 
+// The fisheye's colour at the texels update_coarse_texture would see this frame (its visibility
+// test and bilinear sample, whatever their quality), only on the grid x % p_step == 0,
+// y % p_step == 0 and only where p_only (CV_8UC1, atlas-sized) is non-zero: the lighting
+// estimate's new values (§4.6) without a copy of the atlas. r_samples (CV_32FC3) is written
+// where r_visible (CV_8UC1, zero elsewhere) is 255; both are atlas-sized. Parallel over rows.
+void sample_coarse_texels(const TexelGeometry &p_geometry, const OmniParams &p_params, const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image,
+		const cv::Mat *p_visibility_mask, const cv::Mat &p_only, int p_step, const TextureUpdateOptions &p_options, cv::Mat *r_samples, cv::Mat *r_visible);
+
 // Updates io_texture (from make_coarse_texture(p_mesh)) with one fisheye frame.
 // p_fisheye_image: CV_8UC1 (grey, copied to R, G, B), CV_8UC3 (R, G, B; value / 255) or CV_32FC3
 // (R, G, B radiance as is), p_params' size. p_visibility_mask: CV_8UC1 atlas-sized, 255 where

@@ -75,16 +75,11 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 	// 2. Lighting change (§4.6), from (old texel, new sample) pairs before the update.
 	start = Clock::now();
 	if (opts.lighting && frames > 0) {
-		CoarseTexture scratch;
-		scratch.color = coarse.color.clone();
-		scratch.observed = coarse.observed.clone();
-		scratch.quality = coarse.quality.clone();
-		scratch.updated = cv::Mat::zeros(coarse.updated.size(), CV_8UC1);
-		TextureUpdateOptions sample_options = opts.update;
-		sample_options.policy = TextureUpdatePolicy::Last;
-		update_coarse_texture(room, geometry, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, &scratch, sample_options);
-		// estimate_lighting_change uses only texels observed before (coarse.observed) among the visible.
-		stats.lighting = estimate_lighting_change(coarse, scratch.color, scratch.updated, opts.lighting_options);
+		// The new samples only where the estimate reads them: its grid, among the texels observed
+		// before (no copy of the atlas, no quality test).
+		sample_coarse_texels(geometry, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, coarse.observed, opts.lighting_options.sample_step,
+				opts.update, &lighting_samples, &lighting_visible);
+		stats.lighting = estimate_lighting_change(coarse, lighting_samples, lighting_visible, opts.lighting_options);
 	}
 	t.lighting_ms = ms_since(start);
 

@@ -128,6 +128,7 @@ private:
 	CoarseTexture coarse;
 	cv::Mat completed;
 	cv::Mat inpainted; // inpaint_async: the worker's newest completion (of an older texture)
+	cv::Mat lighting_samples, lighting_visible; // the lighting estimate's new values, kept between frames (no allocation a frame)
 	std::unique_ptr<CoarseCubemapRenderer> renderer;
 	std::unique_ptr<TextureInpainter> inpainter;
 	size_t frames = 0;
