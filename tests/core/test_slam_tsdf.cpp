@@ -360,3 +360,42 @@ TEST_CASE("TSDF timing at 640x480 (prints, asserts nothing)" * doctest::skip()) 
 	}
 	cv::setNumThreads(default_threads);
 }
+
+TEST_CASE("TSDF raycast within per-pixel search intervals finds the same surface in fewer steps, and nothing outside them") {
+	const PinholeIntrinsics camera = rig_camera(1);
+	Scene scene;
+	scene.spheres.push_back({ glm::dvec3(0.0, 0.0, 0.0), 0.3 });
+	TsdfVolume volume;
+	const Pose pose = look_at(glm::dvec3(0.0, 0.2, 1.5), glm::dvec3(0.0, 0.0, 0.0));
+	const Frame f = render(scene, camera, pose);
+	volume.integrate(f.depth, f.rgb, camera, pose);
+	ModelMaps full, searched, outside;
+	RaycastStats full_stats, searched_stats, outside_stats;
+	volume.raycast(camera, pose, &full, &full_stats);
+	// Intervals of +-8 cm around the rendered depth; NaN (the whole range) where there is none.
+	cv::Mat around(camera.height, camera.width, CV_32FC2), beyond(camera.height, camera.width, CV_32FC2);
+	for (int v = 0; v < camera.height; v++) {
+		for (int u = 0; u < camera.width; u++) {
+			const float d = f.depth.at<float>(v, u);
+			const bool has = d > 0.0f;
+			const float nan = std::numeric_limits<float>::quiet_NaN();
+			around.at<cv::Vec2f>(v, u) = has ? cv::Vec2f(d - 0.08f, d + 0.08f) : cv::Vec2f(nan, nan);
+			beyond.at<cv::Vec2f>(v, u) = has ? cv::Vec2f(d + 0.2f, d + 0.4f) : cv::Vec2f(nan, nan);
+		}
+	}
+	volume.raycast(camera, pose, around, &searched, &searched_stats);
+	volume.raycast(camera, pose, beyond, &outside, &outside_stats);
+	REQUIRE(full_stats.hit_pixels > 1000);
+	// Every pixel found is found by the full march too; only grazing pixels at the silhouette, whose
+	// crossing lies more than 8 cm behind the reading, are lost.
+	CHECK(cv::countNonZero((searched.depth == searched.depth) & (full.depth != full.depth)) == 0);
+	CHECK(searched_stats.hit_pixels >= 0.99 * full_stats.hit_pixels);
+	cv::Mat difference;
+	cv::absdiff(full.depth, searched.depth, difference);
+	double worst = 0.0;
+	cv::minMaxIdx(difference, nullptr, &worst, nullptr, nullptr, searched.depth == searched.depth);
+	// The same crossing: another start moves only the refinement's bracket, within half a voxel.
+	CHECK(worst < 0.5 * TsdfOptions().voxel_size_m);
+	CHECK(searched_stats.steps < full_stats.steps);
+	CHECK(outside_stats.hit_pixels == 0); // the sphere's back is never a + to - crossing
+}

@@ -13,6 +13,34 @@ namespace roomprobe {
 
 namespace {
 
+// Per pixel of an image 1 / 2^p_level the size of p_depth_m, the camera-z interval spanned by the
+// readings of its 2^level x 2^level block, widened by p_margin_m (CV_32FC2; NaN where the block
+// has no reading).
+cv::Mat search_intervals(const cv::Mat &p_depth_m, int p_level, float p_margin_m) {
+	const int side = 1 << p_level;
+	const float nan = std::numeric_limits<float>::quiet_NaN();
+	cv::Mat intervals(p_depth_m.rows >> p_level, p_depth_m.cols >> p_level, CV_32FC2);
+	cv::parallel_for_(cv::Range(0, intervals.rows), [&](const cv::Range &p_range) {
+		for (int v = p_range.start; v < p_range.end; v++) {
+			cv::Vec2f *out = intervals.ptr<cv::Vec2f>(v);
+			for (int u = 0; u < intervals.cols; u++) {
+				float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+				for (int y = v * side; y < (v + 1) * side; y++) {
+					const float *row = p_depth_m.ptr<float>(y);
+					for (int x = u * side; x < (u + 1) * side; x++) {
+						if (row[x] > 0.0f) { // false for NaN
+							lo = std::min(lo, row[x]);
+							hi = std::max(hi, row[x]);
+						}
+					}
+				}
+				out[u] = lo <= hi ? cv::Vec2f(lo - p_margin_m, hi + p_margin_m) : cv::Vec2f(nan, nan);
+			}
+		}
+	});
+	return intervals;
+}
+
 using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point p_start) {
@@ -282,7 +310,12 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 		integrated_frames++;
 		out.timings.integrate_ms = ms_since(start);
 		start = Clock::now();
-		tsdf.raycast(intrinsics.level(std::clamp(opts.raycast_level, 0, 4)), last_pose, &reference);
+		const int level = std::clamp(opts.raycast_level, 0, 4);
+		if (opts.reference_search_margin_m > 0.0f) {
+			tsdf.raycast(intrinsics.level(level), last_pose, search_intervals(depth, level, opts.reference_search_margin_m), &reference);
+		} else {
+			tsdf.raycast(intrinsics.level(level), last_pose, &reference);
+		}
 		out.timings.raycast_ms = ms_since(start);
 	}
 	last_state = out.tracking.state;

@@ -47,6 +47,11 @@ struct DenseSlamOptions {
 	// 640x480 at 2): ICP's projective association reads the model at any size, and a quarter-size
 	// reference cost 8 ms instead of 60 with the same ATE (1.3 mm on out/demo/recording). 0: full.
 	int raycast_level = 2;
+	// The reference is searched only within this distance (camera z, metres) of the readings of
+	// the frame just fused at that pixel (their min and max over the reference pixel's block):
+	// the model there was just made to agree with them, and the rays need not march the empty
+	// room in front. Pixels without readings search the whole range. 0: every pixel the whole range.
+	float reference_search_margin_m = 0.08f;
 	// Tracking runs on the frame at 1 / 2^tracking_level of its size (ICP's own pyramid below
 	// that); integration always takes the full frame. 0, the default: full size. Level 1 makes
 	// tracking about 3x faster, but on 640x480 frames halved this way the pose lags the true one

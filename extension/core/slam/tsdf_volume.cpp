@@ -510,6 +510,17 @@ void TsdfVolume::raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_
 
 void TsdfVolume::raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_min_depth_m, float p_max_depth_m, ModelMaps *r_maps,
 		RaycastStats *r_stats, bool p_normals) const {
+	raycast_ranged(p_camera, p_world_from_camera, p_min_depth_m, p_max_depth_m, nullptr, p_normals, r_maps, r_stats);
+}
+
+void TsdfVolume::raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, const cv::Mat &p_search_m, ModelMaps *r_maps,
+		RaycastStats *r_stats) const {
+	CV_Assert(p_search_m.type() == CV_32FC2 && p_search_m.cols == p_camera.width && p_search_m.rows == p_camera.height);
+	raycast_ranged(p_camera, p_world_from_camera, m_options.min_depth_m, m_options.max_depth_m, &p_search_m, true, r_maps, r_stats);
+}
+
+void TsdfVolume::raycast_ranged(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_min_depth_m, float p_max_depth_m,
+		const cv::Mat *p_search_m, bool p_normals, ModelMaps *r_maps, RaycastStats *r_stats) const {
 	const float nan = std::numeric_limits<float>::quiet_NaN();
 	r_maps->camera = p_camera;
 	r_maps->world_from_camera = p_world_from_camera;
@@ -547,8 +558,12 @@ void TsdfVolume::raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_
 			cv::Vec3b *colors = r_maps->colors.ptr<cv::Vec3b>(v);
 			float *depth = r_maps->depth.ptr<float>(v);
 			const cv::Vec2f *range_row = ranges.ptr<cv::Vec2f>(v / RANGE_CELL);
+			const cv::Vec2f *search_row = p_search_m != nullptr ? p_search_m->ptr<cv::Vec2f>(v) : nullptr;
 			for (int u = 0; u < p_camera.width; u++) {
-				const cv::Vec2f range = range_row[u / RANGE_CELL];
+				cv::Vec2f range = range_row[u / RANGE_CELL];
+				if (search_row != nullptr && std::isfinite(search_row[u][0]) && std::isfinite(search_row[u][1])) {
+					range = cv::Vec2f(std::max(range[0], search_row[u][0]), std::min(range[1], search_row[u][1]));
+				}
 				if (!(range[0] <= range[1])) {
 					continue; // no block projects here
 				}

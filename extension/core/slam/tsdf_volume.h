@@ -99,6 +99,12 @@ public:
 	// p_normals, normals stay NaN and a hit costs six trilinear reads less (a dense pass).
 	void raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_min_depth_m, float p_max_depth_m, ModelMaps *r_maps,
 			RaycastStats *r_stats = nullptr, bool p_normals = true) const;
+	// The same with a search interval per pixel: p_search_m (CV_32FC2, the camera's size) holds
+	// [near, far] camera z; pixels with a finite interval march only there (the tracking
+	// reference, searched around the frame just fused: a surface of the model outside it is not
+	// found), the others as above.
+	void raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, const cv::Mat &p_search_m, ModelMaps *r_maps,
+			RaycastStats *r_stats = nullptr) const;
 
 	// Trilinear tsdf (normalised, [-1, 1]) and colour (0..255, zero when no voxel around has one)
 	// at a world point (metres); false where a voxel around it is unallocated or unobserved.
@@ -132,6 +138,8 @@ private:
 	void free_slot(int32_t p_slot);
 	void update_bounds();
 	cv::Mat depth_ranges(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_near_m, float p_far_m) const;
+	void raycast_ranged(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_min_depth_m, float p_max_depth_m, const cv::Mat *p_search_m,
+			bool p_normals, ModelMaps *r_maps, RaycastStats *r_stats) const;
 
 	// Hash table (open addressing, linear probing, backward-shift deletion).
 	int32_t *hash_lookup(const glm::ivec3 &p_block);
