@@ -881,3 +881,56 @@ TEST_CASE("engine: the mailbox keeps the newest value, counts the dropped, and c
 	CHECK(*seven == 7);
 	CHECK(box.dropped_count() == 0);
 }
+
+TEST_CASE("engine: a probe's map raycasts dense_faces_per_render faces and keeps the others until their turn") {
+	const Recording &rec = recording();
+	LiveRoomConfig cfg = live_config(rec);
+	cfg.dense_faces_per_render = 2;
+	LiveRoom engine;
+	REQUIRE(engine.configure(cfg) == "");
+	const size_t split = rec.events.size() / 2;
+	for (size_t i = 0; i < split; i++) {
+		push_event(engine, rec, rec.events[i]);
+	}
+	const int probe = engine.add_probe(rec.probe, PROBE_SIZE);
+	engine.render_probes(); // nothing kept yet: all six faces
+	const auto face_diff = [](const Cubemap &p_a, const Cubemap &p_b, int p_face) {
+		return cv::norm(p_a.faces[size_t(p_face)], p_b.faces[size_t(p_face)], cv::NORM_INF);
+	};
+	Cubemap full = engine.render_at(rec.probe, PROBE_SIZE);
+	for (int f = 0; f < 6; f++) {
+		CHECK(face_diff(engine.probe_map(probe)->cubemap, full, f) <= TEXEL_TOL);
+	}
+	for (size_t i = split; i < rec.events.size(); i++) {
+		push_event(engine, rec, rec.events[i]);
+	}
+	engine.finish();
+	full = engine.render_at(rec.probe, PROBE_SIZE);
+	// The next map raycasts faces 2 and 3 (0 and 1 went first after the six); the others are the
+	// model of half the recording.
+	engine.render_probes();
+	int stale = 0;
+	for (int f = 0; f < 6; f++) {
+		const double diff = face_diff(engine.probe_map(probe)->cubemap, full, f);
+		if (f == 2 || f == 3) {
+			CHECK(diff <= TEXEL_TOL);
+		} else {
+			stale += diff > TEXEL_TOL ? 1 : 0;
+		}
+	}
+	CHECK(stale > 0); // the second half of the sweep changed what some kept face sees
+	// Two more maps and every face has had its turn.
+	engine.render_probes();
+	engine.render_probes();
+	for (int f = 0; f < 6; f++) {
+		CHECK(face_diff(engine.probe_map(probe)->cubemap, full, f) <= TEXEL_TOL);
+	}
+	// A moved probe keeps nothing: its first map is whole.
+	const glm::dvec3 moved = rec.probe + glm::dvec3(0.1, 0.0, 0.0);
+	engine.set_probe(probe, moved, PROBE_SIZE);
+	engine.render_probes();
+	const Cubemap full_moved = engine.render_at(moved, PROBE_SIZE);
+	for (int f = 0; f < 6; f++) {
+		CHECK(face_diff(engine.probe_map(probe)->cubemap, full_moved, f) <= TEXEL_TOL);
+	}
+}

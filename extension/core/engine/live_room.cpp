@@ -84,6 +84,7 @@ struct LiveRoom::Probe {
 	uint64_t version = 0;
 	uint64_t rendered_generation = 0; // the input_generation its newest map was rendered from
 	std::shared_ptr<const ProbeMap> map;
+	DenseFaceCache dense_faces; // its dense faces between maps
 };
 
 struct LiveRoom::Frames {
@@ -687,7 +688,7 @@ bool LiveRoom::render_probe(int p_probe) {
 }
 
 Cubemap LiveRoom::render_map(const glm::dvec3 &p_position, int p_size, const CoarseSnapshot *p_coarse, bool p_with_dense, DenseRenderStats *r_dense,
-		double *r_coarse_ms, double *r_dense_ms) {
+		double *r_coarse_ms, double *r_dense_ms, DenseFaceCache *io_faces) {
 	double start = now_s();
 	Cubemap map;
 	LightingChange cumulative;
@@ -705,8 +706,9 @@ Cubemap LiveRoom::render_map(const glm::dvec3 &p_position, int p_size, const Coa
 		DenseRenderOptions options;
 		options.scale = cfg.dense_render_scale;
 		options.lut = rgb_lut_active ? &rgb_lut : nullptr;
+		options.faces_per_render = cfg.dense_faces_per_render;
 		const auto reading = slam->read_lock(); // no frame half-fused
-		*r_dense = dense_lighting.render_over(slam->volume(), slam->integrated_count(), cumulative, p_position, options, &map);
+		*r_dense = dense_lighting.render_over(slam->volume(), slam->integrated_count(), cumulative, p_position, options, &map, io_faces);
 	}
 	*r_dense_ms = ms_since(start);
 	r_dense->milliseconds = *r_dense_ms;
@@ -723,12 +725,23 @@ std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dve
 			snapshot = last_coarse;
 			frame = last_tracked;
 		}
+		std::shared_ptr<Probe> probe;
+		{
+			const std::lock_guard<std::mutex> lock(probe_mutex);
+			const auto it = probes.find(p_probe);
+			if (it != probes.end()) {
+				probe = it->second;
+				if (p_generation >= full_faces_generation) {
+					probe->dense_faces.refresh_all = true;
+				}
+			}
+		}
 		auto map = std::make_shared<ProbeMap>();
 		map->probe = p_probe;
 		map->position = p_position;
 		map->rgbd_sequence = frame ? frame->sequence : 0;
 		map->fisheye_sequence = snapshot ? snapshot->fisheye_sequence : 0;
-		map->cubemap = render_map(p_position, p_size, snapshot.get(), true, &map->dense, &map->coarse_ms, &map->dense_ms);
+		map->cubemap = render_map(p_position, p_size, snapshot.get(), true, &map->dense, &map->coarse_ms, &map->dense_ms, probe ? &probe->dense_faces : nullptr);
 		double t = now_s();
 		map->sh = project_sh(map->cubemap);
 		map->sh_ms = ms_since(t);
@@ -910,6 +923,7 @@ void LiveRoom::finish() {
 		const std::lock_guard<std::mutex> lock(probe_mutex);
 		inputs_changed = true;
 		generation = ++input_generation;
+		full_faces_generation = generation; // the final maps raycast every dense face
 	}
 	probes_dirty.notify_all();
 	for (int i = 0; i < 2000; i++) {

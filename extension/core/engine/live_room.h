@@ -80,6 +80,11 @@ struct LiveRoomConfig {
 	double fisheye_pose_wait_s = 1.0;
 	int render_threads = 1; // threaded: worker threads for probe rendering (cores left to Godot)
 	int dense_render_scale = DenseRenderOptions().scale; // the dense pass at 1 / scale (dense_render.h)
+	// A probe's map raycasts this many of its six dense faces (round robin) and reuses the others
+	// from its earlier maps while it stays put (dense_render.h DenseFaceCache): with 2, a face's
+	// dense layer is at most two maps older than the map. 6: every face every map. render_at()
+	// (the evaluation) always raycasts all six.
+	int dense_faces_per_render = 2;
 };
 
 // One RGB-D frame as the engine saw it: the image the AR view shows behind the virtual objects
@@ -231,7 +236,7 @@ public:
 
 	// Step mode: waits for the inpainting worker's newest completion (end of a recording).
 	// Threaded: first waits until the workers have finished every posted frame, then until every
-	// probe has a map of the final model.
+	// probe has a map of the final model (all six dense faces raycast again).
 	void finish();
 	LiveRoomStats stats() const;
 	// The SLAM and coarse models themselves, for the evaluation's figures. Step mode only (no
@@ -250,8 +255,9 @@ private:
 	void process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence, bool p_wait_for_pose);
 	// p_generation: input_generation when the render was decided (its inputs are at least that new).
 	std::shared_ptr<const ProbeMap> render_one(int p_probe, const glm::dvec3 &p_position, int p_size, uint64_t p_generation);
+	// io_faces: the probe's dense faces (null: all six raycast now).
 	Cubemap render_map(const glm::dvec3 &p_position, int p_size, const CoarseSnapshot *p_coarse, bool p_with_dense, DenseRenderStats *r_dense,
-			double *r_coarse_ms, double *r_dense_ms);
+			double *r_coarse_ms, double *r_dense_ms, DenseFaceCache *io_faces = nullptr);
 	void publish_mesh();
 	void slam_worker();
 	void coarse_worker();
@@ -305,6 +311,7 @@ private:
 	int next_probe = 1;
 	bool inputs_changed = false; // a new fused frame or coarse snapshot since the last render
 	uint64_t input_generation = 0; // counts those changes
+	uint64_t full_faces_generation = UINT64_MAX; // renders decided at or after it raycast all dense faces (finish())
 
 	// Threads.
 	std::atomic<bool> running{ false };

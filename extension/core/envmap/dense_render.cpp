@@ -38,14 +38,15 @@ void DenseLighting::reset() {
 }
 
 DenseRenderStats DenseLighting::render_over(const TsdfVolume &p_volume, size_t p_fused_frames, const LightingChange &p_cumulative,
-		const glm::dvec3 &p_position, DenseRenderOptions p_options, Cubemap *io_cubemap) {
+		const glm::dvec3 &p_position, DenseRenderOptions p_options, Cubemap *io_cubemap, DenseFaceCache *io_cache) {
 	const LightingChange change = update(p_fused_frames, p_cumulative);
 	p_options.gain = change.gain;
 	p_options.offset = change.offset;
-	return render_dense_over(p_volume, p_position, p_options, io_cubemap);
+	return render_dense_over(p_volume, p_position, p_options, io_cubemap, io_cache);
 }
 
-DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 &p_position, const DenseRenderOptions &p_options, Cubemap *io_cubemap) {
+DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 &p_position, const DenseRenderOptions &p_options, Cubemap *io_cubemap,
+		DenseFaceCache *io_cache) {
 	const auto start = std::chrono::steady_clock::now();
 	DenseRenderStats stats;
 	if (io_cubemap == nullptr || !is_valid_cubemap(*io_cubemap) || p_volume.stats().allocated_blocks == 0) {
@@ -63,9 +64,43 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 		identity[size_t(i)] = float(i) / 255.0f;
 	}
 	const std::array<float, 256> &lut = p_options.lut != nullptr ? *p_options.lut : identity;
+	// Which faces are raycast now: all without a cache (or after a move); else the next ones.
+	std::unique_lock<std::mutex> cache_lock;
+	std::array<bool, 6> raycast_now;
+	raycast_now.fill(true);
+	if (io_cache != nullptr) {
+		cache_lock = std::unique_lock<std::mutex>(io_cache->mutex);
+		if (io_cache->position != p_position || io_cache->size != size || io_cache->scale != scale) {
+			io_cache->depth = {};
+			io_cache->colors = {};
+			io_cache->next_face = 0;
+			io_cache->position = p_position;
+			io_cache->size = size;
+			io_cache->scale = scale;
+		}
+		const int per_render = std::clamp(p_options.faces_per_render, 1, 6);
+		raycast_now.fill(false);
+		for (int i = 0; i < per_render; i++) {
+			raycast_now[size_t((io_cache->next_face + i) % 6)] = true;
+		}
+		io_cache->next_face = (io_cache->next_face + per_render) % 6;
+		const bool all = io_cache->refresh_all.exchange(false);
+		for (int f = 0; f < 6; f++) {
+			raycast_now[size_t(f)] = all || raycast_now[size_t(f)] || io_cache->depth[size_t(f)].empty();
+		}
+	}
 	for (int f = 0; f < 6; f++) {
 		ModelMaps maps;
-		p_volume.raycast(face_camera, cubemap_face_pose(f, p_position), p_options.near_m, p_options.far_m, &maps, nullptr, false);
+		if (raycast_now[size_t(f)]) {
+			p_volume.raycast(face_camera, cubemap_face_pose(f, p_position), p_options.near_m, p_options.far_m, &maps, nullptr, false);
+			if (io_cache != nullptr) {
+				io_cache->depth[size_t(f)] = maps.depth;
+				io_cache->colors[size_t(f)] = maps.colors;
+			}
+		} else {
+			maps.depth = io_cache->depth[size_t(f)];
+			maps.colors = io_cache->colors[size_t(f)];
+		}
 		cv::Mat &face = io_cubemap->faces[size_t(f)];
 		for (int v = 0; v < size; v++) {
 			const int lv = std::min(low - 1, v * low / size);

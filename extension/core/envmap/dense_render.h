@@ -18,6 +18,7 @@
 #include <slam/tsdf_volume.h>
 
 #include <array>
+#include <atomic>
 #include <mutex>
 
 namespace roomprobe {
@@ -33,6 +34,21 @@ struct DenseRenderOptions {
 	const std::array<float, 256> *lut = nullptr; // 8-bit value -> radiance; null: value / 255
 	cv::Vec3f gain = cv::Vec3f(1.0f, 1.0f, 1.0f); // lighting change applied after the lut
 	cv::Vec3f offset = cv::Vec3f(0.0f, 0.0f, 0.0f);
+	// With a DenseFaceCache: faces raycast per render (1..6, round robin); the others are the
+	// cache's, of an older model (at most ceil(6 / faces_per_render) - 1 renders old). 6: all.
+	int faces_per_render = 6;
+};
+
+// One probe's low-resolution dense faces, kept between its maps (render_dense_over). Reused only
+// while the position, size and scale stay the same. Its own lock: one render at a time uses it.
+struct DenseFaceCache {
+	std::mutex mutex;
+	glm::dvec3 position = glm::dvec3(0.0);
+	int size = 0, scale = 0;
+	std::array<cv::Mat, 6> depth, colors; // the raycast's maps of each face (empty: never raycast)
+	int next_face = 0;
+	// Set by anyone (no lock needed): the next render raycasts all six faces (a final map).
+	std::atomic<bool> refresh_all{ false };
 };
 
 struct DenseRenderStats {
@@ -54,7 +70,7 @@ public:
 	LightingChange update(size_t p_fused_frames, const LightingChange &p_cumulative);
 	// update(), then render_dense_over with that change as p_options' gain and offset.
 	DenseRenderStats render_over(const TsdfVolume &p_volume, size_t p_fused_frames, const LightingChange &p_cumulative,
-			const glm::dvec3 &p_position, DenseRenderOptions p_options, Cubemap *io_cubemap);
+			const glm::dvec3 &p_position, DenseRenderOptions p_options, Cubemap *io_cubemap, DenseFaceCache *io_cache = nullptr);
 	// Forgets the refresh (a new dense model).
 	void reset();
 
@@ -66,7 +82,9 @@ private:
 	LightingChange at_refresh; // identity
 };
 
-// Paints the dense model seen from p_position over io_cubemap (any size; faces CV_32FC3).
-DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 &p_position, const DenseRenderOptions &p_options, Cubemap *io_cubemap);
+// Paints the dense model seen from p_position over io_cubemap (any size; faces CV_32FC3). With
+// io_cache, only p_options.faces_per_render faces are raycast now (see DenseFaceCache).
+DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 &p_position, const DenseRenderOptions &p_options, Cubemap *io_cubemap,
+		DenseFaceCache *io_cache = nullptr);
 
 } // namespace roomprobe
