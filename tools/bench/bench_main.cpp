@@ -80,6 +80,7 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <string>
 #include <thread>
 #include <vector>
@@ -373,6 +374,7 @@ struct Arguments {
 	long frames = -1; // RGB-D frames to process; -1: all
 	int threads = 0; // 0: the libraries' defaults
 	int probe_size = 0; // 0: the mode's default
+	int probes = 1; // slam --recording: probes rendered every frame (the first at the probe, the others around it)
 	double speed = 1.0; // live: playback speed
 	std::string rig_file; // --rig: the RGB-D camera of this rig file
 	bool has_intrinsics = false; // --intrinsics fx,fy,cx,cy
@@ -406,6 +408,8 @@ void print_usage(std::FILE *p_out) {
 			"                        instead of the source's; the depth scale and any fisheye stay the source's\n"
 			"  --save-trajectory FILE  slam: the tracked poses in TUM format (timestamp tx ty tz qx qy qz qw), one line per frame\n"
 			"                        tracked good or poor; lost frames (no pose known) and poor ones' reasons as '#' comments\n"
+			"  --probes N            slam --recording: render N probes every frame, the first at the probe, the others on a\n"
+			"                        ring of 0.6 m around it (default 1); 'render_probes' times them all\n"
 			"  --no-peers            slam --recording: skip the peers (OpenCV contrib's HASHTSDF volume integrating and raycasting\n"
 			"                        the fused frames at the tracked poses, cv::rgbd::ICPOdometry frame to frame), run after the\n"
 			"                        engine; their medians over ours are the summary's opencv_*_ratio keys\n"
@@ -611,6 +615,28 @@ int bench_dense(const Arguments &p_args, const DenseSource &p_source);
 
 // ---------------------------------------------------------------- issue #11's speed targets and peers
 
+// How the frame's cost and the TSDF's memory grow with the recording: the first tenth against the last.
+void print_growth(const Series &p_frame_ms, size_t p_early_bytes, size_t p_final_bytes) {
+	const size_t n = p_frame_ms.size(), tenth = std::max<size_t>(1, n / 10);
+	if (n < 2) {
+		return;
+	}
+	Series first, last;
+	first.values.assign(p_frame_ms.values.begin(), p_frame_ms.values.begin() + long(tenth));
+	last.values.assign(p_frame_ms.values.end() - long(tenth), p_frame_ms.values.end());
+	std::printf("  growth: push_rgbd + render_probes median %.2f ms over the first %zu frames, %.2f ms over the last %zu; TSDF %.1f MiB a tenth in, %.1f MiB at the end\n",
+			first.median(), tenth, last.median(), tenth, double(p_early_bytes) / (1024.0 * 1024.0), double(p_final_bytes) / (1024.0 * 1024.0));
+}
+
+// --probes N: the probes after the first stand on a horizontal ring around it (inside a room of
+// a few metres), so that each sees the room from its own point.
+constexpr double EXTRA_PROBE_RING_M = 0.6;
+
+glm::dvec3 extra_probe_offset(int p_index, int p_count) {
+	const double angle = 2.0 * std::numbers::pi * double(p_index - 1) / double(std::max(1, p_count - 1));
+	return EXTRA_PROBE_RING_M * glm::dvec3(std::cos(angle), 0.0, std::sin(angle));
+}
+
 // Peer time over ours (NaN: the peer did not run).
 struct PeerRatios {
 	double integration = std::numeric_limits<double>::quiet_NaN();
@@ -737,7 +763,14 @@ int bench_recording(const Arguments &p_args) {
 		return 1;
 	}
 	const int probe_id = engine.add_probe(probe, probe_size);
+	for (int i = 1; i < p_args.probes; i++) {
+		engine.add_probe(probe + extra_probe_offset(i, p_args.probes), probe_size);
+	}
 	print_recording_header("slam", p_args, setup, probe_size);
+	if (p_args.probes > 1) {
+		std::printf("  %d probes: the first at the probe, %d on a ring of %.2f m around it (render_probes times all of them)\n", p_args.probes,
+				p_args.probes - 1, EXTRA_PROBE_RING_M);
+	}
 	TrajectoryFile trajectory_file;
 	if (!trajectory_file.open(p_args.save_trajectory, "slam --recording " + p_args.recording, "the room's (room.yaml's initial pose)")) {
 		return 1;
@@ -749,6 +782,7 @@ int bench_recording(const Arguments &p_args) {
 	Series push_rgbd, push_fisheye, render_call, live_frame;
 	Series fisheye_error_mm;
 	std::vector<bench::PeerFrame> peer_frames; // the fused frames at their tracked poses
+	size_t early_tsdf_bytes = 0; // the TSDF's memory a tenth of the way in
 	uint64_t coarse_frames_seen = 0, mesh_version_seen = 0;
 	size_t rgbd_done = 0, fisheye_pushed = 0, frames_failed = 0, occlusion_skipped = 0, fisheye_integrated = 0;
 	for (const PlaybackEvent &event : reader.get_events()) {
@@ -797,6 +831,9 @@ int bench_recording(const Arguments &p_args) {
 				map_total.add(map->total_ms);
 			}
 			live_frame.add(push_ms + render_ms);
+			if (rgbd_done == std::max<size_t>(1, setup.rgbd_total / 10)) {
+				early_tsdf_bytes = engine.stats().tsdf.bytes_used;
+			}
 		} else {
 			FisheyeFrameResult frame = reader.read_fisheye(event.index);
 			if (!frame.ok) {
@@ -887,6 +924,7 @@ int bench_recording(const Arguments &p_args) {
 	std::printf("  median-based %.2f ms (%.2f + %.3f x %.2f)   mean-based %.2f ms   paper %.2f ms (GPU system, incl. rendering the scene)\n", full_median,
 			live_frame.median(), fisheye_per_rgbd, push_fisheye.median(), full_mean, PAPER_FRAME_MS);
 	std::printf("  (re-meshing is inside push_rgbd: in the mean, rarely in the median)\n");
+	print_growth(live_frame, early_tsdf_bytes, engine.stats().tsdf.bytes_used);
 	if (setup.synthetic) {
 		print_slam_target(figures, rig.rgb.width, rig.rgb.height);
 	}
@@ -1404,6 +1442,11 @@ int main(int argc, char **argv) {
 				return usage("--threads needs a positive integer");
 			}
 			args.threads = int(n);
+		} else if (arg == "--probes" && args.mode == "slam") {
+			if (!cursor.positive_integer(&n) || n > 64) {
+				return usage("--probes needs a probe count, 1 to 64");
+			}
+			args.probes = int(n);
 		} else if (arg == "--probe-size") {
 			if (!cursor.positive_integer(&n) || n > 4096) {
 				return usage("--probe-size needs a face size in texels, 1 to 4096");
