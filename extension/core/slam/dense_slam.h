@@ -53,10 +53,10 @@ struct DenseSlamOptions {
 	// room in front. Pixels without readings search the whole range. 0: every pixel the whole range.
 	float reference_search_margin_m = 0.08f;
 	// Tracking runs on the frame at 1 / 2^tracking_level of its size (ICP's own pyramid below
-	// that); integration always takes the full frame. 0, the default: full size. Level 1 makes
-	// tracking about 3x faster, but on 640x480 frames halved this way the pose lags the true one
-	// by about 3 mm a frame (out/demo/recording), which natively rendered 320x240 frames do not
-	// (tests/core/test_slam_dense.cpp): not understood yet, so not the default.
+	// that); integration always takes the full frame. 0, the default: full size. Level 1 tracks
+	// 2.5x faster (14 to 18 ms against 37 on the 10-s living room) without the drift once seen,
+	// but costs ATE: 1.70 -> 5.61 mm on the flat-wall panorama_room, 4.43 -> 5.05 on living_room,
+	// 44.4 -> 47.2 mm on 7-Scenes (README, the speed section), so it is not the default.
 	int tracking_level = 0;
 	// Relocalisation: when a frame is Lost and the model exists, it is tracked again from 13
 	// starting poses: the held pose, and the held pose moved by +-relocalise_step_m along each
