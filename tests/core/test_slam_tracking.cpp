@@ -7,6 +7,7 @@
 
 #include "camera/pinhole_camera.h"
 #include "slam/depth_pyramid.h"
+#include "slam/icp_kernels.h"
 #include "slam/icp_tracker.h"
 #include "synth/synth_renderer.h"
 #include "synth/synth_scene.h"
@@ -80,6 +81,45 @@ TEST_CASE("slam: depth downsampling ignores holes and does not average across an
 	REQUIRE(half.size() == cv::Size(2, 1));
 	CHECK(half.at<float>(0, 0) == doctest::Approx(1.01f));
 	CHECK(std::isnan(half.at<float>(0, 1)));
+}
+
+TEST_CASE("slam: smooth_depth (row by row, vectorised) equals smooth_depth_pixel to the bit") {
+	// Depths on two surfaces (an edge the band must not cross), holes, zeros and a size that is no
+	// multiple of the stripes, at several radii.
+	cv::RNG rng(7);
+	cv::Mat depth(37, 53, CV_32FC1);
+	for (int y = 0; y < depth.rows; ++y) {
+		for (int x = 0; x < depth.cols; ++x) {
+			const float base = x < 20 ? 1.0f : 2.5f;
+			const double u = rng.uniform(0.0, 1.0);
+			depth.at<float>(y, x) = u < 0.1 ? std::numeric_limits<float>::quiet_NaN() : u < 0.15 ? 0.0f : base + float(rng.gaussian(0.01));
+		}
+	}
+	for (const int radius : { 1, 2, 3 }) {
+		CAPTURE(radius);
+		const float band = 0.04f;
+		const cv::Mat smooth = smooth_depth(depth, radius, band);
+		const int side = 2 * radius + 1;
+		const float sigma = 0.5f * float(radius) + 0.5f;
+		std::vector<float> weights(size_t(side * side));
+		for (int dy = -radius; dy <= radius; ++dy) {
+			for (int dx = -radius; dx <= radius; ++dx) {
+				weights[size_t((dy + radius) * side + dx + radius)] = std::exp(-float(dx * dx + dy * dy) / (2.0f * sigma * sigma));
+			}
+		}
+		int mismatches = 0, holes = 0;
+		for (int y = 0; y < depth.rows; ++y) {
+			for (int x = 0; x < depth.cols; ++x) {
+				const float expected = smooth_depth_pixel(depth.ptr<float>(), depth.step1(), depth.cols, depth.rows, x, y, radius, band, weights.data());
+				const float got = smooth.at<float>(y, x);
+				holes += std::isnan(expected) ? 1 : 0;
+				const bool same = std::isnan(expected) ? std::isnan(got) : got == expected;
+				mismatches += same ? 0 : 1;
+			}
+		}
+		CHECK(holes > 0);
+		CHECK(mismatches == 0);
+	}
 }
 
 TEST_CASE("slam: normals of a tilted plane are its normal, towards the camera") {

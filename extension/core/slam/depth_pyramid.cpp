@@ -2,7 +2,10 @@
 
 #include "icp_kernels.h"
 
+#include <algorithm>
 #include <atomic>
+#include <bit>
+#include <cstdint>
 #include <cmath>
 #include <vector>
 
@@ -24,6 +27,46 @@ void for_rows(int p_rows, const Body &p_body) {
 			}
 		}
 	});
+}
+
+// One row of smooth_depth: the same sums as smooth_depth_pixel, in the same order (window row by
+// row, left to right), but taken tap by tap along the whole row, so that the inner loop runs over
+// pixels and the compiler vectorises it; a tap that fails the band test adds exactly 0. The result
+// equals smooth_depth_pixel's to the bit (tests/core/test_slam_tracking.cpp). p_sum and
+// p_weight_sum: scratch of p_width floats.
+void smooth_depth_row(const float *p_depth, size_t p_stride, int p_width, int p_height, int p_y, int p_radius, float p_band_m,
+		const float *p_weights, float *p_sum, float *p_weight_sum, float *r_row) {
+	const float *centre = p_depth + size_t(p_y) * p_stride;
+	std::fill(p_sum, p_sum + p_width, 0.0f);
+	std::fill(p_weight_sum, p_weight_sum + p_width, 0.0f);
+	const int side = 2 * p_radius + 1;
+	for (int dy = -p_radius; dy <= p_radius; ++dy) {
+		const int y = p_y + dy;
+		if (y < 0 || y >= p_height) {
+			continue;
+		}
+		const float *row = p_depth + size_t(y) * p_stride;
+		for (int dx = -p_radius; dx <= p_radius; ++dx) {
+			const float weight = p_weights[size_t((dy + p_radius) * side + dx + p_radius)];
+			// Pixels x whose tap x + dx lies inside the image.
+			const int begin = std::max(0, -dx), end = std::min(p_width, p_width - dx);
+			const float *taps = row + dx;
+			for (int x = begin; x < end; ++x) {
+				// Computed whatever the test says, and masked with integer operations: GCC (with
+				// -ftrapping-math, the default) turns no floating-point select into a vector one.
+				const float d = taps[x];
+				const uint32_t near = -uint32_t(std::abs(d - centre[x]) <= p_band_m); // all ones or 0; false for NaN
+				p_sum[x] += std::bit_cast<float>(std::bit_cast<uint32_t>(weight * d) & near);
+				p_weight_sum[x] += std::bit_cast<float>(std::bit_cast<uint32_t>(weight) & near);
+			}
+		}
+	}
+	for (int x = 0; x < p_width; ++x) {
+		// Holes stay holes (a valid centre always counts itself, so its weight sum is not 0).
+		const uint32_t hole = -uint32_t(!(centre[x] > 0.0f));
+		const float mean = p_sum[x] / p_weight_sum[x];
+		r_row[x] = std::bit_cast<float>((std::bit_cast<uint32_t>(mean) & ~hole) | (std::bit_cast<uint32_t>(ICP_NAN) & hole));
+	}
 }
 
 } // namespace
@@ -84,12 +127,16 @@ cv::Mat smooth_depth(const cv::Mat &p_depth_m, int p_radius, float p_band_m) {
 		}
 	}
 	cv::Mat smooth(p_depth_m.size(), CV_32FC1);
-	const float *source = p_depth_m.ptr<float>();
-	const size_t stride = p_depth_m.step1();
-	for_rows(smooth.rows, [&](int y) {
-		float *row = smooth.ptr<float>(y);
-		for (int x = 0; x < smooth.cols; ++x) {
-			row[x] = smooth_depth_pixel(source, stride, p_depth_m.cols, p_depth_m.rows, x, y, p_radius, p_band_m, weights.data());
+	const int width = p_depth_m.cols, height = p_depth_m.rows;
+	const int stripes = (height + ROWS_PER_STRIPE - 1) / ROWS_PER_STRIPE;
+	cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range &p_range) {
+		std::vector<float> sum(static_cast<size_t>(width)), weight_sum(static_cast<size_t>(width));
+		for (int s = p_range.start; s < p_range.end; ++s) {
+			const int end = std::min(height, (s + 1) * ROWS_PER_STRIPE);
+			for (int y = s * ROWS_PER_STRIPE; y < end; ++y) {
+				smooth_depth_row(p_depth_m.ptr<float>(), p_depth_m.step1(), width, height, y, p_radius, p_band_m, weights.data(), sum.data(),
+						weight_sum.data(), smooth.ptr<float>(y));
+			}
 		}
 	});
 	return smooth;
@@ -113,14 +160,15 @@ cv::Mat compute_vertex_map(const cv::Mat &p_depth_m, const PinholeIntrinsics &p_
 	return vertices;
 }
 
-cv::Mat compute_normal_map(const cv::Mat &p_vertices, float p_max_jump_relative) {
-	CV_Assert(p_vertices.type() == CV_32FC3);
-	cv::Mat normals(p_vertices.size(), CV_32FC3);
+cv::Mat compute_normal_map(const cv::Mat &p_vertices, float p_max_jump_relative, int p_sample_stride) {
+	CV_Assert(p_vertices.type() == CV_32FC3 && p_sample_stride >= 1);
+	cv::Mat normals(p_vertices.size(), CV_32FC3, cv::Scalar::all(ICP_NAN));
 	const float *source = p_vertices.ptr<float>();
 	const size_t stride = p_vertices.step1();
-	for_rows(p_vertices.rows, [&](int y) {
+	for_rows((p_vertices.rows + p_sample_stride - 1) / p_sample_stride, [&](int p_sampled_row) {
+		const int y = p_sampled_row * p_sample_stride;
 		cv::Vec3f *row = normals.ptr<cv::Vec3f>(y);
-		for (int x = 0; x < p_vertices.cols; ++x) {
+		for (int x = 0; x < p_vertices.cols; x += p_sample_stride) {
 			const glm::vec3 n = normal_pixel(source, stride, p_vertices.cols, p_vertices.rows, x, y, p_max_jump_relative);
 			row[x] = cv::Vec3f(n.x, n.y, n.z);
 		}
@@ -145,7 +193,7 @@ cv::Mat intensity_of(const cv::Mat &p_rgb) {
 }
 
 FramePyramid build_frame_pyramid(const cv::Mat &p_clean_depth_m, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, int p_levels,
-		float p_band_m, const SurfaceOptions &p_surface) {
+		float p_band_m, const SurfaceOptions &p_surface, int p_finest_stride) {
 	FramePyramid pyramid;
 	for (int level = 0; level < p_levels; ++level) {
 		const PinholeIntrinsics camera = p_camera.level(level);
@@ -155,7 +203,7 @@ FramePyramid build_frame_pyramid(const cv::Mat &p_clean_depth_m, const cv::Mat &
 		pyramid.cameras.push_back(camera);
 		pyramid.depth.push_back(depth);
 		pyramid.vertices.push_back(compute_vertex_map(depth, camera));
-		pyramid.normals.push_back(compute_normal_map(pyramid.vertices.back(), p_surface.max_jump_relative));
+		pyramid.normals.push_back(compute_normal_map(pyramid.vertices.back(), p_surface.max_jump_relative, level == 0 ? p_finest_stride : 1));
 		if (!p_rgb.empty()) {
 			cv::Mat intensity = level == 0 ? intensity_of(p_rgb) : cv::Mat();
 			if (level > 0) {

@@ -44,7 +44,9 @@ cv::Mat compute_vertex_map(const cv::Mat &p_depth_m, const PinholeIntrinsics &p_
 
 // CV_32FC3 unit camera-frame normals of a vertex map, towards the camera; NaN at the border,
 // next to holes and on depth edges (a neighbour more than p_max_jump_relative * z away in z).
-cv::Mat compute_normal_map(const cv::Mat &p_vertices, float p_max_jump_relative);
+// p_sample_stride > 1: only every p_sample_stride-th pixel of every p_sample_stride-th row (from
+// (0, 0)) gets its normal, the others NaN (for ICP's sampled finest level).
+cv::Mat compute_normal_map(const cv::Mat &p_vertices, float p_max_jump_relative, int p_sample_stride = 1);
 
 // CV_32FC1 intensity in [0, 1] (mean of R, G, B / 255) of a CV_8UC3 image; empty when it is empty.
 cv::Mat intensity_of(const cv::Mat &p_rgb);
@@ -54,13 +56,15 @@ struct FramePyramid {
 	std::vector<PinholeIntrinsics> cameras;
 	std::vector<cv::Mat> depth; // CV_32FC1 metres, NaN = none
 	std::vector<cv::Mat> vertices; // CV_32FC3 camera frame, metres
-	std::vector<cv::Mat> normals; // CV_32FC3 camera frame, unit
+	std::vector<cv::Mat> normals; // CV_32FC3 camera frame, unit; at level 0 only on the sampled pixels (build_frame_pyramid)
 	std::vector<cv::Mat> intensity; // CV_32FC1 in [0, 1] (2x2 means); empty when no colour was given
 };
 
 // p_levels >= 1 levels of a clean depth image (clean_depth), smoothed first as p_surface says,
-// and, optionally, its colour (CV_8UC3, may be empty). p_band_m as in downsample_depth.
+// and, optionally, its colour (CV_8UC3, may be empty). p_band_m as in downsample_depth. Level 0's
+// normals only on every p_finest_stride-th pixel of every p_finest_stride-th row (the pixels ICP
+// pairs there, IcpOptions::finest_stride_px); the coarser levels come from the whole of it.
 FramePyramid build_frame_pyramid(const cv::Mat &p_clean_depth_m, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, int p_levels,
-		float p_band_m, const SurfaceOptions &p_surface);
+		float p_band_m, const SurfaceOptions &p_surface, int p_finest_stride = 1);
 
 } // namespace roomprobe

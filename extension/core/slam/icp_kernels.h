@@ -187,7 +187,9 @@ inline float sample_bilinear(const float *p_image, size_t p_stride, int p_width,
 // the photometric row r_rows[1], when the model has intensity and the weight is not 0).
 // r_squared_distance gets the squared point-to-plane residual of an inlier (metres^2, unweighted
 // by the noise weight its rows carry).
-inline int icp_correspondence(const glm::vec3 &p_vertex, const glm::vec3 &p_normal, float p_intensity, const IcpKernelParams &p_params,
+// Always inlined: called per pixel, and GCC's size heuristics would otherwise keep it a call
+// with its vectors passed through memory.
+[[gnu::always_inline]] inline int icp_correspondence(const glm::vec3 &p_vertex, const glm::vec3 &p_normal, float p_intensity, const IcpKernelParams &p_params,
 		const IcpModelView &p_model, IcpRow *r_rows, float *r_squared_distance) {
 	if (!(p_vertex.z > 0.0f) || std::isnan(p_normal.x)) {
 		return 0;
@@ -200,10 +202,14 @@ inline int icp_correspondence(const glm::vec3 &p_vertex, const glm::vec3 &p_norm
 	if (!p_model.camera.project(in_model, &pixel)) {
 		return 0;
 	}
-	const int u = int(std::lround(pixel.x)), v = int(std::lround(pixel.y));
-	if (u < 0 || v < 0 || u >= p_model.camera.width || v >= p_model.camera.height) {
+	// The nearest pixel, rounding halves up; lroundf is a libm call here (no SSE4.1 at build time),
+	// and a pixel left of or above -0.5 is outside anyway, so the truncation of the shifted value
+	// never meets a negative.
+	const float shifted_x = pixel.x + 0.5f, shifted_y = pixel.y + 0.5f;
+	if (!(shifted_x > 0.0f && shifted_y > 0.0f && shifted_x < float(p_model.camera.width) && shifted_y < float(p_model.camera.height))) {
 		return 0;
 	}
+	const int u = int(shifted_x), v = int(shifted_y);
 	const float *m = p_model.points + size_t(v) * p_model.stride + size_t(u) * 3;
 	const float *mn = p_model.normals + size_t(v) * p_model.stride + size_t(u) * 3;
 	const glm::vec3 model_point(m[0], m[1], m[2]), model_normal(mn[0], mn[1], mn[2]);

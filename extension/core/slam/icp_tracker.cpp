@@ -21,7 +21,7 @@ constexpr int ROWS_PER_STRIPE = 8;
 
 // The Gauss-Newton normal equations J^T J xi = -J^T r, summed in double (millions of float rows).
 struct NormalSystem {
-	double h[6][6] = {}; // upper triangle of J^T J
+	double h[6][6] = {}; // upper triangle of J^T J (rows come in through RowSums)
 	double g[6] = {}; // J^T r
 	double sum_squared = 0.0; // of the point-to-plane residuals, metres^2
 	// Traces of the rotation and translation blocks of the point-to-plane rows alone: the scale
@@ -29,15 +29,6 @@ struct NormalSystem {
 	double geometry_trace_rotation = 0.0, geometry_trace_translation = 0.0;
 	int inliers = 0;
 
-	void add(const IcpRow &p_row) {
-		for (int i = 0; i < 6; ++i) {
-			const double ji = p_row.jacobian[i];
-			for (int j = i; j < 6; ++j) {
-				h[i][j] += ji * p_row.jacobian[j];
-			}
-			g[i] += ji * p_row.residual;
-		}
-	}
 	void operator+=(const NormalSystem &p_other) {
 		for (int i = 0; i < 6; ++i) {
 			for (int j = i; j < 6; ++j) {
@@ -49,6 +40,43 @@ struct NormalSystem {
 		geometry_trace_rotation += p_other.geometry_trace_rotation;
 		geometry_trace_translation += p_other.geometry_trace_translation;
 		inliers += p_other.inliers;
+	}
+};
+
+// One image row's share of a NormalSystem's h and g, summed in float (a row has at most a few
+// hundred rows of the system: float keeps them to about 1e-5 where the double sum over the frame
+// would not), then added to the double system once per image row: the 27 products a row costs
+// are float ones the compiler can pack.
+struct RowSums {
+	float h[21] = {}; // upper triangle of J^T J, row by row
+	float g[6] = {};
+	float trace_rotation = 0.0f, trace_translation = 0.0f, sum_squared = 0.0f; // NormalSystem's
+
+	void add(const IcpRow &p_row) {
+		const float *j = p_row.jacobian;
+		int k = 0;
+		for (int a = 0; a < 6; ++a) {
+			for (int b = a; b < 6; ++b) {
+				h[k++] += j[a] * j[b];
+			}
+			g[a] += j[a] * p_row.residual;
+		}
+	}
+	// Adds the sums to r_system and starts again from 0.
+	void flush(NormalSystem *r_system) {
+		int k = 0;
+		for (int a = 0; a < 6; ++a) {
+			for (int b = a; b < 6; ++b) {
+				r_system->h[a][b] += double(h[k]);
+				h[k++] = 0.0f;
+			}
+			r_system->g[a] += double(g[a]);
+			g[a] = 0.0f;
+		}
+		r_system->geometry_trace_rotation += double(trace_rotation);
+		r_system->geometry_trace_translation += double(trace_translation);
+		r_system->sum_squared += double(sum_squared);
+		trace_rotation = trace_translation = sum_squared = 0.0f;
 	}
 };
 
@@ -104,39 +132,44 @@ IcpModelView model_view(const ModelMaps &p_model, const ModelIntensity *p_intens
 	return view;
 }
 
-// The normal equations of one pyramid level at the estimate in p_params: per-stripe partial sums
-// in parallel, then their sum in stripe order (the same result whatever the thread count).
-NormalSystem accumulate(const FramePyramid &p_frame, int p_level, const IcpKernelParams &p_params, const IcpModelView &p_model) {
+// The normal equations of one pyramid level at the estimate in p_params, from every p_stride-th
+// pixel of every p_stride-th row: per-stripe partial sums in parallel, then their sum in stripe
+// order (the same result whatever the thread count).
+NormalSystem accumulate(const FramePyramid &p_frame, int p_level, int p_stride, const IcpKernelParams &p_params, const IcpModelView &p_model) {
 	const cv::Mat &vertices = p_frame.vertices[size_t(p_level)];
 	const cv::Mat &normals = p_frame.normals[size_t(p_level)];
 	const cv::Mat *intensity = p_frame.intensity.empty() ? nullptr : &p_frame.intensity[size_t(p_level)];
-	const int rows = vertices.rows, cols = vertices.cols;
+	const int cols = vertices.cols;
+	const int rows = (vertices.rows + p_stride - 1) / p_stride; // sampled rows
 	const int stripes = (rows + ROWS_PER_STRIPE - 1) / ROWS_PER_STRIPE;
 	std::vector<NormalSystem> partial(static_cast<size_t>(stripes));
 	cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range &p_range) {
 		for (int s = p_range.start; s < p_range.end; ++s) {
 			NormalSystem &system = partial[size_t(s)];
 			const int end = std::min(rows, (s + 1) * ROWS_PER_STRIPE);
-			for (int y = s * ROWS_PER_STRIPE; y < end; ++y) {
+			for (int row = s * ROWS_PER_STRIPE; row < end; ++row) {
+				const int y = row * p_stride;
 				const cv::Vec3f *v = vertices.ptr<cv::Vec3f>(y);
 				const cv::Vec3f *n = normals.ptr<cv::Vec3f>(y);
 				const float *i = intensity != nullptr ? intensity->ptr<float>(y) : nullptr;
-				for (int x = 0; x < cols; ++x) {
+				RowSums sums;
+				for (int x = 0; x < cols; x += p_stride) {
 					IcpRow rows_out[2];
 					float squared = 0.0f;
 					const int count = icp_correspondence(glm::vec3(v[x][0], v[x][1], v[x][2]), glm::vec3(n[x][0], n[x][1], n[x][2]),
 							i != nullptr ? i[x] : ICP_NAN, p_params, p_model, rows_out, &squared);
 					for (int k = 0; k < count; ++k) {
-						system.add(rows_out[k]);
+						sums.add(rows_out[k]);
 					}
 					if (count > 0) {
 						const float *j = rows_out[0].jacobian;
-						system.geometry_trace_rotation += double(j[0]) * j[0] + double(j[1]) * j[1] + double(j[2]) * j[2];
-						system.geometry_trace_translation += double(j[3]) * j[3] + double(j[4]) * j[4] + double(j[5]) * j[5];
-						system.sum_squared += squared;
+						sums.trace_rotation += j[0] * j[0] + j[1] * j[1] + j[2] * j[2];
+						sums.trace_translation += j[3] * j[3] + j[4] * j[4] + j[5] * j[5];
+						sums.sum_squared += squared;
 						++system.inliers;
 					}
 				}
+				sums.flush(&system);
 			}
 		}
 	});
@@ -145,6 +178,18 @@ NormalSystem accumulate(const FramePyramid &p_frame, int p_level, const IcpKerne
 		total += p;
 	}
 	return total;
+}
+
+// Valid (non-NaN) depths among every p_stride-th pixel of every p_stride-th row.
+int count_sampled_valid(const cv::Mat &p_depth_m, int p_stride) {
+	int valid = 0;
+	for (int y = 0; y < p_depth_m.rows; y += p_stride) {
+		const float *row = p_depth_m.ptr<float>(y);
+		for (int x = 0; x < p_depth_m.cols; x += p_stride) {
+			valid += row[x] > 0.0f ? 1 : 0; // false for NaN
+		}
+	}
+	return valid;
 }
 
 // The normal equations made unit-free: S H S with S scaling the rotation and the translation
@@ -334,7 +379,13 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 				"too few valid depth pixels: " + std::to_string(valid) + " of " + std::to_string(total), 0);
 	}
 	const int levels = std::clamp(options.levels, 1, IcpOptions::MAX_LEVELS);
-	const FramePyramid frame = build_frame_pyramid(depth, colour ? p_rgb : cv::Mat(), p_camera, levels, float(options.pyramid_band_m), options.surface);
+	// The finest level pairs a sample of its pixels (IcpOptions::finest_stride_px); the inlier
+	// fraction is of the valid pixels sampled.
+	const int finest_stride = std::max(1, options.finest_stride_px);
+	auto stride_at = [&](int p_level) { return p_level == 0 ? finest_stride : 1; };
+	const int sampled_valid = finest_stride == 1 ? valid : count_sampled_valid(depth, finest_stride);
+	const FramePyramid frame =
+			build_frame_pyramid(depth, colour ? p_rgb : cv::Mat(), p_camera, levels, float(options.pyramid_band_m), options.surface, finest_stride);
 	ModelIntensity intensity; // made when the colour term is first needed
 	const IcpModelView geometry_model = model_view(p_model, nullptr);
 	IcpModelView colour_model = geometry_model;
@@ -343,13 +394,17 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 			intensity = model_intensity(p_model);
 			colour_model = model_view(p_model, &intensity);
 		}
-		return accumulate(frame, p_level, kernel_params(options, p_pose, p_level, p_colour), p_colour ? colour_model : geometry_model);
+		return accumulate(frame, p_level, stride_at(p_level), kernel_params(options, p_pose, p_level, p_colour), p_colour ? colour_model : geometry_model);
 	};
 
 	Pose pose = p_initial_world_from_camera;
 	int iterations = 0;
 	bool colour_used = false;
 	Conditioning finest;
+	// The finest level's last system, when its step was below the thresholds: the pose it was taken
+	// at is the final one to within them, so it stands for the final pose's support.
+	NormalSystem converged_finest;
+	bool converged = false;
 	for (int level = levels - 1; level >= 0; --level) {
 		bool colour_level = colour && options.colour_always;
 		for (int i = 0; i < options.iterations[size_t(level)]; ++i) {
@@ -378,20 +433,24 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 			const double step_m = std::sqrt(xi[3] * xi[3] + xi[4] * xi[4] + xi[5] * xi[5]);
 			const double step_rad = std::sqrt(xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
 			if (step_m < options.min_update_m && step_rad < options.min_update_rad) {
+				if (level == 0) {
+					converged_finest = system;
+					converged = true;
+				}
 				break;
 			}
 		}
 	}
 
 	// The support of the final pose, at the finest level, geometry only.
-	const NormalSystem final_system = system_at(0, pose, false);
+	const NormalSystem final_system = converged ? converged_finest : system_at(0, pose, false);
 	if (!finest.ok) {
 		finest = condition(final_system);
 	}
 	TrackingResult result;
 	result.world_from_camera = pose;
 	result.iterations = iterations;
-	result.inlier_fraction = double(final_system.inliers) / double(valid);
+	result.inlier_fraction = double(final_system.inliers) / double(std::max(1, sampled_valid));
 	result.rmse_m = final_system.inliers > 0 ? std::sqrt(final_system.sum_squared / final_system.inliers) : 0.0;
 	result.constraint = finest.ok ? finest.eigenvalues[5] : 0.0;
 	result.colour_used = colour_used;
@@ -405,7 +464,8 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 		reason = "the pose jumped " + format(jump_m, 3) + " m and " + format(jump_deg, 1) + " deg from the initial guess (limits " +
 				format(options.max_jump_m, 3) + " m, " + format(options.max_jump_deg, 1) + " deg)";
 	} else if (result.inlier_fraction < options.lost_inlier_fraction) {
-		reason = "too few inliers: " + std::to_string(final_system.inliers) + " of " + std::to_string(valid) + " valid depth pixels";
+		reason = "too few inliers: " + std::to_string(final_system.inliers) + " of " + std::to_string(sampled_valid) + " valid depth pixels" +
+				(finest_stride > 1 ? " sampled" : "");
 	}
 	if (!reason.empty()) {
 		TrackingResult held = lost(p_initial_world_from_camera, reason, iterations);

@@ -25,6 +25,12 @@ struct IcpOptions {
 	std::array<int, MAX_LEVELS> iterations = { 10, 6, 8, 8 };
 	double min_update_m = 1e-4; // metres
 	double min_update_rad = 1e-4; // radians
+	// The finest level pairs every finest_stride_px-th pixel of every finest_stride_px-th row (1:
+	// all). Its depth is smoothed over a 5x5 window first (SurfaceOptions), so neighbouring pixels
+	// carry nearly the same reading and a sample of them nearly the same information, for a
+	// quarter of the work at 2; the model a frame is tracked against is coarser still (dense_slam.h
+	// raycast_level).
+	int finest_stride_px = 2;
 	// Correspondences: point-to-point distance (metres) and angle between the normals (degrees)
 	// beyond which a pair is an outlier. At the coarser levels the distance is allowed to grow by
 	// coarse_distance_growth per level, for the larger initial error they have to take out.
