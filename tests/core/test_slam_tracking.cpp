@@ -311,3 +311,52 @@ TEST_CASE("slam: frame-to-frame tracking over 1 s of the hand-held path drifts l
 	MESSAGE("frame-to-frame over 1 s (30 frames, noisy depth): ATE RMSE ", ate_m * 1000.0, " mm");
 	CHECK(ate_m < 0.01);
 }
+
+TEST_CASE("slam: a sampled normal map equals the full one on its samples and has none elsewhere") {
+	const PinholeIntrinsics camera = pinhole_intrinsics(half_camera());
+	const Frame frame = render_living_room(living_room().trajectory.world_from_rgb(2.0), 2.0, true, 5);
+	const cv::Mat vertices = compute_vertex_map(frame.depth_m, camera);
+	const cv::Mat full = compute_normal_map(vertices, 0.05f);
+	const cv::Mat sampled = compute_normal_map(vertices, 0.05f, 2);
+	int mismatches = 0, sampled_valid = 0, unsampled_set = 0;
+	for (int y = 0; y < full.rows; ++y) {
+		for (int x = 0; x < full.cols; ++x) {
+			const cv::Vec3f a = full.at<cv::Vec3f>(y, x), b = sampled.at<cv::Vec3f>(y, x);
+			if (y % 2 == 0 && x % 2 == 0) {
+				const bool same = (std::isnan(a[0]) && std::isnan(b[0])) || (a[0] == b[0] && a[1] == b[1] && a[2] == b[2]);
+				mismatches += same ? 0 : 1;
+				sampled_valid += std::isnan(b[0]) ? 0 : 1;
+			} else {
+				unsampled_set += std::isnan(b[0]) ? 0 : 1;
+			}
+		}
+	}
+	CHECK(sampled_valid > full.rows * full.cols / 8); // most samples carry a normal
+	CHECK(mismatches == 0);
+	CHECK(unsampled_set == 0);
+}
+
+TEST_CASE("slam: ICP on a sample of the finest level agrees with ICP on all of it") {
+	// finest_stride_px = 2 (the default) against 1 (every pixel) on the noisy steps: both Good,
+	// and within a millimetre and 0.05 deg of each other (the sample's extra noise, the smoothing
+	// having correlated neighbouring pixels, is well under the noisy test's bound).
+	IcpOptions every_pixel;
+	every_pixel.finest_stride_px = 1;
+	IcpOptions sampled;
+	sampled.finest_stride_px = 2;
+	for (const Step &step : test_steps()) {
+		CAPTURE(step.time_s);
+		const TrackingResult full = track_step(step, true, every_pixel);
+		const TrackingResult sample = track_step(step, true, sampled);
+		const double apart_m = translation_difference_m(full.world_from_camera, sample.world_from_camera);
+		const double apart_deg = rotation_difference_deg(full.world_from_camera, sample.world_from_camera);
+		const double full_error_m = translation_difference_m(full.world_from_camera, step.current);
+		const double sample_error_m = translation_difference_m(sample.world_from_camera, step.current);
+		MESSAGE("sampled vs every pixel: ", apart_m * 1000.0, " mm / ", apart_deg, " deg apart; errors ", full_error_m * 1000.0, " / ",
+				sample_error_m * 1000.0, " mm");
+		CHECK(full.state == TrackingState::Good);
+		CHECK(sample.state == TrackingState::Good);
+		CHECK(apart_m < 0.001);
+		CHECK(apart_deg < 0.05);
+	}
+}
