@@ -187,6 +187,10 @@ struct TsdfFrameView {
 	float max_depth_m = 4.0f;
 	uint16_t max_weight = 64;
 	uint16_t max_color_weight = 8;
+	// Voxels whose update could not change them are rejected from the nearest reading alone,
+	// before the bilinear depth (false: every voxel takes the whole computation, the plain path
+	// the tests compare with; the result is the same).
+	bool early_exits = true;
 };
 
 // A usable depth reading (NaN and 0 are none).
@@ -278,6 +282,26 @@ inline bool tsdf_update_voxel_at(const TsdfFrameView &p_frame, const glm::vec3 &
 	if (depth - pc.z < -p_frame.truncation_m * (0.5f + 1.0f / std::max(p_frame.min_slope, 1e-3f))) {
 		return false;
 	}
+	const float slope = p_frame.slope[size_t(v) * p_frame.slope_stride + size_t(u)];
+	const bool has_plane = slope >= p_frame.min_slope; // false for NaN
+	if (p_frame.early_exits) {
+		// The same with this pixel's own slope factor: the bilinear depth lies within half the
+		// band (and a rounding margin) of this reading, so eta lies within [eta_lo, eta_hi].
+		const float spread = 0.5f * p_frame.truncation_m + 1e-5f;
+		const float factor = has_plane ? slope : 1.0f;
+		const float eta_hi = (depth + spread - pc.z) * factor;
+		if (eta_hi < -p_frame.truncation_m || (!has_plane && eta_hi < p_frame.truncation_m)) {
+			return false;
+		}
+		// Free space seen again by a voxel already at +1 with the full weight: the average stays
+		// exactly 1, the weight at its cap, and no colour is taken that far from the surface.
+		if (r_voxel->tsdf == 1.0f && r_voxel->weight == uint16_t(int(p_frame.max_weight) * TSDF_WEIGHT_UNIT)) {
+			const float eta_lo = (depth - spread - pc.z) * factor;
+			if (eta_lo >= p_frame.truncation_m && eta_lo >= p_frame.color_band_m) {
+				return false;
+			}
+		}
+	}
 	const int u0 = int(std::floor(pixel.x)), v0 = int(std::floor(pixel.y));
 	if (u0 >= 0 && v0 >= 0 && u0 + 1 < p_frame.camera.width && v0 + 1 < p_frame.camera.height) {
 		const float *r0 = p_frame.depth + size_t(v0) * p_frame.depth_stride + size_t(u0);
@@ -296,8 +320,6 @@ inline bool tsdf_update_voxel_at(const TsdfFrameView &p_frame, const glm::vec3 &
 	// at different angles agree on the distance field around it (the plain projective difference
 	// grows as 1 / cos of the view angle, and fused views would bend the gradient). Readings
 	// slanted beyond min_slope, or without a tangent plane (edges), only carve free space.
-	const float slope = p_frame.slope[size_t(v) * p_frame.slope_stride + size_t(u)];
-	const bool has_plane = slope >= p_frame.min_slope; // false for NaN
 	const float eta = (depth - pc.z) * (has_plane ? slope : 1.0f);
 	if (eta < -p_frame.truncation_m || (!has_plane && eta < p_frame.truncation_m)) {
 		return false; // hidden behind the observed surface, or near one seen too poorly
