@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <limits>
 #include <numbers>
 
 using namespace roomprobe;
@@ -454,5 +455,34 @@ TEST_CASE("TSDF integration's skipped blocks and voxels: every voxel as the plai
 		CHECK(tsdf > 0.5f);
 		REQUIRE(volume->sample_tsdf(glm::vec3(0.0f, -0.6f, 0.0f), &tsdf, &rgb));
 		CHECK(std::fabs(tsdf) * options.truncation_m <= options.voxel_size_m);
+	}
+}
+
+TEST_CASE("TSDF kernels' inline rounding, fmin and fmax agree with the standard library") {
+	// Every colour average the update can form (weights up to 300), halves, and values next to them.
+	int mismatches = 0;
+	for (int cw = 0; cw <= 300; cw++) {
+		for (int old = 0; old <= 255; old += 3) {
+			for (int px = 0; px <= 255; px++) {
+				const float q = (float(old) * float(cw) + float(px)) / (float(cw) + 1.0f);
+				mismatches += tsdf_round_positive(q) != int(std::lround(q));
+			}
+		}
+	}
+	for (float x : { 0.0f, 0.5f, 1.5f, 2.5f, 254.5f, 0.49999997f, 1.4999999f, 31.999998f, 32.0f, 1e6f + 0.5f }) {
+		for (float y : { x, std::nextafter(x, 0.0f), std::nextafter(x, 1e9f) }) {
+			mismatches += tsdf_round_positive(y) != int(std::lround(y));
+		}
+	}
+	CHECK(mismatches == 0);
+	const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+	const float values[] = { -inf, -2.0f, -0.5f, 0.0f, 0.25f, 3.0f, inf, nan };
+	for (float a : values) {
+		for (float b : values) {
+			const float lo = tsdf_fmin(a, b), hi = tsdf_fmax(a, b);
+			const float lo_std = std::fmin(a, b), hi_std = std::fmax(a, b);
+			CHECK((lo == lo_std || (std::isnan(lo) && std::isnan(lo_std))));
+			CHECK((hi == hi_std || (std::isnan(hi) && std::isnan(hi_std))));
+		}
 	}
 }
