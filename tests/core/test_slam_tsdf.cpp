@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <limits>
 #include <numbers>
 
 using namespace roomprobe;
@@ -398,4 +399,90 @@ TEST_CASE("TSDF raycast within per-pixel search intervals finds the same surface
 	CHECK(worst < 0.5 * TsdfOptions().voxel_size_m);
 	CHECK(searched_stats.steps < full_stats.steps);
 	CHECK(outside_stats.hit_pixels == 0); // the sphere's back is never a + to - crossing
+}
+
+TEST_CASE("TSDF integration's skipped blocks and voxels: every voxel as the plain path leaves it, and a removed object is still carved away") {
+	const PinholeIntrinsics camera = rig_camera(1);
+	Scene with_ball;
+	with_ball.boxes.push_back({ glm::dvec3(-3.0, -1.0, -0.1), glm::dvec3(3.0, 1.0, 0.0) }); // a wall, facing +z
+	with_ball.boxes.push_back({ glm::dvec3(-3.0, -1.1, -0.1), glm::dvec3(3.0, -1.0, 3.0) }); // a floor
+	with_ball.spheres.push_back({ glm::dvec3(0.0, -0.6, 0.8), 0.25 });
+	Scene without_ball = with_ball;
+	without_ball.spheres.clear();
+	TsdfOptions options;
+	options.max_weight = 2; // free space saturates within a few frames
+	options.max_color_weight = 2;
+	TsdfOptions plain_options = options;
+	plain_options.skip_unchanged = false;
+	TsdfVolume fast(options), plain(plain_options);
+	long long visible = 0, updated = 0;
+	auto integrate_both = [&](const Scene &p_scene, const Pose &p_pose) {
+		const Frame f = render(p_scene, camera, p_pose);
+		const IntegrationStats a = fast.integrate(f.depth, f.rgb, camera, f.world_from_camera);
+		const IntegrationStats b = plain.integrate(f.depth, f.rgb, camera, f.world_from_camera);
+		CHECK(a.visible_blocks == b.visible_blocks);
+		CHECK(a.allocated_blocks == b.allocated_blocks);
+		CHECK(b.updated_blocks == b.visible_blocks);
+		visible += a.visible_blocks;
+		updated += a.updated_blocks;
+	};
+	// The ball seen from several sides, then gone, then seen again from around and from where it stood.
+	for (int i = 0; i < 6; i++) {
+		integrate_both(with_ball, look_at(glm::dvec3(-0.6 + 0.24 * i, 0.1, 2.2), glm::dvec3(0.0, -0.5, 0.6)));
+	}
+	for (int i = 0; i < 8; i++) {
+		integrate_both(without_ball, look_at(glm::dvec3(0.6 - 0.15 * i, -0.5, 2.4), glm::dvec3(0.0, -0.6, 0.0))); // the wall behind it head-on
+	}
+	integrate_both(without_ball, look_at(glm::dvec3(0.0, -0.6, 0.8), glm::dvec3(0.0, -0.6, 0.0)));
+	MESSAGE("blocks updated " << updated << " of " << visible << " in view");
+	CHECK(updated < visible);
+
+	const std::vector<glm::ivec3> blocks = fast.allocated_blocks();
+	REQUIRE(blocks == plain.allocated_blocks());
+	int differing = 0;
+	for (const glm::ivec3 &b : blocks) {
+		const TsdfVoxel *x = fast.find_block(b), *y = plain.find_block(b);
+		for (int i = 0; i < TSDF_BLOCK_VOXELS; i++) {
+			differing += x[i].tsdf != y[i].tsdf || x[i].weight != y[i].weight || x[i].color_weight != y[i].color_weight || x[i].r != y[i].r || x[i].g != y[i].g || x[i].b != y[i].b;
+		}
+	}
+	CHECK(differing == 0);
+	// Where the ball's front stood is free space again (positive), the wall behind it a surface.
+	for (TsdfVolume *volume : { &fast, &plain }) {
+		float tsdf;
+		glm::vec3 rgb;
+		REQUIRE(volume->sample_tsdf(glm::vec3(0.0f, -0.6f, 1.05f), &tsdf, &rgb));
+		CHECK(tsdf > 0.5f);
+		REQUIRE(volume->sample_tsdf(glm::vec3(0.0f, -0.6f, 0.0f), &tsdf, &rgb));
+		CHECK(std::fabs(tsdf) * options.truncation_m <= options.voxel_size_m);
+	}
+}
+
+TEST_CASE("TSDF kernels' inline rounding, fmin and fmax agree with the standard library") {
+	// Every colour average the update can form (weights up to 300), halves, and values next to them.
+	int mismatches = 0;
+	for (int cw = 0; cw <= 300; cw++) {
+		for (int old = 0; old <= 255; old += 3) {
+			for (int px = 0; px <= 255; px++) {
+				const float q = (float(old) * float(cw) + float(px)) / (float(cw) + 1.0f);
+				mismatches += tsdf_round_positive(q) != int(std::lround(q));
+			}
+		}
+	}
+	for (float x : { 0.0f, 0.5f, 1.5f, 2.5f, 254.5f, 0.49999997f, 1.4999999f, 31.999998f, 32.0f, 1e6f + 0.5f }) {
+		for (float y : { x, std::nextafter(x, 0.0f), std::nextafter(x, 1e9f) }) {
+			mismatches += tsdf_round_positive(y) != int(std::lround(y));
+		}
+	}
+	CHECK(mismatches == 0);
+	const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+	const float values[] = { -inf, -2.0f, -0.5f, 0.0f, 0.25f, 3.0f, inf, nan };
+	for (float a : values) {
+		for (float b : values) {
+			const float lo = tsdf_fmin(a, b), hi = tsdf_fmax(a, b);
+			const float lo_std = std::fmin(a, b), hi_std = std::fmax(a, b);
+			CHECK((lo == lo_std || (std::isnan(lo) && std::isnan(lo_std))));
+			CHECK((hi == hi_std || (std::isnan(hi) && std::isnan(hi_std))));
+		}
+	}
 }

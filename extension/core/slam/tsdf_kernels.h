@@ -187,7 +187,26 @@ struct TsdfFrameView {
 	float max_depth_m = 4.0f;
 	uint16_t max_weight = 64;
 	uint16_t max_color_weight = 8;
+	// Voxels whose update could not change them are rejected from the nearest reading alone,
+	// before the bilinear depth (false: every voxel takes the whole computation, the plain path
+	// the tests compare with; the result is the same).
+	bool early_exits = true;
 };
+
+// std::lround for 0 <= p_x < 2^31, inline (libm's lroundf is a call per voxel): the truncation,
+// plus one where the exact remainder reaches a half (halves away from zero, as lround).
+inline int tsdf_round_positive(float p_x) {
+	const int i = int(p_x);
+	return i + int(p_x - float(i) >= 0.5f);
+}
+
+// std::fmin and std::fmax inline (NaN loses to a number, as there).
+inline float tsdf_fmin(float p_a, float p_b) {
+	return (p_b < p_a || p_a != p_a) ? p_b : p_a;
+}
+inline float tsdf_fmax(float p_a, float p_b) {
+	return (p_b > p_a || p_a != p_a) ? p_b : p_a;
+}
 
 // A usable depth reading (NaN and 0 are none).
 inline bool tsdf_depth_valid(float p_depth, float p_min, float p_max) {
@@ -278,6 +297,26 @@ inline bool tsdf_update_voxel_at(const TsdfFrameView &p_frame, const glm::vec3 &
 	if (depth - pc.z < -p_frame.truncation_m * (0.5f + 1.0f / std::max(p_frame.min_slope, 1e-3f))) {
 		return false;
 	}
+	const float slope = p_frame.slope[size_t(v) * p_frame.slope_stride + size_t(u)];
+	const bool has_plane = slope >= p_frame.min_slope; // false for NaN
+	if (p_frame.early_exits) {
+		// The same with this pixel's own slope factor: the bilinear depth lies within half the
+		// band (and a rounding margin) of this reading, so eta lies within [eta_lo, eta_hi].
+		const float spread = 0.5f * p_frame.truncation_m + 1e-5f;
+		const float factor = has_plane ? slope : 1.0f;
+		const float eta_hi = (depth + spread - pc.z) * factor;
+		if (eta_hi < -p_frame.truncation_m || (!has_plane && eta_hi < p_frame.truncation_m)) {
+			return false;
+		}
+		// Free space seen again by a voxel already at +1 with the full weight: the average stays
+		// exactly 1, the weight at its cap, and no colour is taken that far from the surface.
+		if (r_voxel->tsdf == 1.0f && r_voxel->weight == uint16_t(int(p_frame.max_weight) * TSDF_WEIGHT_UNIT)) {
+			const float eta_lo = (depth - spread - pc.z) * factor;
+			if (eta_lo >= p_frame.truncation_m && eta_lo >= p_frame.color_band_m) {
+				return false;
+			}
+		}
+	}
 	const int u0 = int(std::floor(pixel.x)), v0 = int(std::floor(pixel.y));
 	if (u0 >= 0 && v0 >= 0 && u0 + 1 < p_frame.camera.width && v0 + 1 < p_frame.camera.height) {
 		const float *r0 = p_frame.depth + size_t(v0) * p_frame.depth_stride + size_t(u0);
@@ -296,8 +335,6 @@ inline bool tsdf_update_voxel_at(const TsdfFrameView &p_frame, const glm::vec3 &
 	// at different angles agree on the distance field around it (the plain projective difference
 	// grows as 1 / cos of the view angle, and fused views would bend the gradient). Readings
 	// slanted beyond min_slope, or without a tangent plane (edges), only carve free space.
-	const float slope = p_frame.slope[size_t(v) * p_frame.slope_stride + size_t(u)];
-	const bool has_plane = slope >= p_frame.min_slope; // false for NaN
 	const float eta = (depth - pc.z) * (has_plane ? slope : 1.0f);
 	if (eta < -p_frame.truncation_m || (!has_plane && eta < p_frame.truncation_m)) {
 		return false; // hidden behind the observed surface, or near one seen too poorly
@@ -306,16 +343,16 @@ inline bool tsdf_update_voxel_at(const TsdfFrameView &p_frame, const glm::vec3 &
 	// Slanted readings count less (cos^2 of the view angle): their depth is the least certain
 	// and the tangent plane the poorest stand-in for the surface away from the reading.
 	const float c = has_plane ? std::min(1.0f, slope) : 0.0f;
-	const int add = std::max(1, int(std::lround(c * c * float(TSDF_WEIGHT_UNIT))));
+	const int add = std::max(1, tsdf_round_positive(c * c * float(TSDF_WEIGHT_UNIT)));
 	const float w = float(r_voxel->weight);
 	r_voxel->tsdf = (r_voxel->tsdf * w + sdf * float(add)) / (w + float(add));
 	r_voxel->weight = uint16_t(std::min(int(r_voxel->weight) + add, int(p_frame.max_weight) * TSDF_WEIGHT_UNIT));
 	if (std::fabs(eta) < p_frame.color_band_m) {
 		const uint8_t *px = p_frame.rgb + size_t(v) * p_frame.rgb_stride + size_t(u) * 3;
 		const float cw = float(r_voxel->color_weight);
-		r_voxel->r = uint8_t(std::lround((float(r_voxel->r) * cw + float(px[0])) / (cw + 1.0f)));
-		r_voxel->g = uint8_t(std::lround((float(r_voxel->g) * cw + float(px[1])) / (cw + 1.0f)));
-		r_voxel->b = uint8_t(std::lround((float(r_voxel->b) * cw + float(px[2])) / (cw + 1.0f)));
+		r_voxel->r = uint8_t(tsdf_round_positive((float(r_voxel->r) * cw + float(px[0])) / (cw + 1.0f)));
+		r_voxel->g = uint8_t(tsdf_round_positive((float(r_voxel->g) * cw + float(px[1])) / (cw + 1.0f)));
+		r_voxel->b = uint8_t(tsdf_round_positive((float(r_voxel->b) * cw + float(px[2])) / (cw + 1.0f)));
 		if (r_voxel->color_weight < p_frame.max_color_weight) {
 			r_voxel->color_weight++;
 		}
@@ -328,7 +365,7 @@ inline float tsdf_box_exit(const glm::vec3 &p_origin, const glm::vec3 &p_inv_dir
 	const glm::vec3 t0 = (p_box_min - p_origin) * p_inv_dir;
 	const glm::vec3 t1 = (p_box_max - p_origin) * p_inv_dir;
 	const glm::vec3 tfar = glm::max(t0, t1);
-	return std::fmin(tfar.x, std::fmin(tfar.y, tfar.z));
+	return tsdf_fmin(tfar.x, tsdf_fmin(tfar.y, tfar.z));
 }
 
 // Clips [r_t0, r_t1] to the part of the ray inside a box; false when none is.
@@ -337,8 +374,8 @@ inline bool tsdf_clip_to_box(const glm::vec3 &p_origin, const glm::vec3 &p_inv_d
 	const glm::vec3 t1 = (p_box_max - p_origin) * p_inv_dir;
 	const glm::vec3 tnear = glm::min(t0, t1);
 	const glm::vec3 tfar = glm::max(t0, t1);
-	*r_t0 = std::fmax(*r_t0, std::fmax(tnear.x, std::fmax(tnear.y, tnear.z)));
-	*r_t1 = std::fmin(*r_t1, std::fmin(tfar.x, std::fmin(tfar.y, tfar.z)));
+	*r_t0 = tsdf_fmax(*r_t0, tsdf_fmax(tnear.x, tsdf_fmax(tnear.y, tnear.z)));
+	*r_t1 = tsdf_fmin(*r_t1, tsdf_fmin(tfar.x, tsdf_fmin(tfar.y, tfar.z)));
 	return *r_t0 <= *r_t1;
 }
 
@@ -445,7 +482,7 @@ inline bool tsdf_raycast_pixel(const TsdfView &p_view, const TsdfRayParams &p_ra
 			// Unallocated: nothing was seen here; jump to where the ray leaves the region whose
 			// nearest voxels lie in this block, [8 b - 0.5, 8 b + 7.5) voxels.
 			const glm::vec3 bmin = (glm::vec3(cache.block) * float(TSDF_BLOCK_SIDE) - glm::vec3(0.5f)) * vs;
-			t = std::fmax(tsdf_box_exit(p_ray.origin, inv_dir, bmin, bmin + glm::vec3(block_m)), t) + 1e-3f * vs;
+			t = tsdf_fmax(tsdf_box_exit(p_ray.origin, inv_dir, bmin, bmin + glm::vec3(block_m)), t) + 1e-3f * vs;
 			have_prev = false;
 			continue;
 		}

@@ -70,6 +70,97 @@ void append_segment_blocks(const glm::vec3 &p_a, const glm::vec3 &p_b, std::vect
 
 constexpr int TSDF_MAX_BLOCKS = 1 << 22;
 
+// Pixels per side of a tile of the depth-bounds grid that integration culls blocks with.
+constexpr int DEPTH_TILE = 8;
+
+// Per tile of DEPTH_TILE^2 pixels, [min, max] of the usable readings (+inf, -inf when none).
+struct DepthTiles {
+	int cols = 0, rows = 0;
+	std::vector<glm::vec2> bounds;
+};
+
+DepthTiles depth_tiles(const cv::Mat &p_depth_m, float p_min_depth_m, float p_max_depth_m) {
+	DepthTiles tiles;
+	tiles.cols = (p_depth_m.cols + DEPTH_TILE - 1) / DEPTH_TILE;
+	tiles.rows = (p_depth_m.rows + DEPTH_TILE - 1) / DEPTH_TILE;
+	const float inf = std::numeric_limits<float>::infinity();
+	tiles.bounds.assign(size_t(tiles.cols) * size_t(tiles.rows), glm::vec2(inf, -inf));
+	cv::parallel_for_(cv::Range(0, tiles.rows), [&](const cv::Range &p_range) {
+		for (int r = p_range.start; r < p_range.end; r++) {
+			glm::vec2 *out = &tiles.bounds[size_t(r) * size_t(tiles.cols)];
+			for (int v = r * DEPTH_TILE; v < std::min(p_depth_m.rows, (r + 1) * DEPTH_TILE); v++) {
+				const float *row = p_depth_m.ptr<float>(v);
+				for (int u = 0; u < p_depth_m.cols; u++) {
+					const float d = row[u];
+					if (tsdf_depth_valid(d, p_min_depth_m, p_max_depth_m)) {
+						glm::vec2 &b = out[u / DEPTH_TILE];
+						b.x = std::min(b.x, d);
+						b.y = std::max(b.y, d);
+					}
+				}
+			}
+		}
+	});
+	return tiles;
+}
+
+// Whether an update of a block's voxels could change any of them, from the readings its
+// voxels can reach (the tiles under its projection, widened by the pixel that rounding and the
+// bilinear depth add). p_origin: voxel (0, 0, 0) of the block in the camera's frame; p_step_*:
+// one voxel along the grid's axes there. The tests mirror tsdf_update_voxel_at's own exits.
+bool block_may_change(const TsdfFrameView &p_frame, const DepthTiles &p_tiles, const glm::vec3 &p_origin, const glm::vec3 &p_step_x, const glm::vec3 &p_step_y,
+		const glm::vec3 &p_step_z, bool p_saturated) {
+	const float last = float(TSDF_BLOCK_SIDE - 1);
+	float zmin = std::numeric_limits<float>::infinity(), zmax = -zmin;
+	glm::vec2 pmin(std::numeric_limits<float>::infinity()), pmax(-std::numeric_limits<float>::infinity());
+	for (int c = 0; c < 8; c++) {
+		const glm::vec3 pc = p_origin + (c & 1 ? last : 0.0f) * p_step_x + ((c >> 1) & 1 ? last : 0.0f) * p_step_y + ((c >> 2) & 1 ? last : 0.0f) * p_step_z;
+		glm::vec2 pixel;
+		if (!(pc.z > 1e-3f) || !p_frame.camera.project(pc, &pixel)) {
+			return true; // the block reaches the camera's plane: no bound on its pixels
+		}
+		zmin = std::min(zmin, pc.z);
+		zmax = std::max(zmax, pc.z);
+		pmin = glm::min(pmin, pixel);
+		pmax = glm::max(pmax, pixel);
+	}
+	// The voxels' nearest pixels and bilinear neighbours lie in [floor(min), floor(max) + 1]; one
+	// pixel more on each side for rounding.
+	pmin -= glm::vec2(1.0f);
+	pmax += glm::vec2(2.0f);
+	const float w = float(p_frame.camera.width), h = float(p_frame.camera.height);
+	if (!(pmax.x >= 0.0f && pmax.y >= 0.0f && pmin.x < w && pmin.y < h)) {
+		return false; // wholly off the image
+	}
+	const int u0 = std::max(0, int(std::floor(pmin.x))), u1 = std::min(p_frame.camera.width - 1, int(std::floor(pmax.x)));
+	const int v0 = std::max(0, int(std::floor(pmin.y))), v1 = std::min(p_frame.camera.height - 1, int(std::floor(pmax.y)));
+	float dmin = std::numeric_limits<float>::infinity(), dmax = -dmin;
+	for (int r = v0 / DEPTH_TILE; r <= v1 / DEPTH_TILE; r++) {
+		const glm::vec2 *row = &p_tiles.bounds[size_t(r) * size_t(p_tiles.cols)];
+		for (int c = u0 / DEPTH_TILE; c <= u1 / DEPTH_TILE; c++) {
+			dmin = std::min(dmin, row[c].x);
+			dmax = std::max(dmax, row[c].y);
+		}
+	}
+	if (!(dmin <= dmax)) {
+		return false; // no reading under the block
+	}
+	// The stepped voxel points and the corners differ by rounding only: a margin of 0.1 mm.
+	constexpr float MARGIN_M = 1e-4f;
+	if (dmax - (zmin - MARGIN_M) < -p_frame.truncation_m * (0.5f + 1.0f / std::max(p_frame.min_slope, 1e-3f))) {
+		return false; // wholly well behind the readings
+	}
+	if (p_saturated && p_frame.min_slope > 0.0f) {
+		// Wholly in free space (eta >= its lower bound for every voxel: the bilinear depth is never
+		// below the smallest reading) and already at +1 with the full weight: nothing changes.
+		const float eta_lo = (dmin - (zmax + MARGIN_M)) * std::min(p_frame.min_slope, 1.0f);
+		if (eta_lo >= p_frame.truncation_m && eta_lo >= p_frame.color_band_m) {
+			return false;
+		}
+	}
+	return true;
+}
+
 uint32_t hash_size_for(int p_max_blocks) {
 	uint32_t size = 1024;
 	while (double(size) * MAX_HASH_LOAD < 1.5 * double(p_max_blocks)) {
@@ -160,11 +251,13 @@ int32_t TsdfVolume::allocate_slot(const glm::ivec3 &p_block) {
 		m_slot_block.push_back(p_block);
 		m_slot_used.push_back(0);
 		m_slot_frame.push_back(0);
+		m_slot_saturated.push_back(0);
 		m_voxels.resize(m_voxels.size() + TSDF_BLOCK_VOXELS);
 	}
 	m_slot_block[size_t(slot)] = p_block;
 	m_slot_used[size_t(slot)] = 1;
 	m_slot_frame[size_t(slot)] = m_frame;
+	m_slot_saturated[size_t(slot)] = 0;
 	m_allocated++;
 	return slot;
 }
@@ -380,29 +473,41 @@ IntegrationStats TsdfVolume::integrate(const cv::Mat &p_depth_m, const cv::Mat &
 	const glm::vec3 step_x = frame.camera_from_world_rotation[0] * vs; // glm: [i] is column i
 	const glm::vec3 step_y = frame.camera_from_world_rotation[1] * vs;
 	const glm::vec3 step_z = frame.camera_from_world_rotation[2] * vs;
-	std::vector<uint8_t> changed(visible.size(), 0);
+	frame.early_exits = m_options.skip_unchanged;
+	// Blocks none of whose voxels could change are culled from the bounds of the readings under
+	// them: most blocks in view lie wholly behind the nearer surfaces or in saturated free space.
+	const DepthTiles tiles = depth_tiles(p_depth_m, m_options.min_depth_m, m_options.max_depth_m);
+	const uint16_t full_weight = uint16_t(m_options.max_weight * TSDF_WEIGHT_UNIT);
+	std::vector<uint8_t> changed(visible.size(), 0), updated(visible.size(), 0);
 	cv::parallel_for_(cv::Range(0, int(visible.size())), [&](const cv::Range &p_range) {
 		for (int i = p_range.start; i < p_range.end; i++) {
 			const int32_t slot = visible[size_t(i)];
 			const glm::ivec3 base = m_slot_block[size_t(slot)] * TSDF_BLOCK_SIDE;
-			TsdfVoxel *voxels = &m_voxels[size_t(slot) * TSDF_BLOCK_VOXELS];
-			bool any = false;
 			// The voxels in the camera's frame, stepped by the rotated grid axes (a voxel's point
 			// is its block's origin plus x, y, z steps: adds instead of a matrix product each).
 			const glm::vec3 origin = frame.camera_from_world_rotation * (glm::vec3(base) * vs) + frame.camera_from_world_translation;
-			TsdfVoxel *voxel = voxels;
+			if (m_options.skip_unchanged && !block_may_change(frame, tiles, origin, step_x, step_y, step_z, m_slot_saturated[size_t(slot)] != 0)) {
+				continue;
+			}
+			updated[size_t(i)] = 1;
+			TsdfVoxel *voxel = &m_voxels[size_t(slot) * TSDF_BLOCK_VOXELS];
+			bool any = false;
+			bool saturated = true;
 			for (int z = 0; z < TSDF_BLOCK_SIDE; z++) {
 				for (int y = 0; y < TSDF_BLOCK_SIDE; y++) {
 					glm::vec3 pc = origin + float(y) * step_y + float(z) * step_z;
 					for (int x = 0; x < TSDF_BLOCK_SIDE; x++, voxel++, pc += step_x) {
 						any |= tsdf_update_voxel_at(frame, pc, voxel);
+						saturated &= voxel->tsdf == 1.0f && voxel->weight == full_weight;
 					}
 				}
 			}
 			changed[size_t(i)] = any;
+			m_slot_saturated[size_t(slot)] = saturated;
 		}
 	});
 	for (size_t i = 0; i < visible.size(); i++) {
+		stats.updated_blocks += updated[i];
 		if (changed[i]) {
 			m_dirty.push_back(m_slot_block[size_t(visible[i])]);
 		}
@@ -455,49 +560,90 @@ cv::Mat TsdfVolume::depth_ranges(const PinholeIntrinsics &p_camera, const Pose &
 	// project onto it (InfiniTAM's expected depths): rays start at the first block they can
 	// meet and stop after the last, and cells no block covers are not marched at all.
 	const int cols = (p_camera.width + RANGE_CELL - 1) / RANGE_CELL, rows = (p_camera.height + RANGE_CELL - 1) / RANGE_CELL;
-	cv::Mat ranges(rows, cols, CV_32FC2, cv::Scalar(std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()));
+	const cv::Scalar empty(std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity());
 	const Pose camera_from_world = inverse(p_world_from_camera);
 	const glm::mat3 rotation = rotation_matrix(camera_from_world);
 	const glm::vec3 translation(camera_from_world.translation);
 	const float block_m = float(TSDF_BLOCK_SIDE) * m_options.voxel_size_m;
+	const float radius = 0.5f * std::sqrt(3.0f) * block_m;
 	const float near = p_near_m;
-	for (size_t s = 0; s < m_slot_block.size(); s++) {
-		if (!m_slot_used[s]) {
-			continue;
-		}
-		// The region whose nearest voxels are this block's: [8 b - 0.5, 8 b + 7.5) voxels.
-		const glm::vec3 lo = glm::vec3(m_slot_block[s]) * block_m - glm::vec3(0.5f * m_options.voxel_size_m);
-		float zmin = std::numeric_limits<float>::infinity(), zmax = -zmin;
-		glm::vec2 pmin(std::numeric_limits<float>::infinity()), pmax(-std::numeric_limits<float>::infinity());
-		bool straddles = false;
-		for (int c = 0; c < 8; c++) {
-			const glm::vec3 corner = lo + glm::vec3(float(c & 1), float((c >> 1) & 1), float((c >> 2) & 1)) * block_m;
-			const glm::vec3 pc = rotation * corner + translation;
-			zmin = std::min(zmin, pc.z);
-			zmax = std::max(zmax, pc.z);
-			glm::vec2 pixel;
-			if (pc.z < near || !p_camera.project(pc, &pixel)) {
-				straddles = true;
-				continue;
+	// Slots in chunks, each into its own image, merged after (min and max: the same result in any
+	// order).
+	constexpr int CHUNKS = 8;
+	const size_t slots = m_slot_block.size();
+	std::vector<cv::Mat> partial(CHUNKS);
+	cv::parallel_for_(cv::Range(0, CHUNKS), [&](const cv::Range &p_range) {
+		for (int k = p_range.start; k < p_range.end; k++) {
+			cv::Mat &ranges = partial[size_t(k)];
+			ranges.create(rows, cols, CV_32FC2);
+			ranges.setTo(empty);
+			for (size_t s = slots * size_t(k) / CHUNKS; s < slots * size_t(k + 1) / CHUNKS; s++) {
+				if (!m_slot_used[s]) {
+					continue;
+				}
+				// The region whose nearest voxels are this block's: [8 b - 0.5, 8 b + 7.5) voxels.
+				const glm::vec3 lo = glm::vec3(m_slot_block[s]) * block_m - glm::vec3(0.5f * m_options.voxel_size_m);
+				// Most blocks lie outside the view: rejected by their bounding sphere (conservatively,
+				// with a pixel's margin) before their corners are projected.
+				const glm::vec3 centre = rotation * (lo + glm::vec3(0.5f * block_m)) + translation;
+				if (centre.z + radius < near || centre.z - radius > p_far_m) {
+					continue;
+				}
+				if (centre.z - radius > near) {
+					const float z0 = centre.z - radius, z1 = centre.z + radius;
+					const float x_lo = p_camera.fx * std::min((centre.x - radius) / z0, (centre.x - radius) / z1) + p_camera.cx - 1.0f;
+					const float x_hi = p_camera.fx * std::max((centre.x + radius) / z0, (centre.x + radius) / z1) + p_camera.cx + 1.0f;
+					const float y_lo = p_camera.fy * std::min((centre.y - radius) / z0, (centre.y - radius) / z1) + p_camera.cy - 1.0f;
+					const float y_hi = p_camera.fy * std::max((centre.y + radius) / z0, (centre.y + radius) / z1) + p_camera.cy + 1.0f;
+					// Cells are found by truncating division below: pixels down to -RANGE_CELL land in cell 0.
+					if (x_hi < -float(RANGE_CELL) || y_hi < -float(RANGE_CELL) || x_lo >= float(cols * RANGE_CELL) || y_lo >= float(rows * RANGE_CELL)) {
+						continue;
+					}
+				}
+				float zmin = std::numeric_limits<float>::infinity(), zmax = -zmin;
+				glm::vec2 pmin(std::numeric_limits<float>::infinity()), pmax(-std::numeric_limits<float>::infinity());
+				bool straddles = false;
+				for (int c = 0; c < 8; c++) {
+					const glm::vec3 corner = lo + glm::vec3(float(c & 1), float((c >> 1) & 1), float((c >> 2) & 1)) * block_m;
+					const glm::vec3 pc = rotation * corner + translation;
+					zmin = std::min(zmin, pc.z);
+					zmax = std::max(zmax, pc.z);
+					glm::vec2 pixel;
+					if (pc.z < near || !p_camera.project(pc, &pixel)) {
+						straddles = true;
+						continue;
+					}
+					pmin = glm::min(pmin, pixel);
+					pmax = glm::max(pmax, pixel);
+				}
+				if (zmax < near || zmin > p_far_m) {
+					continue;
+				}
+				if (straddles) {
+					// A corner before the near plane: the block may cover any pixel.
+					pmin = glm::vec2(0.0f);
+					pmax = glm::vec2(float(p_camera.width - 1), float(p_camera.height - 1));
+				}
+				const int c0 = std::max(0, int(std::floor(pmin.x)) / RANGE_CELL), c1 = std::min(cols - 1, int(std::floor(pmax.x)) / RANGE_CELL);
+				const int r0 = std::max(0, int(std::floor(pmin.y)) / RANGE_CELL), r1 = std::min(rows - 1, int(std::floor(pmax.y)) / RANGE_CELL);
+				for (int r = r0; r <= r1; r++) {
+					cv::Vec2f *row = ranges.ptr<cv::Vec2f>(r);
+					for (int c = c0; c <= c1; c++) {
+						row[c][0] = std::min(row[c][0], zmin);
+						row[c][1] = std::max(row[c][1], zmax);
+					}
+				}
 			}
-			pmin = glm::min(pmin, pixel);
-			pmax = glm::max(pmax, pixel);
 		}
-		if (zmax < near || zmin > p_far_m) {
-			continue;
-		}
-		if (straddles) {
-			// A corner before the near plane: the block may cover any pixel.
-			pmin = glm::vec2(0.0f);
-			pmax = glm::vec2(float(p_camera.width - 1), float(p_camera.height - 1));
-		}
-		const int c0 = std::max(0, int(std::floor(pmin.x)) / RANGE_CELL), c1 = std::min(cols - 1, int(std::floor(pmax.x)) / RANGE_CELL);
-		const int r0 = std::max(0, int(std::floor(pmin.y)) / RANGE_CELL), r1 = std::min(rows - 1, int(std::floor(pmax.y)) / RANGE_CELL);
-		for (int r = r0; r <= r1; r++) {
-			cv::Vec2f *row = ranges.ptr<cv::Vec2f>(r);
-			for (int c = c0; c <= c1; c++) {
-				row[c][0] = std::min(row[c][0], zmin);
-				row[c][1] = std::max(row[c][1], zmax);
+	});
+	cv::Mat ranges = partial[0];
+	for (int k = 1; k < CHUNKS; k++) {
+		for (int r = 0; r < rows; r++) {
+			cv::Vec2f *out = ranges.ptr<cv::Vec2f>(r);
+			const cv::Vec2f *in = partial[size_t(k)].ptr<cv::Vec2f>(r);
+			for (int c = 0; c < cols; c++) {
+				out[c][0] = std::min(out[c][0], in[c][0]);
+				out[c][1] = std::max(out[c][1], in[c][1]);
 			}
 		}
 	}
@@ -660,6 +806,7 @@ void TsdfVolume::reset() {
 	m_slot_block.clear();
 	m_slot_used.clear();
 	m_slot_frame.clear();
+	m_slot_saturated.clear();
 	m_free_slots.clear();
 	m_allocated = 0;
 	m_bounds_min = m_bounds_max = glm::vec3(0.0f);

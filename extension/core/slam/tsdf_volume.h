@@ -41,12 +41,18 @@ struct TsdfOptions {
 	// Cap on allocated blocks (6 KiB each: 512 voxels of 12 bytes): 40000 blocks = 246 MB of
 	// voxels plus a 2 MB hash table. See TsdfVolume for what happens at the cap.
 	int max_blocks = 40000; // clamped to [1, 4194304]
+	// Integration skips the blocks and voxels that a frame cannot change (same result; false: every
+	// voxel of every block in view is updated, the plain path the tests compare with).
+	bool skip_unchanged = true;
 };
 
 // What one integrate() did.
 struct IntegrationStats {
 	int valid_pixels = 0; // depth readings used
-	int visible_blocks = 0; // blocks updated: along the readings' bands, plus allocated ones in view
+	int visible_blocks = 0; // blocks in view: along the readings' bands, plus allocated ones in view
+	// Those of them whose voxels were updated: the others could not change (wholly behind the
+	// readings under them, over no reading, or free space already at +1 with the full weight).
+	int updated_blocks = 0;
 	int allocated_blocks = 0; // blocks newly allocated by this frame
 	int evicted_blocks = 0; // blocks evicted by this frame to stay under max_blocks
 	int dropped_blocks = 0; // blocks this frame wanted but could not have (its own view exceeded the cap)
@@ -85,8 +91,8 @@ public:
 	// Fuses one frame. p_depth_m: CV_32FC1, z in metres, NaN or 0 = no reading; p_rgb: CV_8UC3,
 	// R, G, B, same size; p_camera: the (undistorted) camera of both; p_world_from_camera: its pose.
 	// Blocks along each reading's ray within [d - truncation, d + truncation] are allocated; then
-	// every voxel of the blocks in view is updated (parallel over blocks). Updated blocks are
-	// marked dirty (take_dirty_blocks).
+	// every voxel of the blocks in view is updated (parallel over blocks; blocks and voxels it
+	// cannot change are skipped). Blocks whose voxels changed are marked dirty (take_dirty_blocks).
 	IntegrationStats integrate(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera);
 
 	// The model seen from a pose: per pixel the first + to - zero crossing of the tsdf along the
@@ -155,6 +161,7 @@ private:
 	std::vector<glm::ivec3> m_slot_block; // the block held by each slot
 	std::vector<uint8_t> m_slot_used;
 	std::vector<uint32_t> m_slot_frame; // the frame that last saw each slot (in view)
+	std::vector<uint8_t> m_slot_saturated; // every voxel at tsdf +1 with max_weight (free space seen long enough)
 	std::vector<int32_t> m_free_slots;
 	int m_allocated = 0;
 	uint32_t m_frame = 0;
