@@ -11,6 +11,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 namespace roomprobe {
 
@@ -55,28 +56,34 @@ double observation_quality(double p_cos_view, double p_distance_m, double p_radi
 
 namespace {
 
-// Bilinear sample at p_pixel (pixel centres at integers), as linear R, G, B.
+// floor() as an int: a truncation where it is the same (x86-64's baseline has no rounding
+// instruction, and floor() is a call there).
+int floor_int(double p_value) {
+	return p_value >= 0.0 ? static_cast<int>(p_value) : static_cast<int>(std::floor(p_value));
+}
+
+// Bilinear sample at p_pixel (pixel centres at integers), as linear R, G, B. Plain floats per
+// channel (cv::Vec3f's operators saturate each element, a cost here).
 template <typename T, int C>
 cv::Vec3f bilinear(const cv::Mat &p_image, double p_x, double p_y, float p_scale) {
-	const int x0 = static_cast<int>(std::floor(p_x));
-	const int y0 = static_cast<int>(std::floor(p_y));
+	const int x0 = floor_int(p_x);
+	const int y0 = floor_int(p_y);
 	const float fx = static_cast<float>(p_x - x0);
 	const float fy = static_cast<float>(p_y - y0);
 	const int x1 = std::min(x0 + 1, p_image.cols - 1);
 	const int y1 = std::min(y0 + 1, p_image.rows - 1);
 	const int xa = std::max(x0, 0), ya = std::max(y0, 0);
-	auto at = [&](int p_yy, int p_xx) {
-		const T *row = p_image.ptr<T>(p_yy) + size_t(p_xx) * C;
-		if constexpr (C == 1) {
-			const float v = static_cast<float>(row[0]);
-			return cv::Vec3f(v, v, v);
-		} else {
-			return cv::Vec3f(static_cast<float>(row[0]), static_cast<float>(row[1]), static_cast<float>(row[2]));
-		}
-	};
-	const cv::Vec3f top = at(ya, xa) * (1.0f - fx) + at(ya, x1) * fx;
-	const cv::Vec3f bottom = at(y1, xa) * (1.0f - fx) + at(y1, x1) * fx;
-	return (top * (1.0f - fy) + bottom * fy) * p_scale;
+	const T *top_row = p_image.ptr<T>(ya), *bottom_row = p_image.ptr<T>(y1);
+	const T *a = top_row + size_t(xa) * C, *b = top_row + size_t(x1) * C;
+	const T *c = bottom_row + size_t(xa) * C, *d = bottom_row + size_t(x1) * C;
+	cv::Vec3f out;
+	for (int k = 0; k < 3; k++) {
+		const int e = C == 1 ? 0 : k;
+		const float top = static_cast<float>(a[e]) * (1.0f - fx) + static_cast<float>(b[e]) * fx;
+		const float bottom = static_cast<float>(c[e]) * (1.0f - fx) + static_cast<float>(d[e]) * fx;
+		out[k] = (top * (1.0f - fy) + bottom * fy) * p_scale;
+	}
+	return out;
 }
 
 // The fisheye image's sample at a pixel, as linear R, G, B (8-bit images scaled to [0, 1]).
@@ -101,76 +108,136 @@ struct FisheyeView {
 	double margin = 0.0; // rim_margin_px
 	bool has_circle = false;
 	double circle_cx = 0.0, circle_cy = 0.0, radius = 0.0;
+	double max_x = 0.0, max_y = 0.0; // the last pixel centres the rim margin leaves
+	double rim2 = 0.0; // (radius - margin)^2; -1 when nothing is inside
+
+	glm::dvec3 to_camera(const glm::dvec3 &p_world) const { return rotation * p_world + translation; }
 };
 
-FisheyeView fisheye_view(const OmniParams &p_params, const Pose &p_world_from_fisheye, const cv::Mat &p_image, const TextureUpdateOptions &p_options) {
+FisheyeView fisheye_view(const OmniParams &p_params, const Pose &p_world_from_fisheye, int p_cols, int p_rows, const TextureUpdateOptions &p_options) {
 	FisheyeView view;
 	const Pose fisheye_from_world = inverse(p_world_from_fisheye);
 	view.params = &p_params;
 	view.rotation = glm::mat3_cast(fisheye_from_world.rotation);
 	view.translation = fisheye_from_world.translation;
 	view.camera = p_world_from_fisheye.translation;
-	view.cols = p_image.cols;
-	view.rows = p_image.rows;
+	view.cols = p_cols;
+	view.rows = p_rows;
 	view.margin = p_options.rim_margin_px;
 	view.has_circle = p_params.circle_radius > 0.0;
 	view.circle_cx = view.has_circle ? p_params.circle_cx : 0.5 * (view.cols - 1);
 	view.circle_cy = view.has_circle ? p_params.circle_cy : 0.5 * (view.rows - 1);
 	view.radius = view.has_circle ? p_params.circle_radius : 0.5 * std::hypot(double(view.cols), double(view.rows));
+	view.max_x = view.cols - 1 - view.margin;
+	view.max_y = view.rows - 1 - view.margin;
+	const double rim = view.radius - view.margin;
+	view.rim2 = rim < 0.0 ? -1.0 : rim * rim;
 	return view;
 }
 
-// Where the fisheye sees texel i: false for the back of the surface, outside the image or the
-// image circle's rim. r_r: the pixel's distance from the circle centre.
-bool observe_texel(const FisheyeView &p_view, const TexelGeometry &p_geometry, size_t p_i, glm::dvec2 *r_pixel, double *r_cos_view, double *r_distance,
-		double *r_r) {
-	const glm::dvec3 &point = p_geometry.points[p_i];
-	const glm::dvec3 to_camera = p_view.camera - point;
-	const double distance = glm::length(to_camera);
-	if (!(distance > 1e-9)) {
-		return false;
+// Where texels land in the image: projected on the spot (the plain path), or read from the
+// frame's TexelProjection, where a texel's neighbour one chart axis step away is the next texel
+// along atlas x (u) or y (v) on the same chart.
+class TexelPixels {
+public:
+	TexelPixels(const FisheyeView &p_view, const TexelGeometry &p_geometry, const TexelProjection *p_projection) :
+			view(p_view), geometry(p_geometry), projected(p_projection ? p_projection->pixels.ptr<cv::Vec2d>(0) : nullptr) {}
+
+	bool pixel(size_t p_i, glm::dvec2 *r_pixel) const {
+		if (projected) {
+			const cv::Vec2d &p = projected[p_i];
+			*r_pixel = glm::dvec2(p[0], p[1]);
+			return !std::isnan(p[0]);
+		}
+		return project_omni(*view.params, view.to_camera(geometry.points[p_i]), r_pixel);
 	}
-	const double cos_view = glm::dot(p_geometry.normals[p_i], to_camera) / distance;
-	if (cos_view <= 0.0) {
-		return false; // the back of the surface
+
+	// The pixel of texel (p_x, p_y)'s point plus one step along its chart's u axis (p_dx = 1) or
+	// v axis (p_dy = 1).
+	bool step_pixel(int p_x, int p_y, int p_dx, int p_dy, const RoomMesh &p_mesh, glm::dvec2 *r_pixel) const {
+		const size_t i = size_t(p_y) * geometry.width + p_x;
+		const int x = p_x + p_dx, y = p_y + p_dy;
+		if (projected && x < geometry.width && y < geometry.height) {
+			const size_t j = size_t(y) * geometry.width + x;
+			if (geometry.charts[j] == geometry.charts[i]) {
+				return pixel(j, r_pixel);
+			}
+		}
+		const Chart &chart = p_mesh.charts[geometry.charts[i]];
+		const Vec3 &step = p_dx ? chart.u_axis_m : chart.v_axis_m;
+		return project_omni(*view.params, view.to_camera(geometry.points[i] + glm::dvec3(step.x, step.y, step.z)), r_pixel);
 	}
-	glm::dvec2 pixel;
-	if (!project_omni(*p_view.params, p_view.rotation * point + p_view.translation, &pixel)) {
-		return false;
+
+	// Whether texel i is seen this frame: false for the back of the surface, outside the image or
+	// the image circle's rim. r_r2: the squared distance of its pixel from the circle centre.
+	bool observe(size_t p_i, glm::dvec2 *r_pixel, double *r_cos_view, double *r_distance, double *r_r2) const {
+		if (projected && std::isnan(projected[p_i][0])) {
+			return false; // the cheapest test first
+		}
+		const glm::dvec3 &point = geometry.points[p_i];
+		const glm::dvec3 to_camera = view.camera - point;
+		const double distance = glm::length(to_camera);
+		if (!(distance > 1e-9)) {
+			return false;
+		}
+		const double cos_view = glm::dot(geometry.normals[p_i], to_camera) / distance;
+		if (cos_view <= 0.0) {
+			return false; // the back of the surface
+		}
+		glm::dvec2 pixel;
+		if (!this->pixel(p_i, &pixel)) {
+			return false;
+		}
+		const double margin = view.margin;
+		if (!(pixel.x >= margin && pixel.y >= margin && pixel.x <= view.max_x && pixel.y <= view.max_y)) {
+			return false;
+		}
+		const double dx = pixel.x - view.circle_cx, dy = pixel.y - view.circle_cy;
+		const double r2 = dx * dx + dy * dy;
+		if (view.has_circle && !(r2 <= view.rim2)) {
+			return false;
+		}
+		*r_pixel = pixel;
+		*r_cos_view = cos_view;
+		*r_distance = distance;
+		*r_r2 = r2;
+		return true;
 	}
-	const double margin = p_view.margin;
-	if (!(pixel.x >= margin && pixel.y >= margin && pixel.x <= p_view.cols - 1 - margin && pixel.y <= p_view.rows - 1 - margin)) {
-		return false;
-	}
-	const double r = std::hypot(pixel.x - p_view.circle_cx, pixel.y - p_view.circle_cy);
-	if (p_view.has_circle && r > p_view.radius - margin) {
-		return false;
-	}
-	*r_pixel = pixel;
-	*r_cos_view = cos_view;
-	*r_distance = distance;
-	*r_r = r;
-	return true;
-}
+
+private:
+	const FisheyeView &view;
+	const TexelGeometry &geometry;
+	const cv::Vec2d *projected; // null: project on the spot
+};
 
 bool valid_image_type(const cv::Mat &p_image) {
 	const int type = p_image.type();
 	return !p_image.empty() && (type == CV_8UC1 || type == CV_8UC3 || type == CV_32FC3);
 }
 
-} // namespace
+bool projection_fits(const TexelGeometry &p_geometry, const TexelProjection *p_projection) {
+	return !p_projection || (p_projection->pixels.type() == CV_64FC2 && p_projection->pixels.isContinuous() &&
+									p_projection->pixels.size() == cv::Size(p_geometry.width, p_geometry.height));
+}
 
-void sample_coarse_texels(const TexelGeometry &p_geometry, const OmniParams &p_params, const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image,
-		const cv::Mat *p_visibility_mask, const cv::Mat &p_only, int p_step, const TextureUpdateOptions &p_options, cv::Mat *r_samples, cv::Mat *r_visible) {
+// 1 - edge_penalty * r^2 (r the radius fraction, at most 1), at least 0.
+double edge_factor(double p_radius_fraction2, const TextureUpdateOptions &p_options) {
+	return std::max(1.0 - p_options.edge_penalty * std::clamp(p_radius_fraction2, 0.0, 1.0), 0.0);
+}
+
+void sample_texels(const TexelGeometry &p_geometry, const TexelProjection *p_projection, const OmniParams &p_params, const Pose &p_world_from_fisheye,
+		const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, const cv::Mat &p_only, int p_step, const TextureUpdateOptions &p_options,
+		cv::Mat *r_samples, cv::Mat *r_visible) {
 	const int w = p_geometry.width, h = p_geometry.height;
 	r_samples->create(h, w, CV_32FC3);
 	r_visible->create(h, w, CV_8UC1);
 	r_visible->setTo(cv::Scalar::all(0));
-	if (!valid_image_type(p_fisheye_image) || p_only.size() != cv::Size(w, h) || p_only.type() != CV_8UC1 ||
+	if (!valid_image_type(p_fisheye_image) || p_only.size() != cv::Size(w, h) || p_only.type() != CV_8UC1 || !projection_fits(p_geometry, p_projection) ||
 			(p_visibility_mask && (p_visibility_mask->size() != cv::Size(w, h) || p_visibility_mask->type() != CV_8UC1))) {
 		return;
 	}
-	const FisheyeView view = fisheye_view(p_params, p_world_from_fisheye, p_fisheye_image, p_options);
+	const FisheyeView view = fisheye_view(p_params, p_world_from_fisheye, p_fisheye_image.cols, p_fisheye_image.rows, p_options);
+	const TexelPixels pixels(view, p_geometry, p_projection);
 	const int step = std::max(1, p_step);
 	tbb::parallel_for(tbb::blocked_range<int>(0, (h + step - 1) / step), [&](const tbb::blocked_range<int> &p_rows) {
 		for (int row = p_rows.begin(); row < p_rows.end(); ++row) {
@@ -182,9 +249,8 @@ void sample_coarse_texels(const TexelGeometry &p_geometry, const OmniParams &p_p
 			for (int x = 0; x < w; x += step) {
 				const size_t i = size_t(y) * w + x;
 				glm::dvec2 pixel;
-				double cos_view, distance, r;
-				if (only_row[x] == 0 || p_geometry.charts[i] < 0 || (mask_row && mask_row[x] == 0) ||
-						!observe_texel(view, p_geometry, i, &pixel, &cos_view, &distance, &r)) {
+				double cos_view, distance, r2;
+				if (only_row[x] == 0 || p_geometry.charts[i] < 0 || (mask_row && mask_row[x] == 0) || !pixels.observe(i, &pixel, &cos_view, &distance, &r2)) {
 					continue;
 				}
 				sample_row[x] = sample_image(p_fisheye_image, pixel);
@@ -194,13 +260,13 @@ void sample_coarse_texels(const TexelGeometry &p_geometry, const OmniParams &p_p
 	});
 }
 
-TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const OmniParams &p_params,
-		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask,
-		CoarseTexture *io_texture, const TextureUpdateOptions &p_options) {
+TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const TexelProjection *p_projection, const OmniParams &p_params,
+		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, CoarseTexture *io_texture,
+		const TextureUpdateOptions &p_options) {
 	TextureUpdateStats stats;
 	const auto start = std::chrono::steady_clock::now();
 	const int w = p_mesh.atlas_width, h = p_mesh.atlas_height;
-	if (!io_texture || p_geometry.width != w || p_geometry.height != h || p_fisheye_image.empty()) {
+	if (!io_texture || p_geometry.width != w || p_geometry.height != h || p_fisheye_image.empty() || !projection_fits(p_geometry, p_projection)) {
 		return stats;
 	}
 	if (!valid_image_type(p_fisheye_image)) {
@@ -215,10 +281,9 @@ TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeom
 		return stats;
 	}
 
-	const FisheyeView view = fisheye_view(p_params, p_world_from_fisheye, p_fisheye_image, p_options);
-	const glm::dmat3 &rotation = view.rotation;
-	const glm::dvec3 &translation = view.translation;
-	const double radius = view.radius;
+	const FisheyeView view = fisheye_view(p_params, p_world_from_fisheye, p_fisheye_image.cols, p_fisheye_image.rows, p_options);
+	const TexelPixels pixels(view, p_geometry, p_projection);
+	const double radius2 = view.radius * view.radius;
 	const bool best = p_options.policy == TextureUpdatePolicy::Best;
 	const double keep_fraction = 1.0 - std::clamp(p_options.replace_epsilon, 0.0, 1.0);
 
@@ -237,26 +302,25 @@ TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeom
 				if (p_geometry.charts[i] < 0 || (mask_row && mask_row[x] == 0)) {
 					continue;
 				}
-				const glm::dvec3 &point = p_geometry.points[i];
 				glm::dvec2 pixel;
-				double cos_view, distance, r;
-				if (!observe_texel(view, p_geometry, i, &pixel, &cos_view, &distance, &r)) {
+				double cos_view, distance, r2;
+				if (!pixels.observe(i, &pixel, &cos_view, &distance, &r2)) {
 					continue;
 				}
 				++visible;
-				double quality = observation_quality(cos_view, distance, r / radius, p_options);
-				if (p_options.footprint_quality && quality > 0.0) {
-					// The texel's area in the image, pixels^2, from the projections of its two edges.
-					const Chart &chart = p_mesh.charts[p_geometry.charts[i]];
-					const glm::dvec3 u(chart.u_axis_m.x, chart.u_axis_m.y, chart.u_axis_m.z);
-					const glm::dvec3 v(chart.v_axis_m.x, chart.v_axis_m.y, chart.v_axis_m.z);
-					glm::dvec2 pu, pv;
+				const double edge = edge_factor(r2 / radius2, p_options);
+				double quality = 0.0;
+				glm::dvec2 pu, pv;
+				if (!(cos_view >= p_options.min_cos_view)) {
+					// Too oblique: never updated (observation_quality's 0).
+				} else if (p_options.footprint_quality && edge > 0.0 && pixels.step_pixel(x, y, 1, 0, p_mesh, &pu) &&
+						pixels.step_pixel(x, y, 0, 1, p_mesh, &pv)) {
+					// The texel's area in the image, pixels^2, from the pixels of its two edges.
+					const glm::dvec2 du = pu - pixel, dv = pv - pixel;
+					quality = std::abs(du.x * dv.y - du.y * dv.x) * edge;
+				} else {
 					// (Where an edge's projection fails, at the model's limit, the closed form stays.)
-					if (project_omni(p_params, rotation * (point + u) + translation, &pu) &&
-							project_omni(p_params, rotation * (point + v) + translation, &pv)) {
-						const glm::dvec2 du = pu - pixel, dv = pv - pixel;
-						quality = std::abs(du.x * dv.y - du.y * dv.x) * std::max(1.0 - p_options.edge_penalty * (r / radius) * (r / radius), 0.0);
-					}
+					quality = observation_quality(cos_view, distance, 0.0, p_options) * edge;
 				}
 				if (best) {
 					if (quality <= 0.0 || (observed_row[x] && quality < quality_row[x] * keep_fraction)) {
@@ -280,6 +344,52 @@ TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeom
 	stats.texels_updated = updated_total;
 	stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 	return stats;
+}
+
+} // namespace
+
+void project_texels(const TexelGeometry &p_geometry, const OmniParams &p_params, const Pose &p_world_from_fisheye, TexelProjection *io_projection) {
+	const int w = p_geometry.width, h = p_geometry.height;
+	io_projection->pixels.create(h, w, CV_64FC2);
+	const FisheyeView view = fisheye_view(p_params, p_world_from_fisheye, p_params.width, p_params.height, TextureUpdateOptions());
+	const double nan = std::numeric_limits<double>::quiet_NaN();
+	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {
+		for (int y = p_rows.begin(); y < p_rows.end(); ++y) {
+			cv::Vec2d *row = io_projection->pixels.ptr<cv::Vec2d>(y);
+			for (int x = 0; x < w; ++x) {
+				const size_t i = size_t(y) * w + x;
+				glm::dvec2 pixel;
+				if (p_geometry.charts[i] >= 0 && project_omni(p_params, view.to_camera(p_geometry.points[i]), &pixel)) {
+					row[x] = cv::Vec2d(pixel.x, pixel.y);
+				} else {
+					row[x] = cv::Vec2d(nan, nan);
+				}
+			}
+		}
+	});
+}
+
+void sample_coarse_texels(const TexelGeometry &p_geometry, const OmniParams &p_params, const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image,
+		const cv::Mat *p_visibility_mask, const cv::Mat &p_only, int p_step, const TextureUpdateOptions &p_options, cv::Mat *r_samples, cv::Mat *r_visible) {
+	sample_texels(p_geometry, nullptr, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, p_only, p_step, p_options, r_samples, r_visible);
+}
+
+void sample_coarse_texels(const TexelGeometry &p_geometry, const TexelProjection &p_projection, const OmniParams &p_params, const Pose &p_world_from_fisheye,
+		const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, const cv::Mat &p_only, int p_step, const TextureUpdateOptions &p_options,
+		cv::Mat *r_samples, cv::Mat *r_visible) {
+	sample_texels(p_geometry, &p_projection, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, p_only, p_step, p_options, r_samples, r_visible);
+}
+
+TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const OmniParams &p_params,
+		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask,
+		CoarseTexture *io_texture, const TextureUpdateOptions &p_options) {
+	return update_texture(p_mesh, p_geometry, nullptr, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, io_texture, p_options);
+}
+
+TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const TexelProjection &p_projection, const OmniParams &p_params,
+		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, CoarseTexture *io_texture,
+		const TextureUpdateOptions &p_options) {
+	return update_texture(p_mesh, p_geometry, &p_projection, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, io_texture, p_options);
 }
 
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const OmniParams &p_params, const Pose &p_world_from_fisheye,

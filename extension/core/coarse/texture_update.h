@@ -83,6 +83,19 @@ struct TextureUpdateStats {
 	double seconds = 0.0; // wall-clock time of the update
 };
 
+// Each atlas texel's pixel in one fisheye frame, projected once (project_omni) and read by the
+// lighting estimate's samples and the texture update of that frame. The update then takes a
+// texel's footprint from its neighbours' pixels: the texel one step along its chart's u (v) axis
+// is the next texel along atlas x (y) on the same chart, so no further projection is needed
+// except at a chart's edge.
+struct TexelProjection {
+	cv::Mat pixels; // CV_64FC2, atlas-sized: texel (x, y)'s pixel; NaN where it is not on the surface or project_omni does not see it
+};
+
+// Fills io_projection for the fisheye at p_world_from_fisheye (allocates only when the atlas size
+// changes). Parallel over rows.
+void project_texels(const TexelGeometry &p_geometry, const OmniParams &p_params, const Pose &p_world_from_fisheye, TexelProjection *io_projection);
+
 // The fisheye's colour at the texels update_coarse_texture would see this frame (its visibility
 // test and bilinear sample, whatever their quality), only on the grid x % p_step == 0,
 // y % p_step == 0 and only where p_only (CV_8UC1, atlas-sized) is non-zero: the lighting
@@ -90,6 +103,10 @@ struct TextureUpdateStats {
 // where r_visible (CV_8UC1, zero elsewhere) is 255; both are atlas-sized. Parallel over rows.
 void sample_coarse_texels(const TexelGeometry &p_geometry, const OmniParams &p_params, const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image,
 		const cv::Mat *p_visibility_mask, const cv::Mat &p_only, int p_step, const TextureUpdateOptions &p_options, cv::Mat *r_samples, cv::Mat *r_visible);
+// The same from the frame's projection (project_texels with the same fisheye and pose).
+void sample_coarse_texels(const TexelGeometry &p_geometry, const TexelProjection &p_projection, const OmniParams &p_params, const Pose &p_world_from_fisheye,
+		const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, const cv::Mat &p_only, int p_step, const TextureUpdateOptions &p_options,
+		cv::Mat *r_samples, cv::Mat *r_visible);
 
 // Updates io_texture (from make_coarse_texture(p_mesh)) with one fisheye frame.
 // p_fisheye_image: CV_8UC1 (grey, copied to R, G, B), CV_8UC3 (R, G, B; value / 255) or CV_32FC3
@@ -100,6 +117,11 @@ void sample_coarse_texels(const TexelGeometry &p_geometry, const OmniParams &p_p
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const OmniParams &p_params,
 		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask,
 		CoarseTexture *io_texture, const TextureUpdateOptions &p_options = TextureUpdateOptions());
+// The same from the frame's projection (project_texels with the same fisheye and pose): one
+// projection a texel instead of three; the same result up to rounding.
+TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const TexelProjection &p_projection, const OmniParams &p_params,
+		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, CoarseTexture *io_texture,
+		const TextureUpdateOptions &p_options = TextureUpdateOptions());
 
 // The same, computing the texel geometry on the fly (slower: prefer the overload above per frame).
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const OmniParams &p_params, const Pose &p_world_from_fisheye,

@@ -72,12 +72,17 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 	const cv::Mat *mask_ptr = convex ? nullptr : &mask;
 	t.occlusion_ms = ms_since(start);
 
+	// Every texel's pixel, once for the lighting estimate and the update (counted with the update).
+	start = Clock::now();
+	project_texels(geometry, fisheye, p_world_from_fisheye, &projection);
+	t.update_ms = ms_since(start);
+
 	// 2. Lighting change (§4.6), from (old texel, new sample) pairs before the update.
 	start = Clock::now();
 	if (opts.lighting && frames > 0) {
 		// The new samples only where the estimate reads them: its grid, among the texels observed
 		// before (no copy of the atlas, no quality test).
-		sample_coarse_texels(geometry, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, coarse.observed, opts.lighting_options.sample_step,
+		sample_coarse_texels(geometry, projection, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, coarse.observed, opts.lighting_options.sample_step,
 				opts.update, &lighting_samples, &lighting_visible);
 		stats.lighting = estimate_lighting_change(coarse, lighting_samples, lighting_visible, opts.lighting_options);
 	}
@@ -85,8 +90,8 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 
 	// 3. Texture update (§4.3, keep the best).
 	start = Clock::now();
-	stats.update = update_coarse_texture(room, geometry, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, &coarse, opts.update);
-	t.update_ms = ms_since(start);
+	stats.update = update_coarse_texture(room, geometry, projection, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, &coarse, opts.update);
+	t.update_ms += ms_since(start);
 
 	// 4. Apply the change to the observed texels this frame did not update.
 	start = Clock::now();

@@ -62,7 +62,7 @@ struct CoarsePipelineOptions {
 struct CoarsePipelineTimings {
 	double occlusion_ms = 0.0;
 	double lighting_ms = 0.0; // sampling the scratch copy, estimating and applying
-	double update_ms = 0.0;
+	double update_ms = 0.0; // projecting the texels and updating them
 	double inpaint_ms = 0.0;
 	double render_ms = 0.0; // render_cubemap() (the last call / all calls)
 	double sh_ms = 0.0; // SH projection in sh()
@@ -128,6 +128,7 @@ private:
 	CoarseTexture coarse;
 	cv::Mat completed;
 	cv::Mat inpainted; // inpaint_async: the worker's newest completion (of an older texture)
+	TexelProjection projection; // this frame's texel pixels (kept: no allocation a frame)
 	cv::Mat lighting_samples, lighting_visible; // the lighting estimate's new values, kept between frames (no allocation a frame)
 	std::unique_ptr<CoarseCubemapRenderer> renderer;
 	std::unique_ptr<TextureInpainter> inpainter;
