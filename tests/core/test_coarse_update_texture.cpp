@@ -250,7 +250,7 @@ TEST_CASE("coarse update: from the frame's texel projection, the same as project
 	cv::Mat image(params.height, params.width, CV_32FC3);
 	for (int y = 0; y < image.rows; y++) {
 		for (int x = 0; x < image.cols; x++) {
-			image.at<cv::Vec3f>(y, x) = cv::Vec3f(float(x) / 100.0f, float(y) / 100.0f, 1.0f);
+			image.at<cv::Vec3f>(y, x) = cv::Vec3f(float(x + 10) / 1100.0f, float(y + 10) / 1100.0f, 0.5f);
 		}
 	}
 	cv::Mat mask(mesh.atlas_height, mesh.atlas_width, CV_8UC1, cv::Scalar(255));
@@ -265,12 +265,28 @@ TEST_CASE("coarse update: from the frame's texel projection, the same as project
 	}
 	CoarseTexture plain = make_coarse_texture(mesh), fast = make_coarse_texture(mesh);
 	TexelProjection projection;
-	size_t updated = 0;
+	LightingPairs pairs;
+	pairs.step = 2;
+	size_t updated = 0, pair_count = 0, skipped_tiles = 0;
 	for (size_t k = 0; k < poses.size(); k++) {
 		const cv::Mat *frame_mask = k % 2 ? &mask : nullptr;
 		project_texels(geometry, params, poses[k], &projection);
+		// The lighting pairs the update gathers: the plain samples of the texels observed before.
+		const CoarseTexture before { fast.color.clone(), fast.observed.clone(), fast.quality.clone(), fast.updated.clone() };
+		cv::Mat before_samples, before_visible;
+		sample_coarse_texels(geometry, params, poses[k], image, frame_mask, before.observed, pairs.step, TextureUpdateOptions(), &before_samples, &before_visible);
 		const TextureUpdateStats a = update_coarse_texture(mesh, geometry, params, poses[k], image, frame_mask, &plain);
-		const TextureUpdateStats b = update_coarse_texture(mesh, geometry, projection, params, poses[k], image, frame_mask, &fast);
+		const TextureUpdateStats b = update_coarse_texture(mesh, geometry, projection, params, poses[k], image, frame_mask, &fast, TextureUpdateOptions(), &pairs);
+		const std::vector<LightingSample> &gathered = pairs.gather();
+		CHECK(gathered.size() == size_t(cv::countNonZero(before_visible)));
+		const LightingChange from_pairs = estimate_lighting_change(gathered, LightingOptions());
+		const LightingChange from_samples = estimate_lighting_change(before, before_samples, before_visible, LightingOptions());
+		CHECK(from_pairs.valid == (k > 0));
+		CHECK(from_pairs.valid == from_samples.valid);
+		CHECK(from_pairs.sample_count == from_samples.sample_count);
+		CHECK(from_pairs.gain == from_samples.gain);
+		pair_count += gathered.size();
+		skipped_tiles += size_t(std::count(projection.tile_seen.begin(), projection.tile_seen.end(), uint8_t(0)));
 		CHECK(a.texels_visible == b.texels_visible);
 		CHECK(std::abs(double(a.texels_updated) - double(b.texels_updated)) <= 1e-4 * double(a.texels_updated));
 		updated += a.texels_updated;
@@ -284,6 +300,8 @@ TEST_CASE("coarse update: from the frame's texel projection, the same as project
 		CHECK(cv::norm(plain_samples, fast_samples, cv::NORM_INF, plain_visible) == 0.0);
 	}
 	CHECK(updated > geometry.surface_texels);
+	CHECK(pair_count > 10000);
+	CHECK(skipped_tiles > 0); // the culling was exercised (and changed nothing above)
 	// Qualities agree to rounding (a neighbour's pixel against its own point's projection); a
 	// texel whose decision flips on that rounding is allowed, one in ten thousand.
 	CHECK(cv::norm(plain.observed, fast.observed, cv::NORM_INF) == 0.0);

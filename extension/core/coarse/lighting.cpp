@@ -22,6 +22,12 @@ double median_of(std::vector<double> *r_values) {
 	return median;
 }
 
+// One chunk's IRLS sums, per channel: sum w · old · new and sum w · old².
+struct WeightedSums {
+	double numerator[3] = { 0.0, 0.0, 0.0 };
+	double denominator[3] = { 0.0, 0.0, 0.0 };
+};
+
 // The robust gains of the three channels, new ≈ g · old each, fitted in lockstep: one pass over
 // the pairs an iteration serves all three (six independent sums). The medians (the start and each
 // iteration's scale) are taken over an evenly strided subset of at most scale_samples pairs: a
@@ -35,6 +41,9 @@ cv::Vec3d robust_gains(const std::vector<LightingSample> &p_samples, const Light
 	work.reserve(n / stride + 1);
 	double gain[3];
 	bool done[3] = { false, false, false };
+	const size_t chunk_size = 4096;
+	const size_t chunks = (n + chunk_size - 1) / chunk_size;
+	std::vector<WeightedSums> chunk_sums(chunks);
 	for (int c = 0; c < 3; c++) {
 		work.clear();
 		for (size_t i = 0; i < n; i += stride) {
@@ -62,17 +71,32 @@ cv::Vec3d robust_gains(const std::vector<LightingSample> &p_samples, const Light
 		if (done[0] && done[1] && done[2]) {
 			break;
 		}
+		// The weighted sums in fixed chunks, in parallel, added in chunk order: the same result
+		// whatever the threads.
+		tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks), [&](const tbb::blocked_range<size_t> &p_chunks) {
+			for (size_t k = p_chunks.begin(); k < p_chunks.end(); k++) {
+				WeightedSums sums;
+				for (size_t i = k * chunk_size; i < std::min(n, (k + 1) * chunk_size); i++) {
+					const LightingSample &sample = p_samples[i];
+					for (int c = 0; c < 3; c++) {
+						// Tukey's biweight (1 - u^2)^2 for |u| < 1, else 0, without a branch.
+						const double old_value = sample.old_value[c], new_value = sample.new_value[c];
+						const double u = (new_value - gain[c] * old_value) * inverse_cutoff[c];
+						const double root = std::max(1.0 - u * u, 0.0);
+						const double weight = root * root;
+						sums.numerator[c] += weight * old_value * new_value;
+						sums.denominator[c] += weight * old_value * old_value;
+					}
+				}
+				chunk_sums[k] = sums;
+			}
+		});
 		double numerator[3] = { 0.0, 0.0, 0.0 };
 		double denominator[3] = { 0.0, 0.0, 0.0 };
-		for (const LightingSample &sample : p_samples) {
+		for (const WeightedSums &sums : chunk_sums) {
 			for (int c = 0; c < 3; c++) {
-				// Tukey's biweight (1 - u^2)^2 for |u| < 1, else 0, without a branch.
-				const double old_value = sample.old_value[c], new_value = sample.new_value[c];
-				const double u = (new_value - gain[c] * old_value) * inverse_cutoff[c];
-				const double root = std::max(1.0 - u * u, 0.0);
-				const double weight = root * root;
-				numerator[c] += weight * old_value * new_value;
-				denominator[c] += weight * old_value * old_value;
+				numerator[c] += sums.numerator[c];
+				denominator[c] += sums.denominator[c];
 			}
 		}
 		for (int c = 0; c < 3; c++) {

@@ -2,6 +2,7 @@
 
 #include <camera/omni_camera.h>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <tbb/blocked_range.h>
@@ -12,8 +13,70 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace roomprobe {
+
+namespace {
+
+// Each tile's bounding sphere (about its surface points' box centre) and its one chart.
+void make_tiles(TexelGeometry *io_geometry) {
+	TexelGeometry &g = *io_geometry;
+	const int size = TexelGeometry::tile_size;
+	g.tiles_x = (g.width + size - 1) / size;
+	g.tiles_y = (g.height + size - 1) / size;
+	const size_t n = size_t(g.tiles_x) * g.tiles_y;
+	g.tile_centres.assign(n, glm::dvec3(0.0));
+	g.tile_radii.assign(n, -1.0);
+	g.tile_charts.assign(n, -1);
+	g.tile_normals.assign(n, glm::dvec3(0.0));
+	for (int ty = 0; ty < g.tiles_y; ++ty) {
+		for (int tx = 0; tx < g.tiles_x; ++tx) {
+			const int x0 = tx * size, y0 = ty * size, x1 = std::min(x0 + size, g.width), y1 = std::min(y0 + size, g.height);
+			glm::dvec3 low(std::numeric_limits<double>::max()), high(-std::numeric_limits<double>::max());
+			int chart = -1, first_x = 0, first_y = 0;
+			bool one_chart = true, any = false;
+			for (int y = y0; y < y1; ++y) {
+				for (int x = x0; x < x1; ++x) {
+					const size_t i = size_t(y) * g.width + x;
+					if (g.charts[i] < 0) {
+						continue;
+					}
+					one_chart = one_chart && (!any || g.charts[i] == chart);
+					if (!any) {
+						first_x = x;
+						first_y = y;
+					}
+					chart = g.charts[i];
+					any = true;
+					low = glm::min(low, g.points[i]);
+					high = glm::max(high, g.points[i]);
+				}
+			}
+			if (!any) {
+				continue;
+			}
+			const size_t t = size_t(ty) * g.tiles_x + tx;
+			const glm::dvec3 centre = 0.5 * (low + high);
+			double radius2 = 0.0;
+			for (int y = y0; y < y1; ++y) {
+				for (int x = x0; x < x1; ++x) {
+					const size_t i = size_t(y) * g.width + x;
+					if (g.charts[i] >= 0) {
+						const glm::dvec3 d = g.points[i] - centre;
+						radius2 = std::max(radius2, glm::dot(d, d));
+					}
+				}
+			}
+			g.tile_centres[t] = centre;
+			g.tile_radii[t] = std::sqrt(radius2);
+			g.tile_charts[t] = one_chart ? chart : -1;
+			g.tile_normals[t] = g.normals[size_t(first_y) * g.width + first_x];
+		}
+	}
+}
+
+} // namespace
 
 TexelGeometry make_texel_geometry(const RoomMesh &p_mesh) {
 	TexelGeometry g;
@@ -42,6 +105,7 @@ TexelGeometry make_texel_geometry(const RoomMesh &p_mesh) {
 		count += local;
 	});
 	g.surface_texels = count;
+	make_tiles(&g);
 	return g;
 }
 
@@ -141,7 +205,10 @@ FisheyeView fisheye_view(const OmniParams &p_params, const Pose &p_world_from_fi
 class TexelPixels {
 public:
 	TexelPixels(const FisheyeView &p_view, const TexelGeometry &p_geometry, const TexelProjection *p_projection) :
-			view(p_view), geometry(p_geometry), projected(p_projection ? p_projection->pixels.ptr<cv::Vec2d>(0) : nullptr) {}
+			view(p_view), geometry(p_geometry), projection(p_projection), projected(p_projection ? p_projection->pixels.ptr<cv::Vec2d>(0) : nullptr) {}
+
+	// Whether texels of tile column p_tx in tile row p_ty need looking at (all, projecting on the spot).
+	bool tile_seen(int p_tx, int p_ty) const { return !projection || projection->tile_seen[size_t(p_ty) * geometry.tiles_x + p_tx] != 0; }
 
 	bool pixel(size_t p_i, glm::dvec2 *r_pixel) const {
 		if (projected) {
@@ -157,7 +224,7 @@ public:
 	bool step_pixel(int p_x, int p_y, int p_dx, int p_dy, const RoomMesh &p_mesh, glm::dvec2 *r_pixel) const {
 		const size_t i = size_t(p_y) * geometry.width + p_x;
 		const int x = p_x + p_dx, y = p_y + p_dy;
-		if (projected && x < geometry.width && y < geometry.height) {
+		if (projected && x < geometry.width && y < geometry.height && projection->seen(geometry, x, y)) {
 			const size_t j = size_t(y) * geometry.width + x;
 			if (geometry.charts[j] == geometry.charts[i]) {
 				return pixel(j, r_pixel);
@@ -207,8 +274,15 @@ public:
 private:
 	const FisheyeView &view;
 	const TexelGeometry &geometry;
-	const cv::Vec2d *projected; // null: project on the spot
+	const TexelProjection *projection; // null: project on the spot
+	const cv::Vec2d *projected; // its pixels
 };
+
+// The first x on p_step's grid in the tile after x's.
+int next_tile_x(int p_x, int p_step) {
+	const int next = (p_x / TexelGeometry::tile_size + 1) * TexelGeometry::tile_size;
+	return (next + p_step - 1) / p_step * p_step;
+}
 
 bool valid_image_type(const cv::Mat &p_image) {
 	const int type = p_image.type();
@@ -217,7 +291,8 @@ bool valid_image_type(const cv::Mat &p_image) {
 
 bool projection_fits(const TexelGeometry &p_geometry, const TexelProjection *p_projection) {
 	return !p_projection || (p_projection->pixels.type() == CV_64FC2 && p_projection->pixels.isContinuous() &&
-									p_projection->pixels.size() == cv::Size(p_geometry.width, p_geometry.height));
+									p_projection->pixels.size() == cv::Size(p_geometry.width, p_geometry.height) &&
+									p_projection->tile_seen.size() == size_t(p_geometry.tiles_x) * p_geometry.tiles_y);
 }
 
 // 1 - edge_penalty * r^2 (r the radius fraction, at most 1), at least 0.
@@ -247,6 +322,10 @@ void sample_texels(const TexelGeometry &p_geometry, const TexelProjection *p_pro
 			cv::Vec3f *sample_row = r_samples->ptr<cv::Vec3f>(y);
 			uint8_t *visible_row = r_visible->ptr<uint8_t>(y);
 			for (int x = 0; x < w; x += step) {
+				if (x % TexelGeometry::tile_size < step && !pixels.tile_seen(x / TexelGeometry::tile_size, y / TexelGeometry::tile_size)) {
+					x = next_tile_x(x, step) - step; // the tile is not seen: on to the next one
+					continue;
+				}
 				const size_t i = size_t(y) * w + x;
 				glm::dvec2 pixel;
 				double cos_view, distance, r2;
@@ -262,7 +341,7 @@ void sample_texels(const TexelGeometry &p_geometry, const TexelProjection *p_pro
 
 TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const TexelProjection *p_projection, const OmniParams &p_params,
 		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, CoarseTexture *io_texture,
-		const TextureUpdateOptions &p_options) {
+		const TextureUpdateOptions &p_options, LightingPairs *r_pairs) {
 	TextureUpdateStats stats;
 	const auto start = std::chrono::steady_clock::now();
 	const int w = p_mesh.atlas_width, h = p_mesh.atlas_height;
@@ -287,10 +366,18 @@ TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p
 	const bool best = p_options.policy == TextureUpdatePolicy::Best;
 	const double keep_fraction = 1.0 - std::clamp(p_options.replace_epsilon, 0.0, 1.0);
 
+	const int pair_step = r_pairs ? std::max(1, r_pairs->step) : 1;
+	if (r_pairs) {
+		r_pairs->rows.resize(size_t((h + pair_step - 1) / pair_step));
+		for (std::vector<LightingSample> &row : r_pairs->rows) {
+			row.clear();
+		}
+	}
 	std::atomic<size_t> visible_total { 0 }, updated_total { 0 };
 	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {
 		size_t visible = 0, updated = 0;
 		for (int y = p_rows.begin(); y < p_rows.end(); ++y) {
+			std::vector<LightingSample> *pairs_row = r_pairs && y % pair_step == 0 ? &r_pairs->rows[size_t(y / pair_step)] : nullptr;
 			uint8_t *updated_row = tex.updated.ptr<uint8_t>(y);
 			std::fill(updated_row, updated_row + w, uint8_t(0));
 			const uint8_t *mask_row = p_visibility_mask ? p_visibility_mask->ptr<uint8_t>(y) : nullptr;
@@ -298,6 +385,10 @@ TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p
 			float *quality_row = tex.quality.ptr<float>(y);
 			uint8_t *observed_row = tex.observed.ptr<uint8_t>(y);
 			for (int x = 0; x < w; ++x) {
+				if (x % TexelGeometry::tile_size == 0 && !pixels.tile_seen(x / TexelGeometry::tile_size, y / TexelGeometry::tile_size)) {
+					x += TexelGeometry::tile_size - 1; // the tile is not seen
+					continue;
+				}
 				const size_t i = size_t(y) * w + x;
 				if (p_geometry.charts[i] < 0 || (mask_row && mask_row[x] == 0)) {
 					continue;
@@ -308,6 +399,14 @@ TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p
 					continue;
 				}
 				++visible;
+				cv::Vec3f sample;
+				bool sampled = false;
+				if (pairs_row && x % pair_step == 0 && observed_row[x] != 0) {
+					// Observed before (this texel's own write comes below): a lighting pair.
+					sample = sample_image(p_fisheye_image, pixel);
+					sampled = true;
+					pairs_row->push_back({ color_row[x], sample });
+				}
 				const double edge = edge_factor(r2 / radius2, p_options);
 				double quality = 0.0;
 				glm::dvec2 pu, pv;
@@ -327,7 +426,7 @@ TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p
 						continue;
 					}
 				}
-				color_row[x] = sample_image(p_fisheye_image, pixel);
+				color_row[x] = sampled ? sample : sample_image(p_fisheye_image, pixel);
 				// Best: the best quality ever seen, not the new (possibly epsilon-worse) one's, so that
 				// a run of slightly worse views cannot ratchet the reference down (measured: with the
 				// new one's, epsilon = 0.1 came out worse than the "last" policy).
@@ -348,21 +447,111 @@ TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p
 
 } // namespace
 
+namespace {
+
+// cos of the half angle of the cone the lens sees within: the widest ray of its image circle's rim
+// (or, without a circle, of the image's border), sampled densely, with a degree to spare for the
+// rays between the samples. -2 (no cone) where a rim pixel has no ray.
+double lens_cone_cos(const OmniParams &p_params) {
+	const int samples = 720;
+	const bool circle = p_params.circle_radius > 0.0;
+	double widest = 1.0; // the smallest cos seen
+	for (int k = 0; k < samples; ++k) {
+		glm::dvec2 pixel;
+		const double t = double(k) / samples;
+		if (circle) {
+			const double angle = 2.0 * std::numbers::pi * t;
+			pixel = glm::dvec2(p_params.circle_cx, p_params.circle_cy) + p_params.circle_radius * glm::dvec2(std::cos(angle), std::sin(angle));
+		} else {
+			// The border's four sides in turn, pixel centres' outer edges at -0.5 and size - 0.5.
+			const double w = p_params.width, h = p_params.height, along = 4.0 * t - std::floor(4.0 * t);
+			const int side = int(4.0 * t);
+			pixel = side == 0 ? glm::dvec2(-0.5 + along * w, -0.5)
+					: side == 1 ? glm::dvec2(w - 0.5, -0.5 + along * h)
+					: side == 2 ? glm::dvec2(w - 0.5 - along * w, h - 0.5)
+								: glm::dvec2(-0.5, h - 0.5 - along * h);
+		}
+		glm::dvec3 ray;
+		if (!unproject_omni(p_params, pixel, &ray)) {
+			widest = -2.0; // a rim pixel without a ray: the rim bounds nothing
+			break;
+		}
+		widest = std::min(widest, ray.z);
+	}
+	// project_omni sees nothing beyond max_angle_deg either.
+	const double limit = p_params.max_angle_deg > 0.0 ? p_params.max_angle_deg * std::numbers::pi / 180.0 : std::numbers::pi;
+	const double rim = widest < -1.0 ? std::numbers::pi : std::acos(std::clamp(widest, -1.0, 1.0)) + std::numbers::pi / 180.0;
+	const double half_angle = std::min(rim, limit);
+	return half_angle >= std::numbers::pi ? -2.0 : std::cos(half_angle);
+}
+
+bool same_lens(const OmniParams &p_a, const OmniParams &p_b) {
+	return p_a.width == p_b.width && p_a.height == p_b.height && p_a.xi == p_b.xi && p_a.fx == p_b.fx && p_a.fy == p_b.fy && p_a.cx == p_b.cx &&
+			p_a.cy == p_b.cy && p_a.skew == p_b.skew && p_a.k1 == p_b.k1 && p_a.k2 == p_b.k2 && p_a.p1 == p_b.p1 && p_a.p2 == p_b.p2 &&
+			p_a.circle_cx == p_b.circle_cx && p_a.circle_cy == p_b.circle_cy && p_a.circle_radius == p_b.circle_radius &&
+			p_a.max_angle_deg == p_b.max_angle_deg;
+}
+
+// Whether any point of tile t can be seen: in front of its one chart's plane, and its bounding
+// sphere reaching into the lens's cone.
+bool tile_may_be_seen(const TexelGeometry &p_geometry, size_t p_t, const FisheyeView &p_view, double p_cone_cos) {
+	const double radius = p_geometry.tile_radii[p_t];
+	if (radius < 0.0) {
+		return false; // no surface texel
+	}
+	const glm::dvec3 &centre = p_geometry.tile_centres[p_t];
+	// One chart, one plane: the camera behind it sees none of the tile (every point p lies within
+	// radius of the centre, so n . (camera - p) <= n . (camera - centre) + radius).
+	if (p_geometry.tile_charts[p_t] >= 0 && glm::dot(p_geometry.tile_normals[p_t], p_view.camera - centre) + radius <= 0.0) {
+		return false;
+	}
+	if (p_cone_cos < -1.0) {
+		return true;
+	}
+	const glm::dvec3 d = p_view.to_camera(centre);
+	const double distance = glm::length(d);
+	if (distance <= radius) {
+		return true;
+	}
+	// Outside when the angle from the axis exceeds the half angle plus the sphere's angular radius.
+	const double half_angle = std::acos(p_cone_cos), reach = std::asin(radius / distance);
+	const double angle = std::acos(std::clamp(d.z / distance, -1.0, 1.0));
+	return angle <= half_angle + reach;
+}
+
+} // namespace
+
 void project_texels(const TexelGeometry &p_geometry, const OmniParams &p_params, const Pose &p_world_from_fisheye, TexelProjection *io_projection) {
 	const int w = p_geometry.width, h = p_geometry.height;
-	io_projection->pixels.create(h, w, CV_64FC2);
+	TexelProjection &projection = *io_projection;
+	projection.pixels.create(h, w, CV_64FC2);
+	if (projection.cone_cos == -2.0 || !same_lens(projection.cone_lens, p_params)) {
+		projection.cone_lens = p_params;
+		projection.cone_cos = lens_cone_cos(p_params);
+	}
 	const FisheyeView view = fisheye_view(p_params, p_world_from_fisheye, p_params.width, p_params.height, TextureUpdateOptions());
+	projection.tile_seen.resize(size_t(p_geometry.tiles_x) * p_geometry.tiles_y);
+	for (size_t t = 0; t < projection.tile_seen.size(); ++t) {
+		projection.tile_seen[t] = tile_may_be_seen(p_geometry, t, view, projection.cone_cos) ? 1 : 0;
+	}
 	const double nan = std::numeric_limits<double>::quiet_NaN();
+	const int size = TexelGeometry::tile_size;
 	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {
 		for (int y = p_rows.begin(); y < p_rows.end(); ++y) {
-			cv::Vec2d *row = io_projection->pixels.ptr<cv::Vec2d>(y);
-			for (int x = 0; x < w; ++x) {
-				const size_t i = size_t(y) * w + x;
-				glm::dvec2 pixel;
-				if (p_geometry.charts[i] >= 0 && project_omni(p_params, view.to_camera(p_geometry.points[i]), &pixel)) {
-					row[x] = cv::Vec2d(pixel.x, pixel.y);
-				} else {
-					row[x] = cv::Vec2d(nan, nan);
+			cv::Vec2d *row = projection.pixels.ptr<cv::Vec2d>(y);
+			const uint8_t *seen_row = projection.tile_seen.data() + size_t(y / size) * p_geometry.tiles_x;
+			for (int tx = 0; tx < p_geometry.tiles_x; ++tx) {
+				if (!seen_row[tx]) {
+					continue;
+				}
+				for (int x = tx * size; x < std::min(w, tx * size + size); ++x) {
+					const size_t i = size_t(y) * w + x;
+					glm::dvec2 pixel;
+					if (p_geometry.charts[i] >= 0 && project_omni(p_params, view.to_camera(p_geometry.points[i]), &pixel)) {
+						row[x] = cv::Vec2d(pixel.x, pixel.y);
+					} else {
+						row[x] = cv::Vec2d(nan, nan);
+					}
 				}
 			}
 		}
@@ -383,13 +572,26 @@ void sample_coarse_texels(const TexelGeometry &p_geometry, const TexelProjection
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const OmniParams &p_params,
 		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask,
 		CoarseTexture *io_texture, const TextureUpdateOptions &p_options) {
-	return update_texture(p_mesh, p_geometry, nullptr, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, io_texture, p_options);
+	return update_texture(p_mesh, p_geometry, nullptr, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, io_texture, p_options, nullptr);
 }
 
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const TexelProjection &p_projection, const OmniParams &p_params,
 		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, CoarseTexture *io_texture,
-		const TextureUpdateOptions &p_options) {
-	return update_texture(p_mesh, p_geometry, &p_projection, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, io_texture, p_options);
+		const TextureUpdateOptions &p_options, LightingPairs *r_pairs) {
+	return update_texture(p_mesh, p_geometry, &p_projection, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, io_texture, p_options, r_pairs);
+}
+
+const std::vector<LightingSample> &LightingPairs::gather() {
+	size_t n = 0;
+	for (const std::vector<LightingSample> &row : rows) {
+		n += row.size();
+	}
+	all.clear();
+	all.reserve(n);
+	for (const std::vector<LightingSample> &row : rows) {
+		all.insert(all.end(), row.begin(), row.end());
+	}
+	return all;
 }
 
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const OmniParams &p_params, const Pose &p_world_from_fisheye,

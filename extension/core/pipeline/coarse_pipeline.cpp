@@ -72,36 +72,29 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 	const cv::Mat *mask_ptr = convex ? nullptr : &mask;
 	t.occlusion_ms = ms_since(start);
 
-	// Every texel's pixel, once for the lighting estimate and the update (counted with the update).
+	// 2. Texture update (§4.3, keep the best) from every texel's pixel, projected once; it also
+	// gathers the lighting estimate's (old texel, new sample) pairs before it writes.
 	start = Clock::now();
 	project_texels(geometry, fisheye, p_world_from_fisheye, &projection);
+	const bool estimate_lighting = opts.lighting && frames > 0;
+	lighting_pairs.step = opts.lighting_options.sample_step;
+	stats.update = update_coarse_texture(room, geometry, projection, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, &coarse, opts.update,
+			estimate_lighting ? &lighting_pairs : nullptr);
 	t.update_ms = ms_since(start);
 
-	// 2. Lighting change (§4.6), from (old texel, new sample) pairs before the update.
+	// 3. Lighting change (§4.6) from those pairs, applied to the observed texels this frame did not
+	// update (the update's order does not matter: the pairs hold the values from before it).
 	start = Clock::now();
-	if (opts.lighting && frames > 0) {
-		// The new samples only where the estimate reads them: its grid, among the texels observed
-		// before (no copy of the atlas, no quality test).
-		sample_coarse_texels(geometry, projection, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, coarse.observed, opts.lighting_options.sample_step,
-				opts.update, &lighting_samples, &lighting_visible);
-		stats.lighting = estimate_lighting_change(coarse, lighting_samples, lighting_visible, opts.lighting_options);
+	if (estimate_lighting) {
+		stats.lighting = estimate_lighting_change(lighting_pairs.gather(), opts.lighting_options);
 	}
-	t.lighting_ms = ms_since(start);
-
-	// 3. Texture update (§4.3, keep the best).
-	start = Clock::now();
-	stats.update = update_coarse_texture(room, geometry, projection, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, &coarse, opts.update);
-	t.update_ms += ms_since(start);
-
-	// 4. Apply the change to the observed texels this frame did not update.
-	start = Clock::now();
 	if (stats.lighting.valid) {
 		apply_lighting_change(&coarse, stats.lighting);
 		cumulative = compose_lighting(stats.lighting, cumulative);
 	}
-	t.lighting_ms += ms_since(start);
+	t.lighting_ms = ms_since(start);
 
-	// 5. Inpainting (§4.5), here or on the worker.
+	// 4. Inpainting (§4.5), here or on the worker.
 	start = Clock::now();
 	if (opts.inpaint && opts.inpaint_async) {
 		inpainter->request(coarse);
