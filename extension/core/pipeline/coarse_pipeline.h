@@ -129,6 +129,7 @@ private:
 	cv::Mat completed;
 	cv::Mat inpainted; // inpaint_async: the worker's newest completion (of an older texture)
 	TexelProjection projection; // this frame's texel pixels (kept: no allocation a frame)
+	cv::Mat mask; // this frame's occlusion mask (kept)
 	LightingPairs lighting_pairs; // the lighting estimate's pairs, kept between frames (no allocation a frame)
 	std::unique_ptr<CoarseCubemapRenderer> renderer;
 	std::unique_ptr<TextureInpainter> inpainter;
