@@ -294,3 +294,19 @@ TEST_CASE("lighting: changes compose, and the change since a reference undoes it
 		CHECK(since.apply(y)[c] == doctest::Approx(then.apply(y)[c]).epsilon(1e-6));
 	}
 }
+
+TEST_CASE("lighting: the robust gain's medians over a strided subset give the gain of all samples") {
+	std::mt19937 rng(7);
+	const cv::Vec3f gain(0.7f, 1.1f, 1.45f);
+	const Scene people = gain_scene(gain, true, &rng);
+	LightingOptions all_options, subset_options;
+	all_options.scale_samples = 0;
+	subset_options.scale_samples = 300; // of about 3 700 valid samples (every second texel each way)
+	const LightingChange all = estimate_lighting_change(people.before, people.new_color, people.visible, all_options);
+	const LightingChange subset = estimate_lighting_change(people.before, people.new_color, people.visible, subset_options);
+	REQUIRE(all.valid);
+	REQUIRE(subset.valid);
+	CHECK(all.sample_count > 10 * subset_options.scale_samples);
+	CHECK(max_relative_error(all.gain, gain) < 0.01);
+	CHECK(max_relative_error(subset.gain, all.gain) < 1e-3);
+}

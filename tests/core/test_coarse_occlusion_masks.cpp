@@ -9,6 +9,7 @@
 
 #include <doctest/doctest.h>
 #include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -200,4 +201,40 @@ TEST_CASE("coarse occlusion: extra occluders hide what is behind them, and a vie
 	CHECK(visible(rays, texel_at(mesh, SurfaceKind::Wall, glm::dvec3(0.0, 0.3, 0.5))));
 	const cv::Mat outside = occlusion_mask(mesh, geometry, glm::dvec3(7.0, 1.4, 2.0), OcclusionOptions { 1e-3, false });
 	CHECK(cv::countNonZero(outside) == 0);
+}
+
+TEST_CASE("coarse occlusion: the mask of the tiles a frame sees is the plain mask there, and 0 elsewhere") {
+	const RoomMesh mesh = build(figure4_two_rooms());
+	const TexelGeometry geometry = make_texel_geometry(mesh);
+	OmniParams lens; // a 190-degree fisheye looking along the world's +x
+	lens.width = lens.height = 512;
+	lens.xi = 1.0;
+	lens.fx = lens.fy = 240.0;
+	lens.cx = lens.cy = lens.circle_cx = lens.circle_cy = 255.5;
+	lens.circle_radius = 250.0;
+	Pose pose;
+	pose.rotation = glm::quat_cast(glm::dmat3(glm::dvec3(0, 0, -1), glm::dvec3(0, 1, 0), glm::dvec3(1, 0, 0)));
+	TexelProjection projection;
+	cv::Mat mask;
+	for (const glm::dvec3 &camera : { glm::dvec3(2.0, 1.45, 1.0), glm::dvec3(6.5, 1.3, 0.7) }) {
+		CAPTURE(camera.x);
+		pose.translation = camera;
+		project_texels(geometry, lens, pose, &projection);
+		occlusion_mask(mesh, geometry, camera, projection, &mask);
+		const cv::Mat plain = occlusion_mask(mesh, geometry, camera);
+		int seen = 0, unseen = 0, differing = 0;
+		for (int y = 0; y < geometry.height; y++) {
+			for (int x = 0; x < geometry.width; x++) {
+				if (!geometry.on_surface(x, y)) {
+					continue;
+				}
+				const bool in_seen_tile = projection.seen(geometry, x, y);
+				(in_seen_tile ? seen : unseen)++;
+				differing += mask.at<uint8_t>(y, x) != (in_seen_tile ? plain.at<uint8_t>(y, x) : 0) ? 1 : 0;
+			}
+		}
+		CHECK(seen > 1000);
+		CHECK(unseen > 1000);
+		CHECK(differing == 0);
+	}
 }

@@ -242,3 +242,81 @@ TEST_CASE("coarse update: the lighting estimate's sparse samples are the 'last' 
 	sample_coarse_texels(geometry, params, corner, image, &mask, cv::Mat(), step, options, &samples, &visible);
 	CHECK(cv::countNonZero(visible) == 0);
 }
+
+TEST_CASE("coarse update: from the frame's texel projection, the same as projecting on the spot") {
+	const RoomMesh mesh = build(living_room());
+	const TexelGeometry geometry = make_texel_geometry(mesh);
+	const OmniParams params = test_rig().fisheye;
+	cv::Mat image(params.height, params.width, CV_32FC3);
+	for (int y = 0; y < image.rows; y++) {
+		for (int x = 0; x < image.cols; x++) {
+			image.at<cv::Vec3f>(y, x) = cv::Vec3f(float(x + 10) / 1100.0f, float(y + 10) / 1100.0f, 0.5f);
+		}
+	}
+	cv::Mat mask(mesh.atlas_height, mesh.atlas_width, CV_8UC1, cv::Scalar(255));
+	mask(cv::Rect(0, 0, mesh.atlas_width / 3, mesh.atlas_height)) = 0;
+	// Upward views and tilted ones (towards walls, corners and the floor), so that charts' edges
+	// and the image circle's rim cut through the texels.
+	std::vector<Pose> poses = { upward_fisheye(glm::dvec3(2.5, 1.2, 2.0)), upward_fisheye(glm::dvec3(0.6, 1.1, 0.7)) };
+	for (int k = 0; k < 4; k++) {
+		Pose pose = upward_fisheye(glm::dvec3(1.0 + 0.8 * k, 1.0 + 0.2 * k, 1.0 + 0.5 * k));
+		pose.rotation = glm::angleAxis(0.5 + 0.4 * k, glm::normalize(glm::dvec3(1.0, 0.3 * k, -0.5))) * pose.rotation;
+		poses.push_back(pose);
+	}
+	CoarseTexture plain = make_coarse_texture(mesh), fast = make_coarse_texture(mesh);
+	TexelProjection projection;
+	LightingPairs pairs;
+	pairs.step = 2;
+	size_t updated = 0, pair_count = 0, skipped_tiles = 0;
+	for (size_t k = 0; k < poses.size(); k++) {
+		const cv::Mat *frame_mask = k % 2 ? &mask : nullptr;
+		project_texels(geometry, params, poses[k], &projection);
+		// The lighting pairs the update gathers: the plain samples of the texels observed before.
+		const CoarseTexture before { fast.color.clone(), fast.observed.clone(), fast.quality.clone(), fast.updated.clone() };
+		cv::Mat before_samples, before_visible;
+		sample_coarse_texels(geometry, params, poses[k], image, frame_mask, before.observed, pairs.step, TextureUpdateOptions(), &before_samples, &before_visible);
+		const TextureUpdateStats a = update_coarse_texture(mesh, geometry, params, poses[k], image, frame_mask, &plain);
+		const TextureUpdateStats b = update_coarse_texture(mesh, geometry, projection, params, poses[k], image, frame_mask, &fast, TextureUpdateOptions(), &pairs);
+		const std::vector<LightingSample> &gathered = pairs.gather();
+		CHECK(gathered.size() == size_t(cv::countNonZero(before_visible)));
+		const LightingChange from_pairs = estimate_lighting_change(gathered, LightingOptions());
+		const LightingChange from_samples = estimate_lighting_change(before, before_samples, before_visible, LightingOptions());
+		CHECK(from_pairs.valid == (k > 0));
+		CHECK(from_pairs.valid == from_samples.valid);
+		CHECK(from_pairs.sample_count == from_samples.sample_count);
+		CHECK(from_pairs.gain == from_samples.gain);
+		pair_count += gathered.size();
+		skipped_tiles += size_t(std::count(projection.tile_seen.begin(), projection.tile_seen.end(), uint8_t(0)));
+		CHECK(a.texels_visible == b.texels_visible);
+		CHECK(std::abs(double(a.texels_updated) - double(b.texels_updated)) <= 1e-4 * double(a.texels_updated));
+		updated += a.texels_updated;
+
+		// The lighting estimate's samples: exactly the plain ones.
+		cv::Mat plain_samples, plain_visible, fast_samples, fast_visible;
+		sample_coarse_texels(geometry, params, poses[k], image, frame_mask, plain.observed, 2, TextureUpdateOptions(), &plain_samples, &plain_visible);
+		sample_coarse_texels(geometry, projection, params, poses[k], image, frame_mask, plain.observed, 2, TextureUpdateOptions(), &fast_samples,
+				&fast_visible);
+		CHECK(cv::norm(plain_visible, fast_visible, cv::NORM_INF) == 0.0);
+		CHECK(cv::norm(plain_samples, fast_samples, cv::NORM_INF, plain_visible) == 0.0);
+	}
+	CHECK(updated > geometry.surface_texels);
+	CHECK(pair_count > 10000);
+	CHECK(skipped_tiles > 0); // the culling was exercised (and changed nothing above)
+	// Qualities agree to rounding (a neighbour's pixel against its own point's projection); a
+	// texel whose decision flips on that rounding is allowed, one in ten thousand.
+	CHECK(cv::norm(plain.observed, fast.observed, cv::NORM_INF) == 0.0);
+	int differing = 0;
+	double worst_quality = 0.0;
+	for (int y = 0; y < mesh.atlas_height; y++) {
+		for (int x = 0; x < mesh.atlas_width; x++) {
+			differing += plain.color.at<cv::Vec3f>(y, x) != fast.color.at<cv::Vec3f>(y, x) ? 1 : 0;
+			const double q = plain.quality.at<float>(y, x);
+			if (q > 0.0) {
+				worst_quality = std::max(worst_quality, std::abs(fast.quality.at<float>(y, x) - q) / q);
+			}
+		}
+	}
+	CHECK(differing <= int(geometry.surface_texels / 10000));
+	CHECK(worst_quality < 1e-4);
+	MESSAGE("projection path: " << differing << " texels differ of " << geometry.surface_texels << ", worst relative quality difference " << worst_quality);
+}

@@ -249,12 +249,25 @@ cv::Mat TextureInpainter::inpaint(const cv::Mat &p_color, const cv::Mat &p_obser
 }
 
 uint64_t TextureInpainter::request(const CoarseTexture &p_texture) {
-	cv::Mat color = p_texture.color.clone();
-	cv::Mat observed = p_texture.observed.clone();
+	// Copied into buffers the worker is done with (copyTo allocates only when none fits): no
+	// allocation a frame on the caller's thread.
+	cv::Mat color, observed;
+	{
+		std::lock_guard<std::mutex> lock(mutex);
+		color = std::move(spare_color);
+		observed = std::move(spare_observed);
+	}
+	p_texture.color.copyTo(color);
+	p_texture.observed.copyTo(observed);
 	uint64_t id = 0;
 	{
 		std::lock_guard<std::mutex> lock(mutex);
 		id = next_id++;
+		if (has_pending) {
+			// The request not yet taken is replaced: its buffers are free again.
+			spare_color = std::move(pending_color);
+			spare_observed = std::move(pending_observed);
+		}
 		pending_color = std::move(color);
 		pending_observed = std::move(observed);
 		pending_id = id;
@@ -309,6 +322,8 @@ void TextureInpainter::worker_loop() {
 
 		lock.lock();
 		busy = false;
+		spare_color = std::move(color);
+		spare_observed = std::move(observed);
 		if (id > result_id || !has_result) {
 			result_color = std::move(completed);
 			result_id = id;

@@ -142,6 +142,7 @@ private:
 	bool has_pending = false;
 	cv::Mat pending_color;
 	cv::Mat pending_observed;
+	cv::Mat spare_color, spare_observed; // a request's buffers once the worker is done with them, for the next request
 	uint64_t pending_id = 0;
 	uint64_t next_id = 1;
 	bool has_result = false;

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <cstdint>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 namespace roomprobe {
 
 namespace {
@@ -19,48 +22,97 @@ double median_of(std::vector<double> *r_values) {
 	return median;
 }
 
-// Robust gain for one channel: new ≈ g · old.
-double robust_gain(const std::vector<LightingSample> &p_samples, int p_channel, const LightingOptions &p_options) {
+// One chunk's IRLS sums, per channel: sum w · old · new and sum w · old².
+struct WeightedSums {
+	double numerator[3] = { 0.0, 0.0, 0.0 };
+	double denominator[3] = { 0.0, 0.0, 0.0 };
+};
+
+// The robust gains of the three channels, new ≈ g · old each, fitted in lockstep: one pass over
+// the pairs an iteration serves all three (six independent sums). The medians (the start and each
+// iteration's scale) are taken over an evenly strided subset of at most scale_samples pairs: a
+// median needs a selection, the costliest step, and a few thousand samples fix it well; the
+// weighted least squares use every pair.
+cv::Vec3d robust_gains(const std::vector<LightingSample> &p_samples, const LightingOptions &p_options) {
+	const size_t n = p_samples.size();
+	const size_t limit = size_t(std::max(p_options.scale_samples, 1));
+	const size_t stride = p_options.scale_samples > 0 && n > limit ? (n + limit - 1) / limit : 1;
 	std::vector<double> work;
-	work.reserve(p_samples.size());
-	for (const LightingSample &sample : p_samples) {
-		work.push_back(static_cast<double>(sample.new_value[p_channel]) / static_cast<double>(sample.old_value[p_channel]));
-	}
-	double gain = median_of(&work);
-	for (int iteration = 0; iteration < p_options.irls_iterations; iteration++) {
+	work.reserve(n / stride + 1);
+	double gain[3];
+	bool done[3] = { false, false, false };
+	const size_t chunk_size = 4096;
+	const size_t chunks = (n + chunk_size - 1) / chunk_size;
+	std::vector<WeightedSums> chunk_sums(chunks);
+	for (int c = 0; c < 3; c++) {
 		work.clear();
-		for (const LightingSample &sample : p_samples) {
-			work.push_back(std::abs(sample.new_value[p_channel] - gain * sample.old_value[p_channel]));
+		for (size_t i = 0; i < n; i += stride) {
+			work.push_back(static_cast<double>(p_samples[i].new_value[c]) / static_cast<double>(p_samples[i].old_value[c]));
 		}
-		const double sigma = 1.4826 * median_of(&work);
-		if (!(sigma > 1e-12)) {
-			break; // Inliers fit exactly: the current gain is the answer.
-		}
-		const double cutoff = p_options.tukey_c * sigma;
-		double numerator = 0.0;
-		double denominator = 0.0;
-		for (const LightingSample &sample : p_samples) {
-			const double old_value = sample.old_value[p_channel];
-			const double residual = sample.new_value[p_channel] - gain * old_value;
-			const double u = residual / cutoff;
-			if (std::abs(u) >= 1.0) {
+		gain[c] = median_of(&work);
+	}
+	for (int iteration = 0; iteration < p_options.irls_iterations; iteration++) {
+		double inverse_cutoff[3] = { 0.0, 0.0, 0.0 };
+		for (int c = 0; c < 3; c++) {
+			if (done[c]) {
 				continue;
 			}
-			const double weight = (1.0 - u * u) * (1.0 - u * u);
-			numerator += weight * old_value * sample.new_value[p_channel];
-			denominator += weight * old_value * old_value;
+			work.clear();
+			for (size_t i = 0; i < n; i += stride) {
+				work.push_back(std::abs(p_samples[i].new_value[c] - gain[c] * p_samples[i].old_value[c]));
+			}
+			const double sigma = 1.4826 * median_of(&work);
+			if (!(sigma > 1e-12)) {
+				done[c] = true; // Inliers fit exactly: the current gain is the answer.
+				continue;
+			}
+			inverse_cutoff[c] = 1.0 / (p_options.tukey_c * sigma);
 		}
-		if (!(denominator > 0.0)) {
+		if (done[0] && done[1] && done[2]) {
 			break;
 		}
-		const double next = numerator / denominator;
-		const bool converged = std::abs(next - gain) <= 1e-7 * std::abs(gain);
-		gain = next;
-		if (converged) {
-			break;
+		// The weighted sums in fixed chunks, in parallel, added in chunk order: the same result
+		// whatever the threads.
+		tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks), [&](const tbb::blocked_range<size_t> &p_chunks) {
+			for (size_t k = p_chunks.begin(); k < p_chunks.end(); k++) {
+				WeightedSums sums;
+				for (size_t i = k * chunk_size; i < std::min(n, (k + 1) * chunk_size); i++) {
+					const LightingSample &sample = p_samples[i];
+					for (int c = 0; c < 3; c++) {
+						// Tukey's biweight (1 - u^2)^2 for |u| < 1, else 0, without a branch.
+						const double old_value = sample.old_value[c], new_value = sample.new_value[c];
+						const double u = (new_value - gain[c] * old_value) * inverse_cutoff[c];
+						const double root = std::max(1.0 - u * u, 0.0);
+						const double weight = root * root;
+						sums.numerator[c] += weight * old_value * new_value;
+						sums.denominator[c] += weight * old_value * old_value;
+					}
+				}
+				chunk_sums[k] = sums;
+			}
+		});
+		double numerator[3] = { 0.0, 0.0, 0.0 };
+		double denominator[3] = { 0.0, 0.0, 0.0 };
+		for (const WeightedSums &sums : chunk_sums) {
+			for (int c = 0; c < 3; c++) {
+				numerator[c] += sums.numerator[c];
+				denominator[c] += sums.denominator[c];
+			}
+		}
+		for (int c = 0; c < 3; c++) {
+			if (done[c]) {
+				continue;
+			}
+			if (!(denominator[c] > 0.0)) {
+				done[c] = true;
+				continue;
+			}
+			const double next = numerator[c] / denominator[c];
+			done[c] = std::abs(next - gain[c]) <= 1e-7 * std::abs(gain[c]);
+			gain[c] = next;
 		}
 	}
-	return gain;
+	return cv::Vec3d(gain[0], gain[1], gain[2]);
 }
 
 } // namespace
@@ -108,8 +160,9 @@ LightingChange estimate_lighting_change(const std::vector<LightingSample> &p_sam
 			change.offset[c] = static_cast<float>(sum[c] / static_cast<double>(valid.size()));
 		}
 	} else {
+		const cv::Vec3d gains = robust_gains(valid, p_options);
 		for (int c = 0; c < 3; c++) {
-			change.gain[c] = static_cast<float>(robust_gain(valid, c, p_options));
+			change.gain[c] = static_cast<float>(gains[c]);
 		}
 	}
 	change.valid = true;
@@ -154,16 +207,18 @@ void apply_lighting_change(CoarseTexture *r_texture, const LightingChange &p_cha
 			updated.size() != color.size()) {
 		return;
 	}
-	for (int y = 0; y < color.rows; y++) {
-		cv::Vec3f *color_row = color.ptr<cv::Vec3f>(y);
-		const uint8_t *observed_row = observed.ptr<uint8_t>(y);
-		const uint8_t *updated_row = updated.ptr<uint8_t>(y);
-		for (int x = 0; x < color.cols; x++) {
-			if (observed_row[x] != 0 && updated_row[x] == 0) {
-				color_row[x] = p_change.apply(color_row[x]);
+	tbb::parallel_for(tbb::blocked_range<int>(0, color.rows), [&](const tbb::blocked_range<int> &p_rows) {
+		for (int y = p_rows.begin(); y < p_rows.end(); y++) {
+			cv::Vec3f *color_row = color.ptr<cv::Vec3f>(y);
+			const uint8_t *observed_row = observed.ptr<uint8_t>(y);
+			const uint8_t *updated_row = updated.ptr<uint8_t>(y);
+			for (int x = 0; x < color.cols; x++) {
+				if (observed_row[x] != 0 && updated_row[x] == 0) {
+					color_row[x] = p_change.apply(color_row[x]);
+				}
 			}
 		}
-	}
+	});
 }
 
 LightingChange compose_lighting(const LightingChange &p_then, const LightingChange &p_first) {

@@ -19,7 +19,8 @@
 // amounts unrelated to the lighting, and biases Δ. The gain is estimated robustly: start from the
 // median of the ratios new / old (50 % breakdown point), then refine by iteratively reweighted
 // least squares with Tukey's biweight on the residuals new − g · old (scale: 1.4826 · MAD), which
-// gives outliers zero weight while using all inliers efficiently.
+// gives outliers zero weight while using all inliers efficiently. The medians (the start and each
+// iteration's scale) are taken over an evenly strided subset of at most scale_samples pairs.
 //
 // Saturated / black: a texel's colour is rejected when ANY channel of the old or the new value is
 // >= saturated_threshold or <= black_threshold (a clipped channel's true value is unknown, and a
@@ -49,6 +50,10 @@ struct LightingOptions {
 	int sample_step = 2; // Sample every sample_step-th texel along x and along y; >= 1.
 	int min_samples = 32; // Fewer valid samples: no change is estimated (identity, valid = false).
 	int irls_iterations = 10; // GAIN_ROBUST refinement iterations; 0: the median of ratios only.
+	// GAIN_ROBUST: the median of ratios and each iteration's scale (MAD) are taken over at most
+	// this many of the valid samples (evenly strided); the weighted fit uses all of them. A median
+	// needs a selection, the estimate's costliest step; 0: all samples.
+	int scale_samples = 2048;
 	double tukey_c = 4.685; // Tukey biweight cut-off, in robust standard deviations.
 };
 

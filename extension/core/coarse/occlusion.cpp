@@ -126,6 +126,39 @@ bool point_in_polygon(const std::vector<glm::dvec2> &p_polygon, const glm::dvec2
 	return inside;
 }
 
+namespace {
+
+// 255 at the surface texels inside the visibility polygon (walls tested wall_inset_m inside), in
+// the tiles p_projection sees (all when it is null); r_mask (atlas-sized) is left as it is elsewhere.
+void mask_texels(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const VisibilityPolygon &p_polygon, const TexelProjection *p_projection,
+		const OcclusionOptions &p_options, cv::Mat *r_mask) {
+	const int w = p_geometry.width, h = p_geometry.height, size = TexelGeometry::tile_size;
+	const double inset = p_options.wall_inset_m;
+	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {
+		for (int y = p_rows.begin(); y < p_rows.end(); ++y) {
+			uint8_t *row = r_mask->ptr<uint8_t>(y);
+			for (int x = 0; x < w; ++x) {
+				if (p_projection && x % size == 0 && !p_projection->seen(p_geometry, x, y)) {
+					x += size - 1; // the fisheye does not see the tile: the update skips it
+					continue;
+				}
+				const size_t i = size_t(y) * w + x;
+				const int chart = p_geometry.charts[i];
+				if (chart < 0) {
+					continue;
+				}
+				glm::dvec3 point = p_geometry.points[i];
+				if (p_mesh.charts[chart].kind == SurfaceKind::Wall) {
+					point += inset * p_geometry.normals[i];
+				}
+				row[x] = point_in_polygon(p_polygon.points, glm::dvec2(point.x, point.z)) ? 255 : 0;
+			}
+		}
+	});
+}
+
+} // namespace
+
 cv::Mat occlusion_mask(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const glm::dvec3 &p_fisheye_position,
 		const OcclusionOptions &p_options, VisibilityPolygon *r_polygon) {
 	const int w = p_geometry.width, h = p_geometry.height;
@@ -150,25 +183,18 @@ cv::Mat occlusion_mask(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, 
 	if (!polygon.ok) {
 		return mask;
 	}
-	const double inset = p_options.wall_inset_m;
-	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {
-		for (int y = p_rows.begin(); y < p_rows.end(); ++y) {
-			uint8_t *row = mask.ptr<uint8_t>(y);
-			for (int x = 0; x < w; ++x) {
-				const size_t i = size_t(y) * w + x;
-				const int chart = p_geometry.charts[i];
-				if (chart < 0) {
-					continue;
-				}
-				glm::dvec3 point = p_geometry.points[i];
-				if (p_mesh.charts[chart].kind == SurfaceKind::Wall) {
-					point += inset * p_geometry.normals[i];
-				}
-				row[x] = point_in_polygon(polygon.points, glm::dvec2(point.x, point.z)) ? 255 : 0;
-			}
-		}
-	});
+	mask_texels(p_mesh, p_geometry, polygon, nullptr, p_options, &mask);
 	return mask;
+}
+
+void occlusion_mask(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const glm::dvec3 &p_fisheye_position, const TexelProjection &p_projection,
+		cv::Mat *r_mask, const OcclusionOptions &p_options) {
+	r_mask->create(p_geometry.height, p_geometry.width, CV_8UC1);
+	r_mask->setTo(cv::Scalar(0));
+	const VisibilityPolygon polygon = visibility_polygon(p_mesh.floorplan, glm::dvec2(p_fisheye_position.x, p_fisheye_position.z));
+	if (polygon.ok && p_projection.tile_seen.size() == size_t(p_geometry.tiles_x) * p_geometry.tiles_y) {
+		mask_texels(p_mesh, p_geometry, polygon, &p_projection, p_options, r_mask);
+	}
 }
 
 // ---------------------------------------------------------------- Embree

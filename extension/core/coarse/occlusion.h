@@ -57,6 +57,11 @@ struct OcclusionOptions {
 // Optionally returns the visibility polygon (empty and ok for a skipped convex room).
 cv::Mat occlusion_mask(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const glm::dvec3 &p_fisheye_position,
 		const OcclusionOptions &p_options = OcclusionOptions(), VisibilityPolygon *r_polygon = nullptr);
+// The same into r_mask (allocated only when the atlas size changes), tested only in the tiles
+// p_projection sees (project_texels for this frame; 0 elsewhere: the update skips those tiles).
+// No convex-room shortcut: the caller skips the mask for a convex room.
+void occlusion_mask(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const glm::dvec3 &p_fisheye_position, const TexelProjection &p_projection,
+		cv::Mat *r_mask, const OcclusionOptions &p_options = OcclusionOptions());
 
 // Validation (and extra occluders): Embree rays from the fisheye centre to each texel centre over
 // the coarse mesh plus optional extra triangles. Builds the Embree scene once; thread-safe queries.

@@ -9,6 +9,7 @@
 #include <io/opencv.h>
 
 #include "coarse_texture.h"
+#include "lighting.h"
 
 #include <camera/camera_params.h>
 #include <math/pose.h>
@@ -30,6 +31,13 @@ struct TexelGeometry {
 	std::vector<glm::dvec3> normals; // unit inward normal, same indexing
 	std::vector<int> charts; // chart index (into RoomMesh::charts), -1 where the texel is not on the surface
 	size_t surface_texels = 0; // texels with charts[i] >= 0
+	// Square tiles of the atlas, for skipping the ones a frame cannot see (project_texels).
+	static constexpr int tile_size = 16; // texels
+	int tiles_x = 0, tiles_y = 0; // tile (tx, ty) covers texels [tx, ty] * tile_size + [0, tile_size)
+	std::vector<glm::dvec3> tile_centres; // bounding sphere of the tile's surface points, world metres, at [ty * tiles_x + tx]
+	std::vector<double> tile_radii; // its radius, metres; < 0: no surface texel in the tile
+	std::vector<int> tile_charts; // the one chart all its surface texels lie on, else -1
+	std::vector<glm::dvec3> tile_normals; // that chart's unit inward normal (a surface texel's)
 
 	bool on_surface(int p_x, int p_y) const { return charts[size_t(p_y) * width + p_x] >= 0; }
 };
@@ -83,6 +91,30 @@ struct TextureUpdateStats {
 	double seconds = 0.0; // wall-clock time of the update
 };
 
+// Each atlas texel's pixel in one fisheye frame, projected once (project_omni) and read by the
+// lighting estimate's samples and the texture update of that frame. The update then takes a
+// texel's footprint from its neighbours' pixels: the texel one step along its chart's u (v) axis
+// is the next texel along atlas x (y) on the same chart, so no further projection is needed
+// except at a chart's edge.
+// Tiles the fisheye cannot see (all their points outside the lens's cone of view, or behind their
+// one chart's plane) are skipped: their texels' pixels are not written, and the readers skip them.
+struct TexelProjection {
+	cv::Mat pixels; // CV_64FC2, atlas-sized: texel (x, y)'s pixel; NaN where it is not on the surface or project_omni does not see it
+	std::vector<uint8_t> tile_seen; // per TexelGeometry tile: 0 when skipped (its pixels are stale)
+	// The cone the lens sees within, from its image circle (or image border), kept for the lens it
+	// was found for.
+	OmniParams cone_lens;
+	double cone_cos = -2.0; // cos of the cone's half angle; -2: no cone (nothing is skipped by angle)
+
+	bool seen(const TexelGeometry &p_geometry, int p_x, int p_y) const {
+		return tile_seen[size_t(p_y / TexelGeometry::tile_size) * p_geometry.tiles_x + p_x / TexelGeometry::tile_size] != 0;
+	}
+};
+
+// Fills io_projection for the fisheye at p_world_from_fisheye (allocates only when the atlas size
+// changes). Parallel over rows.
+void project_texels(const TexelGeometry &p_geometry, const OmniParams &p_params, const Pose &p_world_from_fisheye, TexelProjection *io_projection);
+
 // The fisheye's colour at the texels update_coarse_texture would see this frame (its visibility
 // test and bilinear sample, whatever their quality), only on the grid x % p_step == 0,
 // y % p_step == 0 and only where p_only (CV_8UC1, atlas-sized) is non-zero: the lighting
@@ -90,6 +122,10 @@ struct TextureUpdateStats {
 // where r_visible (CV_8UC1, zero elsewhere) is 255; both are atlas-sized. Parallel over rows.
 void sample_coarse_texels(const TexelGeometry &p_geometry, const OmniParams &p_params, const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image,
 		const cv::Mat *p_visibility_mask, const cv::Mat &p_only, int p_step, const TextureUpdateOptions &p_options, cv::Mat *r_samples, cv::Mat *r_visible);
+// The same from the frame's projection (project_texels with the same fisheye and pose).
+void sample_coarse_texels(const TexelGeometry &p_geometry, const TexelProjection &p_projection, const OmniParams &p_params, const Pose &p_world_from_fisheye,
+		const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, const cv::Mat &p_only, int p_step, const TextureUpdateOptions &p_options,
+		cv::Mat *r_samples, cv::Mat *r_visible);
 
 // Updates io_texture (from make_coarse_texture(p_mesh)) with one fisheye frame.
 // p_fisheye_image: CV_8UC1 (grey, copied to R, G, B), CV_8UC3 (R, G, B; value / 255) or CV_32FC3
@@ -100,6 +136,25 @@ void sample_coarse_texels(const TexelGeometry &p_geometry, const OmniParams &p_p
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const OmniParams &p_params,
 		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask,
 		CoarseTexture *io_texture, const TextureUpdateOptions &p_options = TextureUpdateOptions());
+// The lighting estimate's (old texel, new sample) pairs, gathered by the update as it passes:
+// the texels on the grid x % step == 0, y % step == 0 that were observed before this frame and
+// that the frame sees (sample_coarse_texels' set and values, whatever their quality), the old
+// value read before the update writes. Kept between frames (no allocation a frame).
+struct LightingPairs {
+	int step = 2; // >= 1
+	std::vector<std::vector<LightingSample>> rows; // per grid row
+	std::vector<LightingSample> all; // gather()'s, in row-major order
+
+	// The rows' pairs in row-major order, into all.
+	const std::vector<LightingSample> &gather();
+};
+
+// The same from the frame's projection (project_texels with the same fisheye and pose): one
+// projection a texel instead of three; the same result up to rounding. With r_pairs, also
+// gathers the lighting estimate's pairs (its step is read, its rows filled).
+TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const TexelProjection &p_projection, const OmniParams &p_params,
+		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, CoarseTexture *io_texture,
+		const TextureUpdateOptions &p_options = TextureUpdateOptions(), LightingPairs *r_pairs = nullptr);
 
 // The same, computing the texel geometry on the fly (slower: prefer the overload above per frame).
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const OmniParams &p_params, const Pose &p_world_from_fisheye,

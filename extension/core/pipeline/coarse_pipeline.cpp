@@ -62,41 +62,43 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 	const Clock::time_point frame_start = Clock::now();
 	CoarsePipelineTimings t;
 
-	// 1. Occlusion (§4.4).
+	// Every texel's pixel, projected once (the tiles the fisheye cannot see skipped): for the
+	// occlusion mask's tiles and the update (counted with the update).
 	Clock::time_point start = Clock::now();
-	cv::Mat mask;
+	project_texels(geometry, fisheye, p_world_from_fisheye, &projection);
+	t.update_ms = ms_since(start);
+
+	// 1. Occlusion (§4.4).
+	start = Clock::now();
 	stats.occlusion_skipped = convex;
 	if (!convex) {
-		mask = occlusion_mask(room, geometry, p_world_from_fisheye.translation, opts.occlusion);
+		occlusion_mask(room, geometry, p_world_from_fisheye.translation, projection, &mask, opts.occlusion);
 	}
 	const cv::Mat *mask_ptr = convex ? nullptr : &mask;
 	t.occlusion_ms = ms_since(start);
 
-	// 2. Lighting change (§4.6), from (old texel, new sample) pairs before the update.
+	// 2. Texture update (§4.3, keep the best); it also gathers the lighting estimate's (old
+	// texel, new sample) pairs before it writes.
 	start = Clock::now();
-	if (opts.lighting && frames > 0) {
-		// The new samples only where the estimate reads them: its grid, among the texels observed
-		// before (no copy of the atlas, no quality test).
-		sample_coarse_texels(geometry, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, coarse.observed, opts.lighting_options.sample_step,
-				opts.update, &lighting_samples, &lighting_visible);
-		stats.lighting = estimate_lighting_change(coarse, lighting_samples, lighting_visible, opts.lighting_options);
+	const bool estimate_lighting = opts.lighting && frames > 0;
+	lighting_pairs.step = opts.lighting_options.sample_step;
+	stats.update = update_coarse_texture(room, geometry, projection, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, &coarse, opts.update,
+			estimate_lighting ? &lighting_pairs : nullptr);
+	t.update_ms += ms_since(start);
+
+	// 3. Lighting change (§4.6) from those pairs, applied to the observed texels this frame did not
+	// update (the update's order does not matter: the pairs hold the values from before it).
+	start = Clock::now();
+	if (estimate_lighting) {
+		stats.lighting = estimate_lighting_change(lighting_pairs.gather(), opts.lighting_options);
 	}
-	t.lighting_ms = ms_since(start);
-
-	// 3. Texture update (§4.3, keep the best).
-	start = Clock::now();
-	stats.update = update_coarse_texture(room, geometry, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, &coarse, opts.update);
-	t.update_ms = ms_since(start);
-
-	// 4. Apply the change to the observed texels this frame did not update.
-	start = Clock::now();
 	if (stats.lighting.valid) {
 		apply_lighting_change(&coarse, stats.lighting);
 		cumulative = compose_lighting(stats.lighting, cumulative);
 	}
-	t.lighting_ms += ms_since(start);
+	t.lighting_ms = ms_since(start);
 
-	// 5. Inpainting (§4.5), here or on the worker.
+	// 4. Inpainting (§4.5), here or on the worker.
 	start = Clock::now();
 	if (opts.inpaint && opts.inpaint_async) {
 		inpainter->request(coarse);
@@ -121,9 +123,21 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 }
 
 void CoarsePipeline::compose_completed() {
-	coarse.color.copyTo(completed);
-	if (!inpainted.empty()) {
-		inpainted.copyTo(completed, coarse.observed == 0);
+	if (inpainted.empty() || inpainted.size() != coarse.color.size() || inpainted.type() != coarse.color.type()) {
+		coarse.color.copyTo(completed);
+		return;
+	}
+	// The observed colour where there is one, else the fill: one pass, no mask made. Serial: the
+	// inpainting worker is busy on the other core while this runs.
+	completed.create(coarse.color.size(), coarse.color.type());
+	for (int y = 0; y < coarse.color.rows; y++) {
+		const cv::Vec3f *color_row = coarse.color.ptr<cv::Vec3f>(y);
+		const cv::Vec3f *fill_row = inpainted.ptr<cv::Vec3f>(y);
+		const uint8_t *observed_row = coarse.observed.ptr<uint8_t>(y);
+		cv::Vec3f *out_row = completed.ptr<cv::Vec3f>(y);
+		for (int x = 0; x < coarse.color.cols; x++) {
+			out_row[x] = observed_row[x] != 0 ? color_row[x] : fill_row[x];
+		}
 	}
 }
 

@@ -4,13 +4,13 @@
 //
 // Per fisheye frame (add_fisheye_frame):
 //   1. occlusion mask (§4.4, coarse/occlusion.h); skipped for a convex floorplan (all visible);
-//   2. lighting change (§4.6, coarse/lighting.h), when enabled: the frame is first sampled into
-//      a scratch copy of the texture (TextureUpdatePolicy::Last, so every visible texel takes the
-//      frame's value), giving (old texel, new sample) pairs on the visible, directly observed
-//      texels; the change is estimated from them BEFORE the update;
-//   3. texture update (§4.3, policy Best, coarse/texture_update.h);
-//   4. the lighting change is applied to the observed texels this frame did not update;
-//   5. inpainting (§4.5), when enabled: synchronously (TextureInpainter::inpaint), so that the
+//   2. texture update (§4.3, policy Best, coarse/texture_update.h), from every texel's pixel
+//      projected once (project_texels, skipping the tiles the fisheye cannot see); as it passes it
+//      gathers the lighting estimate's (old texel, new sample) pairs on a grid of the visible
+//      texels observed before, whatever the new sample's quality (LightingPairs);
+//   3. lighting change (§4.6, coarse/lighting.h), when enabled: estimated from those pairs (the
+//      values from before the update), applied to the observed texels this frame did not update;
+//   4. inpainting (§4.5), when enabled: synchronously (TextureInpainter::inpaint), so that the
 //      completed texture always belongs to the latest frame (evaluation); or, with inpaint_async
 //      (the live path, CoarseRoomModel), off the frame's critical path on the inpainter's worker:
 //      each frame requests a completion of its texture and composes the newest finished one under
@@ -61,8 +61,8 @@ struct CoarsePipelineOptions {
 // Wall-clock milliseconds of each stage: of the last frame, and summed over all frames.
 struct CoarsePipelineTimings {
 	double occlusion_ms = 0.0;
-	double lighting_ms = 0.0; // sampling the scratch copy, estimating and applying
-	double update_ms = 0.0;
+	double lighting_ms = 0.0; // estimating and applying (the pairs are gathered in the update)
+	double update_ms = 0.0; // projecting the texels, updating them and gathering the lighting pairs
 	double inpaint_ms = 0.0;
 	double render_ms = 0.0; // render_cubemap() (the last call / all calls)
 	double sh_ms = 0.0; // SH projection in sh()
@@ -128,7 +128,9 @@ private:
 	CoarseTexture coarse;
 	cv::Mat completed;
 	cv::Mat inpainted; // inpaint_async: the worker's newest completion (of an older texture)
-	cv::Mat lighting_samples, lighting_visible; // the lighting estimate's new values, kept between frames (no allocation a frame)
+	TexelProjection projection; // this frame's texel pixels (kept: no allocation a frame)
+	cv::Mat mask; // this frame's occlusion mask (kept)
+	LightingPairs lighting_pairs; // the lighting estimate's pairs, kept between frames (no allocation a frame)
 	std::unique_ptr<CoarseCubemapRenderer> renderer;
 	std::unique_ptr<TextureInpainter> inpainter;
 	size_t frames = 0;
