@@ -2,6 +2,7 @@
 
 #include <io/opencv.h>
 
+#include "slam/tsdf_integrate_simd.h"
 #include "slam/tsdf_volume.h"
 #include "slam_test_scenes.h"
 
@@ -12,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <limits>
 #include <numbers>
@@ -455,6 +457,64 @@ TEST_CASE("TSDF integration's skipped blocks and voxels: every voxel as the plai
 		CHECK(tsdf > 0.5f);
 		REQUIRE(volume->sample_tsdf(glm::vec3(0.0f, -0.6f, 0.0f), &tsdf, &rgb));
 		CHECK(std::fabs(tsdf) * options.truncation_m <= options.voxel_size_m);
+	}
+}
+
+TEST_CASE("TSDF integration eight voxels at a time (AVX2): every voxel and every dirty block as the scalar kernel leaves them") {
+	if (!tsdf_simd_available()) {
+		MESSAGE("this CPU has no AVX2: only the scalar kernel runs here");
+		return;
+	}
+	const PinholeIntrinsics camera = rig_camera(1);
+	Scene scene;
+	scene.boxes.push_back({ glm::dvec3(-3.0, -1.0, -0.1), glm::dvec3(3.0, 1.0, 0.0) }); // a wall
+	scene.boxes.push_back({ glm::dvec3(-3.0, -1.1, -0.1), glm::dvec3(3.0, -1.0, 3.0) }); // a floor
+	scene.spheres.push_back({ glm::dvec3(0.0, -0.6, 0.8), 0.25 });
+	for (const bool skip : { true, false }) {
+		CAPTURE(skip);
+		TsdfOptions options;
+		options.max_weight = 3; // saturated free space within a few frames: the early exit that needs it runs
+		options.max_color_weight = 2;
+		options.max_depth_m = 2.6f; // part of the wall is beyond it
+		options.skip_unchanged = skip;
+		TsdfOptions scalar_options = options;
+		scalar_options.simd = false;
+		TsdfVolume simd(options), scalar(scalar_options);
+		cv::RNG rng(7);
+		for (int i = 0; i < 8; i++) {
+			Frame f = render(scene, camera, look_at(glm::dvec3(-0.5 + 0.14 * i, 0.1 - 0.05 * i, 2.3 - 0.1 * i), glm::dvec3(0.0, -0.6, 0.4)));
+			// Sensor-like readings: noise growing with depth, holes, and zeros (no reading).
+			for (int v = 0; v < f.depth.rows; v++) {
+				for (int u = 0; u < f.depth.cols; u++) {
+					float &d = f.depth.at<float>(v, u);
+					const double r = rng.uniform(0.0, 1.0);
+					d = r < 0.03 ? std::numeric_limits<float>::quiet_NaN() : r < 0.05 ? 0.0f : d + float(rng.gaussian(0.002 * d * d));
+				}
+			}
+			const IntegrationStats a = simd.integrate(f.depth, f.rgb, camera, f.world_from_camera);
+			const IntegrationStats b = scalar.integrate(f.depth, f.rgb, camera, f.world_from_camera);
+			CHECK(a.visible_blocks == b.visible_blocks);
+			CHECK(a.updated_blocks == b.updated_blocks);
+			CHECK(a.allocated_blocks == b.allocated_blocks);
+			CHECK(simd.take_dirty_blocks() == scalar.take_dirty_blocks());
+		}
+		const std::vector<glm::ivec3> blocks = simd.allocated_blocks();
+		REQUIRE(blocks == scalar.allocated_blocks());
+		long long differing = 0, observed = 0, coloured = 0, saturated = 0;
+		for (const glm::ivec3 &block : blocks) {
+			const TsdfVoxel *x = simd.find_block(block), *y = scalar.find_block(block);
+			for (int i = 0; i < TSDF_BLOCK_VOXELS; i++) {
+				differing += std::memcmp(&x[i], &y[i], sizeof(TsdfVoxel)) != 0;
+				observed += y[i].weight > 0;
+				coloured += y[i].color_weight > 0;
+				saturated += y[i].tsdf == 1.0f && y[i].weight == options.max_weight * TSDF_WEIGHT_UNIT;
+			}
+		}
+		MESSAGE(observed << " voxels observed, " << coloured << " coloured, " << saturated << " saturated free space");
+		CHECK(observed > 100000); // the paths under test really ran
+		CHECK(coloured > 10000);
+		CHECK(saturated > 1000);
+		CHECK(differing == 0);
 	}
 }
 

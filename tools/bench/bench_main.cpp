@@ -78,7 +78,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -108,6 +110,7 @@ constexpr double PAPER_FRAME_MS = 47.42; // Table 1's total
 constexpr double TARGET_TRACKING_MS = 8.0, TARGET_INTEGRATION_MS = 6.0, TARGET_RAYCAST_MS = 4.0;
 constexpr double TARGET_COARSE_MS = 6.0, TARGET_PROBE_MS = 8.0, TARGET_FULL_FRAME_MS = 25.0;
 constexpr double TARGET_INTEGRATION_RATIO = 10.0, TARGET_RAYCAST_RATIO = 3.0, TARGET_ICP_RATIO = 3.0;
+constexpr double TARGET_OPEN3D_INTEGRATION_RATIO = 10.0;
 // As the live nodes: DenseSLAM's mesh_update_interval.
 constexpr int MESH_INTERVAL = 15;
 // The probe's map size: RoomProbe's default in step mode, and the live benchmark's.
@@ -381,6 +384,7 @@ struct Arguments {
 	double intrinsics[4] = { 0.0, 0.0, 0.0, 0.0 };
 	std::string save_trajectory; // --save-trajectory FILE
 	bool peers = true; // slam --recording: OpenCV's TSDF and ICP on the same frames (--no-peers: not)
+	std::string open3d_results; // --open3d-results FILE: Open3D's medians on the same frames (open3d_peer.py --out)
 	DenseSlamOptions slam; // the defaults, with --voxel-size-m, --colour-weight and the ranges applied
 };
 
@@ -413,6 +417,8 @@ void print_usage(std::FILE *p_out) {
 			"  --no-peers            slam --recording: skip the peers (OpenCV contrib's HASHTSDF volume integrating and raycasting\n"
 			"                        the fused frames at the tracked poses, cv::rgbd::ICPOdometry frame to frame), run after the\n"
 			"                        engine; their medians over ours are the summary's opencv_*_ratio keys\n"
+			"  --open3d-results FILE slam --recording: Open3D VoxelBlockGrid's medians on the same frames (tools/bench/open3d_peer.py\n"
+			"                        --out FILE; ./roomprobe bench ... --open3d runs it first); adds open3d_*_ratio to the summary\n"
 			"SLAM settings (DenseSlamOptions; the effective ones are printed first):\n"
 			"  --voxel-size-m V      TSDF voxel edge, metres (default %.3f)\n"
 			"  --colour-weight W     ICP's photometric term, metres per unit intensity; 0: geometry only (default %.2f)\n"
@@ -642,6 +648,8 @@ struct PeerRatios {
 	double integration = std::numeric_limits<double>::quiet_NaN();
 	double raycast = std::numeric_limits<double>::quiet_NaN();
 	double icp = std::numeric_limits<double>::quiet_NaN();
+	double open3d_integration = std::numeric_limits<double>::quiet_NaN(); // Open3D VoxelBlockGrid's time / ours
+	double open3d_raycast = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct SpeedFigures {
@@ -692,6 +700,62 @@ PeerRatios print_opencv_peers(const std::vector<bench::PeerFrame> &p_frames, con
 	return ratios;
 }
 
+// Open3D's VoxelBlockGrid on the same recording (tools/bench/open3d_peer.py --out FILE, run before
+// this process by ./roomprobe bench --open3d): its medians read from FILE, over ours. False, with
+// the reason printed, when FILE is unreadable, malformed, or was run with other settings.
+bool read_open3d_peer(const std::string &p_file, const RecordingSetup &p_setup, const SlamFigures &p_figures, size_t p_frames, PeerRatios *r_ratios) {
+	std::ifstream in(p_file);
+	if (!in) {
+		std::fprintf(stderr, "error: --open3d-results %s: cannot be read\n", p_file.c_str());
+		return false;
+	}
+	std::map<std::string, std::string> keys;
+	std::string line;
+	for (int number = 1; std::getline(in, line); number++) {
+		if (line.empty() || line[0] == '#') {
+			continue;
+		}
+		const size_t eq = line.find('=');
+		if (eq == std::string::npos || eq == 0) {
+			std::fprintf(stderr, "error: --open3d-results %s:%d: expected key=value\n", p_file.c_str(), number);
+			return false;
+		}
+		keys[line.substr(0, eq)] = line.substr(eq + 1);
+	}
+	const auto number_of = [&](const char *p_key, double *r_value) {
+		const auto it = keys.find(p_key);
+		char *end = nullptr;
+		*r_value = it == keys.end() ? 0.0 : std::strtod(it->second.c_str(), &end);
+		if (it == keys.end() || end == it->second.c_str() || *end != '\0' || !std::isfinite(*r_value)) {
+			std::fprintf(stderr, "error: --open3d-results %s: %s is missing or not a number\n", p_file.c_str(), p_key);
+			return false;
+		}
+		return true;
+	};
+	double integrate_ms, raycast_ms, voxel_m, truncation_m, frames;
+	if (!number_of("open3d_integration_ms", &integrate_ms) || !number_of("open3d_raycast_ms", &raycast_ms) || !number_of("open3d_voxel_size_m", &voxel_m) ||
+			!number_of("open3d_truncation_m", &truncation_m) || !number_of("open3d_frames", &frames)) {
+		return false;
+	}
+	const TsdfOptions &tsdf = p_setup.config.slam.tsdf;
+	if (std::fabs(voxel_m - tsdf.voxel_size_m) > 1e-6 || std::fabs(truncation_m - tsdf.truncation_m) > 1e-6 || size_t(frames) != p_frames) {
+		std::fprintf(stderr, "error: --open3d-results %s: the peer ran %g frames at a %g m voxel and %g m truncation; this run has %zu at %g m and %g m\n",
+				p_file.c_str(), frames, voxel_m, truncation_m, p_frames, tsdf.voxel_size_m, tsdf.truncation_m);
+		return false;
+	}
+	r_ratios->open3d_integration = integrate_ms / p_figures.integrate.median();
+	r_ratios->open3d_raycast = raycast_ms / p_figures.raycast.median();
+	std::printf("\nOpen3D %s tensor VoxelBlockGrid on the same %zu frames (CPU, %s threads, the recording's true poses; run just before this process\n"
+				"by tools/bench/open3d_peer.py), medians:\n",
+			keys["open3d_version"].c_str(), p_frames, keys["open3d_threads"].c_str());
+	std::printf("  %-58s %10s %10s %12s\n", "stage", "peer ms", "ours ms", "peer / ours");
+	std::printf("  %-58s %10.2f %10.2f %12.2f\n", "integration: block coordinates + integrate, same voxel, trunc.", integrate_ms, p_figures.integrate.median(),
+			r_ratios->open3d_integration);
+	const std::string name = "raycast " + keys["open3d_raycast_width"] + "x" + keys["open3d_raycast_height"] + " (depth, normal, colour)";
+	std::printf("  %-58s %10.2f %10.2f %12.2f\n", name.c_str(), raycast_ms, p_figures.raycast.median(), r_ratios->open3d_raycast);
+	return true;
+}
+
 void print_speed_target(const char *p_name, double p_ms, double p_target_ms) {
 	std::printf("  TARGET %-52s <= %5.1f ms: %8.2f ms  %s\n", p_name, p_target_ms, p_ms, met(p_ms <= p_target_ms));
 }
@@ -718,6 +782,7 @@ void print_speed_targets(const SpeedFigures &p_speed, const PeerRatios &p_ratios
 	print_ratio_target("integration, OpenCV HASHTSDF's time / ours", p_ratios.integration, TARGET_INTEGRATION_RATIO);
 	print_ratio_target("raycast, OpenCV HASHTSDF's time / ours", p_ratios.raycast, TARGET_RAYCAST_RATIO);
 	print_ratio_target("tracking, OpenCV ICPOdometry's time / ours", p_ratios.icp, TARGET_ICP_RATIO);
+	print_ratio_target("integration, Open3D VoxelBlockGrid's time / ours", p_ratios.open3d_integration, TARGET_OPEN3D_INTEGRATION_RATIO);
 }
 
 std::string speed_summary(const SpeedFigures &p_speed, const PeerRatios &p_ratios) {
@@ -728,6 +793,10 @@ std::string speed_summary(const SpeedFigures &p_speed, const PeerRatios &p_ratio
 	out += " opencv_integration_ratio=" + figure(!std::isnan(p_ratios.integration), p_ratios.integration);
 	out += " opencv_raycast_ratio=" + figure(!std::isnan(p_ratios.raycast), p_ratios.raycast);
 	out += " opencv_icp_ratio=" + figure(!std::isnan(p_ratios.icp), p_ratios.icp);
+	if (!std::isnan(p_ratios.open3d_integration)) { // only when the peer was run
+		out += " open3d_integration_ratio=" + figure(true, p_ratios.open3d_integration);
+		out += " open3d_raycast_ratio=" + figure(true, p_ratios.open3d_raycast);
+	}
 	return out;
 }
 
@@ -979,7 +1048,10 @@ int bench_recording(const Arguments &p_args) {
 	std::printf("  dense mesh: %zu triangles\n", figures.mesh_triangles);
 	trajectory_file.close(p_args.save_trajectory);
 
-	const PeerRatios ratios = p_args.peers ? print_opencv_peers(peer_frames, setup, figures) : PeerRatios();
+	PeerRatios ratios = p_args.peers ? print_opencv_peers(peer_frames, setup, figures) : PeerRatios();
+	if (!p_args.open3d_results.empty() && !read_open3d_peer(p_args.open3d_results, setup, figures, rgbd_done, &ratios)) {
+		return 1;
+	}
 	SpeedFigures speed;
 	speed.tracking_ms = figures.track.median();
 	speed.integration_ms = figures.integrate.median();
@@ -1479,6 +1551,10 @@ int main(int argc, char **argv) {
 				return usage("--voxel-size-m needs a voxel edge in metres, > 0 and <= 1");
 			}
 			args.slam.tsdf.voxel_size_m = float(v);
+		} else if (arg == "--open3d-results" && args.mode == "slam") {
+			if (!cursor.value(&args.open3d_results)) {
+				return usage("--open3d-results needs a file (tools/bench/open3d_peer.py --out)");
+			}
 		} else if (arg == "--no-peers" && args.mode == "slam") {
 			args.peers = false;
 		} else if (arg == "--colour-always") {

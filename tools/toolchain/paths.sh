@@ -26,7 +26,7 @@ rp_path_option() {
 	"synth --out" | "eval --out") echo out-dir ;;
 	"bench --save-trajectory") echo out-file ;;
 	"synth --rig" | "synth --hdri" | "bench --recording" | "bench --tum" | "bench --7scenes" | "bench --rig" | \
-		"bench --intrinsics" | "eval --recording") echo in ;;
+		"bench --intrinsics" | "bench --open3d-results" | "eval --recording") echo in ;;
 	esac
 }
 

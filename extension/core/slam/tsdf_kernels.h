@@ -82,6 +82,13 @@ struct TsdfBlockCache {
 	int32_t slot = TSDF_HASH_EMPTY;
 };
 
+// floor for |p_x| < 2^31 (grid and pixel coordinates; callers range-check pixels first), inline: baseline x86-64 has no SSE4.1
+// roundss, so std::floor is a libm call, once per voxel and pixel coordinate otherwise.
+inline int tsdf_floor(float p_x) {
+	const int i = int(p_x);
+	return i - int(p_x < float(i));
+}
+
 // The voxel at integer grid coordinates, or nullptr when its block is not allocated.
 inline const TsdfVoxel *tsdf_voxel_at(const TsdfView &p_view, const glm::ivec3 &p_voxel, TsdfBlockCache *r_cache) {
 	const glm::ivec3 block(p_voxel.x >> 3, p_voxel.y >> 3, p_voxel.z >> 3);
@@ -99,7 +106,7 @@ inline const TsdfVoxel *tsdf_voxel_at(const TsdfView &p_view, const glm::ivec3 &
 // The 8 voxels around a point given in voxel units (p_grid = world / voxel_size); false when any
 // is unallocated or unobserved. r_frac: the point's position inside that cell, in [0, 1)^3.
 inline bool tsdf_cell_corners(const TsdfView &p_view, const glm::vec3 &p_grid, TsdfBlockCache *r_cache, const TsdfVoxel *r_corners[8], glm::vec3 *r_frac) {
-	const glm::vec3 base_f(std::floor(p_grid.x), std::floor(p_grid.y), std::floor(p_grid.z));
+	const glm::vec3 base_f(float(tsdf_floor(p_grid.x)), float(tsdf_floor(p_grid.y)), float(tsdf_floor(p_grid.z)));
 	const glm::ivec3 base(base_f);
 	*r_frac = p_grid - base_f;
 	const glm::ivec3 local(base.x & 7, base.y & 7, base.z & 7);
@@ -147,7 +154,7 @@ inline bool tsdf_trilinear(const TsdfView &p_view, const glm::vec3 &p_grid, Tsdf
 
 // Trilinear colour (0..255 per channel) over the corners that have one; false when none has.
 inline bool tsdf_trilinear_color(const TsdfView &p_view, const glm::vec3 &p_grid, TsdfBlockCache *r_cache, glm::vec3 *r_rgb) {
-	const glm::vec3 base_f(std::floor(p_grid.x), std::floor(p_grid.y), std::floor(p_grid.z));
+	const glm::vec3 base_f(float(tsdf_floor(p_grid.x)), float(tsdf_floor(p_grid.y)), float(tsdf_floor(p_grid.z)));
 	const glm::ivec3 base(base_f);
 	const glm::vec3 f = p_grid - base_f;
 	glm::vec3 sum(0.0f);
@@ -174,7 +181,7 @@ struct TsdfFrameView {
 	PinholeIntrinsics camera;
 	glm::mat3 camera_from_world_rotation = glm::mat3(1.0f);
 	glm::vec3 camera_from_world_translation = glm::vec3(0.0f);
-	const float *depth = nullptr; // CV_32FC1 rows, metres
+	const float *depth = nullptr; // CV_32FC1 rows, metres; NaN where no usable reading (clean_depth)
 	size_t depth_stride = 0; // floats per row
 	const uint8_t *rgb = nullptr; // CV_8UC3 rows, R, G, B
 	size_t rgb_stride = 0; // bytes per row
@@ -185,6 +192,9 @@ struct TsdfFrameView {
 	float color_band_m = 0.01f;
 	float min_depth_m = 0.3f;
 	float max_depth_m = 4.0f;
+	// A voxel further than this behind the reading on its pixel cannot change, whatever the
+	// bilinear depth and the slope factor (tsdf_behind_limit).
+	float behind_limit_m = 0.1533f;
 	uint16_t max_weight = 64;
 	uint16_t max_color_weight = 8;
 	// Voxels whose update could not change them are rejected from the nearest reading alone,
@@ -198,6 +208,13 @@ struct TsdfFrameView {
 inline int tsdf_round_positive(float p_x) {
 	const int i = int(p_x);
 	return i + int(p_x - float(i) >= 0.5f);
+}
+
+// How far behind the reading on its pixel a voxel can be and still change: the bilinear depth
+// differs from that reading by less than half the band, and eta >= -truncation is needed with a
+// slope factor of at least min_slope.
+inline float tsdf_behind_limit(float p_truncation_m, float p_min_slope) {
+	return p_truncation_m * (0.5f + 1.0f / std::max(p_min_slope, 1e-3f));
 }
 
 // std::fmin and std::fmax inline (NaN loses to a number, as there).
@@ -266,6 +283,19 @@ inline float tsdf_depth_slope(const float *p_depth, size_t p_stride, const Pinho
 	return std::fabs(glm::dot(n, x)) / (len * x.z);
 }
 
+// Averages pixel (p_u, p_v)'s colour into a voxel near the surface, the weight capped at
+// max_color_weight frames.
+inline void tsdf_blend_color(const TsdfFrameView &p_frame, int p_u, int p_v, TsdfVoxel *r_voxel) {
+	const uint8_t *px = p_frame.rgb + size_t(p_v) * p_frame.rgb_stride + size_t(p_u) * 3;
+	const float cw = float(r_voxel->color_weight);
+	r_voxel->r = uint8_t(tsdf_round_positive((float(r_voxel->r) * cw + float(px[0])) / (cw + 1.0f)));
+	r_voxel->g = uint8_t(tsdf_round_positive((float(r_voxel->g) * cw + float(px[1])) / (cw + 1.0f)));
+	r_voxel->b = uint8_t(tsdf_round_positive((float(r_voxel->b) * cw + float(px[2])) / (cw + 1.0f)));
+	if (r_voxel->color_weight < p_frame.max_color_weight) {
+		r_voxel->color_weight++;
+	}
+}
+
 // Folds one frame into one voxel: the signed distance to the tangent
 // plane of the reading on the voxel's ray (tsdf_depth_slope), truncated to [-1, 1] and skipped
 // well behind the surface, averaged with a capped weight; the colour only within color_band of
@@ -282,19 +312,20 @@ inline bool tsdf_update_voxel_at(const TsdfFrameView &p_frame, const glm::vec3 &
 	// (within half the truncation band), else the nearest pixel, so that no depth is blended across
 	// an occlusion edge. Rounding to the nearest pixel alone would put each voxel up to half a
 	// pixel off its ray: a tsdf error of 0.5 px * depth / f * tan(tilt), which turns normals.
-	const int u = int(std::floor(pixel.x + 0.5f));
-	const int v = int(std::floor(pixel.y + 0.5f));
-	if (u < 0 || v < 0 || u >= p_frame.camera.width || v >= p_frame.camera.height) {
+	// The nearest pixel, floor(pixel + 0.5), in the image (the range test first, so that the
+	// truncation below is a floor and NaN is out).
+	const float us = pixel.x + 0.5f, vs = pixel.y + 0.5f;
+	if (!(us >= 0.0f && vs >= 0.0f && us < float(p_frame.camera.width) && vs < float(p_frame.camera.height))) {
 		return false;
 	}
+	const int u = int(us), v = int(vs);
 	float depth = p_frame.depth[size_t(v) * p_frame.depth_stride + size_t(u)];
-	if (!tsdf_depth_valid(depth, p_frame.min_depth_m, p_frame.max_depth_m)) {
-		return false;
+	if (!(depth == depth)) {
+		return false; // no reading (NaN: the depth is clean)
 	}
-	// Most voxels of a block lie well behind the reading: skip them before the bilinear depth,
-	// which differs from this reading by less than half the band, and the slope factor, at
-	// least min_slope where it counts (below, eta >= -truncation is needed to change anything).
-	if (depth - pc.z < -p_frame.truncation_m * (0.5f + 1.0f / std::max(p_frame.min_slope, 1e-3f))) {
+	// Most voxels of a block lie well behind the reading: skip them before the bilinear depth
+	// and the slope factor (tsdf_behind_limit).
+	if (depth - pc.z < -p_frame.behind_limit_m) {
 		return false;
 	}
 	const float slope = p_frame.slope[size_t(v) * p_frame.slope_stride + size_t(u)];
@@ -317,15 +348,15 @@ inline bool tsdf_update_voxel_at(const TsdfFrameView &p_frame, const glm::vec3 &
 			}
 		}
 	}
-	const int u0 = int(std::floor(pixel.x)), v0 = int(std::floor(pixel.y));
+	const int u0 = tsdf_floor(pixel.x), v0 = tsdf_floor(pixel.y); // pixel is within half a pixel of the image here
 	if (u0 >= 0 && v0 >= 0 && u0 + 1 < p_frame.camera.width && v0 + 1 < p_frame.camera.height) {
 		const float *r0 = p_frame.depth + size_t(v0) * p_frame.depth_stride + size_t(u0);
 		const float *r1 = r0 + p_frame.depth_stride;
 		const float d00 = r0[0], d10 = r0[1], d01 = r1[0], d11 = r1[1];
-		const float lo = std::min(std::min(d00, d10), std::min(d01, d11)); // NaN: all_valid is false
+		const float lo = std::min(std::min(d00, d10), std::min(d01, d11));
 		const float hi = std::max(std::max(d00, d10), std::max(d01, d11));
-		const bool all_valid = tsdf_depth_valid(d00, p_frame.min_depth_m, p_frame.max_depth_m) && tsdf_depth_valid(d10, p_frame.min_depth_m, p_frame.max_depth_m) && tsdf_depth_valid(d01, p_frame.min_depth_m, p_frame.max_depth_m) && tsdf_depth_valid(d11, p_frame.min_depth_m, p_frame.max_depth_m);
-		if (all_valid && hi - lo < 0.5f * p_frame.truncation_m) {
+		const float sum = d00 + d10 + d01 + d11; // NaN when any has no reading
+		if (sum == sum && hi - lo < 0.5f * p_frame.truncation_m) {
 			const float fx = pixel.x - float(u0), fy = pixel.y - float(v0);
 			depth = (d00 * (1.0f - fx) + d10 * fx) * (1.0f - fy) + (d01 * (1.0f - fx) + d11 * fx) * fy;
 		}
@@ -348,14 +379,7 @@ inline bool tsdf_update_voxel_at(const TsdfFrameView &p_frame, const glm::vec3 &
 	r_voxel->tsdf = (r_voxel->tsdf * w + sdf * float(add)) / (w + float(add));
 	r_voxel->weight = uint16_t(std::min(int(r_voxel->weight) + add, int(p_frame.max_weight) * TSDF_WEIGHT_UNIT));
 	if (std::fabs(eta) < p_frame.color_band_m) {
-		const uint8_t *px = p_frame.rgb + size_t(v) * p_frame.rgb_stride + size_t(u) * 3;
-		const float cw = float(r_voxel->color_weight);
-		r_voxel->r = uint8_t(tsdf_round_positive((float(r_voxel->r) * cw + float(px[0])) / (cw + 1.0f)));
-		r_voxel->g = uint8_t(tsdf_round_positive((float(r_voxel->g) * cw + float(px[1])) / (cw + 1.0f)));
-		r_voxel->b = uint8_t(tsdf_round_positive((float(r_voxel->b) * cw + float(px[2])) / (cw + 1.0f)));
-		if (r_voxel->color_weight < p_frame.max_color_weight) {
-			r_voxel->color_weight++;
-		}
+		tsdf_blend_color(p_frame, u, v, r_voxel);
 	}
 	return true;
 }
@@ -476,7 +500,7 @@ inline bool tsdf_raycast_pixel(const TsdfView &p_view, const TsdfRayParams &p_ra
 		(*r_steps)++;
 		const glm::vec3 g = origin_grid + t * dir_grid;
 		// The nearest voxel decides: its block is looked up once per block the ray enters.
-		const glm::ivec3 voxel(int(std::floor(g.x + 0.5f)), int(std::floor(g.y + 0.5f)), int(std::floor(g.z + 0.5f)));
+		const glm::ivec3 voxel(tsdf_floor(g.x + 0.5f), tsdf_floor(g.y + 0.5f), tsdf_floor(g.z + 0.5f));
 		const TsdfVoxel *nearest = tsdf_voxel_at(p_view, voxel, &cache);
 		if (cache.slot < 0) {
 			// Unallocated: nothing was seen here; jump to where the ray leaves the region whose

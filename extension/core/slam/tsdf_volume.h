@@ -44,6 +44,9 @@ struct TsdfOptions {
 	// Integration skips the blocks and voxels that a frame cannot change (same result; false: every
 	// voxel of every block in view is updated, the plain path the tests compare with).
 	bool skip_unchanged = true;
+	// Voxels updated eight at a time with AVX2 when the CPU has it, chosen at run time
+	// (tsdf_integrate_simd.h); bit-identical to the scalar kernel (false: always scalar).
+	bool simd = true;
 };
 
 // What one integrate() did.
