@@ -17,6 +17,7 @@ struct DeviceInfo {
 	std::string vendor; // Manufacturer as reported by the device, e.g. "Aravis", "PrimeSense".
 	std::string model; // Model name, e.g. "Fake", "PS1080".
 	std::string serial; // Serial number; empty where listing cannot read it without opening.
+	std::vector<std::string> modes; // "depth 640x480 30 Hz 1 mm", "Mono8 1024x1024"...; filled in only by the list_*_modes functions
 };
 
 // A value or the reason there is none. Drivers never throw: every failure is a
@@ -40,15 +41,16 @@ struct DriverStatus {
 	bool ok() const { return error.empty(); }
 };
 
-// One 8-bit single-channel image from a machine-vision camera (the fisheye).
-// Rows are packed: row y starts at pixels[y * width], no padding.
-struct GrayFrame {
+// One 8-bit image from a machine-vision camera (the fisheye), as the camera sent it.
+// Rows are packed: row y starts at pixels[y * width * channels], no padding.
+struct CameraFrame {
 	int width = 0; // Pixels.
 	int height = 0; // Pixels.
-	std::string pixel_format; // GenICam name: "Mono8", or a Bayer mosaic such as "BayerRG8" (not demosaiced).
-	std::vector<uint8_t> pixels; // width * height bytes, one per pixel.
+	int channels = 1; // 1 (Mono8, a Bayer mosaic) or 3 (RGB8, BGR8).
+	std::string pixel_format; // GenICam name: "Mono8", "RGB8", or a Bayer mosaic such as "BayerRG8" (not demosaiced: capture/pixel_formats.h does that).
+	std::vector<uint8_t> pixels; // width * height * channels bytes.
 	uint64_t timestamp_ns = 0; // Exposure time stamp from the camera's clock, nanoseconds; the host time below when the camera gives none.
-	uint64_t host_timestamp_ns = 0; // Host wall clock (Unix epoch) when the frame arrived, nanoseconds.
+	uint64_t host_timestamp_ns = 0; // Host monotonic clock (capture/capture_clock.h) when grab() took the frame, nanoseconds.
 	uint64_t frame_id = 0; // The camera's frame counter (wraps; gaps mean dropped frames).
 };
 
@@ -59,7 +61,7 @@ struct DepthFrame {
 	std::vector<uint16_t> depth_mm; // width * height distances along the optical axis, millimetres; 0 = no measurement.
 	bool registered_to_color = false; // True when the device mapped depth into the colour camera's pixels.
 	uint64_t timestamp_ns = 0; // Device clock (OpenNI2 gives microseconds), nanoseconds; a recording's own time line.
-	uint64_t host_timestamp_ns = 0; // Host wall clock (Unix epoch) when the frame was read, nanoseconds.
+	uint64_t host_timestamp_ns = 0; // Host monotonic clock (capture/capture_clock.h) when the frame was read, nanoseconds.
 	int frame_index = 0; // The stream's frame counter.
 };
 
@@ -69,7 +71,7 @@ struct ColorFrame {
 	int height = 0; // Pixels.
 	std::vector<uint8_t> rgb; // width * height * 3 bytes, R, G, B per pixel, rows packed.
 	uint64_t timestamp_ns = 0; // Device clock, nanoseconds (see DepthFrame).
-	uint64_t host_timestamp_ns = 0; // Host wall clock (Unix epoch) when the frame was read, nanoseconds.
+	uint64_t host_timestamp_ns = 0; // Host monotonic clock (capture/capture_clock.h) when the frame was read, nanoseconds.
 	int frame_index = 0; // The stream's frame counter.
 };
 

@@ -3,6 +3,7 @@
 // simulator arv-fake-gv-camera-0.8 (aravis-tools) on the loopback interface.
 
 #include "aravis/aravis_camera.h"
+#include "gv_simulator.h"
 
 #include <doctest/doctest.h>
 
@@ -42,70 +43,6 @@ double variance(const std::vector<uint8_t> &p_pixels) {
 	return sum_sq / n - (sum / n) * (sum / n);
 }
 
-const char *const GV_SIMULATOR = "arv-fake-gv-camera-0.8";
-
-std::string find_on_path(const std::string &p_program) {
-	const char *path = std::getenv("PATH");
-	std::string dirs = path ? path : "/usr/bin:/bin";
-	size_t start = 0;
-	while (start <= dirs.size()) {
-		const size_t end = std::min(dirs.find(':', start), dirs.size());
-		const std::filesystem::path candidate = std::filesystem::path(dirs.substr(start, end - start)) / p_program;
-		if (access(candidate.c_str(), X_OK) == 0) {
-			return candidate.string();
-		}
-		start = end + 1;
-	}
-	return "";
-}
-
-// Evaluated when the test registers, so that the skip shows in doctest's count.
-bool gv_simulator_missing() {
-	const bool missing = find_on_path(GV_SIMULATOR).empty();
-	if (missing) {
-		std::fprintf(stderr, "test_drivers_aravis: skipping the vanishing-camera test: %s (aravis-tools) is not on PATH\n", GV_SIMULATOR);
-	}
-	return missing;
-}
-
-// The GigE Vision simulator as a child process: killed and reaped when this
-// goes, and killed by the kernel should the test program crash first.
-class GvSimulator {
-public:
-	GvSimulator() {
-		const std::string program = find_on_path(GV_SIMULATOR);
-		char *const argv[] = { const_cast<char *>(program.c_str()), const_cast<char *>("-i"), const_cast<char *>("127.0.0.1"), nullptr };
-		pid = fork();
-		if (pid == 0) {
-			// Only async-signal-safe calls between fork and exec.
-			prctl(PR_SET_PDEATHSIG, SIGKILL);
-			const int null_fd = open("/dev/null", O_WRONLY);
-			dup2(null_fd, 1);
-			dup2(null_fd, 2);
-			execv(program.c_str(), argv);
-			_exit(127);
-		}
-	}
-	GvSimulator(const GvSimulator &) = delete;
-	GvSimulator &operator=(const GvSimulator &) = delete;
-	~GvSimulator() { kill(); }
-
-	// False once it has exited, e.g. because another simulator holds the port.
-	bool running() {
-		return pid > 0 && waitpid(pid, nullptr, WNOHANG) == 0;
-	}
-	void kill() {
-		if (pid > 0) {
-			::kill(pid, SIGKILL);
-			waitpid(pid, nullptr, 0);
-			pid = -1;
-		}
-	}
-
-private:
-	pid_t pid = -1;
-};
-
 } // namespace
 
 TEST_CASE("aravis driver: the Fake camera is listed only when asked for") {
@@ -137,7 +74,7 @@ TEST_CASE("aravis driver: Fake_1 opens and grabs frames of the reported size wit
 	CHECK(height > 0);
 	CHECK_FALSE(camera.is_streaming());
 
-	DriverResult<GrayFrame> first = camera.grab(2000);
+	DriverResult<CameraFrame> first = camera.grab(2000);
 	REQUIRE_MESSAGE(first.ok(), first.error);
 	CHECK(camera.is_streaming());
 	CHECK(first.value.width == width);
@@ -149,7 +86,7 @@ TEST_CASE("aravis driver: Fake_1 opens and grabs frames of the reported size wit
 	// The test pattern is a gradient, not a flat image.
 	CHECK(variance(first.value.pixels) > 0.0);
 
-	DriverResult<GrayFrame> second = camera.grab(2000);
+	DriverResult<CameraFrame> second = camera.grab(2000);
 	REQUIRE_MESSAGE(second.ok(), second.error);
 	CHECK(second.value.timestamp_ns > first.value.timestamp_ns);
 	CHECK(second.value.pixels.size() == first.value.pixels.size());
@@ -159,11 +96,11 @@ TEST_CASE("aravis driver: grab returns the newest frame, not one queued while th
 	DriverResult<std::unique_ptr<AravisCamera>> opened = AravisCamera::open("Fake_1");
 	REQUIRE_MESSAGE(opened.ok(), opened.error);
 	AravisCamera &camera = *opened.value;
-	DriverResult<GrayFrame> first = camera.grab(2000);
+	DriverResult<CameraFrame> first = camera.grab(2000);
 	REQUIRE_MESSAGE(first.ok(), first.error);
 	// The Fake camera runs at 25 fps: in 300 ms several frames queue up.
 	std::this_thread::sleep_for(std::chrono::milliseconds(300));
-	DriverResult<GrayFrame> later = camera.grab(2000);
+	DriverResult<CameraFrame> later = camera.grab(2000);
 	REQUIRE_MESSAGE(later.ok(), later.error);
 	CHECK(later.value.timestamp_ns - first.value.timestamp_ns >= 200'000'000u);
 	CHECK(later.value.frame_id > first.value.frame_id + 1);
@@ -214,7 +151,7 @@ TEST_CASE("aravis driver: opening an unknown camera fails with an error naming i
 }
 
 TEST_CASE("aravis driver: a GigE camera that vanishes mid-stream makes grab fail, never crash (needs arv-fake-gv-camera-0.8)" *
-		doctest::skip(gv_simulator_missing()) * doctest::timeout(60)) {
+		doctest::skip(gv_simulator_missing("the vanishing-camera test")) * doctest::timeout(60)) {
 	GvSimulator simulator;
 	REQUIRE(simulator.running());
 	// The simulator needs a moment before it answers.
@@ -228,13 +165,13 @@ TEST_CASE("aravis driver: a GigE camera that vanishes mid-stream makes grab fail
 	REQUIRE_MESSAGE(opened.ok(), opened.error);
 	REQUIRE_MESSAGE(simulator.running(), "another GigE Vision simulator already serves 127.0.0.1; ours could not start");
 	AravisCamera &camera = *opened.value;
-	DriverResult<GrayFrame> frame = camera.grab(3000);
+	DriverResult<CameraFrame> frame = camera.grab(3000);
 	REQUIRE_MESSAGE(frame.ok(), frame.error);
 	CHECK(frame.value.pixels.size() == size_t(frame.value.width) * size_t(frame.value.height));
 
 	simulator.kill(); // As good as pulling the cable.
 	// A frame that landed just before the kill may still be waiting in the buffer pool (4 buffers).
-	DriverResult<GrayFrame> after = camera.grab(500);
+	DriverResult<CameraFrame> after = camera.grab(500);
 	for (int stale = 0; stale < 4 && after.ok(); stale++) {
 		after = camera.grab(500);
 	}

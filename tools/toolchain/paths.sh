@@ -23,10 +23,10 @@ RP_MKDIRS=()
 # exist); nothing when the option takes no path.
 rp_path_option() {
 	case "$1 $2" in
-	"synth --out" | "eval --out") echo out-dir ;;
+	"synth --out" | "eval --out" | "record --out") echo out-dir ;;
 	"bench --save-trajectory") echo out-file ;;
 	"synth --rig" | "synth --hdri" | "bench --recording" | "bench --tum" | "bench --7scenes" | "bench --rig" | \
-		"bench --intrinsics" | "bench --open3d-results" | "eval --recording") echo in ;;
+		"bench --intrinsics" | "bench --open3d-results" | "eval --recording" | "record --rig") echo in ;;
 	esac
 }
 

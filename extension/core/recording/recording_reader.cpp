@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <sstream>
 
 namespace roomprobe {
 
@@ -120,6 +121,30 @@ std::string check_fisheye_file(const std::string &p_path, const Rig &p_rig) {
 		return std::string(); // a rig without a fisheye (datasets): nothing to compare with
 	}
 	return size_problem(p_path, width, height, "fisheye", p_rig.fisheye.width, p_rig.fisheye.height);
+}
+
+// Reads gaps.txt (a live recording's frames its writer could not keep): one issue a gap, so
+// whoever plays it back knows where frames are missing.
+void read_gap_list(const std::string &p_path, RecordingContents *r_contents) {
+	std::vector<recording_io::IndexLine> lines;
+	const std::string error = recording_io::read_index_lines(p_path, &lines);
+	if (!error.empty()) {
+		r_contents->issues.push_back({ p_path, 0, error });
+		return;
+	}
+	for (const recording_io::IndexLine &line : lines) {
+		std::istringstream fields(line.text);
+		std::string stream;
+		double first_s = 0.0, last_s = 0.0;
+		unsigned long long frames = 0;
+		if (!(fields >> stream >> first_s >> last_s >> frames) || (stream != "rgbd" && stream != "fisheye")) {
+			r_contents->issues.push_back({ p_path, line.line, "expected 'rgbd|fisheye first_timestamp_s last_timestamp_s frames', got '" + line.text + "'" });
+			continue;
+		}
+		r_contents->issues.push_back({ p_path, line.line, std::to_string(frames) + " " + stream + " frame" + (frames == 1 ? "" : "s") +
+				" from " + recording_io::format_number(first_s) + " to " + recording_io::format_number(last_s) +
+				" s were not recorded (the recorder's queue was full)" });
+	}
 }
 
 // Reads groundtruth/cubemaps.txt: 'timestamp_s probe_index relative/path.exr' a line.
@@ -348,6 +373,11 @@ RecordingStatus RecordingReader::open(const std::string &p_folder, const Recordi
 		} else {
 			read.issues.push_back({ cubemap_index, 0, "the recording has no room.yaml, whose probes the cubemaps are at; no ground-truth cubemaps" });
 		}
+	}
+
+	const std::string gap_list = join(p_folder, "gaps.txt");
+	if (fs::exists(gap_list, ec)) {
+		read_gap_list(gap_list, &read);
 	}
 
 	open_contents(std::move(read));

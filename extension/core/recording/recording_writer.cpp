@@ -20,6 +20,12 @@ namespace {
 
 constexpr const char *TRAJECTORY_FILES[2] = { "groundtruth/rgb_trajectory.txt", "groundtruth/fisheye_trajectory.txt" };
 
+uint64_t file_bytes(const std::string &p_path) {
+	std::error_code error;
+	const uintmax_t size = std::filesystem::file_size(p_path, error);
+	return error ? 0 : uint64_t(size);
+}
+
 std::string numbered(const char *p_folder, size_t p_number, const char *p_extension) {
 	char name[64];
 	std::snprintf(name, sizeof(name), "%s/%06zu%s", p_folder, p_number, p_extension);
@@ -191,6 +197,7 @@ RecordingStatus RecordingWriter::open_folder(const std::string &p_folder, const 
 	room = has_room ? *p_room : RoomInfo();
 	options = p_options;
 	rgbd_count = 0;
+	image_bytes = 0;
 	fisheye_count = 0;
 	cubemap_count = 0;
 	has_rgb_time = false;
@@ -255,6 +262,7 @@ RecordingStatus RecordingWriter::add_rgbd(const RgbdFrame &p_frame) {
 	if (!error.empty()) {
 		return fail(error);
 	}
+	image_bytes += file_bytes(rgb_path) + file_bytes(depth_path);
 	has_rgb_time = true;
 	last_rgb_time_s = rgb_time;
 	last_depth_time_s = depth_time;
@@ -310,6 +318,7 @@ RecordingStatus RecordingWriter::add_fisheye(const FisheyeFrame &p_frame) {
 	if (!error.empty()) {
 		return fail(error);
 	}
+	image_bytes += file_bytes(file);
 	has_fisheye_time = true;
 	last_fisheye_time_s = p_frame.timestamp_s;
 	fisheye_count++;

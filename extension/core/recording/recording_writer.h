@@ -70,6 +70,8 @@ public:
 	const std::string &get_folder() const { return folder; }
 	size_t get_rgbd_count() const { return rgbd_count; }
 	size_t get_fisheye_count() const { return fisheye_count; }
+	// Bytes of the RGB, depth and fisheye image files written since open() (as on disk).
+	uint64_t get_image_bytes() const { return image_bytes; }
 
 private:
 	RecordingStatus open_folder(const std::string &p_folder, const Rig &p_rig, const RoomInfo *p_room, const RecordingWriteOptions &p_options);
@@ -90,6 +92,7 @@ private:
 	size_t rgbd_count = 0;
 	size_t fisheye_count = 0;
 	size_t cubemap_count = 0;
+	uint64_t image_bytes = 0;
 	bool has_rgb_time = false;
 	double last_rgb_time_s = 0.0;
 	double last_depth_time_s = 0.0;

@@ -1,5 +1,7 @@
 #include "aravis/aravis_camera.h"
 
+#include "capture/capture_clock.h"
+
 #include <arv.h>
 
 #include <algorithm>
@@ -67,7 +69,7 @@ std::vector<DeviceInfo> list_devices_locked(bool p_include_fake) {
 	const unsigned int count = arv_get_n_devices();
 	for (unsigned int i = 0; i < count; i++) {
 		devices.push_back({ "aravis", text(arv_get_device_id(i)), text(arv_get_device_vendor(i)),
-				text(arv_get_device_model(i)), text(arv_get_device_serial_nbr(i)) });
+				text(arv_get_device_model(i)), text(arv_get_device_serial_nbr(i)), {} });
 	}
 	return devices;
 }
@@ -216,7 +218,7 @@ DriverResult<std::unique_ptr<AravisCamera>> AravisCamera::open(const std::string
 	state->name = name;
 	ArvCamera *cam = camera.get();
 	state->info = { "aravis", p_device_id, text(arv_camera_get_vendor_name(cam, error.out())),
-		text(arv_camera_get_model_name(cam, error.out())), text(arv_camera_get_device_serial_number(cam, error.out())) };
+		text(arv_camera_get_model_name(cam, error.out())), text(arv_camera_get_device_serial_number(cam, error.out())), {} };
 	arv_camera_get_sensor_size(cam, &state->sensor_width, &state->sensor_height, error.out());
 	if (error.failed()) {
 		return Result::failure(name + ": cannot read the sensor size: " + error.message());
@@ -227,8 +229,8 @@ DriverResult<std::unique_ptr<AravisCamera>> AravisCamera::open(const std::string
 	return Result::success(std::unique_ptr<AravisCamera>(new AravisCamera(std::move(state))));
 }
 
-DriverResult<GrayFrame> AravisCamera::grab(int p_timeout_ms) {
-	using Result = DriverResult<GrayFrame>;
+DriverResult<CameraFrame> AravisCamera::grab(int p_timeout_ms) {
+	using Result = DriverResult<CameraFrame>;
 	State &s = *state;
 	if (s.control_lost->load()) {
 		return Result::failure(s.lost_message());
@@ -281,10 +283,12 @@ DriverResult<GrayFrame> AravisCamera::grab(int p_timeout_ms) {
 			continue;
 		}
 		const ArvPixelFormat format = arv_buffer_get_image_pixel_format(buffer);
-		if (ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format) != 8) {
+		const int bits = int(ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format));
+		if (bits != 8 && bits != 24) {
 			return Result::failure(s.name + ": pixel format " + s.stream_pixel_format + " has " +
-					std::to_string(ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format)) + " bits per pixel; only 8-bit formats are supported");
+					std::to_string(bits) + " bits per pixel; only 8-bit formats are supported (Mono8, Bayer*8, RGB8, BGR8)");
 		}
+		const int channels = bits / 8;
 		const int width = arv_buffer_get_image_width(buffer);
 		const int height = arv_buffer_get_image_height(buffer);
 		int x_padding = 0;
@@ -292,21 +296,24 @@ DriverResult<GrayFrame> AravisCamera::grab(int p_timeout_ms) {
 		arv_buffer_get_image_padding(buffer, &x_padding, &y_padding);
 		size_t size = 0;
 		const uint8_t *data = static_cast<const uint8_t *>(arv_buffer_get_image_data(buffer, &size));
-		const size_t stride = size_t(width) + size_t(std::max(x_padding, 0));
-		if (!data || width <= 0 || height <= 0 || size < stride * size_t(height - 1) + size_t(width)) {
+		const size_t row_bytes = size_t(width) * size_t(channels);
+		const size_t stride = row_bytes + size_t(std::max(x_padding, 0));
+		if (!data || width <= 0 || height <= 0 || size < stride * size_t(height - 1) + row_bytes) {
 			return Result::failure(s.name + ": frame of " + std::to_string(size) + " bytes does not hold the " +
 					std::to_string(width) + "x" + std::to_string(height) + " image it announces");
 		}
 
-		GrayFrame frame;
+		CameraFrame frame;
 		frame.width = width;
 		frame.height = height;
+		frame.channels = channels;
 		frame.pixel_format = s.stream_pixel_format;
-		frame.pixels.resize(size_t(width) * size_t(height));
+		frame.pixels.resize(row_bytes * size_t(height));
 		for (int y = 0; y < height; y++) {
-			std::memcpy(frame.pixels.data() + size_t(y) * size_t(width), data + size_t(y) * stride, size_t(width));
+			std::memcpy(frame.pixels.data() + size_t(y) * row_bytes, data + size_t(y) * stride, row_bytes);
 		}
-		frame.host_timestamp_ns = arv_buffer_get_system_timestamp(buffer);
+		// Aravis' system timestamp is the wall clock, which can jump; the rig's clock is monotonic.
+		frame.host_timestamp_ns = monotonic_clock_ns();
 		const uint64_t camera_ns = arv_buffer_get_timestamp(buffer);
 		frame.timestamp_ns = camera_ns ? camera_ns : frame.host_timestamp_ns;
 		frame.frame_id = arv_buffer_get_frame_id(buffer);
@@ -356,6 +363,66 @@ std::string AravisCamera::get_pixel_format() const {
 
 bool AravisCamera::is_streaming() const {
 	return state->stream != nullptr;
+}
+
+bool AravisCamera::is_connection_lost() const {
+	return state->control_lost->load();
+}
+
+std::vector<std::string> AravisCamera::get_available_pixel_formats() const {
+	ErrorSlot error;
+	guint count = 0;
+	const char **names = arv_camera_dup_available_pixel_formats_as_strings(state->camera.get(), &count, error.out());
+	std::vector<std::string> formats;
+	for (guint i = 0; names && i < count; i++) {
+		formats.push_back(text(names[i]));
+	}
+	g_free(names); // the array only: its strings belong to the camera
+	return formats;
+}
+
+DriverStatus AravisCamera::set_pixel_format(const std::string &p_format) {
+	const std::string what = state->name + ": cannot set the pixel format " + p_format + ": ";
+	if (state->stream) {
+		return { what + "the camera is streaming (set it before the first grab)" };
+	}
+	const std::vector<std::string> formats = get_available_pixel_formats();
+	if (std::find(formats.begin(), formats.end(), p_format) == formats.end()) {
+		std::string offered;
+		for (const std::string &format : formats) {
+			offered += (offered.empty() ? "" : ", ") + format;
+		}
+		return { what + "the camera offers " + (offered.empty() ? std::string("none it can name") : offered) };
+	}
+	ErrorSlot error;
+	arv_camera_set_pixel_format_from_string(state->camera.get(), p_format.c_str(), error.out());
+	if (error.failed()) {
+		return { what + error.message() };
+	}
+	return {};
+}
+
+DriverStatus AravisCamera::set_auto_exposure(bool p_on) {
+	ErrorSlot error;
+	ArvCamera *cam = state->camera.get();
+	const bool exposure = arv_camera_is_exposure_auto_available(cam, error.out()) && !error.failed();
+	const bool gain = arv_camera_is_gain_auto_available(cam, error.out()) && !error.failed();
+	if (!exposure && !gain) {
+		return p_on ? DriverStatus{ state->name + ": cannot turn auto-exposure on: the camera has neither ExposureAuto nor GainAuto" } : DriverStatus{};
+	}
+	if (exposure) {
+		arv_camera_set_exposure_time_auto(cam, p_on ? ARV_AUTO_CONTINUOUS : ARV_AUTO_OFF, error.out());
+		if (error.failed()) {
+			return { state->name + ": cannot set ExposureAuto: " + error.message() };
+		}
+	}
+	if (gain) {
+		arv_camera_set_gain_auto(cam, p_on ? ARV_AUTO_CONTINUOUS : ARV_AUTO_OFF, error.out());
+		if (error.failed()) {
+			return { state->name + ": cannot set GainAuto: " + error.message() };
+		}
+	}
+	return {};
 }
 
 bool AravisCamera::has_exposure_time() const {

@@ -33,9 +33,9 @@ public:
 	// continuously into a pool of 4 buffers from the first grab: starting and
 	// stopping per frame (arv_camera_acquisition) costs a stream set-up each time
 	// and cannot keep up with the camera's frame rate.
-	// Only 8-bit formats (Mono8, Bayer*8) are accepted. A camera that stopped
+	// Only 8-bit formats (Mono8, Bayer*8, RGB8, BGR8) are accepted. A camera that stopped
 	// answering (unplugged) gives an error, here and on every later call.
-	DriverResult<GrayFrame> grab(int p_timeout_ms);
+	DriverResult<CameraFrame> grab(int p_timeout_ms);
 
 	const std::string &get_device_id() const;
 	DeviceInfo get_info() const;
@@ -45,6 +45,15 @@ public:
 	int get_height() const;
 	std::string get_pixel_format() const; // GenICam name, e.g. "Mono8".
 	bool is_streaming() const;
+	// True once Aravis' heartbeat found the camera gone; every grab() then fails. Open it again.
+	bool is_connection_lost() const;
+	// The GenICam names of the pixel formats the camera offers ("Mono8", "BayerRG8", ...).
+	std::vector<std::string> get_available_pixel_formats() const;
+	// Before the first grab only; fails naming the formats offered.
+	DriverStatus set_pixel_format(const std::string &p_format);
+	// ExposureAuto and GainAuto continuous (on) or off, whichever the camera has. Off with
+	// neither is not an error (the camera has nothing automatic); on with neither is.
+	DriverStatus set_auto_exposure(bool p_on);
 
 	// Exposure in microseconds and gain in the camera's unit (usually dB). Each
 	// setter switches the matching auto mode off and fails, naming the valid

@@ -1,5 +1,7 @@
 #include "openni2/openni2_device.h"
 
+#include "capture/capture_clock.h"
+
 #include <OpenNI.h>
 
 #include <algorithm>
@@ -75,7 +77,7 @@ std::vector<DeviceInfo> enumerate_devices() {
 	OpenNI::enumerateDevices(&list);
 	std::vector<DeviceInfo> devices;
 	for (int i = 0; i < list.getSize(); i++) {
-		devices.push_back({ "openni2", list[i].getUri(), list[i].getVendor(), list[i].getName(), "" });
+		devices.push_back({ "openni2", list[i].getUri(), list[i].getVendor(), list[i].getName(), "", {} });
 	}
 	return devices;
 }
@@ -116,7 +118,7 @@ std::string check_recording(const std::string &p_path) {
 }
 
 uint64_t host_now_ns() {
-	return uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count());
+	return monotonic_clock_ns(); // never the wall clock, which can jump
 }
 
 // The supported mode closest to p_width x p_height at 30 fps in p_format, if any.
@@ -212,6 +214,58 @@ DriverResult<std::vector<DeviceInfo>> list_openni2_devices() {
 	return Result::success(enumerate_devices());
 }
 
+namespace {
+
+std::string pixel_format_name(openni::PixelFormat p_format) {
+	switch (p_format) {
+		case openni::PIXEL_FORMAT_DEPTH_1_MM:
+			return "1 mm";
+		case openni::PIXEL_FORMAT_DEPTH_100_UM:
+			return "100 um";
+		case openni::PIXEL_FORMAT_SHIFT_9_2:
+			return "shift 9.2";
+		case openni::PIXEL_FORMAT_SHIFT_9_3:
+			return "shift 9.3";
+		case openni::PIXEL_FORMAT_RGB888:
+			return "RGB888";
+		case openni::PIXEL_FORMAT_YUV422:
+			return "YUV422";
+		case openni::PIXEL_FORMAT_GRAY8:
+			return "GRAY8";
+		case openni::PIXEL_FORMAT_GRAY16:
+			return "GRAY16";
+		case openni::PIXEL_FORMAT_JPEG:
+			return "JPEG";
+		case openni::PIXEL_FORMAT_YUYV:
+			return "YUYV";
+		default:
+			return "format " + std::to_string(int(p_format));
+	}
+}
+
+} // namespace
+
+DriverResult<std::vector<std::string>> list_openni2_modes(const std::string &p_uri) {
+	using Result = DriverResult<std::vector<std::string>>;
+	DriverResult<std::unique_ptr<OpenNI2Device>> opened = OpenNI2Device::open(p_uri);
+	if (!opened.ok()) {
+		return Result::failure(opened.error);
+	}
+	std::vector<std::string> modes;
+	for (const auto &[stream, what] : { std::pair{ opened.value->state->depth.get(), "depth" }, std::pair{ opened.value->state->color.get(), "colour" } }) {
+		if (!stream) {
+			continue;
+		}
+		const openni::Array<openni::VideoMode> &supported = stream->getSensorInfo().getSupportedVideoModes();
+		for (int i = 0; i < supported.getSize(); i++) {
+			const openni::VideoMode &mode = supported[i];
+			modes.push_back(std::string(what) + " " + std::to_string(mode.getResolutionX()) + "x" + std::to_string(mode.getResolutionY()) + " " +
+					std::to_string(mode.getFps()) + " Hz " + pixel_format_name(mode.getPixelFormat()));
+		}
+	}
+	return Result::success(std::move(modes));
+}
+
 DriverResult<OpenNI2Session> OpenNI2Session::start() {
 	DriverResult<std::shared_ptr<Runtime>> runtime = acquire_runtime();
 	if (!runtime.ok()) {
@@ -280,7 +334,7 @@ DriverResult<std::unique_ptr<OpenNI2Device>> OpenNI2Device::open(const std::stri
 		serial[0] = '\0';
 	}
 	serial[sizeof(serial) - 1] = '\0';
-	state->info = { "openni2", p_uri, info.getVendor(), info.getName(), serial };
+	state->info = { "openni2", p_uri, info.getVendor(), info.getName(), serial, {} };
 
 	const struct {
 		openni::SensorType type;
@@ -453,6 +507,10 @@ bool OpenNI2Device::has_color() const {
 
 bool OpenNI2Device::is_depth_registered() const {
 	return state->registered;
+}
+
+bool OpenNI2Device::is_disconnected() const {
+	return state->watch && state->watch->disconnected.load();
 }
 
 } // namespace roomprobe::drivers

@@ -23,6 +23,10 @@ namespace roomprobe::drivers {
 // error means OpenNI itself could not start.
 DriverResult<std::vector<DeviceInfo>> list_openni2_devices();
 
+// The video modes a device (or recording) offers, one text a mode: "depth 640x480 30 Hz 1 mm",
+// "colour 1280x1024 15 Hz RGB888". Opens the device for a moment.
+DriverResult<std::vector<std::string>> list_openni2_modes(const std::string &p_uri);
+
 // Keeps OpenNI initialised while held, so listing and opening reuse it.
 // OpenNI 2.2's drivers leak about 110 KB on every initialise/shutdown cycle, so
 // a caller that lists again and again (a device picker) should hold one.
@@ -58,6 +62,8 @@ public:
 	bool has_depth() const;
 	bool has_color() const;
 	bool is_depth_registered() const; // Depth pixels are mapped onto colour pixels.
+	// True once OpenNI reported the device unplugged; every grab then fails. Open it again.
+	bool is_disconnected() const;
 
 	// Stops and destroys the streams, closes the device, releases OpenNI.
 	~OpenNI2Device();
@@ -66,6 +72,7 @@ public:
 	OpenNI2Device &operator=(const OpenNI2Device &) = delete;
 
 private:
+	friend DriverResult<std::vector<std::string>> list_openni2_modes(const std::string &p_uri);
 	struct State; // OpenNI objects, defined in the .cpp.
 
 	explicit OpenNI2Device(std::unique_ptr<State> p_state);

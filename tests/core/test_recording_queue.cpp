@@ -1,0 +1,257 @@
+// RecordingQueue (recording/recording_queue.h): live streams recorded by a writer thread behind a
+// bounded queue, read back frame for frame; overflow written as gaps; nothing overwritten. And the
+// round trip from a live device: Aravis' Fake camera through its capture thread into a recording.
+
+#include "capture/capture_sources.h"
+#include "capture/device_capture.h"
+#include "recording/recording_queue.h"
+#include "recording/recording_reader.h"
+#include "synth_test_rig.h"
+
+#include <doctest/doctest.h>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+using namespace roomprobe;
+namespace fs = std::filesystem;
+
+namespace {
+
+bool contains(const std::string &p_text, const std::string &p_part) {
+	return p_text.find(p_part) != std::string::npos;
+}
+
+fs::path fresh_folder(const std::string &p_name) {
+	const fs::path folder = fs::temp_directory_path() / ("roomprobe_queue_" + p_name + "_" + std::to_string(::getpid()));
+	fs::remove_all(folder);
+	return folder;
+}
+
+Rig small_rig(int p_fisheye_width, int p_fisheye_height) {
+	Rig rig = test_rig();
+	rig.rgb.width = 64;
+	rig.rgb.height = 48;
+	rig.rgb.fx = rig.rgb.fy = 50.0;
+	rig.rgb.cx = 31.5;
+	rig.rgb.cy = 23.5;
+	rig.fisheye.width = p_fisheye_width;
+	rig.fisheye.height = p_fisheye_height;
+	rig.fisheye.cx = rig.fisheye.circle_cx = (p_fisheye_width - 1) * 0.5;
+	rig.fisheye.cy = rig.fisheye.circle_cy = (p_fisheye_height - 1) * 0.5;
+	rig.fisheye.circle_radius = std::min(p_fisheye_width, p_fisheye_height) * 0.45;
+	rig.fisheye.fx = rig.fisheye.fy = rig.fisheye.circle_radius;
+	rig.fisheye_time_offset_s = 0.0; // live: both streams on the rig's one clock
+	return rig;
+}
+
+RgbdFrame make_rgbd(int p_frame, double p_time_s) {
+	RgbdFrame frame;
+	frame.timestamp_s = p_time_s;
+	frame.rgb.create(48, 64, CV_8UC3);
+	frame.depth_m.create(48, 64, CV_32FC1);
+	for (int y = 0; y < 48; y++) {
+		for (int x = 0; x < 64; x++) {
+			frame.rgb.at<cv::Vec3b>(y, x) = cv::Vec3b(uchar(x * 3 + p_frame), uchar(y * 5), uchar(p_frame * 7));
+			frame.depth_m.at<float>(y, x) = (x + y) % 11 == 0 ? std::numeric_limits<float>::quiet_NaN() : 0.5f + 0.001f * float(x + y + p_frame);
+		}
+	}
+	return frame;
+}
+
+FisheyeFrame make_fisheye(int p_frame, double p_time_s, int p_width, int p_height) {
+	FisheyeFrame frame;
+	frame.timestamp_s = p_time_s;
+	frame.image.create(p_height, p_width, CV_8UC3);
+	for (int y = 0; y < p_height; y++) {
+		for (int x = 0; x < p_width; x++) {
+			frame.image.at<cv::Vec3b>(y, x) = cv::Vec3b(uchar(x + p_frame), uchar(y), uchar(200 - p_frame));
+		}
+	}
+	return frame;
+}
+
+bool same_image(const cv::Mat &p_a, const cv::Mat &p_b) {
+	return p_a.size() == p_b.size() && p_a.type() == p_b.type() && cv::norm(p_a, p_b, cv::NORM_INF) == 0.0;
+}
+
+} // namespace
+
+TEST_CASE("recording queue: frames pushed from two threads play back frame for frame, with the same timestamps and images") {
+	const fs::path folder = fresh_folder("roundtrip");
+	const Rig rig = small_rig(40, 40);
+	RecordingQueue queue;
+	const RecordingStatus opened = queue.open(folder.string(), rig, nullptr);
+	REQUIRE_MESSAGE(opened.ok, opened.error);
+	CHECK(queue.is_open());
+	const double t0 = 81234.56789; // a monotonic clock's seconds since boot
+	std::vector<double> rgbd_times, fisheye_times;
+	for (int i = 0; i < 20; i++) {
+		rgbd_times.push_back(t0 + i / 30.0);
+	}
+	for (int i = 0; i < 8; i++) {
+		fisheye_times.push_back(t0 + 0.011 + i / 12.0);
+	}
+	std::thread rgbd_thread([&] {
+		for (size_t i = 0; i < rgbd_times.size(); i++) {
+			CHECK(queue.push_rgbd(make_rgbd(int(i), rgbd_times[i])));
+		}
+	});
+	std::thread fisheye_thread([&] {
+		for (size_t i = 0; i < fisheye_times.size(); i++) {
+			CHECK(queue.push_fisheye(make_fisheye(int(i), fisheye_times[i], 40, 40)));
+		}
+	});
+	rgbd_thread.join();
+	fisheye_thread.join();
+	const RecordingStatus closed = queue.close();
+	REQUIRE_MESSAGE(closed.ok, closed.error);
+	const RecordingQueueStatus status = queue.status();
+	CHECK_FALSE(status.recording);
+	CHECK(status.written[0] == 20);
+	CHECK(status.written[1] == 8);
+	CHECK(status.dropped[0] + status.dropped[1] == 0);
+	CHECK(status.megabytes_written > 0.0);
+	CHECK(status.megabytes_per_s > 0.0);
+	CHECK_FALSE(fs::exists(folder / "gaps.txt"));
+
+	RecordingReader reader;
+	const RecordingStatus read = reader.open(folder.string());
+	REQUIRE_MESSAGE(read.ok, read.error);
+	CHECK(reader.get_issues().empty());
+	REQUIRE(reader.rgbd_count() == rgbd_times.size());
+	REQUIRE(reader.fisheye_count() == fisheye_times.size());
+	for (size_t i = 0; i < rgbd_times.size(); i++) {
+		const RgbdFrameResult frame = reader.read_rgbd(i);
+		REQUIRE_MESSAGE(frame.ok, frame.error);
+		CHECK(frame.frame.timestamp_s == rgbd_times[i]);
+		const RgbdFrame expected = make_rgbd(int(i), rgbd_times[i]);
+		CHECK(same_image(frame.frame.rgb, expected.rgb));
+		// Depth is stored in whole units of depth_scale_m (1 mm): within half a unit, NaN kept.
+		for (int y = 0; y < 48; y++) {
+			for (int x = 0; x < 64; x++) {
+				const float want = expected.depth_m.at<float>(y, x), got = frame.frame.depth_m.at<float>(y, x);
+				if (std::isnan(want)) {
+					CHECK(std::isnan(got));
+				} else {
+					CHECK(std::abs(got - want) <= 0.0005f + 1e-6f);
+				}
+			}
+		}
+	}
+	for (size_t i = 0; i < fisheye_times.size(); i++) {
+		const FisheyeFrameResult frame = reader.read_fisheye(i);
+		REQUIRE_MESSAGE(frame.ok, frame.error);
+		CHECK(frame.frame.timestamp_s == fisheye_times[i]);
+		CHECK(same_image(frame.frame.image, make_fisheye(int(i), fisheye_times[i], 40, 40).image));
+	}
+	fs::remove_all(folder);
+}
+
+TEST_CASE("recording queue: what overflows a full queue is counted and written as gaps, which the reader reports") {
+	const fs::path folder = fresh_folder("gaps");
+	const Rig rig = small_rig(40, 40);
+	RecordingQueue queue;
+	RecordingQueueOptions options;
+	options.max_queued_frames = 2;
+	REQUIRE(queue.open(folder.string(), rig, nullptr, options).ok);
+	// Pushed far faster than PNGs are written: most do not fit.
+	int accepted = 0;
+	const int pushed = 60;
+	for (int i = 0; i < pushed; i++) {
+		accepted += queue.push_rgbd(make_rgbd(i, 100.0 + i / 30.0)) ? 1 : 0;
+	}
+	const RecordingStatus closed = queue.close();
+	REQUIRE_MESSAGE(closed.ok, closed.error);
+	const RecordingQueueStatus status = queue.status();
+	CHECK(status.written[0] == uint64_t(accepted));
+	CHECK(status.dropped[0] == uint64_t(pushed - accepted));
+	REQUIRE(status.dropped[0] > 0);
+	REQUIRE(status.gaps > 0);
+	REQUIRE(fs::exists(folder / "gaps.txt"));
+
+	RecordingReader reader;
+	REQUIRE(reader.open(folder.string()).ok);
+	CHECK(reader.rgbd_count() == size_t(accepted));
+	uint64_t reported = 0;
+	size_t gap_issues = 0;
+	for (const RecordingIssue &issue : reader.get_issues()) {
+		if (contains(issue.file, "gaps.txt")) {
+			gap_issues++;
+			CHECK(contains(issue.message, "were not recorded"));
+			reported += std::stoull(issue.message.substr(0, issue.message.find(' ')));
+		}
+	}
+	CHECK(gap_issues == status.gaps);
+	CHECK(reported == status.dropped[0]); // every dropped frame is in a gap
+	fs::remove_all(folder);
+}
+
+TEST_CASE("recording queue: a folder that holds anything is refused and left as it was") {
+	const fs::path folder = fresh_folder("nonempty");
+	fs::create_directories(folder);
+	{
+		std::ofstream keep(folder / "my_notes.txt");
+		keep << "precious";
+	}
+	RecordingQueue queue;
+	const RecordingStatus opened = queue.open(folder.string(), small_rig(40, 40), nullptr);
+	CHECK_FALSE(opened.ok);
+	CHECK(contains(opened.error, folder.string()));
+	CHECK_FALSE(queue.is_open());
+	CHECK_FALSE(queue.push_rgbd(make_rgbd(0, 1.0)));
+	CHECK(fs::exists(folder / "my_notes.txt"));
+	CHECK_FALSE(fs::exists(folder / "rig.yaml"));
+	fs::remove_all(folder);
+}
+
+TEST_CASE("recording queue: Aravis' Fake camera recorded live for 2 s through its capture thread plays back frame for frame") {
+	// The Fake camera's frame size makes the rig's fisheye size.
+	drivers::FisheyeSourceSettings settings;
+	settings.device = "Fake_1";
+	std::mutex mutex;
+	std::vector<FisheyeFrame> sent;
+	RecordingQueue queue;
+	const fs::path folder = fresh_folder("live");
+	bool opened = false;
+	std::string open_error;
+	drivers::DeviceCapture capture(drivers::make_aravis_fisheye_source(settings), drivers::DeviceCaptureOptions(),
+			[&](drivers::CapturedFrame &&p_frame) {
+				std::lock_guard lock(mutex);
+				if (!opened && open_error.empty()) {
+					const RecordingStatus status = queue.open(folder.string(), small_rig(p_frame.fisheye.image.cols, p_frame.fisheye.image.rows), nullptr);
+					opened = status.ok;
+					open_error = status.error;
+				}
+				if (opened && queue.push_fisheye(p_frame.fisheye)) {
+					sent.push_back(p_frame.fisheye);
+				}
+			});
+	REQUIRE(capture.start().empty());
+	std::this_thread::sleep_for(std::chrono::seconds(2));
+	capture.stop();
+	REQUIRE_MESSAGE(opened, (open_error + " / " + capture.status().reason));
+	const RecordingStatus closed = queue.close();
+	REQUIRE_MESSAGE(closed.ok, closed.error);
+	REQUIRE(sent.size() >= 5);
+	MESSAGE((std::to_string(sent.size()) + " frames recorded, " + std::to_string(queue.status().megabytes_per_s) + " MB/s"));
+
+	RecordingReader reader;
+	const RecordingStatus read = reader.open(folder.string());
+	REQUIRE_MESSAGE(read.ok, read.error);
+	REQUIRE(reader.fisheye_count() == sent.size());
+	for (size_t i = 0; i < sent.size(); i++) {
+		const FisheyeFrameResult frame = reader.read_fisheye(i);
+		REQUIRE_MESSAGE(frame.ok, frame.error);
+		CHECK(frame.frame.timestamp_s == sent[i].timestamp_s);
+		CHECK(same_image(frame.frame.image, sent[i].image));
+	}
+	fs::remove_all(folder);
+}

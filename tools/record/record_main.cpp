@@ -1,0 +1,192 @@
+// roomprobe_record: records the live rig into a RoomProbe recording (docs/recording-format.md),
+// without Godot: one capture thread per device (capture/device_capture.h) stamping frames on the
+// rig's one monotonic clock, and a writer thread behind a bounded queue (recording_queue.h).
+//
+// usage: roomprobe_record --rig FILE --out DIR [--seconds S] [--rgbd URI] [--fisheye ID]
+//          [--fisheye-backend aravis|uvc] [--no-rgbd] [--no-fisheye] [--fake]
+//          [--rgbd-latency-ms MS] [--fisheye-latency-ms MS]
+//   --rgbd URI        an OpenNI2 URI or an .oni file (default: the first depth camera found)
+//   --fisheye ID      an Aravis id or IP, or for uvc /dev/videoN, N or a video file (default: the first found)
+//   --fake            the first-found Aravis search may take Aravis' Fake camera (a test without hardware)
+// A live progress line shows while it records; Ctrl-C stops it cleanly. Both streams are on one
+// clock, so the recording's rig.yaml has fisheye_time_offset_s 0. The last line is a summary.
+
+#include "../common/cli.h"
+
+#include "capture/capture_sources.h"
+#include "capture/device_capture.h"
+
+#include <recording/recording_queue.h>
+#include <rig/rig.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <thread>
+
+using namespace roomprobe;
+
+namespace {
+
+std::atomic<bool> interrupted{ false };
+
+void on_interrupt(int) {
+	interrupted = true;
+}
+
+int usage_error(const std::string &p_message) {
+	std::fprintf(stderr, "roomprobe_record: %s\nusage: roomprobe_record --rig FILE --out DIR [--seconds S] [--rgbd URI] [--fisheye ID] "
+						 "[--fisheye-backend aravis|uvc] [--no-rgbd] [--no-fisheye] [--fake] [--rgbd-latency-ms MS] [--fisheye-latency-ms MS]\n",
+			p_message.c_str());
+	return 2;
+}
+
+} // namespace
+
+int main(int p_argc, char **p_argv) {
+	std::string rig_path, out, rgbd_uri, fisheye_id, backend = "aravis";
+	double seconds = 0.0, rgbd_latency_ms = 0.0, fisheye_latency_ms = 0.0;
+	bool use_rgbd = true, use_fisheye = true, fake = false;
+	cli::Arguments args(p_argc, p_argv, 1);
+	std::string arg;
+	while (args.next(&arg)) {
+		if (arg == "--rig") {
+			if (!args.value(&rig_path)) {
+				return usage_error("--rig needs a file");
+			}
+		} else if (arg == "--out") {
+			if (!args.value(&out)) {
+				return usage_error("--out needs a folder");
+			}
+		} else if (arg == "--seconds") {
+			if (!args.positive_number(&seconds)) {
+				return usage_error("--seconds needs a number of seconds > 0");
+			}
+		} else if (arg == "--rgbd") {
+			if (!args.value(&rgbd_uri)) {
+				return usage_error("--rgbd needs an OpenNI2 URI or .oni file");
+			}
+		} else if (arg == "--fisheye") {
+			if (!args.value(&fisheye_id)) {
+				return usage_error("--fisheye needs a device id");
+			}
+		} else if (arg == "--fisheye-backend") {
+			if (!args.value(&backend) || (backend != "aravis" && backend != "uvc")) {
+				return usage_error("--fisheye-backend is aravis or uvc");
+			}
+		} else if (arg == "--rgbd-latency-ms" || arg == "--fisheye-latency-ms") {
+			double &latency = arg == "--rgbd-latency-ms" ? rgbd_latency_ms : fisheye_latency_ms;
+			std::string v;
+			char *end = nullptr;
+			if (!args.value(&v) || (latency = std::strtod(v.c_str(), &end), end == v.c_str() || *end != '\0') || !(latency >= 0.0 && latency <= 1000.0)) {
+				return usage_error(arg + " needs a number of milliseconds within 0 to 1000");
+			}
+		} else if (arg == "--no-rgbd") {
+			use_rgbd = false;
+		} else if (arg == "--no-fisheye") {
+			use_fisheye = false;
+		} else if (arg == "--fake") {
+			fake = true;
+		} else {
+			return usage_error("unknown argument '" + arg + "'");
+		}
+	}
+	if (rig_path.empty() || out.empty()) {
+		return usage_error("--rig and --out are needed");
+	}
+	RigLoadResult loaded = load_rig(rig_path);
+	if (!loaded.ok) {
+		std::fprintf(stderr, "roomprobe_record: %s\n", loaded.error.c_str());
+		return 1;
+	}
+	Rig rig = loaded.rig;
+	use_fisheye = use_fisheye && rig.has_fisheye();
+	if (!use_rgbd && !use_fisheye) {
+		return usage_error("nothing to record: --no-rgbd and no fisheye (" + std::string(rig.has_fisheye() ? "--no-fisheye" : "the rig has none") + ")");
+	}
+	// Both streams are stamped on the one host clock: no offset between them.
+	rig.fisheye_time_offset_s = 0.0;
+
+	RecordingQueue queue;
+	const RecordingStatus opened = queue.open(out, rig, nullptr);
+	if (!opened.ok) {
+		std::fprintf(stderr, "roomprobe_record: %s\n", opened.error.c_str());
+		return 1;
+	}
+
+	std::vector<std::unique_ptr<drivers::DeviceCapture>> captures;
+	if (use_rgbd) {
+		drivers::RgbdSourceSettings settings;
+		settings.uri = rgbd_uri;
+		settings.width = rig.rgb.width;
+		settings.height = rig.rgb.height;
+		drivers::DeviceCaptureOptions options;
+		options.latency_s = rgbd_latency_ms * 1e-3;
+		captures.push_back(std::make_unique<drivers::DeviceCapture>(drivers::make_openni2_rgbd_source(settings), options,
+				[&](drivers::CapturedFrame &&p_frame) { queue.push_rgbd(p_frame.rgbd); }));
+	}
+	if (use_fisheye) {
+		drivers::FisheyeSourceSettings settings;
+		settings.device = fisheye_id;
+		settings.width = rig.fisheye.width;
+		settings.height = rig.fisheye.height;
+		settings.include_fake = fake;
+		drivers::DeviceCaptureOptions options;
+		options.latency_s = fisheye_latency_ms * 1e-3;
+		captures.push_back(std::make_unique<drivers::DeviceCapture>(
+				backend == "uvc" ? drivers::make_uvc_fisheye_source(settings) : drivers::make_aravis_fisheye_source(settings), options,
+				[&](drivers::CapturedFrame &&p_frame) { queue.push_fisheye(p_frame.fisheye); }));
+	}
+	std::signal(SIGINT, on_interrupt);
+	std::signal(SIGTERM, on_interrupt);
+	for (auto &capture : captures) {
+		const std::string error = capture->start();
+		if (!error.empty()) {
+			std::fprintf(stderr, "roomprobe_record: %s\n", error.c_str());
+			return 1;
+		}
+	}
+	std::printf("roomprobe_record: recording %s%s into %s%s\n", use_rgbd ? "RGB-D" : "", use_rgbd && use_fisheye ? " and fisheye" : use_fisheye ? "fisheye" : "",
+			out.c_str(), seconds > 0.0 ? (" for " + std::to_string(seconds) + " s").c_str() : " until Ctrl-C");
+	const auto start = std::chrono::steady_clock::now();
+	std::vector<std::string> shown_states(captures.size());
+	while (!interrupted) {
+		std::this_thread::sleep_for(std::chrono::milliseconds(250));
+		const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+		const RecordingQueueStatus status = queue.status();
+		std::string states;
+		for (size_t i = 0; i < captures.size(); i++) {
+			const drivers::DeviceStatus device = captures[i]->status();
+			states += (states.empty() ? "" : ", ") + std::string(drivers::device_state_name(device.state));
+			const std::string line = captures[i]->name() + ": " + drivers::device_state_name(device.state) + (device.reason.empty() ? "" : " (" + device.reason + ")");
+			if (line != shown_states[i]) {
+				std::printf("\n  %s\n", line.c_str()); // each change of state once, above the progress line
+				shown_states[i] = line;
+			}
+		}
+		std::printf("\r  %6.1f s  rgbd %llu written %llu dropped  fisheye %llu written %llu dropped  queued %zu  %.1f MB/s  [%s]   ", elapsed,
+				(unsigned long long)status.written[0], (unsigned long long)status.dropped[0], (unsigned long long)status.written[1],
+				(unsigned long long)status.dropped[1], status.queued, status.megabytes_per_s, states.c_str());
+		std::fflush(stdout);
+		if (!status.error.empty() || (seconds > 0.0 && elapsed >= seconds)) {
+			break;
+		}
+	}
+	std::printf("\n");
+	for (auto &capture : captures) {
+		capture->stop();
+	}
+	const RecordingStatus closed = queue.close();
+	const RecordingQueueStatus status = queue.status();
+	if (!closed.ok) {
+		std::fprintf(stderr, "roomprobe_record: %s\n", closed.error.c_str());
+	}
+	std::printf("summary: out=%s seconds=%.2f rgbd_written=%llu rgbd_dropped=%llu fisheye_written=%llu fisheye_dropped=%llu gaps=%llu megabytes=%.1f megabytes_per_s=%.2f ok=%d\n",
+			out.c_str(), status.seconds, (unsigned long long)status.written[0], (unsigned long long)status.dropped[0],
+			(unsigned long long)status.written[1], (unsigned long long)status.dropped[1], (unsigned long long)status.gaps,
+			status.megabytes_written, status.megabytes_per_s, closed.ok ? 1 : 0);
+	return closed.ok ? 0 : 1;
+}
