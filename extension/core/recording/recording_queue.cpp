@@ -43,7 +43,7 @@ RecordingStatus RecordingQueue::open(const std::string &p_folder, const Rig &p_r
 	options = p_options;
 	queue.clear();
 	gaps.clear();
-	in_gap[0] = in_gap[1] = false;
+	open_gap[0] = open_gap[1] = NO_GAP;
 	closing = false;
 	current = RecordingQueueStatus();
 	current.recording = true;
@@ -88,23 +88,19 @@ bool RecordingQueue::push(Item &&p_item, double p_timestamp_s) {
 		const int stream = int(p_item.stream);
 		if (queue.size() >= options.max_queued_frames) {
 			current.dropped[stream]++;
-			if (in_gap[stream]) {
+			if (open_gap[stream] != NO_GAP) {
 				// The gap goes on: it ends at this frame.
-				for (auto gap = gaps.rbegin(); gap != gaps.rend(); ++gap) {
-					if (gap->stream == p_item.stream) {
-						gap->last_s = p_timestamp_s;
-						gap->frames++;
-						break;
-					}
-				}
+				Gap &gap = gaps[open_gap[stream]];
+				gap.last_s = p_timestamp_s;
+				gap.frames++;
 			} else {
+				open_gap[stream] = gaps.size();
 				gaps.push_back({ p_item.stream, p_timestamp_s, p_timestamp_s, 1 });
 				current.gaps = gaps.size();
-				in_gap[stream] = true;
 			}
 			return false;
 		}
-		in_gap[stream] = false;
+		open_gap[stream] = NO_GAP;
 		queue.push_back(std::move(p_item));
 		current.queued = queue.size();
 	}

@@ -80,7 +80,8 @@ private:
 	bool closing = false;
 	std::deque<Item> queue;
 	std::vector<Gap> gaps;
-	bool in_gap[2] = { false, false }; // the stream's last frame was dropped
+	static constexpr size_t NO_GAP = size_t(-1);
+	size_t open_gap[2] = { NO_GAP, NO_GAP }; // per stream: the gap its last frame was dropped into, if it was
 	RecordingQueueStatus current;
 	double started_s = 0.0; // steady clock, seconds
 	RecordingQueueOptions options;

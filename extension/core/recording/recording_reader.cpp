@@ -443,15 +443,7 @@ RgbdFrameResult RecordingReader::read_rgbd(size_t p_index) const {
 		result.error = error;
 		return result;
 	}
-	cv::Mat depth_m(raw.rows, raw.cols, CV_32FC1);
-	const float no_reading = std::numeric_limits<float>::quiet_NaN();
-	for (int y = 0; y < raw.rows; y++) {
-		const uint16_t *in = raw.ptr<uint16_t>(y);
-		float *out = depth_m.ptr<float>(y);
-		for (int x = 0; x < raw.cols; x++) {
-			out[x] = in[x] == 0 ? no_reading : float(double(in[x]) * rig.depth_scale_m);
-		}
-	}
+	const cv::Mat depth_m = depth_metres_from_raw(raw, rig.depth_scale_m);
 	result.frame.timestamp_s = ref.rgb.timestamp_s;
 	result.frame.depth_timestamp_s = ref.depth.timestamp_s;
 	result.frame.rgb = rgb;

@@ -6,6 +6,19 @@ const char *recording_stream_name(RecordingStream p_stream) {
 	return p_stream == RecordingStream::Fisheye ? "fisheye" : "rgbd";
 }
 
+cv::Mat depth_metres_from_raw(const cv::Mat &p_raw, double p_scale_m) {
+	cv::Mat depth_m(p_raw.rows, p_raw.cols, CV_32FC1);
+	const float no_reading = std::numeric_limits<float>::quiet_NaN();
+	for (int y = 0; y < p_raw.rows; y++) {
+		const uint16_t *in = p_raw.ptr<uint16_t>(y);
+		float *out = depth_m.ptr<float>(y);
+		for (int x = 0; x < p_raw.cols; x++) {
+			out[x] = in[x] == 0 ? no_reading : float(double(in[x]) * p_scale_m);
+		}
+	}
+	return depth_m;
+}
+
 std::string to_string(const RecordingIssue &p_issue) {
 	std::string text = p_issue.file;
 	if (p_issue.line > 0) {

@@ -48,6 +48,11 @@ struct RgbdFrame {
 	cv::Mat depth_m;
 };
 
+// depth_m from 16-bit raw depth (CV_16UC1, units of p_scale_m, 0 = no reading): CV_32FC1 metres,
+// NaN where there is no reading. Recordings (depth PNGs) and live cameras (OpenNI2's millimetres)
+// both come in this way.
+cv::Mat depth_metres_from_raw(const cv::Mat &p_raw, double p_scale_m);
+
 // One image of the upward fisheye.
 struct FisheyeFrame {
 	double timestamp_s = 0.0; // seconds on the fisheye's own clock

@@ -102,14 +102,9 @@ public:
 		frame.device_time_s = double(depth.timestamp_ns) * 1e-9;
 		frame.device_frame_id = uint64_t(depth.frame_index);
 		frame.rgbd.rgb = cv::Mat(color.height, color.width, CV_8UC3, const_cast<uint8_t *>(color.rgb.data())).clone();
-		frame.rgbd.depth_m.create(depth.height, depth.width, CV_32FC1);
-		for (int y = 0; y < depth.height; y++) {
-			float *row = frame.rgbd.depth_m.ptr<float>(y);
-			const uint16_t *mm = depth.depth_mm.data() + size_t(y) * size_t(depth.width);
-			for (int x = 0; x < depth.width; x++) {
-				row[x] = mm[x] ? float(mm[x]) * 0.001f : std::numeric_limits<float>::quiet_NaN();
-			}
-		}
+		// OpenNI2's depth is in millimetres (the driver divides 100-um modes down).
+		const cv::Mat depth_mm(depth.height, depth.width, CV_16UC1, const_cast<uint16_t *>(depth.depth_mm.data()));
+		frame.rgbd.depth_m = depth_metres_from_raw(depth_mm, 0.001);
 		return result;
 	}
 

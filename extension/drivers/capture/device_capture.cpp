@@ -205,10 +205,10 @@ void DeviceCapture::run() {
 								(outcome.error.empty() ? std::string() : " (" + outcome.error + ")"));
 			}
 		}
-		source->close();
 		if (lost.empty()) {
-			break; // stop() asked
+			break; // stop() asked: closed below
 		}
+		source->close();
 		set_state(DeviceState::Disconnected, lost + " (trying again in " + seconds_text(backoff_s) + ")");
 		if (!wait(backoff_s)) {
 			break;
