@@ -461,12 +461,34 @@ def make_fixture_recording():
         print(f"    (the fixture recording could not be made; see {log})")
 
 
+# The fixture's RGB-D stream as an OpenNI .oni, which the live-rig tests play as if from a depth
+# camera (tests/godot/test_nodes_live_rig.gd).
+FIXTURE_ONI = FIXTURE_RECORDING + ".oni"
+
+
+def make_fixture_oni():
+    """Writes the fixture recording's RGB-D frames as an .oni with build/bin/roomprobe_oni, once per recording."""
+    tool = os.path.join(rp.BUILD, "bin", "roomprobe_oni")
+    stamp = os.path.join(FIXTURE_RECORDING, ".made-by")
+    if not os.path.exists(tool) or not os.path.exists(stamp):
+        return
+    if os.path.exists(FIXTURE_ONI) and os.path.getmtime(FIXTURE_ONI) >= max(os.path.getmtime(stamp), os.path.getmtime(tool)):
+        return
+    if os.path.exists(FIXTURE_ONI):
+        os.remove(FIXTURE_ONI)
+    log = os.path.join(LOGS, "fixture-oni.log")
+    r = rp.run([tool, "--recording", FIXTURE_RECORDING, "--out", FIXTURE_ONI], log, 300)
+    if r.rc != 0:
+        print(f"    (the fixture .oni could not be made; see {log})")
+
+
 def suite_godot(opts, rendering, allow_empty):
     name = "rendering" if rendering else "godot"
     s = Suite(name)
     s.logs.append(os.path.join(LOGS, f"{name}.log"))
     if not rendering:
         make_fixture_recording()
+        make_fixture_oni()
     user = []
     if opts.filter:
         user += ["--filter", opts.filter]

@@ -104,7 +104,7 @@ public:
 				outcome.kind = GrabOutcome::Frame;
 				outcome.frame.is_rgbd = false;
 				outcome.frame.fisheye.image = cv::Mat(4, 4, CV_8UC1, cv::Scalar(7));
-				outcome.frame.device_time_s = double(++frames) / 30.0;
+				outcome.frame.fisheye.capture.device_time_s = double(++frames) / 30.0;
 				std::this_thread::sleep_for(std::chrono::milliseconds(2));
 				break;
 			case TIMEOUT:
@@ -326,7 +326,7 @@ TEST_CASE("capture: frames are stamped on one monotonic clock less the latency, 
 		std::lock_guard lock(got.mutex);
 		for (size_t i = 1; i < got.frames.size(); i++) {
 			CHECK(got.frames[i].host_time_s > got.frames[i - 1].host_time_s);
-			CHECK(got.frames[i].device_time_s > got.frames[i - 1].device_time_s);
+			CHECK(got.frames[i].capture().device_time_s > got.frames[i - 1].capture().device_time_s);
 		}
 	}
 }
@@ -361,10 +361,10 @@ TEST_CASE("capture: Aravis' Fake camera streams as the fisheye through its own t
 		CHECK_FALSE(frame.is_rgbd);
 		CHECK(frame.fisheye.image.type() == CV_8UC1); // the Fake camera's Mono8
 		CHECK(frame.fisheye.image.cols > 0);
-		CHECK(frame.exposure_us == doctest::Approx(5000.0));
-		CHECK(frame.gain == doctest::Approx(2.0));
+		CHECK(frame.fisheye.capture.exposure_us == doctest::Approx(5000.0));
+		CHECK(frame.fisheye.capture.gain == doctest::Approx(2.0));
 	}
-	CHECK(got.frames.back().device_frame_id > got.frames.front().device_frame_id);
+	CHECK(got.frames.back().capture().device_frame_id > got.frames.front().capture().device_frame_id);
 }
 
 TEST_CASE("capture: the fisheye's size is checked against the rig's") {

@@ -5,6 +5,7 @@
 // usage: roomprobe_record --rig FILE --out DIR [--seconds S] [--rgbd URI] [--fisheye ID]
 //          [--fisheye-backend aravis|uvc] [--no-rgbd] [--no-fisheye] [--fake]
 //          [--rgbd-latency-ms MS] [--fisheye-latency-ms MS]
+//   --*-latency-ms    override the rig file's rgbd_latency_s / fisheye_latency_s (calib/README.md)
 //   --rgbd URI        an OpenNI2 URI or an .oni file (default: the first depth camera found)
 //   --fisheye ID      an Aravis id or IP, or for uvc /dev/videoN, N or a video file (default: the first found)
 //   --fake            the first-found Aravis search may take Aravis' Fake camera (a test without hardware)
@@ -13,11 +14,8 @@
 
 #include "../common/cli.h"
 
-#include "capture/capture_sources.h"
-#include "capture/device_capture.h"
+#include "capture/live_rig.h"
 
-#include <recording/recording_queue.h>
-#include <rig/rig.h>
 
 #include <atomic>
 #include <chrono>
@@ -48,7 +46,7 @@ int usage_error(const std::string &p_message) {
 
 int main(int p_argc, char **p_argv) {
 	std::string rig_path, out, rgbd_uri, fisheye_id, backend = "aravis";
-	double seconds = 0.0, rgbd_latency_ms = 0.0, fisheye_latency_ms = 0.0;
+	double seconds = 0.0, rgbd_latency_ms = -1.0, fisheye_latency_ms = -1.0; // < 0: the rig file's
 	bool use_rgbd = true, use_fisheye = true, fake = false;
 	cli::Arguments args(p_argc, p_argv, 1);
 	std::string arg;
@@ -103,65 +101,49 @@ int main(int p_argc, char **p_argv) {
 		return 1;
 	}
 	Rig rig = loaded.rig;
-	use_fisheye = use_fisheye && rig.has_fisheye();
-	if (!use_rgbd && !use_fisheye) {
-		return usage_error("nothing to record: --no-rgbd and no fisheye (" + std::string(rig.has_fisheye() ? "--no-fisheye" : "the rig has none") + ")");
+	if (rgbd_latency_ms >= 0.0) {
+		rig.rgbd_latency_s = rgbd_latency_ms * 1e-3;
 	}
-	// Both streams are stamped on the one host clock: no offset between them.
-	rig.fisheye_time_offset_s = 0.0;
-
-	RecordingQueue queue;
-	const RecordingStatus opened = queue.open(out, rig, nullptr);
+	if (fisheye_latency_ms >= 0.0 && rig.has_fisheye()) {
+		rig.fisheye_latency_s = fisheye_latency_ms * 1e-3;
+	}
+	use_fisheye = use_fisheye && rig.has_fisheye();
+	drivers::LiveRigSettings settings;
+	settings.use_rgbd = use_rgbd;
+	settings.use_fisheye = use_fisheye;
+	settings.rgbd.uri = rgbd_uri;
+	settings.fisheye.device = fisheye_id;
+	settings.fisheye.include_fake = fake;
+	settings.fisheye_backend = backend == "uvc" ? drivers::FisheyeBackend::Uvc : drivers::FisheyeBackend::Aravis;
+	drivers::LiveRig live;
+	std::string error = live.start(rig, settings, nullptr);
+	if (!error.empty()) {
+		return usage_error(error);
+	}
+	const RecordingStatus opened = live.start_recording(out);
 	if (!opened.ok) {
 		std::fprintf(stderr, "roomprobe_record: %s\n", opened.error.c_str());
 		return 1;
 	}
-
-	std::vector<std::unique_ptr<drivers::DeviceCapture>> captures;
-	if (use_rgbd) {
-		drivers::RgbdSourceSettings settings;
-		settings.uri = rgbd_uri;
-		settings.width = rig.rgb.width;
-		settings.height = rig.rgb.height;
-		drivers::DeviceCaptureOptions options;
-		options.latency_s = rgbd_latency_ms * 1e-3;
-		captures.push_back(std::make_unique<drivers::DeviceCapture>(drivers::make_openni2_rgbd_source(settings), options,
-				[&](drivers::CapturedFrame &&p_frame) { queue.push_rgbd(p_frame.rgbd); }));
-	}
-	if (use_fisheye) {
-		drivers::FisheyeSourceSettings settings;
-		settings.device = fisheye_id;
-		settings.width = rig.fisheye.width;
-		settings.height = rig.fisheye.height;
-		settings.include_fake = fake;
-		drivers::DeviceCaptureOptions options;
-		options.latency_s = fisheye_latency_ms * 1e-3;
-		captures.push_back(std::make_unique<drivers::DeviceCapture>(
-				backend == "uvc" ? drivers::make_uvc_fisheye_source(settings) : drivers::make_aravis_fisheye_source(settings), options,
-				[&](drivers::CapturedFrame &&p_frame) { queue.push_fisheye(p_frame.fisheye); }));
-	}
 	std::signal(SIGINT, on_interrupt);
 	std::signal(SIGTERM, on_interrupt);
-	for (auto &capture : captures) {
-		const std::string error = capture->start();
-		if (!error.empty()) {
-			std::fprintf(stderr, "roomprobe_record: %s\n", error.c_str());
-			return 1;
-		}
-	}
 	std::printf("roomprobe_record: recording %s%s into %s%s\n", use_rgbd ? "RGB-D" : "", use_rgbd && use_fisheye ? " and fisheye" : use_fisheye ? "fisheye" : "",
 			out.c_str(), seconds > 0.0 ? (" for " + std::to_string(seconds) + " s").c_str() : " until Ctrl-C");
 	const auto start = std::chrono::steady_clock::now();
-	std::vector<std::string> shown_states(captures.size());
+	const RecordingStream streams[2] = { RecordingStream::Rgbd, RecordingStream::Fisheye };
+	std::string shown_states[2];
 	while (!interrupted) {
 		std::this_thread::sleep_for(std::chrono::milliseconds(250));
 		const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-		const RecordingQueueStatus status = queue.status();
+		const RecordingQueueStatus status = live.recording_status();
 		std::string states;
-		for (size_t i = 0; i < captures.size(); i++) {
-			const drivers::DeviceStatus device = captures[i]->status();
+		for (int i = 0; i < 2; i++) {
+			if (!live.uses(streams[i])) {
+				continue;
+			}
+			const drivers::DeviceStatus device = live.status(streams[i]);
 			states += (states.empty() ? "" : ", ") + std::string(drivers::device_state_name(device.state));
-			const std::string line = captures[i]->name() + ": " + drivers::device_state_name(device.state) + (device.reason.empty() ? "" : " (" + device.reason + ")");
+			const std::string line = live.device_name(streams[i]) + ": " + drivers::device_state_name(device.state) + (device.reason.empty() ? "" : " (" + device.reason + ")");
 			if (line != shown_states[i]) {
 				std::printf("\n  %s\n", line.c_str()); // each change of state once, above the progress line
 				shown_states[i] = line;
@@ -176,11 +158,9 @@ int main(int p_argc, char **p_argv) {
 		}
 	}
 	std::printf("\n");
-	for (auto &capture : captures) {
-		capture->stop();
-	}
-	const RecordingStatus closed = queue.close();
-	const RecordingQueueStatus status = queue.status();
+	live.stop();
+	const RecordingStatus closed = live.stop_recording();
+	const RecordingQueueStatus status = live.recording_status();
 	if (!closed.ok) {
 		std::fprintf(stderr, "roomprobe_record: %s\n", closed.error.c_str());
 	}

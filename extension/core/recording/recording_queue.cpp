@@ -67,6 +67,7 @@ bool RecordingQueue::push_rgbd(const RgbdFrame &p_frame) {
 	item.rgbd.depth_timestamp_s = p_frame.depth_timestamp_s;
 	item.rgbd.rgb = p_frame.rgb.clone();
 	item.rgbd.depth_m = p_frame.depth_m.clone();
+	item.rgbd.capture = p_frame.capture;
 	return push(std::move(item), p_frame.timestamp_s);
 }
 
@@ -76,6 +77,7 @@ bool RecordingQueue::push_fisheye(const FisheyeFrame &p_frame) {
 	item.fisheye.timestamp_s = p_frame.timestamp_s;
 	item.fisheye.hdr = p_frame.hdr;
 	item.fisheye.image = p_frame.image.clone();
+	item.fisheye.capture = p_frame.capture;
 	return push(std::move(item), p_frame.timestamp_s);
 }
 

@@ -8,8 +8,10 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <set>
 #include <sstream>
 
 namespace roomprobe {
@@ -145,6 +147,61 @@ void read_gap_list(const std::string &p_path, RecordingContents *r_contents) {
 				" from " + recording_io::format_number(first_s) + " to " + recording_io::format_number(last_s) +
 				" s were not recorded (the recorder's queue was full)" });
 	}
+}
+
+// Reads capture.txt (what a live recording's devices said about each frame). A line that does
+// not parse, or names no frame of its stream, is an issue; the frames play either way.
+void read_capture_list(const std::string &p_path, RecordingContents *r_contents) {
+	std::vector<recording_io::IndexLine> lines;
+	const std::string error = recording_io::read_index_lines(p_path, &lines);
+	if (!error.empty()) {
+		r_contents->issues.push_back({ p_path, 0, error + "; frames have no capture information" });
+		return;
+	}
+	std::set<double> frame_times[2];
+	for (const RgbdFrameRef &ref : r_contents->rgbd) {
+		frame_times[0].insert(ref.rgb.timestamp_s);
+	}
+	for (const FrameRef &ref : r_contents->fisheye) {
+		frame_times[1].insert(ref.timestamp_s);
+	}
+	// A number or "nan" (not reported).
+	const auto value = [](const std::string &p_text, double *r_value) {
+		if (p_text == "nan") {
+			*r_value = std::numeric_limits<double>::quiet_NaN();
+			return true;
+		}
+		return recording_io::parse_number(p_text, r_value);
+	};
+	for (const recording_io::IndexLine &line : lines) {
+		std::istringstream fields(line.text);
+		std::string stream, stamp, device_time, frame_id, exposure, gain, extra;
+		CaptureInfo info;
+		double timestamp_s = 0.0;
+		char *end = nullptr;
+		const bool parsed = bool(fields >> stream >> stamp >> device_time >> frame_id >> exposure >> gain) && !(fields >> extra) &&
+				(stream == "rgbd" || stream == "fisheye") && recording_io::parse_number(stamp, &timestamp_s) && value(device_time, &info.device_time_s) &&
+				value(exposure, &info.exposure_us) && value(gain, &info.gain) &&
+				(info.device_frame_id = std::strtoll(frame_id.c_str(), &end, 10), end != frame_id.c_str() && *end == '\0') && info.device_frame_id >= -1;
+		if (!parsed) {
+			r_contents->issues.push_back({ p_path, line.line, "expected 'rgbd|fisheye timestamp_s device_time_s device_frame_id exposure_us gain' "
+															  "(numbers, nan where unknown, frame id -1 where unknown), got '" + line.text + "'; line skipped" });
+			continue;
+		}
+		const int s = stream == "rgbd" ? 0 : 1;
+		if (!frame_times[s].count(timestamp_s)) {
+			r_contents->issues.push_back({ p_path, line.line, "no " + stream + " frame has timestamp " + stamp + "; line skipped" });
+			continue;
+		}
+		r_contents->capture[s][timestamp_s] = info;
+	}
+}
+
+// The capture information of a stream's frame at p_timestamp_s; unknown when there is none.
+CaptureInfo capture_of(const RecordingContents &p_contents, RecordingStream p_stream, double p_timestamp_s) {
+	const std::map<double, CaptureInfo> &list = p_contents.capture[p_stream == RecordingStream::Rgbd ? 0 : 1];
+	const auto found = list.find(p_timestamp_s);
+	return found == list.end() ? CaptureInfo() : found->second;
 }
 
 // Reads groundtruth/cubemaps.txt: 'timestamp_s probe_index relative/path.exr' a line.
@@ -379,6 +436,10 @@ RecordingStatus RecordingReader::open(const std::string &p_folder, const Recordi
 	if (fs::exists(gap_list, ec)) {
 		read_gap_list(gap_list, &read);
 	}
+	const std::string capture_list = join(p_folder, "capture.txt");
+	if (fs::exists(capture_list, ec)) {
+		read_capture_list(capture_list, &read);
+	}
 
 	open_contents(std::move(read));
 	status.ok = true;
@@ -448,6 +509,7 @@ RgbdFrameResult RecordingReader::read_rgbd(size_t p_index) const {
 	result.frame.depth_timestamp_s = ref.depth.timestamp_s;
 	result.frame.rgb = rgb;
 	result.frame.depth_m = depth_m;
+	result.frame.capture = capture_of(contents, RecordingStream::Rgbd, ref.rgb.timestamp_s);
 	result.ok = true;
 	return result;
 }
@@ -502,6 +564,7 @@ FisheyeFrameResult RecordingReader::read_fisheye(size_t p_index) const {
 	result.frame.timestamp_s = ref.timestamp_s;
 	result.frame.image = image;
 	result.frame.hdr = hdr;
+	result.frame.capture = capture_of(contents, RecordingStream::Fisheye, ref.timestamp_s);
 	result.ok = true;
 	return result;
 }

@@ -18,6 +18,7 @@
 #include <rig/rig.h>
 #include <rig/trajectory.h>
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,9 @@ struct RecordingContents {
 	bool has_ground_truth[2] = { false, false }; // indexed by RecordingStream
 	Trajectory ground_truth[2]; // world_from_camera, each on its own camera's clock
 	std::vector<CubemapRef> cubemaps; // non-decreasing timestamps, RGB-D clock
+	// capture.txt (live recordings): what the devices said about each frame, by RecordingStream,
+	// keyed by the frame's timestamp (the RGB timestamp for RGB-D frames).
+	std::map<double, CaptureInfo> capture[2];
 	std::vector<RecordingIssue> issues;
 };
 

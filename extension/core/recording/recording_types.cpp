@@ -1,9 +1,15 @@
 #include "recording_types.h"
 
+#include <cmath>
+
 namespace roomprobe {
 
 const char *recording_stream_name(RecordingStream p_stream) {
 	return p_stream == RecordingStream::Fisheye ? "fisheye" : "rgbd";
+}
+
+bool CaptureInfo::is_known() const {
+	return !std::isnan(device_time_s) || device_frame_id >= 0 || !std::isnan(exposure_us) || !std::isnan(gain);
 }
 
 cv::Mat depth_metres_from_raw(const cv::Mat &p_raw, double p_scale_m) {

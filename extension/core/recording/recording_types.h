@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
@@ -35,6 +36,18 @@ struct FrameRef {
 	int line = 0; // 1-based line of the index that lists it (0: not from a file)
 };
 
+// What a live device said about one of its frames, kept in recordings made live (capture.txt,
+// docs/recording-format.md). Unknown values are NaN (times, exposure, gain) or -1 (frame id).
+struct CaptureInfo {
+	double device_time_s = std::numeric_limits<double>::quiet_NaN(); // the device's own clock, seconds
+	int64_t device_frame_id = -1; // the device's frame counter (a jump: frames the device dropped)
+	// The fisheye's exposure time (microseconds) and gain (the camera's unit, usually dB) when
+	// the frame was taken: what a photometric model needs to bring frames to one radiance scale.
+	double exposure_us = std::numeric_limits<double>::quiet_NaN();
+	double gain = std::numeric_limits<double>::quiet_NaN();
+	bool is_known() const; // any value known
+};
+
 // An RGB image and the depth image registered to it (one RGB-D frame).
 struct RgbdFrame {
 	double timestamp_s = 0.0; // the RGB image's timestamp, seconds on the RGB-D clock
@@ -46,6 +59,7 @@ struct RgbdFrame {
 	// registered to rgb (same size, same pixels). The writer also takes CV_16UC1 holding the
 	// raw values already in units of Rig::depth_scale_m (0 = no reading).
 	cv::Mat depth_m;
+	CaptureInfo capture; // live frames only (exposure and gain stay unknown)
 };
 
 // depth_m from 16-bit raw depth (CV_16UC1, units of p_scale_m, 0 = no reading): CV_32FC1 metres,
@@ -60,6 +74,7 @@ struct FisheyeFrame {
 	// The rig's fisheye size.
 	cv::Mat image;
 	bool hdr = false; // true exactly when image is CV_32FC3 (stored as EXR)
+	CaptureInfo capture; // live frames only
 };
 
 // The room of a recording (room.yaml).

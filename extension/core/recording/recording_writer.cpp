@@ -103,6 +103,27 @@ std::string RecordingWriter::append_line(std::ofstream &p_index, const std::stri
 	return std::string();
 }
 
+// One line of capture.txt for a frame that carries what its device said (live recordings);
+// the file is started with the first such frame.
+std::string RecordingWriter::append_capture(RecordingStream p_stream, double p_timestamp_s, const CaptureInfo &p_capture) {
+	if (!p_capture.is_known()) {
+		return std::string();
+	}
+	if (!capture_index.is_open()) {
+		capture_index.clear();
+		capture_index.open(path("capture.txt"), std::ios::out | std::ios::trunc | std::ios::binary);
+		capture_index << "# RoomProbe recording: what the live devices said about each frame (nan: not reported)\n"
+						 "# stream timestamp_s device_time_s device_frame_id exposure_us gain\n";
+		if (!capture_index) {
+			return path("capture.txt") + ": cannot be written";
+		}
+	}
+	const auto number = [](double p_value) { return std::isnan(p_value) ? std::string("nan") : format_number(p_value); };
+	return append_line(capture_index, "capture.txt", std::string(recording_stream_name(p_stream)) + " " + format_number(p_timestamp_s) + " " +
+					number(p_capture.device_time_s) + " " + std::to_string(p_capture.device_frame_id) + " " + number(p_capture.exposure_us) + " " +
+					number(p_capture.gain));
+}
+
 RecordingStatus RecordingWriter::open(const std::string &p_folder, const Rig &p_rig, const RoomInfo &p_room, const RecordingWriteOptions &p_options) {
 	return open_folder(p_folder, p_rig, &p_room, p_options);
 }
@@ -139,7 +160,7 @@ RecordingStatus RecordingWriter::open_folder(const std::string &p_folder, const 
 	}
 	// Into a used folder (allowed by the options): a previous recording's ground truth, room or
 	// fisheye index must not pass for this one's, as it would if this one wrote none.
-	for (const char *stale : { TRAJECTORY_FILES[0], TRAJECTORY_FILES[1], "groundtruth/cubemaps.txt", "room.yaml", "fisheye.txt" }) {
+	for (const char *stale : { TRAJECTORY_FILES[0], TRAJECTORY_FILES[1], "groundtruth/cubemaps.txt", "room.yaml", "fisheye.txt", "capture.txt" }) {
 		fs::remove(path(stale), ec);
 		if (ec) {
 			return fail(path(stale) + ": cannot remove the previous recording's file (" + ec.message() + ")");
@@ -259,6 +280,9 @@ RecordingStatus RecordingWriter::add_rgbd(const RgbdFrame &p_frame) {
 	if (error.empty()) {
 		error = append_line(depth_index, "depth.txt", format_number(depth_time) + " " + depth_name);
 	}
+	if (error.empty()) {
+		error = append_capture(RecordingStream::Rgbd, rgb_time, p_frame.capture);
+	}
 	if (!error.empty()) {
 		return fail(error);
 	}
@@ -314,6 +338,9 @@ RecordingStatus RecordingWriter::add_fisheye(const FisheyeFrame &p_frame) {
 	}
 	if (error.empty()) {
 		error = append_line(fisheye_index, "fisheye.txt", format_number(p_frame.timestamp_s) + " " + name);
+	}
+	if (error.empty()) {
+		error = append_capture(RecordingStream::Fisheye, p_frame.timestamp_s, p_frame.capture);
 	}
 	if (!error.empty()) {
 		return fail(error);
@@ -441,8 +468,8 @@ RecordingStatus RecordingWriter::close() {
 		std::ofstream *stream;
 		const char *name;
 	};
-	const Index indexes[4] = { { &rgb_index, "rgb.txt" }, { &depth_index, "depth.txt" }, { &fisheye_index, "fisheye.txt" },
-		{ &cubemap_index, "groundtruth/cubemaps.txt" } };
+	const Index indexes[5] = { { &rgb_index, "rgb.txt" }, { &depth_index, "depth.txt" }, { &fisheye_index, "fisheye.txt" },
+		{ &cubemap_index, "groundtruth/cubemaps.txt" }, { &capture_index, "capture.txt" } };
 	for (const Index &index : indexes) {
 		if (!index.stream->is_open()) {
 			continue;

@@ -47,6 +47,7 @@ public:
 	// rig's rgb size. depth_m: CV_32FC1 metres (NaN, infinite or <= 0: no reading; stored as
 	// round(metres / depth_scale_m), an error when beyond 65535 units) or CV_16UC1 raw units, same
 	// size. Timestamps must be finite and increase strictly within rgb.txt and within depth.txt.
+	// A frame whose capture is known (a live frame) also gets its line in capture.txt.
 	RecordingStatus add_rgbd(const RgbdFrame &p_frame);
 	// Writes fisheye/NNNNNN.png (CV_8UC1 or CV_8UC3 R, G, B) or fisheye/NNNNNN.exr (CV_32FC3,
 	// hdr set) and its index line; the rig's fisheye size; strictly increasing timestamps. An
@@ -77,6 +78,7 @@ private:
 	RecordingStatus open_folder(const std::string &p_folder, const Rig &p_rig, const RoomInfo *p_room, const RecordingWriteOptions &p_options);
 	RecordingStatus fail(std::string p_error) const;
 	std::string append_line(std::ofstream &p_index, const std::string &p_index_name, const std::string &p_line);
+	std::string append_capture(RecordingStream p_stream, double p_timestamp_s, const CaptureInfo &p_capture);
 	std::string path(const std::string &p_relative) const;
 
 	bool opened = false;
@@ -89,6 +91,7 @@ private:
 	std::ofstream depth_index;
 	std::ofstream fisheye_index;
 	std::ofstream cubemap_index; // opened with the first cubemap
+	std::ofstream capture_index; // opened with the first frame that carries CaptureInfo
 	size_t rgbd_count = 0;
 	size_t fisheye_count = 0;
 	size_t cubemap_count = 0;

@@ -79,8 +79,14 @@ std::string check_rig(const Rig &p_rig) {
 	c.finite("rgb.p2", rgb.p2);
 	c.finite("rgb.k3", rgb.k3);
 	c.positive("depth_scale_m", p_rig.depth_scale_m);
+	if (!(p_rig.rgbd_latency_s >= 0.0 && p_rig.rgbd_latency_s <= 1.0)) {
+		c.fail("rgbd_latency_s", "must be within 0 to 1 seconds (got " + std::to_string(p_rig.rgbd_latency_s) + ")");
+	}
 
 	if (!p_rig.has_fisheye()) {
+		if (p_rig.fisheye_latency_s != 0.0) {
+			c.fail("fisheye_latency_s", "must be 0 for a rig without a fisheye");
+		}
 		return c.error;
 	}
 	const OmniParams &fisheye = p_rig.fisheye;
@@ -120,6 +126,9 @@ std::string check_rig(const Rig &p_rig) {
 	c.finite("rgb_from_fisheye.translation_m[1]", extrinsic.translation.y);
 	c.finite("rgb_from_fisheye.translation_m[2]", extrinsic.translation.z);
 	c.finite("fisheye_time_offset_s", p_rig.fisheye_time_offset_s);
+	if (!(p_rig.fisheye_latency_s >= 0.0 && p_rig.fisheye_latency_s <= 1.0)) {
+		c.fail("fisheye_latency_s", "must be within 0 to 1 seconds (got " + std::to_string(p_rig.fisheye_latency_s) + ")");
+	}
 	return c.error;
 }
 
@@ -209,10 +218,25 @@ bool read_rig(YamlFieldReader &p_reader, const cv::FileNode &p_root, Rig *r_rig)
 		return p_reader.fail("roomprobe_rig", "unknown version " + std::to_string(version) + " (this build reads version " +
 						std::to_string(RIG_FILE_VERSION) + ")");
 	}
-	if (!p_reader.check_keys(p_root, "", { "roomprobe_rig", "rgb", "depth_scale_m", "fisheye", "rgb_from_fisheye", "fisheye_time_offset_s" },
+	if (!p_reader.check_keys(p_root, "",
+				{ "roomprobe_rig", "rgb", "depth_scale_m", "fisheye", "rgb_from_fisheye", "fisheye_time_offset_s", "rgbd_latency_s", "fisheye_latency_s" },
 				{ "roomprobe_rig", "rgb", "depth_scale_m" }) ||
 			!read_rgb(p_reader, p_root, &r_rig->rgb) || !p_reader.real(p_root, "", "depth_scale_m", &r_rig->depth_scale_m)) {
 		return false;
+	}
+	// The live capture's latencies are optional (files from before them, synthetic rigs).
+	r_rig->rgbd_latency_s = 0.0;
+	r_rig->fisheye_latency_s = 0.0;
+	if (!p_root["rgbd_latency_s"].empty() && !p_reader.real(p_root, "", "rgbd_latency_s", &r_rig->rgbd_latency_s)) {
+		return false;
+	}
+	if (!p_root["fisheye_latency_s"].empty()) {
+		if (p_root["fisheye"].empty()) {
+			return p_reader.fail("fisheye_latency_s", "given for a rig without a fisheye");
+		}
+		if (!p_reader.real(p_root, "", "fisheye_latency_s", &r_rig->fisheye_latency_s)) {
+			return false;
+		}
 	}
 	// An RGB-D camera alone leaves out all three fisheye fields; one of them alone is a mistake.
 	const char *fisheye_fields[3] = { "fisheye", "rgb_from_fisheye", "fisheye_time_offset_s" };
@@ -349,6 +373,10 @@ std::string save_rig(const std::string &p_path, const Rig &p_rig) {
 		storage << "k1" << rgb.k1 << "k2" << rgb.k2 << "p1" << rgb.p1 << "p2" << rgb.p2 << "k3" << rgb.k3;
 		storage << "}";
 		storage << "depth_scale_m" << p_rig.depth_scale_m;
+		if (p_rig.rgbd_latency_s != 0.0) {
+			storage.writeComment("Live capture: seconds from the RGB-D camera taking a frame to its arrival.");
+			storage << "rgbd_latency_s" << p_rig.rgbd_latency_s;
+		}
 		if (!p_rig.has_fisheye()) {
 			storage.writeComment("An RGB-D camera alone: no fisheye, so no extrinsic and no clock offset either.");
 			text = storage.releaseAndGetString();
@@ -369,6 +397,10 @@ std::string save_rig(const std::string &p_path, const Rig &p_rig) {
 		storage << "}";
 		storage.writeComment("Seconds to add to a fisheye timestamp to get RGB-D clock time.");
 		storage << "fisheye_time_offset_s" << p_rig.fisheye_time_offset_s;
+		if (p_rig.fisheye_latency_s != 0.0) {
+			storage.writeComment("Live capture: seconds from the fisheye taking a frame to its arrival.");
+			storage << "fisheye_latency_s" << p_rig.fisheye_latency_s;
+		}
 		text = storage.releaseAndGetString();
 	} catch (const cv::Exception &e) {
 		return p_path + ": cannot write the rig file: " + e.err;

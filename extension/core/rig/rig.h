@@ -17,6 +17,11 @@ struct Rig {
 	OmniParams fisheye;
 	Pose rgb_from_fisheye; // fixed extrinsic: fisheye frame -> RGB-D camera frame
 	double fisheye_time_offset_s = 0.0; // add to a fisheye timestamp to get RGB-D clock time
+	// Live capture: how long before its arrival each camera took a frame (exposure, readout,
+	// transfer), seconds in [0, 1]. A capture thread stamps a frame with the host's monotonic
+	// clock less this (drivers/capture). Optional in the file; 0 when absent.
+	double rgbd_latency_s = 0.0;
+	double fisheye_latency_s = 0.0; // a rig without a fisheye leaves it 0
 
 	bool has_fisheye() const { return fisheye.width != 0 || fisheye.height != 0; }
 };

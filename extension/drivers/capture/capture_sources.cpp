@@ -99,8 +99,8 @@ public:
 		result.kind = GrabOutcome::Frame;
 		CapturedFrame &frame = result.frame;
 		frame.is_rgbd = true;
-		frame.device_time_s = double(depth.timestamp_ns) * 1e-9;
-		frame.device_frame_id = uint64_t(depth.frame_index);
+		frame.rgbd.capture.device_time_s = double(depth.timestamp_ns) * 1e-9;
+		frame.rgbd.capture.device_frame_id = int64_t(depth.frame_index);
 		frame.rgbd.rgb = cv::Mat(color.height, color.width, CV_8UC3, const_cast<uint8_t *>(color.rgb.data())).clone();
 		// OpenNI2's depth is in millimetres (the driver divides 100-um modes down).
 		const cv::Mat depth_mm(depth.height, depth.width, CV_16UC1, const_cast<uint16_t *>(depth.depth_mm.data()));
@@ -197,17 +197,17 @@ public:
 		result.kind = GrabOutcome::Frame;
 		CapturedFrame &frame = result.frame;
 		frame.fisheye.image = std::move(image);
-		frame.device_time_s = double(raw.timestamp_ns) * 1e-9;
-		frame.device_frame_id = raw.frame_id;
+		frame.fisheye.capture.device_time_s = double(raw.timestamp_ns) * 1e-9;
+		frame.fisheye.capture.device_frame_id = int64_t(raw.frame_id);
 		// Read after the frame: with auto-exposure on, the value that made it (the camera changes
 		// it between frames, so this can be one frame late; chunk data would be exact).
 		if (has_exposure) {
 			DriverResult<double> exposure = camera->get_exposure_time_us();
-			frame.exposure_us = exposure.ok() ? exposure.value : NO_VALUE;
+			frame.fisheye.capture.exposure_us = exposure.ok() ? exposure.value : NO_VALUE;
 		}
 		if (has_gain) {
 			DriverResult<double> gain = camera->get_gain();
-			frame.gain = gain.ok() ? gain.value : NO_VALUE;
+			frame.fisheye.capture.gain = gain.ok() ? gain.value : NO_VALUE;
 		}
 		return result;
 	}
@@ -303,11 +303,11 @@ public:
 		} else {
 			cv::cvtColor(bgr, frame.fisheye.image, cv::COLOR_BGR2RGB);
 		}
-		frame.device_time_s = capture->get(cv::CAP_PROP_POS_MSEC) * 1e-3;
-		frame.device_frame_id = frame_count++;
+		frame.fisheye.capture.device_time_s = capture->get(cv::CAP_PROP_POS_MSEC) * 1e-3;
+		frame.fisheye.capture.device_frame_id = frame_count++;
 		if (!is_file) {
-			frame.exposure_us = capture->get(cv::CAP_PROP_EXPOSURE) * 100.0;
-			frame.gain = capture->get(cv::CAP_PROP_GAIN);
+			frame.fisheye.capture.exposure_us = capture->get(cv::CAP_PROP_EXPOSURE) * 100.0;
+			frame.fisheye.capture.gain = capture->get(cv::CAP_PROP_GAIN);
 		}
 		return result;
 	}
@@ -320,7 +320,7 @@ private:
 	bool is_file = false;
 	double frame_period_s = 0.0;
 	std::chrono::steady_clock::time_point next_frame;
-	uint64_t frame_count = 0;
+	int64_t frame_count = 0;
 };
 
 } // namespace

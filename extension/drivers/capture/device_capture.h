@@ -41,18 +41,14 @@ enum class DeviceState {
 // "stopped", "connecting", "streaming", "stalled", "disconnected".
 const char *device_state_name(DeviceState p_state);
 
-// One frame from a live device, stamped by its capture thread.
+// One frame from a live device, stamped by its capture thread. What the device said about it
+// (its own clock and frame counter; the fisheye's exposure and gain) is in the frame's capture.
 struct CapturedFrame {
 	bool is_rgbd = false; // which of the two is filled in
 	roomprobe::RgbdFrame rgbd; // timestamp_s and depth_timestamp_s: host_time_s
 	roomprobe::FisheyeFrame fisheye; // timestamp_s: host_time_s
 	double host_time_s = 0.0; // the rig's clock: monotonic arrival, less the device's latency, seconds
-	double device_time_s = 0.0; // the device's own clock, seconds (kept for recordings)
-	uint64_t device_frame_id = 0; // the device's frame counter (gaps: frames the device dropped)
-	// The fisheye's exposure time (microseconds) and gain (the camera's unit, usually dB) when the
-	// frame was taken; NaN where the device does not report them.
-	double exposure_us = std::numeric_limits<double>::quiet_NaN();
-	double gain = std::numeric_limits<double>::quiet_NaN();
+	const roomprobe::CaptureInfo &capture() const { return is_rgbd ? rgbd.capture : fisheye.capture; }
 };
 
 // What a CaptureSource's grab gives.

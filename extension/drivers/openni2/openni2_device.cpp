@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <thread>
 
 namespace roomprobe::drivers {
 
@@ -168,6 +169,17 @@ struct OpenNI2Device::State {
 	std::unique_ptr<openni::VideoStream> depth;
 	std::unique_ptr<openni::VideoStream> color;
 	std::unique_ptr<DisconnectWatch> watch;
+	// Recordings play in OpenNI's manual mode, with repeat on. libOniFile's player thread walks
+	// its list of streams without a lock, so a stream destroyed while it runs can crash it (at
+	// the end of a recording without repeat it spins through that list). In manual mode it reads
+	// a frame only when asked (waitForAnyStream pokes it) and otherwise waits, parked, on its
+	// trigger; with repeat it never reaches that end. The end is found here instead, when a
+	// stream's frame index starts again, and the recorded pace is kept here: each frame is held
+	// until its timestamp, counted from the first one read. No frame is skipped.
+	int64_t first_timestamp_us = -1;
+	std::chrono::steady_clock::time_point first_read;
+	int last_frame_index[2] = { -1, -1 }; // depth, colour
+	bool ended = false;
 
 	~State() {
 		if (watch) {
@@ -191,6 +203,9 @@ struct OpenNI2Device::State {
 		if (watch && watch->disconnected.load()) {
 			return Result::failure(name + ": disconnected (unplugged?); open it again");
 		}
+		if (ended) {
+			return Result::failure(name + ": end of the recording");
+		}
 		int ready = -1;
 		const openni::Status waited = OpenNI::waitForAnyStream(&p_stream, 1, &ready, std::max(p_timeout_ms, 0));
 		if (waited == openni::STATUS_TIME_OUT) {
@@ -201,7 +216,37 @@ struct OpenNI2Device::State {
 		if (waited != openni::STATUS_OK || p_stream->readFrame(&frame) != openni::STATUS_OK || !frame.isValid()) {
 			return Result::failure(name + ": cannot read a " + p_what + " frame: " + extended_error());
 		}
+		if (file) {
+			int &last = last_frame_index[p_stream == depth.get() ? 0 : 1];
+			if (frame.getFrameIndex() <= last) {
+				ended = true; // the player started the recording again
+				return Result::failure(name + ": end of the recording");
+			}
+			last = frame.getFrameIndex();
+			keep_recorded_pace(int64_t(frame.getTimestamp()));
+		}
 		return Result::success(frame);
+	}
+
+	// Holds a recording's frame until its time has come, as a live camera would deliver it. A
+	// jump forward of more than a second (a gap in the recording) is not waited out.
+	void keep_recorded_pace(int64_t p_timestamp_us) {
+		using Clock = std::chrono::steady_clock;
+		const Clock::time_point now = Clock::now();
+		if (first_timestamp_us < 0 || p_timestamp_us < first_timestamp_us) {
+			first_timestamp_us = p_timestamp_us;
+			first_read = now;
+			return;
+		}
+		const Clock::time_point due = first_read + std::chrono::microseconds(p_timestamp_us - first_timestamp_us);
+		if (due - now > std::chrono::seconds(1)) {
+			first_timestamp_us = p_timestamp_us;
+			first_read = now;
+			return;
+		}
+		if (due > now) {
+			std::this_thread::sleep_until(due);
+		}
 	}
 };
 
@@ -368,8 +413,9 @@ DriverResult<std::unique_ptr<OpenNI2Device>> OpenNI2Device::open(const std::stri
 
 	if (file) {
 		if (openni::PlaybackControl *playback = device.getPlaybackControl()) {
-			// Without repeat, the end of the recording shows as a timeout.
-			playback->setRepeatEnabled(false);
+			// Manual, repeating: see State::first_timestamp_us.
+			playback->setRepeatEnabled(true);
+			playback->setSpeed(-1.0f);
 		}
 	} else if (state->depth && state->color) {
 		if (device.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR)) {

@@ -46,7 +46,9 @@ public:
 	// existing file, or any path ending in ".oni". A live device streams depth in
 	// millimetres and RGB colour at 640x480 when it offers that, with depth
 	// registered to colour and depth/colour frame sync where supported. A
-	// recording plays once at its recorded speed (no repeat), as it was recorded.
+	// recording plays once (no repeat) at its recorded pace, every frame in order:
+	// OpenNI's player runs in its manual mode and a grab holds each frame until
+	// its time, so a slow reader falls behind instead of skipping frames.
 	static DriverResult<std::unique_ptr<OpenNI2Device>> open(const std::string &p_uri);
 
 	// Each waits up to p_timeout_ms (>= 0) for the next frame of its stream.

@@ -3,6 +3,7 @@
 #include "../convert/image_convert.h"
 #include "../convert/pose_convert.h"
 
+#include <recording/room_file.h>
 #include <rig/photometry.h>
 
 #include <cmath>
@@ -26,6 +27,83 @@ bool RigCapture::get_loop() const { return loop; }
 void RigCapture::set_autoplay(bool p_autoplay) { autoplay = p_autoplay; }
 bool RigCapture::get_autoplay() const { return autoplay; }
 
+void RigCapture::set_source(Source p_source) {
+	if (p_source != SOURCE_RECORDING && p_source != SOURCE_LIVE) {
+		ERR_PRINT(String("RigCapture: source must be Recording (0) or Live (1); got ") + String::num_int64(int64_t(p_source)) + "; left as it was");
+		return;
+	}
+	if (p_source == source) {
+		return;
+	}
+	close();
+	source = p_source;
+	last_error.clear();
+	update_configuration_warnings();
+}
+
+RigCapture::Source RigCapture::get_source() const { return source; }
+
+void RigCapture::set_rig_file(const String &p_path) {
+	rig_file = p_path;
+	last_error.clear();
+	if (source == SOURCE_LIVE) {
+		close();
+	}
+	update_configuration_warnings();
+}
+
+String RigCapture::get_rig_file() const { return rig_file; }
+
+void RigCapture::set_room_file(const String &p_path) {
+	room_file = p_path;
+	last_error.clear();
+	if (source == SOURCE_LIVE) {
+		close();
+	}
+	update_configuration_warnings();
+}
+
+String RigCapture::get_room_file() const { return room_file; }
+// The device settings take effect at the next play().
+void RigCapture::set_rgbd_device(const String &p_uri) { rgbd_device = p_uri; }
+String RigCapture::get_rgbd_device() const { return rgbd_device; }
+void RigCapture::set_fisheye_device(const String &p_id) { fisheye_device = p_id; }
+String RigCapture::get_fisheye_device() const { return fisheye_device; }
+
+void RigCapture::set_fisheye_backend(FisheyeBackend p_backend) {
+	if (p_backend != FISHEYE_BACKEND_ARAVIS && p_backend != FISHEYE_BACKEND_UVC) {
+		ERR_PRINT(String("RigCapture: fisheye_backend must be Aravis (0) or UVC (1); got ") + String::num_int64(int64_t(p_backend)) + "; left as it was");
+		return;
+	}
+	fisheye_backend = p_backend;
+}
+
+RigCapture::FisheyeBackend RigCapture::get_fisheye_backend() const { return fisheye_backend; }
+void RigCapture::set_fisheye_pixel_format(const String &p_format) { fisheye_pixel_format = p_format; }
+String RigCapture::get_fisheye_pixel_format() const { return fisheye_pixel_format; }
+void RigCapture::set_auto_exposure(bool p_on) { auto_exposure = p_on; }
+bool RigCapture::get_auto_exposure() const { return auto_exposure; }
+
+void RigCapture::set_exposure_us(double p_exposure_us) {
+	if (!(p_exposure_us > 0.0 && p_exposure_us <= 10e6)) {
+		ERR_PRINT(String("RigCapture: exposure_us must be within 0 (excluded) and 10000000 microseconds; got ") + String::num(p_exposure_us) + "; left as it was");
+		return;
+	}
+	exposure_us = p_exposure_us;
+}
+
+double RigCapture::get_exposure_us() const { return exposure_us; }
+
+void RigCapture::set_gain(double p_gain) {
+	if (!std::isfinite(p_gain)) {
+		ERR_PRINT("RigCapture: gain must be a finite number; left as it was");
+		return;
+	}
+	gain = p_gain;
+}
+
+double RigCapture::get_gain() const { return gain; }
+
 RigCapture::RigCapture() :
 		engine(std::make_shared<LiveRoom>()) {
 	set_process_priority(-30);
@@ -39,6 +117,7 @@ RigCapture::RigCapture() :
 
 RigCapture::~RigCapture() {
 	stop_capture();
+	live.reset(); // its sinks reach the engine and this node
 	if (engine) {
 		engine->stop();
 	}
@@ -55,6 +134,9 @@ void RigCapture::fail(const std::string &p_message) {
 }
 
 bool RigCapture::open() {
+	if (source == SOURCE_LIVE) {
+		return open_live();
+	}
 	close();
 	if (recording_path.is_empty()) {
 		fail("recording_path is empty");
@@ -88,8 +170,54 @@ bool RigCapture::open() {
 	return true;
 }
 
+// Reads rig_file (and room_file) and gives the engine the rig; the devices start with play().
+bool RigCapture::open_live() {
+	close();
+	if (rig_file.is_empty()) {
+		fail("rig_file is empty: with source Live, set it to the rig's calibration file (calib/README.md)");
+		return false;
+	}
+	ProjectSettings *settings = ProjectSettings::get_singleton();
+	const RigLoadResult loaded = load_rig(settings->globalize_path(rig_file).utf8_string());
+	if (!loaded.ok) {
+		fail(loaded.error);
+		return false;
+	}
+	RoomInfo room;
+	if (!room_file.is_empty()) {
+		const RoomLoadResult room_loaded = load_room_file(settings->globalize_path(room_file).utf8_string());
+		if (!room_loaded.ok) {
+			fail(room_loaded.error);
+			return false;
+		}
+		room = room_loaded.room;
+	}
+	live_rig = loaded.rig;
+	live_rig.fisheye_time_offset_s = 0.0; // both streams are stamped on one host clock
+	has_live_room = !room_file.is_empty();
+	live_room = room;
+	live_open = true;
+	engine->edit_config([&](LiveRoomConfig &p_config) {
+		p_config.has_rig = true;
+		p_config.rig = live_rig;
+		p_config.photometry = RigPhotometry(); // the rig file carries none yet (the calibration issue)
+		p_config.initial_rgb_pose = has_live_room ? live_room.initial_rgb_pose : Pose();
+		p_config.keep_points = has_live_room ? live_room.probes : std::vector<glm::dvec3>();
+		p_config.ground_truth.clear();
+	});
+	last_error.clear();
+	update_configuration_warnings();
+	return true;
+}
+
 void RigCapture::close() {
 	stop();
+	if (live_open) {
+		live.reset();
+		live_open = false;
+		has_live_room = false;
+		engine->edit_config([](LiveRoomConfig &p_config) { p_config.has_rig = false; });
+	}
 	if (reader) {
 		engine->edit_config([](LiveRoomConfig &p_config) {
 			p_config.has_rig = false;
@@ -100,13 +228,20 @@ void RigCapture::close() {
 	rewind();
 }
 
-bool RigCapture::is_open() const { return reader != nullptr; }
+bool RigCapture::is_open() const { return reader != nullptr || live_open; }
 
 void RigCapture::play() {
-	if (!reader && !open()) {
+	if (!is_open() && !open()) {
 		return;
 	}
 	playing = true;
+	if (live_open) {
+		engine->apply_config();
+		engine->start();
+		start_live();
+		set_process(playing);
+		return;
+	}
 	if (pacing == PACING_REAL_TIME) {
 		// The engine's workers take the frames; the capture thread reads them.
 		engine->apply_config();
@@ -116,9 +251,83 @@ void RigCapture::play() {
 	set_process(pacing == PACING_REAL_TIME);
 }
 
+// The devices' capture threads feed the engine and the node's newest frames; their state
+// changes wait for the main thread (report_device_states).
+void RigCapture::start_live() {
+	if (!live) {
+		live = std::make_unique<drivers::LiveRig>();
+	}
+	ProjectSettings *project = ProjectSettings::get_singleton();
+	// A device may be a file played as if live (an .oni, a video): res:// and user:// work.
+	const auto device_text = [project](const String &p_value) {
+		return (p_value.begins_with("res://") || p_value.begins_with("user://") ? project->globalize_path(p_value) : p_value).utf8_string();
+	};
+	drivers::LiveRigSettings settings;
+	settings.rgbd.uri = device_text(rgbd_device);
+	settings.fisheye.device = device_text(fisheye_device);
+	settings.fisheye.pixel_format = fisheye_pixel_format.utf8_string();
+	settings.fisheye.auto_exposure = auto_exposure;
+	settings.fisheye.exposure_us = exposure_us;
+	settings.fisheye.gain = gain;
+	settings.fisheye_backend = fisheye_backend == FISHEYE_BACKEND_UVC ? drivers::FisheyeBackend::Uvc : drivers::FisheyeBackend::Aravis;
+	{
+		const std::lock_guard<std::mutex> lock(mutex);
+		live_frames[0] = live_frames[1] = 0;
+	}
+	const std::string error = live->start(
+			live_rig, settings,
+			[this](drivers::CapturedFrame &&p_frame) {
+				const int s = p_frame.is_rgbd ? STREAM_RGBD : STREAM_FISHEYE;
+				if (p_frame.is_rgbd) {
+					engine->push_rgbd(p_frame.rgbd);
+				} else {
+					engine->push_fisheye(p_frame.fisheye);
+				}
+				const std::lock_guard<std::mutex> lock(mutex);
+				if (p_frame.is_rgbd) {
+					latest.rgbd = std::move(p_frame.rgbd);
+				} else {
+					latest.fisheye = std::move(p_frame.fisheye);
+				}
+				latest.index[s] = live_frames[s]++;
+				latest.version[s]++;
+			},
+			[this](RecordingStream p_stream, const drivers::DeviceStatus &p_status) {
+				const std::lock_guard<std::mutex> lock(mutex);
+				state_changes.push_back({ p_stream == RecordingStream::Rgbd ? STREAM_RGBD : STREAM_FISHEYE, p_status });
+			});
+	if (!error.empty()) {
+		playing = false;
+		engine->stop();
+		fail(error);
+	}
+}
+
+void RigCapture::report_device_states() {
+	std::vector<StateChange> changes;
+	{
+		const std::lock_guard<std::mutex> lock(mutex);
+		changes.swap(state_changes);
+	}
+	for (const StateChange &change : changes) {
+		device_status[change.stream] = change.status;
+		emit_signal("device_state_changed", int(change.stream), int(change.status.state), String(change.status.reason.c_str()));
+	}
+	if (!changes.empty()) {
+		update_configuration_warnings();
+	}
+}
+
 void RigCapture::stop() {
 	playing = false;
 	stop_capture();
+	if (live) {
+		stop_recording(); // no more frames: the recording is finished
+		live->stop();
+		for (drivers::DeviceStatus &status : device_status) {
+			status = drivers::DeviceStatus();
+		}
+	}
 	engine->stop();
 	set_process(false);
 }
@@ -285,6 +494,10 @@ void RigCapture::show_frames(bool p_signal) {
 
 bool RigCapture::step() {
 	MainThreadTimer timer;
+	if (source == SOURCE_LIVE) {
+		fail("step() plays recordings one frame at a time; with source Live the devices stream (play())");
+		return false;
+	}
 	if (!reader && !open()) {
 		return false;
 	}
@@ -335,6 +548,11 @@ void RigCapture::_process(double p_delta) {
 		engine->apply_config();
 		update_configuration_warnings();
 	}
+	report_device_states();
+	if (playing && live_open) {
+		show_frames(true);
+		return;
+	}
 	if (!playing || !reader || pacing != PACING_REAL_TIME) {
 		return;
 	}
@@ -357,6 +575,10 @@ void RigCapture::_process(double p_delta) {
 }
 
 int64_t RigCapture::get_frame_count(Stream p_stream) const {
+	if (live_open) {
+		const std::lock_guard<std::mutex> lock(mutex);
+		return live_frames[p_stream == STREAM_RGBD ? 0 : 1];
+	}
 	if (!reader) {
 		return 0;
 	}
@@ -448,10 +670,88 @@ PackedStringArray RigCapture::get_issues() const {
 
 String RigCapture::get_last_error() const { return String(last_error.c_str()); }
 
+RigCapture::DeviceState RigCapture::get_device_state(Stream p_stream) const {
+	return DeviceState(int(device_status[p_stream == STREAM_RGBD ? 0 : 1].state));
+}
+
+String RigCapture::get_device_state_reason(Stream p_stream) const {
+	return String(device_status[p_stream == STREAM_RGBD ? 0 : 1].reason.c_str());
+}
+
+Dictionary RigCapture::get_device_status(Stream p_stream) const {
+	const RecordingStream stream = p_stream == STREAM_RGBD ? RecordingStream::Rgbd : RecordingStream::Fisheye;
+	const drivers::DeviceStatus status = live ? live->status(stream) : drivers::DeviceStatus();
+	Dictionary d;
+	d["device"] = String(live ? live->device_name(stream).c_str() : "");
+	d["state"] = int(status.state);
+	d["state_name"] = String(drivers::device_state_name(status.state));
+	d["reason"] = String(status.reason.c_str());
+	d["frames"] = int64_t(status.frames);
+	d["reconnections"] = int64_t(status.reconnections);
+	return d;
+}
+
+bool RigCapture::start_recording(const String &p_folder) {
+	if (!live || !live->is_running()) {
+		fail("start_recording(" + p_folder.utf8_string() + "): the live rig is not streaming; set source to Live and play() first "
+																"(a recording is played back, not recorded again)");
+		return false;
+	}
+	const std::string folder = ProjectSettings::get_singleton()->globalize_path(p_folder).utf8_string();
+	const RecordingStatus status = live->start_recording(folder, has_live_room ? &live_room : nullptr);
+	if (!status.ok) {
+		fail(status.error);
+		return false;
+	}
+	return true;
+}
+
+bool RigCapture::stop_recording() {
+	if (!live) {
+		return true;
+	}
+	const RecordingStatus status = live->stop_recording();
+	if (!status.ok) {
+		fail(status.error);
+	}
+	return status.ok;
+}
+
+bool RigCapture::is_recording() const { return live && live->is_recording(); }
+
+Dictionary RigCapture::get_recording_status() const {
+	const RecordingQueueStatus status = live ? live->recording_status() : RecordingQueueStatus();
+	Dictionary d;
+	d["recording"] = status.recording;
+	d["folder"] = String(status.folder.c_str());
+	d["rgbd_written"] = int64_t(status.written[0]);
+	d["fisheye_written"] = int64_t(status.written[1]);
+	d["rgbd_dropped"] = int64_t(status.dropped[0]);
+	d["fisheye_dropped"] = int64_t(status.dropped[1]);
+	d["gaps"] = int64_t(status.gaps);
+	d["queued"] = int64_t(status.queued);
+	d["seconds"] = status.seconds;
+	d["megabytes"] = status.megabytes_written;
+	d["megabytes_per_s"] = status.megabytes_per_s;
+	d["error"] = String(status.error.c_str());
+	return d;
+}
+
+const RoomInfo *RigCapture::room_info() const {
+	if (live_open) {
+		return has_live_room ? &live_room : nullptr;
+	}
+	return reader && reader->has_room() ? &reader->get_room() : nullptr;
+}
+
+const Rig *RigCapture::rig_info() const {
+	return live_open ? &live_rig : reader ? &reader->get_rig() : nullptr;
+}
+
 PackedVector2Array RigCapture::get_room_floorplan() const {
 	PackedVector2Array points;
-	if (reader && reader->has_room()) {
-		for (const Vec2 &p : reader->get_room().floorplan.points) {
+	if (const RoomInfo *room = room_info()) {
+		for (const Vec2 &p : room->floorplan.points) {
 			points.push_back(Vector2(real_t(p.x), real_t(p.y)));
 		}
 	}
@@ -459,13 +759,14 @@ PackedVector2Array RigCapture::get_room_floorplan() const {
 }
 
 double RigCapture::get_room_ceiling_height() const {
-	return reader && reader->has_room() ? reader->get_room().floorplan.ceiling_height_m : 0.0;
+	const RoomInfo *room = room_info();
+	return room ? room->floorplan.ceiling_height_m : 0.0;
 }
 
 PackedVector3Array RigCapture::get_probe_positions() const {
 	PackedVector3Array out;
-	if (reader && reader->has_room()) {
-		for (const glm::dvec3 &p : reader->get_room().probes) {
+	if (const RoomInfo *room = room_info()) {
+		for (const glm::dvec3 &p : room->probes) {
 			out.push_back(Vector3(real_t(p.x), real_t(p.y), real_t(p.z)));
 		}
 	}
@@ -487,22 +788,35 @@ Transform3D RigCapture::get_ground_truth_camera_transform() const {
 }
 
 double RigCapture::get_rgb_camera_fov() const {
-	if (!reader) {
+	const Rig *rig = rig_info();
+	if (!rig) {
 		return 0.0;
 	}
-	const PinholeParams &rgb = reader->get_rig().rgb;
+	const PinholeParams &rgb = rig->rgb;
 	return rgb.fy > 0.0 ? 2.0 * std::atan(0.5 * rgb.height / rgb.fy) * 180.0 / 3.14159265358979323846 : 0.0;
 }
 
 PackedStringArray RigCapture::get_warnings() const {
 	PackedStringArray warnings;
-	if (recording_path.is_empty()) {
-		warnings.push_back("Set recording_path to a recording folder (docs/recording-format.md). Live devices are not supported yet.");
+	if (source == SOURCE_RECORDING && recording_path.is_empty()) {
+		warnings.push_back("Set recording_path to a recording folder (docs/recording-format.md), or set source to Live.");
+	}
+	if (source == SOURCE_LIVE && rig_file.is_empty()) {
+		warnings.push_back("Set rig_file to the rig's calibration file (calib/README.md): source Live needs it.");
 	}
 	if (!last_error.empty()) {
-		warnings.push_back(String(("The recording cannot be played: " + last_error).c_str()));
+		warnings.push_back(String(((source == SOURCE_LIVE ? "The live rig cannot run: " : "The recording cannot be played: ") + last_error).c_str()));
 	}
-	if (reader && !engine->config_pending() && !engine->configuration_error().empty()) {
+	if (live_open && playing) {
+		for (int s = 0; s < 2; s++) {
+			const drivers::DeviceStatus &status = device_status[s];
+			if (status.state == drivers::DeviceState::Stalled || status.state == drivers::DeviceState::Disconnected) {
+				warnings.push_back(String(((s == STREAM_RGBD ? std::string("The RGB-D camera is ") : std::string("The fisheye is ")) +
+						drivers::device_state_name(status.state) + ": " + status.reason).c_str()));
+			}
+		}
+	}
+	if ((reader || live_open) && !engine->config_pending() && !engine->configuration_error().empty()) {
 		warnings.push_back(String(("The live engine is not running: " + engine->configuration_error()).c_str()));
 	}
 	return warnings;
@@ -518,6 +832,33 @@ void RigCapture::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_loop"), &RigCapture::get_loop);
 	ClassDB::bind_method(D_METHOD("set_autoplay", "autoplay"), &RigCapture::set_autoplay);
 	ClassDB::bind_method(D_METHOD("get_autoplay"), &RigCapture::get_autoplay);
+	ClassDB::bind_method(D_METHOD("set_source", "source"), &RigCapture::set_source);
+	ClassDB::bind_method(D_METHOD("get_source"), &RigCapture::get_source);
+	ClassDB::bind_method(D_METHOD("set_rig_file", "path"), &RigCapture::set_rig_file);
+	ClassDB::bind_method(D_METHOD("get_rig_file"), &RigCapture::get_rig_file);
+	ClassDB::bind_method(D_METHOD("set_room_file", "path"), &RigCapture::set_room_file);
+	ClassDB::bind_method(D_METHOD("get_room_file"), &RigCapture::get_room_file);
+	ClassDB::bind_method(D_METHOD("set_rgbd_device", "uri"), &RigCapture::set_rgbd_device);
+	ClassDB::bind_method(D_METHOD("get_rgbd_device"), &RigCapture::get_rgbd_device);
+	ClassDB::bind_method(D_METHOD("set_fisheye_device", "id"), &RigCapture::set_fisheye_device);
+	ClassDB::bind_method(D_METHOD("get_fisheye_device"), &RigCapture::get_fisheye_device);
+	ClassDB::bind_method(D_METHOD("set_fisheye_backend", "backend"), &RigCapture::set_fisheye_backend);
+	ClassDB::bind_method(D_METHOD("get_fisheye_backend"), &RigCapture::get_fisheye_backend);
+	ClassDB::bind_method(D_METHOD("set_fisheye_pixel_format", "format"), &RigCapture::set_fisheye_pixel_format);
+	ClassDB::bind_method(D_METHOD("get_fisheye_pixel_format"), &RigCapture::get_fisheye_pixel_format);
+	ClassDB::bind_method(D_METHOD("set_auto_exposure", "on"), &RigCapture::set_auto_exposure);
+	ClassDB::bind_method(D_METHOD("get_auto_exposure"), &RigCapture::get_auto_exposure);
+	ClassDB::bind_method(D_METHOD("set_exposure_us", "exposure_us"), &RigCapture::set_exposure_us);
+	ClassDB::bind_method(D_METHOD("get_exposure_us"), &RigCapture::get_exposure_us);
+	ClassDB::bind_method(D_METHOD("set_gain", "gain"), &RigCapture::set_gain);
+	ClassDB::bind_method(D_METHOD("get_gain"), &RigCapture::get_gain);
+	ClassDB::bind_method(D_METHOD("get_device_state", "stream"), &RigCapture::get_device_state);
+	ClassDB::bind_method(D_METHOD("get_device_state_reason", "stream"), &RigCapture::get_device_state_reason);
+	ClassDB::bind_method(D_METHOD("get_device_status", "stream"), &RigCapture::get_device_status);
+	ClassDB::bind_method(D_METHOD("start_recording", "folder"), &RigCapture::start_recording);
+	ClassDB::bind_method(D_METHOD("stop_recording"), &RigCapture::stop_recording);
+	ClassDB::bind_method(D_METHOD("is_recording"), &RigCapture::is_recording);
+	ClassDB::bind_method(D_METHOD("get_recording_status"), &RigCapture::get_recording_status);
 	ClassDB::bind_method(D_METHOD("open"), &RigCapture::open);
 	ClassDB::bind_method(D_METHOD("close"), &RigCapture::close);
 	ClassDB::bind_method(D_METHOD("is_open"), &RigCapture::is_open);
@@ -549,7 +890,19 @@ void RigCapture::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_rgb_camera_fov"), &RigCapture::get_rgb_camera_fov);
 	ClassDB::bind_static_method("RigCapture", D_METHOD("get_main_thread_usec"), &RigCapture::get_main_thread_usec);
 
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "source", PROPERTY_HINT_ENUM, "Recording,Live"), "set_source", "get_source");
 	ADD_PROPERTY(PropertyInfo(Variant::STRING, "recording_path", PROPERTY_HINT_GLOBAL_DIR), "set_recording_path", "get_recording_path");
+	ADD_GROUP("Live", "");
+	ADD_PROPERTY(PropertyInfo(Variant::STRING, "rig_file", PROPERTY_HINT_FILE, "*.yaml"), "set_rig_file", "get_rig_file");
+	ADD_PROPERTY(PropertyInfo(Variant::STRING, "room_file", PROPERTY_HINT_FILE, "*.yaml"), "set_room_file", "get_room_file");
+	ADD_PROPERTY(PropertyInfo(Variant::STRING, "rgbd_device"), "set_rgbd_device", "get_rgbd_device");
+	ADD_PROPERTY(PropertyInfo(Variant::STRING, "fisheye_device"), "set_fisheye_device", "get_fisheye_device");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "fisheye_backend", PROPERTY_HINT_ENUM, "Aravis,UVC"), "set_fisheye_backend", "get_fisheye_backend");
+	ADD_PROPERTY(PropertyInfo(Variant::STRING, "fisheye_pixel_format"), "set_fisheye_pixel_format", "get_fisheye_pixel_format");
+	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "auto_exposure"), "set_auto_exposure", "get_auto_exposure");
+	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "exposure_us", PROPERTY_HINT_RANGE, "1,1000000,1,or_greater,suffix:us"), "set_exposure_us", "get_exposure_us");
+	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "gain", PROPERTY_HINT_RANGE, "0,48,0.1,or_greater"), "set_gain", "get_gain");
+	ADD_GROUP("", "");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "pacing", PROPERTY_HINT_ENUM, "Real Time,Step"), "set_pacing", "get_pacing");
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "loop"), "set_loop", "get_loop");
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "autoplay"), "set_autoplay", "get_autoplay");
@@ -558,9 +911,19 @@ void RigCapture::_bind_methods() {
 	BIND_ENUM_CONSTANT(PACING_STEP);
 	BIND_ENUM_CONSTANT(STREAM_RGBD);
 	BIND_ENUM_CONSTANT(STREAM_FISHEYE);
+	BIND_ENUM_CONSTANT(SOURCE_RECORDING);
+	BIND_ENUM_CONSTANT(SOURCE_LIVE);
+	BIND_ENUM_CONSTANT(FISHEYE_BACKEND_ARAVIS);
+	BIND_ENUM_CONSTANT(FISHEYE_BACKEND_UVC);
+	BIND_ENUM_CONSTANT(DEVICE_STATE_STOPPED);
+	BIND_ENUM_CONSTANT(DEVICE_STATE_CONNECTING);
+	BIND_ENUM_CONSTANT(DEVICE_STATE_STREAMING);
+	BIND_ENUM_CONSTANT(DEVICE_STATE_STALLED);
+	BIND_ENUM_CONSTANT(DEVICE_STATE_DISCONNECTED);
 
 	ADD_SIGNAL(MethodInfo("frame_captured", PropertyInfo(Variant::INT, "stream"), PropertyInfo(Variant::INT, "index"), PropertyInfo(Variant::FLOAT, "timestamp")));
 	ADD_SIGNAL(MethodInfo("finished"));
+	ADD_SIGNAL(MethodInfo("device_state_changed", PropertyInfo(Variant::INT, "stream"), PropertyInfo(Variant::INT, "state"), PropertyInfo(Variant::STRING, "reason")));
 }
 
 } // namespace roomprobe

@@ -8,10 +8,13 @@
 //     and only those asked for.
 //   Step: one frame per step() call, read here and processed by the engine before step() returns
 //     (its step mode): deterministic, for tests.
-// Live devices (extension/drivers) come later.
+// Or it streams the live rig (source Live): drivers/capture/live_rig.h runs a capture thread per
+// device, whose frames go straight into the engine; the node only shows device states (signal,
+// warnings), the newest frames, and starts and stops recordings.
 
 #include "live_room_link.h"
 
+#include <capture/live_rig.h>
 #include <recording/recording_reader.h>
 
 #include <rp_godot/godot.h>
@@ -38,6 +41,21 @@ public:
 		STREAM_RGBD,
 		STREAM_FISHEYE,
 	};
+	enum Source {
+		SOURCE_RECORDING, // recording_path
+		SOURCE_LIVE, // the devices, with rig_file
+	};
+	enum FisheyeBackend {
+		FISHEYE_BACKEND_ARAVIS, // GigE Vision / USB3 Vision
+		FISHEYE_BACKEND_UVC, // a V4L2 webcam (OpenCV's VideoCapture)
+	};
+	enum DeviceState { // drivers::DeviceState, in its order
+		DEVICE_STATE_STOPPED,
+		DEVICE_STATE_CONNECTING,
+		DEVICE_STATE_STREAMING,
+		DEVICE_STATE_STALLED,
+		DEVICE_STATE_DISCONNECTED,
+	};
 
 	// Processes first: the model nodes read the results of the frames it delivers in the same frame.
 	RigCapture();
@@ -51,6 +69,35 @@ public:
 	bool get_loop() const;
 	void set_autoplay(bool p_autoplay);
 	bool get_autoplay() const;
+	void set_source(Source p_source);
+	Source get_source() const;
+	void set_rig_file(const godot::String &p_path);
+	godot::String get_rig_file() const;
+	void set_room_file(const godot::String &p_path);
+	godot::String get_room_file() const;
+	void set_rgbd_device(const godot::String &p_uri);
+	godot::String get_rgbd_device() const;
+	void set_fisheye_device(const godot::String &p_id);
+	godot::String get_fisheye_device() const;
+	void set_fisheye_backend(FisheyeBackend p_backend);
+	FisheyeBackend get_fisheye_backend() const;
+	void set_fisheye_pixel_format(const godot::String &p_format);
+	godot::String get_fisheye_pixel_format() const;
+	void set_auto_exposure(bool p_on);
+	bool get_auto_exposure() const;
+	void set_exposure_us(double p_exposure_us);
+	double get_exposure_us() const;
+	void set_gain(double p_gain);
+	double get_gain() const;
+
+	// Live source: each device's state and why, and recording the live streams.
+	DeviceState get_device_state(Stream p_stream) const;
+	godot::String get_device_state_reason(Stream p_stream) const;
+	godot::Dictionary get_device_status(Stream p_stream) const;
+	bool start_recording(const godot::String &p_folder);
+	bool stop_recording();
+	bool is_recording() const;
+	godot::Dictionary get_recording_status() const;
 
 	bool open();
 	void close();
@@ -120,8 +167,21 @@ private:
 	void update_textures(bool p_rgbd, bool p_fisheye) const;
 	void configure_engine();
 	void fail(const std::string &p_message);
+	bool open_live();
+	void start_live();
+	// Main thread: emits device_state_changed for the changes the capture threads queued.
+	void report_device_states();
+	const RoomInfo *room_info() const; // the recording's room, or room_file's (live); null without
+	const Rig *rig_info() const; // the recording's rig, or rig_file's (live); null when not open
+	void reopen_if_live();
 
 	godot::String recording_path;
+	Source source = SOURCE_RECORDING;
+	godot::String rig_file, room_file, rgbd_device, fisheye_device, fisheye_pixel_format;
+	FisheyeBackend fisheye_backend = FISHEYE_BACKEND_ARAVIS;
+	bool auto_exposure = true;
+	double exposure_us = 10000.0;
+	double gain = 0.0;
 	Pacing pacing = PACING_REAL_TIME;
 	bool loop = false;
 	bool autoplay = true;
@@ -129,6 +189,16 @@ private:
 	std::shared_ptr<LiveRoom> engine;
 	std::shared_ptr<const RecordingReader> reader; // read_* is const: the capture thread reads frames
 	bool playing = false;
+	// Live source: opened (rig_file read) while live_rig holds a value.
+	std::unique_ptr<drivers::LiveRig> live;
+	bool live_open = false;
+	Rig live_rig;
+	bool has_live_room = false;
+	RoomInfo live_room;
+	struct StateChange {
+		Stream stream = STREAM_RGBD;
+		drivers::DeviceStatus status;
+	};
 
 	// Shared with the capture thread, under mutex.
 	mutable std::mutex mutex;
@@ -140,6 +210,8 @@ private:
 	int64_t dropped = 0;
 	bool reached_end = false; // the capture thread played the last event (the main thread signals it)
 	std::vector<std::string> frame_warnings; // unreadable frames, printed by the main thread
+	std::vector<StateChange> state_changes; // device state changes, signalled by the main thread
+	int64_t live_frames[2] = { 0, 0 }; // frames the live devices delivered since play()
 	Shown latest;
 
 	// Main thread only.
@@ -152,9 +224,13 @@ private:
 	mutable godot::Ref<godot::Image> rgb_image, depth_image, fisheye_image;
 	mutable bool images_stale = true;
 	std::string last_error;
+	drivers::DeviceStatus device_status[2]; // the last state signalled, per stream
 };
 
 } // namespace roomprobe
 
 VARIANT_ENUM_CAST(roomprobe::RigCapture::Pacing)
 VARIANT_ENUM_CAST(roomprobe::RigCapture::Stream)
+VARIANT_ENUM_CAST(roomprobe::RigCapture::Source)
+VARIANT_ENUM_CAST(roomprobe::RigCapture::FisheyeBackend)
+VARIANT_ENUM_CAST(roomprobe::RigCapture::DeviceState)
