@@ -18,39 +18,11 @@ func after_each() -> void:
 
 ## Rig (real time), SLAM, room and probe, none of them given a NodePath.
 func _scene_without_paths() -> Dictionary:
-	_scene = Node3D.new()
 	var rig = fixture_rig()
 	rig.pacing = 0  # PACING_REAL_TIME
-	_scene.add_child(rig)
-	var room = ClassDB.instantiate("CoarseRoomModel")
-	room.name = "Room"
-	room.texel_size = 0.05
-	room.pose_source = 1  # POSE_SOURCE_DENSE_SLAM
-	_scene.add_child(room)
-	var slam = ClassDB.instantiate("DenseSLAM")
-	slam.name = "SLAM"
-	_scene.add_child(slam)
-	var probe = ClassDB.instantiate("RoomProbe")
-	probe.name = "Probe"
-	probe.resolution = 32
-	probe.update_mode = 1  # UPDATE_ALWAYS
-	_scene.add_child(probe)
-	assert_true(rig.open(), rig.get_last_error())
-	room.floorplan = rig.get_room_floorplan()
-	room.ceiling_height = rig.get_room_ceiling_height()
-	add_to_tree(_scene)
-	probe.global_position = rig.get_probe_positions()[0]
-	return {"rig": rig, "slam": slam, "room": room, "probe": probe}
-
-
-## Waits (real time) until p_done returns true, at most p_seconds; false on time-out.
-func _wait_until(p_done: Callable, p_seconds: float) -> bool:
-	var start := Time.get_ticks_msec()
-	while not p_done.call():
-		if Time.get_ticks_msec() - start > p_seconds * 1000.0:
-			return false
-		await tree.process_frame
-	return true
+	var s := live_scene(rig)
+	_scene = s.scene
+	return s
 
 
 func test_plays_in_real_time_off_the_main_thread() -> void:
@@ -61,9 +33,9 @@ func test_plays_in_real_time_off_the_main_thread() -> void:
 	s.probe.environment_map_updated.connect(func(): maps[0] += 1)
 	s.rig.play()
 	# The 1-s recording plays by the scene's clock; the workers keep up or drop frames.
-	assert_true(await _wait_until(func(): return not s.rig.is_playing(), 30.0), "the recording played to its end")
+	assert_true(await wait_until(func(): return not s.rig.is_playing(), 30.0), "the recording played to its end")
 	s.room.finish_inpainting()
-	assert_true(await _wait_until(func(): return s.slam.get_processed_frame_count() > 0 and maps[0] > 0, 10.0), "results reached the nodes")
+	assert_true(await wait_until(func(): return s.slam.get_processed_frame_count() > 0 and maps[0] > 0, 10.0), "results reached the nodes")
 	assert_eq(s.slam.get_warnings().size(), 0, str(s.slam.get_warnings()))
 	assert_eq(s.room.get_warnings().size(), 0, str(s.room.get_warnings()))
 	assert_eq(Array(s.probe.get_warnings()).filter(func(w): return not w.contains("reaches nothing")).size(), 0, str(s.probe.get_warnings()))

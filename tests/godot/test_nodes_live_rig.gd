@@ -38,9 +38,7 @@ func _need_oni() -> bool:
 
 
 func _live_scene() -> Dictionary:
-	_scene = Node3D.new()
 	var rig = ClassDB.instantiate("RigCapture")
-	rig.name = "Rig"
 	rig.autoplay = false
 	rig.source = 1  # SOURCE_LIVE
 	rig.rig_file = _fake_rig_file()
@@ -50,35 +48,9 @@ func _live_scene() -> Dictionary:
 	rig.auto_exposure = false
 	rig.exposure_us = 5000.0
 	rig.gain = 1.0
-	_scene.add_child(rig)
-	var room = ClassDB.instantiate("CoarseRoomModel")
-	room.name = "Room"
-	room.texel_size = 0.05
-	room.pose_source = 1  # POSE_SOURCE_DENSE_SLAM
-	_scene.add_child(room)
-	var slam = ClassDB.instantiate("DenseSLAM")
-	slam.name = "SLAM"
-	_scene.add_child(slam)
-	var probe = ClassDB.instantiate("RoomProbe")
-	probe.name = "Probe"
-	probe.resolution = 32
-	probe.update_mode = 1  # UPDATE_ALWAYS
-	_scene.add_child(probe)
-	assert_true(rig.open(), rig.get_last_error())
-	room.floorplan = rig.get_room_floorplan()
-	room.ceiling_height = rig.get_room_ceiling_height()
-	add_to_tree(_scene)
-	probe.global_position = rig.get_probe_positions()[0]
-	return {"rig": rig, "slam": slam, "room": room, "probe": probe}
-
-
-func _wait_until(p_done: Callable, p_seconds: float) -> bool:
-	var start := Time.get_ticks_msec()
-	while not p_done.call():
-		if Time.get_ticks_msec() - start > p_seconds * 1000.0:
-			return false
-		await tree.process_frame
-	return true
+	var s := live_scene(rig)
+	_scene = s.scene
+	return s
 
 
 func test_live_devices_reach_the_probe_off_the_main_thread() -> void:
@@ -93,7 +65,7 @@ func test_live_devices_reach_the_probe_off_the_main_thread() -> void:
 	var frames_before := Engine.get_process_frames()
 	s.rig.play()
 	assert_true(s.rig.is_playing(), s.rig.get_last_error())
-	var streamed := await _wait_until(func(): return s.rig.get_frame_count(0) >= 20 and s.rig.get_frame_count(1) >= 20 \
+	var streamed := await wait_until(func(): return s.rig.get_frame_count(0) >= 20 and s.rig.get_frame_count(1) >= 20 \
 			and maps[0] > 0 and s.slam.get_processed_frame_count() > 0, 60.0)
 	assert_true(streamed, "frames: rgbd %d fisheye %d, maps %d, states %s, %s / %s" % [s.rig.get_frame_count(0), s.rig.get_frame_count(1), maps[0],
 			str(states), s.rig.get_device_state_reason(0), s.rig.get_device_state_reason(1)])

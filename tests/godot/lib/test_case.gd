@@ -164,6 +164,44 @@ func add_to_tree(node: Node) -> Node:
 	return node
 
 
+## The live pipeline around p_rig (a RigCapture, opened here): room, SLAM and probe, none given a
+## NodePath, the room from the rig's floorplan, the probe at its first probe position. Returns
+## {scene, rig, slam, room, probe}; the scene is in the tree: free it in after_each().
+func live_scene(p_rig: Node) -> Dictionary:
+	var scene := Node3D.new()
+	p_rig.name = "Rig"
+	scene.add_child(p_rig)
+	var room = ClassDB.instantiate("CoarseRoomModel")
+	room.name = "Room"
+	room.texel_size = 0.05
+	room.pose_source = 1  # POSE_SOURCE_DENSE_SLAM
+	scene.add_child(room)
+	var slam = ClassDB.instantiate("DenseSLAM")
+	slam.name = "SLAM"
+	scene.add_child(slam)
+	var probe = ClassDB.instantiate("RoomProbe")
+	probe.name = "Probe"
+	probe.resolution = 32
+	probe.update_mode = 1  # UPDATE_ALWAYS
+	scene.add_child(probe)
+	assert_true(p_rig.open(), p_rig.get_last_error())
+	room.floorplan = p_rig.get_room_floorplan()
+	room.ceiling_height = p_rig.get_room_ceiling_height()
+	add_to_tree(scene)
+	probe.global_position = p_rig.get_probe_positions()[0]
+	return {"scene": scene, "rig": p_rig, "slam": slam, "room": room, "probe": probe}
+
+
+## Waits (real time) until p_done returns true, at most p_seconds; false on time-out.
+func wait_until(p_done: Callable, p_seconds: float) -> bool:
+	var start := Time.get_ticks_msec()
+	while not p_done.call():
+		if Time.get_ticks_msec() - start > p_seconds * 1000.0:
+			return false
+		await tree.process_frame
+	return true
+
+
 ## Waits n process frames.
 func wait_frames(n: int) -> void:
 	for i in n:
