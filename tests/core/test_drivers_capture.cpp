@@ -105,6 +105,7 @@ public:
 				outcome.frame.is_rgbd = false;
 				outcome.frame.fisheye.image = cv::Mat(4, 4, CV_8UC1, cv::Scalar(7));
 				outcome.frame.fisheye.capture.device_time_s = double(++frames) / 30.0;
+				outcome.frame.processing_s = processing_s;
 				std::this_thread::sleep_for(std::chrono::milliseconds(2));
 				break;
 			case TIMEOUT:
@@ -123,6 +124,7 @@ public:
 	std::atomic<int> open_calls{ 0 };
 	std::atomic<int> close_calls{ 0 };
 	bool frames_after_reopen = false; // a reopened device streams at once (the rest of the script is dropped)
+	double processing_s = 0.0; // what each frame says its conversion took
 
 private:
 	Step next(std::vector<Step> &p_steps) {
@@ -307,6 +309,28 @@ TEST_CASE("capture: frames are stamped on one monotonic clock less the latency, 
 			CHECK(frame.host_time_s <= after_s - options.latency_s);
 			CHECK(frame.fisheye.timestamp_s == frame.host_time_s);
 			last = frame.host_time_s;
+		}
+	}
+	SUBCASE("a source's conversion time is taken off the stamp: the frame arrived before it was converted") {
+		auto source = std::make_unique<ScriptedSource>(std::vector<ScriptedSource::Step>{ ScriptedSource::OPEN_OK },
+				std::vector<ScriptedSource::Step>{ ScriptedSource::FRAME });
+		source->processing_s = 0.040;
+		std::mutex mutex;
+		std::vector<std::pair<double, double>> stamped_received; // host_time_s, when the sink had it
+		DeviceCapture capture(std::move(source), DeviceCaptureOptions(), [&](CapturedFrame &&p_frame) {
+			const double received_s = double(monotonic_clock_ns()) * 1e-9;
+			std::lock_guard lock(mutex);
+			stamped_received.emplace_back(p_frame.host_time_s, received_s);
+		});
+		REQUIRE(capture.start().empty());
+		REQUIRE(wait_until(10.0, [&] { std::lock_guard lock(mutex); return stamped_received.size() >= 10; }));
+		capture.stop();
+		std::lock_guard lock(mutex);
+		for (size_t i = 0; i < stamped_received.size(); i++) {
+			CHECK(stamped_received[i].first <= stamped_received[i].second - 0.040);
+			if (i > 0) {
+				CHECK(stamped_received[i].first > stamped_received[i - 1].first);
+			}
 		}
 	}
 	SUBCASE("a clock that steps back 10 s mid-capture") {

@@ -36,20 +36,7 @@ fs::path fresh_folder(const std::string &p_name) {
 }
 
 Rig small_rig(int p_fisheye_width, int p_fisheye_height) {
-	Rig rig = test_rig();
-	rig.rgb.width = 64;
-	rig.rgb.height = 48;
-	rig.rgb.fx = rig.rgb.fy = 50.0;
-	rig.rgb.cx = 31.5;
-	rig.rgb.cy = 23.5;
-	rig.fisheye.width = p_fisheye_width;
-	rig.fisheye.height = p_fisheye_height;
-	rig.fisheye.cx = rig.fisheye.circle_cx = (p_fisheye_width - 1) * 0.5;
-	rig.fisheye.cy = rig.fisheye.circle_cy = (p_fisheye_height - 1) * 0.5;
-	rig.fisheye.circle_radius = std::min(p_fisheye_width, p_fisheye_height) * 0.45;
-	rig.fisheye.fx = rig.fisheye.fy = rig.fisheye.circle_radius;
-	rig.fisheye_time_offset_s = 0.0; // live: both streams on the rig's one clock
-	return rig;
+	return small_test_rig(64, 48, p_fisheye_width, p_fisheye_height);
 }
 
 RgbdFrame make_rgbd(int p_frame, double p_time_s) {

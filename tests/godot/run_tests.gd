@@ -22,6 +22,8 @@ const TEST_CASE_SCRIPT := "res://tests/lib/test_case.gd"
 class ErrorCollector extends Logger:
 	var _mutex := Mutex.new()
 	var _errors: Array[String] = []
+	## Script errors logged so far (a test stopped by one never completes its coroutine).
+	var script_errors := 0
 
 	func _log_error(function: String, file: String, line: int, code: String, rationale: String, _editor_notify: bool, error_type: int, script_backtraces: Array[ScriptBacktrace]) -> void:
 		if error_type == ERROR_TYPE_WARNING:
@@ -34,6 +36,8 @@ class ErrorCollector extends Logger:
 				where = "%s:%d" % [bt.get_frame_file(0), bt.get_frame_line(0)]
 				break
 		_mutex.lock()
+		if error_type == ERROR_TYPE_SCRIPT:
+			script_errors += 1
 		_errors.append("%s\t%s in %s" % [details, function, where])
 		_mutex.unlock()
 
@@ -257,18 +261,19 @@ func _report_fail(id: String, message: String) -> void:
 
 
 # Calls tc.method(), awaiting it when it is a coroutine; false when it did not finish in time
-# (or when it stopped on a script error after an await, which looks the same from here).
+# or stopped on a script error after an await (its coroutine then never completes).
 func _call_with_timeout(tc: RoomProbeTestCase, method: String, timeout_s: float) -> bool:
+	var script_errors_before := _collector.script_errors
 	var result: Variant = tc.call(method)
-	# A coroutine returns its GDScriptFunctionState (not a type scripts can name).
+	# A coroutine returns its GDScriptFunctionState (not a type scripts can name). That state
+	# goes invalid as soon as the function resumes, yet still emits "completed" when the
+	# function returns after further awaits: wait for the signal, not for is_valid().
 	if not (result is Object and is_instance_valid(result) and result.get_class() == "GDScriptFunctionState"):
 		return true
 	var state := {"done": false}
 	var on_done := func(_value: Variant = null) -> void: state.done = true
 	(result as Object).connect("completed", on_done)
 	var deadline := Time.get_ticks_msec() + int(timeout_s * 1000.0)
-	while not state.done and Time.get_ticks_msec() < deadline:
-		if not is_instance_valid(result) or not result.call(&"is_valid"):
-			break
+	while not state.done and Time.get_ticks_msec() < deadline and _collector.script_errors == script_errors_before:
 		await process_frame
 	return state.done

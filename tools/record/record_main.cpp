@@ -10,11 +10,14 @@
 //   --fisheye ID      an Aravis id or IP, or for uvc /dev/videoN, N or a video file (default: the first found)
 //   --fake            the first-found Aravis search may take Aravis' Fake camera (a test without hardware)
 // A live progress line shows while it records; Ctrl-C stops it cleanly. Both streams are on one
-// clock, so the recording's rig.yaml has fisheye_time_offset_s 0. The last line is a summary.
+// clock, so the recording's rig.yaml has fisheye_time_offset_s 0. The last line is a summary; its
+// *_host_ms_p50/p95 are the host's part of the capture latency (driver hand-over to the sink).
 
 #include "../common/cli.h"
 
+#include "capture/capture_clock.h"
 #include "capture/live_rig.h"
+#include "engine/live_room.h"
 
 
 #include <atomic>
@@ -22,8 +25,10 @@
 #include <csignal>
 #include <cstdio>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 using namespace roomprobe;
 
@@ -115,8 +120,18 @@ int main(int p_argc, char **p_argv) {
 	settings.fisheye.device = fisheye_id;
 	settings.fisheye.include_fake = fake;
 	settings.fisheye_backend = backend == "uvc" ? drivers::FisheyeBackend::Uvc : drivers::FisheyeBackend::Aravis;
+	// The host's part of the capture latency, per stream: from the driver handing a frame over to
+	// the frame, converted and recorded, reaching the engine's sink (the device's own part, exposure
+	// to hand-over, needs the hardware: the rig file's *_latency_s).
+	std::mutex host_mutex;
+	std::vector<double> host_ms[2];
 	drivers::LiveRig live;
-	std::string error = live.start(rig, settings, nullptr);
+	std::string error = live.start(rig, settings, [&](drivers::CapturedFrame &&p_frame) {
+		const double arrival_s = p_frame.host_time_s + (p_frame.is_rgbd ? rig.rgbd_latency_s : rig.fisheye_latency_s);
+		const double ms = (double(drivers::monotonic_clock_ns()) * 1e-9 - arrival_s) * 1e3;
+		const std::lock_guard<std::mutex> lock(host_mutex);
+		host_ms[p_frame.is_rgbd ? 0 : 1].push_back(ms);
+	});
 	if (!error.empty()) {
 		return usage_error(error);
 	}
@@ -164,9 +179,12 @@ int main(int p_argc, char **p_argv) {
 	if (!closed.ok) {
 		std::fprintf(stderr, "roomprobe_record: %s\n", closed.error.c_str());
 	}
-	std::printf("summary: out=%s seconds=%.2f rgbd_written=%llu rgbd_dropped=%llu fisheye_written=%llu fisheye_dropped=%llu gaps=%llu megabytes=%.1f megabytes_per_s=%.2f ok=%d\n",
+	const LatencySummary rgbd_host = summarise_latency(host_ms[0]);
+	const LatencySummary fisheye_host = summarise_latency(host_ms[1]);
+	std::printf("summary: out=%s seconds=%.2f rgbd_written=%llu rgbd_dropped=%llu fisheye_written=%llu fisheye_dropped=%llu gaps=%llu megabytes=%.1f megabytes_per_s=%.2f "
+				"rgbd_host_ms_p50=%.2f rgbd_host_ms_p95=%.2f fisheye_host_ms_p50=%.2f fisheye_host_ms_p95=%.2f ok=%d\n",
 			out.c_str(), status.seconds, (unsigned long long)status.written[0], (unsigned long long)status.dropped[0],
 			(unsigned long long)status.written[1], (unsigned long long)status.dropped[1], (unsigned long long)status.gaps,
-			status.megabytes_written, status.megabytes_per_s, closed.ok ? 1 : 0);
+			status.megabytes_written, status.megabytes_per_s, rgbd_host.p50_ms, rgbd_host.p95_ms, fisheye_host.p50_ms, fisheye_host.p95_ms, closed.ok ? 1 : 0);
 	return closed.ok ? 0 : 1;
 }

@@ -29,22 +29,6 @@ constexpr std::chrono::milliseconds WORKER_POLL(50);
 // Arrival times kept for the latency figures (frames older than this many are forgotten).
 constexpr size_t ARRIVALS_KEPT = 256;
 
-LatencySummary summarise(std::vector<double> p_values) {
-	LatencySummary s;
-	s.count = p_values.size();
-	if (p_values.empty()) {
-		return s;
-	}
-	std::sort(p_values.begin(), p_values.end());
-	auto rank = [&](double p_fraction) {
-		const size_t r = size_t(std::ceil(p_fraction * double(p_values.size())));
-		return p_values[std::min(p_values.size() - 1, r > 0 ? r - 1 : 0)];
-	};
-	s.p50_ms = rank(0.5);
-	s.p95_ms = rank(0.95);
-	s.max_ms = p_values.back();
-	return s;
-}
 
 // The faces as Godot's RGBAH image with mipmaps wants them: level 0, then each half-size level
 // (box filter) down to 1x1, RGBA half floats.
@@ -76,6 +60,23 @@ std::vector<uint16_t> gpu_face(const cv::Mat &p_face) {
 }
 
 } // namespace
+
+LatencySummary summarise_latency(std::vector<double> p_values) {
+	LatencySummary s;
+	s.count = p_values.size();
+	if (p_values.empty()) {
+		return s;
+	}
+	std::sort(p_values.begin(), p_values.end());
+	auto rank = [&](double p_fraction) {
+		const size_t r = size_t(std::ceil(p_fraction * double(p_values.size())));
+		return p_values[std::min(p_values.size() - 1, r > 0 ? r - 1 : 0)];
+	};
+	s.p50_ms = rank(0.5);
+	s.p95_ms = rank(0.95);
+	s.max_ms = p_values.back();
+	return s;
+}
 
 struct LiveRoom::Probe {
 	glm::dvec3 position = glm::dvec3(0.0);
@@ -942,8 +943,8 @@ LiveRoomStats LiveRoom::stats() const {
 	{
 		const std::lock_guard<std::mutex> lock(stats_mutex);
 		s = counters;
-		s.rgbd_latency = summarise(rgbd_latencies_ms);
-		s.fisheye_latency = summarise(fisheye_latencies_ms);
+		s.rgbd_latency = summarise_latency(rgbd_latencies_ms);
+		s.fisheye_latency = summarise_latency(fisheye_latencies_ms);
 	}
 	s.running = running;
 	s.rgbd_dropped = frames->rgbd.dropped_count();

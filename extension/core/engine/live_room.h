@@ -150,6 +150,7 @@ struct LatencySummary {
 	size_t count = 0;
 	double p50_ms = 0.0, p95_ms = 0.0, max_ms = 0.0;
 };
+LatencySummary summarise_latency(std::vector<double> p_values_ms);
 
 struct LiveRoomStats {
 	bool running = false;

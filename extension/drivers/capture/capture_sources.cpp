@@ -32,6 +32,11 @@ std::string check_size(const std::string &p_name, const char *p_what, int p_widt
 			size_text(p_rig_width, p_rig_height) + " (choose that mode, or calibrate the rig for this one)";
 }
 
+// Seconds since p_arrived (when the driver handed the frame over).
+double seconds_since(std::chrono::steady_clock::time_point p_arrived) {
+	return std::chrono::duration<double>(std::chrono::steady_clock::now() - p_arrived).count();
+}
+
 GrabOutcome outcome(GrabOutcome::Kind p_kind, std::string p_error) {
 	GrabOutcome result;
 	result.kind = p_kind;
@@ -82,6 +87,7 @@ public:
 			return outcome(GrabOutcome::Lost, name() + ": not open");
 		}
 		DriverResult<RgbdFrame> grabbed = device->grab(p_timeout_ms);
+		const auto arrived = std::chrono::steady_clock::now();
 		if (!grabbed.ok()) {
 			return outcome(device->is_disconnected() ? GrabOutcome::Lost : GrabOutcome::Timeout, grabbed.error);
 		}
@@ -105,6 +111,7 @@ public:
 		// OpenNI2's depth is in millimetres (the driver divides 100-um modes down).
 		const cv::Mat depth_mm(depth.height, depth.width, CV_16UC1, const_cast<uint16_t *>(depth.depth_mm.data()));
 		frame.rgbd.depth_m = depth_metres_from_raw(depth_mm, 0.001);
+		frame.processing_s = seconds_since(arrived);
 		return result;
 	}
 
@@ -180,6 +187,7 @@ public:
 			return outcome(GrabOutcome::Lost, name() + ": not open");
 		}
 		DriverResult<CameraFrame> grabbed = camera->grab(p_timeout_ms);
+		const auto arrived = std::chrono::steady_clock::now();
 		if (!grabbed.ok()) {
 			return outcome(camera->is_connection_lost() ? GrabOutcome::Lost : GrabOutcome::Timeout, grabbed.error);
 		}
@@ -209,6 +217,7 @@ public:
 			DriverResult<double> gain = camera->get_gain();
 			frame.fisheye.capture.gain = gain.ok() ? gain.value : NO_VALUE;
 		}
+		frame.processing_s = seconds_since(arrived);
 		return result;
 	}
 
@@ -284,7 +293,9 @@ public:
 			next_frame += std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(frame_period_s));
 		}
 		cv::Mat bgr;
-		if (!capture->read(bgr) || bgr.empty()) {
+		const bool read = capture->read(bgr);
+		const auto arrived = std::chrono::steady_clock::now();
+		if (!read || bgr.empty()) {
 			if (is_file) {
 				std::this_thread::sleep_for(std::chrono::milliseconds(p_timeout_ms));
 				return outcome(GrabOutcome::Timeout, name() + ": end of the video");
@@ -309,6 +320,7 @@ public:
 			frame.fisheye.capture.exposure_us = capture->get(cv::CAP_PROP_EXPOSURE) * 100.0;
 			frame.fisheye.capture.gain = capture->get(cv::CAP_PROP_GAIN);
 		}
+		frame.processing_s = seconds_since(arrived);
 		return result;
 	}
 

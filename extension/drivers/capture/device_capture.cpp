@@ -162,13 +162,16 @@ void DeviceCapture::run() {
 		while (!stop_requested()) {
 			GrabOutcome outcome = source->grab(options.grab_timeout_ms);
 			if (outcome.kind == GrabOutcome::Frame) {
-				// Stamped here, on the one clock; strictly increasing even if the clock handed in
-				// steps back (a wall clock would), so frames never reorder.
+				// Stamped here, on the one clock, at the driver's hand-over (before the source's
+				// conversion); strictly increasing even if the clock handed in steps back (a wall
+				// clock would), so frames never reorder.
+				CapturedFrame &frame = outcome.frame;
+				const uint64_t processing_ns = uint64_t(std::clamp(frame.processing_s, 0.0, 1.0) * 1e9);
 				uint64_t stamp_ns = options.clock();
+				stamp_ns = stamp_ns > processing_ns ? stamp_ns - processing_ns : 0;
 				stamp_ns = std::max(stamp_ns, last_stamp_ns + 1000);
 				last_stamp_ns = stamp_ns;
 				last_frame_s = double(stamp_ns) * 1e-9;
-				CapturedFrame &frame = outcome.frame;
 				frame.host_time_s = last_frame_s - options.latency_s;
 				if (frame.is_rgbd) {
 					frame.rgbd.timestamp_s = frame.host_time_s;

@@ -48,6 +48,9 @@ struct CapturedFrame {
 	roomprobe::RgbdFrame rgbd; // timestamp_s and depth_timestamp_s: host_time_s
 	roomprobe::FisheyeFrame fisheye; // timestamp_s: host_time_s
 	double host_time_s = 0.0; // the rig's clock: monotonic arrival, less the device's latency, seconds
+	// Seconds the source spent on the frame after its driver handed it over (conversion, register
+	// reads): the arrival stamp is moved back by it, so it biases no timestamp.
+	double processing_s = 0.0;
 	const roomprobe::CaptureInfo &capture() const { return is_rgbd ? rgbd.capture : fisheye.capture; }
 };
 
