@@ -302,7 +302,7 @@ TEST_CASE("synth: checkerboard views: the corners are where boards.yaml says") {
 	const CheckerboardSpec board;
 	const CalibrationResult result = write_calibration_views(folder.path.string(), rig, board, 3);
 	REQUIRE_MESSAGE(result.ok, result.error);
-	CHECK(result.views == pinhole_board_poses(board).size() + fisheye_board_poses(board).size());
+	CHECK(result.views == pinhole_board_poses(board).size() + fisheye_board_poses(board).size() + 2 * pair_board_poses(board).size());
 	cv::FileStorage yaml((folder.path / "calibration/boards.yaml").string(), cv::FileStorage::READ);
 	REQUIRE(yaml.isOpened());
 	CHECK(int(yaml["board"]["squares_x"]) == board.squares_x);
@@ -358,15 +358,16 @@ TEST_CASE("synth: checkerboard views: the corners are where boards.yaml says") {
 		const bool reversed = backward_sum < forward_sum;
 		const double error = reversed ? backward : forward;
 		const double mean = (reversed ? backward_sum : forward_sum) / n;
-		// No bias (a half-pixel convention slip would show here), and the corner detector's
-		// scatter on antialiased edges.
+		// No bias (a half-pixel convention slip would show here as 0.5 px), and the corner
+		// detector's scatter on antialiased edges. The pairs' boards are the farthest (squares of
+		// some 20 px, foreshortened), where the classic detector's mean offset reaches 0.07 px.
 		cv::Point2d bias(0.0, 0.0);
 		for (size_t i = 0; i < n; ++i) {
 			const cv::Point2f &c = corners[reversed ? n - 1 - i : i];
 			bias += cv::Point2d((c.x - truth[2 * i]) / n, (c.y - truth[2 * i + 1]) / n);
 		}
-		CHECK(std::abs(bias.x) < 0.06);
-		CHECK(std::abs(bias.y) < 0.06);
+		CHECK(std::abs(bias.x) < 0.1);
+		CHECK(std::abs(bias.y) < 0.1);
 		CHECK(mean < 0.2);
 		CHECK(error < 0.5);
 		worst = std::max(worst, error);

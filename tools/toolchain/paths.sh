@@ -24,9 +24,10 @@ RP_MKDIRS=()
 rp_path_option() {
 	case "$1 $2" in
 	"synth --out" | "eval --out" | "record --out") echo out-dir ;;
-	"bench --save-trajectory" | "oni --out") echo out-file ;;
+	"bench --save-trajectory" | "oni --out" | "calibrate --out") echo out-file ;;
 	"synth --rig" | "synth --hdri" | "bench --recording" | "bench --tum" | "bench --7scenes" | "bench --rig" | \
-		"bench --intrinsics" | "bench --open3d-results" | "eval --recording" | "record --rig" | "oni --recording") echo in ;;
+		"bench --intrinsics" | "bench --open3d-results" | "eval --recording" | "record --rig" | "oni --recording" | \
+		"calibrate --images" | "calibrate --recording" | "calibrate --ocamcalib") echo in ;;
 	esac
 }
 

@@ -17,7 +17,54 @@ double sum_of_squares(const std::vector<double> &p_values) {
 	return sum;
 }
 
+// Central differences: the fits are smooth, and this keeps the Jacobian accurate to ~1e-10.
+bool numerical_jacobian(const ResidualFunction &p_function, const std::vector<double> &p_params, const std::vector<double> &p_steps, int p_m,
+		cv::Mat &r_jacobian) {
+	const int n = int(p_params.size());
+	r_jacobian.create(p_m, n, CV_64F);
+	std::vector<double> probe, plus, minus;
+	for (int k = 0; k < n; k++) {
+		const double h = k < int(p_steps.size()) ? p_steps[k] : 1e-6 * std::max(1.0, std::abs(p_params[k]));
+		probe = p_params;
+		probe[k] = p_params[k] + h;
+		if (!p_function(probe, plus) || int(plus.size()) != p_m) {
+			return false;
+		}
+		probe[k] = p_params[k] - h;
+		if (!p_function(probe, minus) || int(minus.size()) != p_m) {
+			return false;
+		}
+		for (int i = 0; i < p_m; i++) {
+			r_jacobian.at<double>(i, k) = (plus[i] - minus[i]) / (2.0 * h);
+		}
+	}
+	return true;
+}
+
 } // namespace
+
+std::vector<double> parameter_std_devs(const ResidualFunction &p_function, const std::vector<double> &p_params, const std::vector<double> &p_steps) {
+	std::vector<double> residuals;
+	if (!p_function(p_params, residuals)) {
+		return {};
+	}
+	const int m = int(residuals.size());
+	const int n = int(p_params.size());
+	cv::Mat jacobian;
+	if (m <= n || !numerical_jacobian(p_function, p_params, p_steps, m, jacobian)) {
+		return {};
+	}
+	cv::Mat covariance;
+	if (cv::invert(jacobian.t() * jacobian, covariance, cv::DECOMP_SVD) == 0.0) {
+		return {};
+	}
+	const double variance = sum_of_squares(residuals) / double(m - n); // of one residual
+	std::vector<double> result(n);
+	for (int k = 0; k < n; k++) {
+		result[k] = std::sqrt(std::max(0.0, covariance.at<double>(k, k) * variance));
+	}
+	return result;
+}
 
 LeastSquaresResult minimize_least_squares(const ResidualFunction &p_function, std::vector<double> &r_params,
 		const LeastSquaresOptions &p_options) {
@@ -32,23 +79,10 @@ LeastSquaresResult minimize_least_squares(const ResidualFunction &p_function, st
 	result.residual_count = m;
 	result.initial_cost = result.final_cost = sum_of_squares(residuals);
 	double lambda = p_options.initial_lambda;
-	cv::Mat jacobian(m, n, CV_64F);
-	std::vector<double> probe = r_params, plus, minus;
+	cv::Mat jacobian;
 	for (int iteration = 0; iteration < p_options.max_iterations; iteration++) {
 		result.iterations = iteration + 1;
-		// Central differences: the fits are smooth, and this keeps the Jacobian accurate to ~1e-10.
-		bool jacobian_ok = true;
-		for (int k = 0; k < n && jacobian_ok; k++) {
-			const double h = k < int(p_options.steps.size()) ? p_options.steps[k] : 1e-6 * std::max(1.0, std::abs(r_params[k]));
-			probe = r_params;
-			probe[k] = r_params[k] + h;
-			jacobian_ok = p_function(probe, plus) && int(plus.size()) == m;
-			probe[k] = r_params[k] - h;
-			jacobian_ok = jacobian_ok && p_function(probe, minus) && int(minus.size()) == m;
-			for (int i = 0; i < m && jacobian_ok; i++) {
-				jacobian.at<double>(i, k) = (plus[i] - minus[i]) / (2.0 * h);
-			}
-		}
+		const bool jacobian_ok = numerical_jacobian(p_function, r_params, p_options.steps, m, jacobian);
 		if (!jacobian_ok) {
 			break;
 		}

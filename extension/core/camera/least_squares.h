@@ -27,6 +27,12 @@ struct LeastSquaresResult {
 	int residual_count = 0;
 };
 
+// The standard deviation of each parameter at a least-squares minimum p_params: the square roots
+// of diag((J^T J)^-1) times the residuals' variance (sum of squares over m - n), J numerical as in
+// the fit. Empty when the residuals cannot be evaluated or there are no more residuals than
+// parameters. Meaningful when the residuals are independent, zero-mean and of one scale.
+std::vector<double> parameter_std_devs(const ResidualFunction &p_function, const std::vector<double> &p_params, const std::vector<double> &p_steps = {});
+
 // Minimizes the sum of squared residuals over r_params (in place).
 LeastSquaresResult minimize_least_squares(const ResidualFunction &p_function, std::vector<double> &r_params,
 		const LeastSquaresOptions &p_options = {});

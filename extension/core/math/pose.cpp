@@ -93,4 +93,26 @@ bool normalize_rotation(glm::dquat *r_rotation, double p_tolerance) {
 	return true;
 }
 
+glm::dquat rotation_from_vector(const glm::dvec3 &p_rotation_vector) {
+	const double angle = glm::length(p_rotation_vector);
+	if (angle < 1e-12) {
+		// First order: q = (1, v / 2), normalised.
+		return glm::normalize(glm::dquat(1.0, 0.5 * p_rotation_vector.x, 0.5 * p_rotation_vector.y, 0.5 * p_rotation_vector.z));
+	}
+	return glm::angleAxis(angle, p_rotation_vector / angle);
+}
+
+glm::dvec3 rotation_vector(const glm::dquat &p_rotation) {
+	glm::dquat q = glm::normalize(p_rotation);
+	if (q.w < 0.0) {
+		q = -q; // the shorter way round: angle in [0, pi]
+	}
+	const glm::dvec3 axis(q.x, q.y, q.z);
+	const double s = glm::length(axis);
+	if (s < 1e-12) {
+		return 2.0 * axis;
+	}
+	return axis * (2.0 * std::atan2(s, q.w) / s);
+}
+
 } // namespace roomprobe

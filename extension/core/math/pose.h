@@ -32,6 +32,11 @@ Pose interpolate(const Pose &p_from, const Pose &p_to, double p_alpha);
 glm::dmat4 pose_to_matrix(const Pose &p_pose);
 Pose pose_from_matrix(const glm::dmat4 &p_matrix);
 
+// A rotation vector (axis times angle in radians, cv::Rodrigues' convention) and back: the
+// minimal parameters of a pose for the least-squares fits.
+glm::dquat rotation_from_vector(const glm::dvec3 &p_rotation_vector);
+glm::dvec3 rotation_vector(const glm::dquat &p_rotation);
+
 // Whether every component of the pose is finite.
 bool is_finite(const Pose &p_pose);
 // Scales r_rotation to unit norm when its norm is within p_tolerance of 1 (files store rounded

@@ -219,7 +219,8 @@ bool read_rig(YamlFieldReader &p_reader, const cv::FileNode &p_root, Rig *r_rig)
 						std::to_string(RIG_FILE_VERSION) + ")");
 	}
 	if (!p_reader.check_keys(p_root, "",
-				{ "roomprobe_rig", "rgb", "depth_scale_m", "fisheye", "rgb_from_fisheye", "fisheye_time_offset_s", "rgbd_latency_s", "fisheye_latency_s" },
+				{ "roomprobe_rig", "rgb", "depth_scale_m", "fisheye", "rgb_from_fisheye", "fisheye_time_offset_s", "rgbd_latency_s", "fisheye_latency_s",
+						"calibration_report" },
 				{ "roomprobe_rig", "rgb", "depth_scale_m" }) ||
 			!read_rgb(p_reader, p_root, &r_rig->rgb) || !p_reader.real(p_root, "", "depth_scale_m", &r_rig->depth_scale_m)) {
 		return false;
@@ -349,7 +350,41 @@ std::string write_text(const std::string &p_path, const std::string &p_text) {
 
 } // namespace
 
-std::string save_rig(const std::string &p_path, const Rig &p_rig) {
+namespace {
+
+void write_report(cv::FileStorage &p_storage, const RigCalibrationReport &p_report, bool p_has_fisheye) {
+	p_storage.writeComment("How well the calibration fits its views (./roomprobe calibrate): RMS reprojection errors in pixels,\n"
+						   "*_std one standard deviation. RoomProbe does not read it back.");
+	p_storage << "calibration_report" << "{";
+	p_storage << "board" << p_report.board;
+	p_storage << "rgb_views" << int(p_report.rgb_views) << "rgb_rms_px" << p_report.rgb_rms_px;
+	const PinholeParams &r = p_report.rgb_std;
+	p_storage << "rgb_std" << "{" << "fx" << r.fx << "fy" << r.fy << "cx" << r.cx << "cy" << r.cy << "k1" << r.k1 << "k2" << r.k2 << "p1" << r.p1 << "p2" << r.p2
+			  << "}";
+	if (p_has_fisheye) {
+		p_storage << "fisheye_method" << p_report.fisheye_method;
+		p_storage << "fisheye_views" << int(p_report.fisheye_views) << "fisheye_rms_px" << p_report.fisheye_rms_px;
+		const OmniParams &f = p_report.fisheye_std;
+		p_storage << "fisheye_std" << "{" << "xi" << f.xi << "fx" << f.fx << "fy" << f.fy << "cx" << f.cx << "cy" << f.cy << "k1" << f.k1 << "k2" << f.k2 << "p1"
+				  << f.p1 << "p2" << f.p2 << "}";
+		p_storage << "pair_views" << int(p_report.pair_views) << "pair_rgb_rms_px" << p_report.pair_rgb_rms_px << "pair_fisheye_rms_px"
+				  << p_report.pair_fisheye_rms_px;
+		const glm::dvec3 &t = p_report.rgb_from_fisheye_translation_std_m;
+		const glm::dvec3 &a = p_report.rgb_from_fisheye_rotation_std_deg;
+		p_storage << "rgb_from_fisheye_translation_std_m" << "[:" << t.x << t.y << t.z << "]";
+		p_storage << "rgb_from_fisheye_rotation_std_deg" << "[:" << a.x << a.y << a.z << "]";
+		p_storage << "clock_offset" << p_report.clock_offset;
+	}
+	if (p_report.depth_checked) {
+		p_storage << "depth" << "{" << "scale" << p_report.depth_scale << "offset_m" << p_report.depth_offset_m << "residual_rms_m" << p_report.depth_residual_rms_m
+				  << "raw_rms_m" << p_report.depth_raw_rms_m << "samples" << int(p_report.depth_samples) << "}";
+	}
+	p_storage << "}";
+}
+
+} // namespace
+
+std::string save_rig(const std::string &p_path, const Rig &p_rig, const RigCalibrationReport *p_report) {
 	// Never write a file that load_rig would refuse.
 	const std::string problem = check_rig(p_rig);
 	if (!problem.empty()) {
@@ -379,6 +414,9 @@ std::string save_rig(const std::string &p_path, const Rig &p_rig) {
 		}
 		if (!p_rig.has_fisheye()) {
 			storage.writeComment("An RGB-D camera alone: no fisheye, so no extrinsic and no clock offset either.");
+			if (p_report) {
+				write_report(storage, *p_report, false);
+			}
 			text = storage.releaseAndGetString();
 			return write_text(p_path, text);
 		}
@@ -400,6 +438,9 @@ std::string save_rig(const std::string &p_path, const Rig &p_rig) {
 		if (p_rig.fisheye_latency_s != 0.0) {
 			storage.writeComment("Live capture: seconds from the fisheye taking a frame to its arrival.");
 			storage << "fisheye_latency_s" << p_rig.fisheye_latency_s;
+		}
+		if (p_report) {
+			write_report(storage, *p_report, true);
 		}
 		text = storage.releaseAndGetString();
 	} catch (const cv::Exception &e) {

@@ -5,6 +5,9 @@
 #include <camera/camera_params.h>
 #include <math/pose.h>
 
+#include <glm/vec3.hpp>
+
+#include <limits>
 #include <string>
 
 namespace roomprobe {
@@ -26,6 +29,26 @@ struct Rig {
 	bool has_fisheye() const { return fisheye.width != 0 || fisheye.height != 0; }
 };
 
+// How well a calibration fits its views: ./roomprobe calibrate writes it into the rig file as
+// calibration_report, which load_rig accepts and does not read (it documents, it changes nothing).
+// Reprojection errors are RMS pixels per corner; *_std is one standard deviation.
+struct RigCalibrationReport {
+	std::string board; // "9x6 inner corners, 35 mm squares"
+	size_t rgb_views = 0, fisheye_views = 0, pair_views = 0; // used in the fits
+	double rgb_rms_px = std::numeric_limits<double>::quiet_NaN();
+	PinholeParams rgb_std;
+	std::string fisheye_method; // "cv::omnidir::calibrate", or the OCamCalib file fitted
+	double fisheye_rms_px = std::numeric_limits<double>::quiet_NaN();
+	OmniParams fisheye_std;
+	double pair_rgb_rms_px = std::numeric_limits<double>::quiet_NaN(), pair_fisheye_rms_px = std::numeric_limits<double>::quiet_NaN();
+	glm::dvec3 rgb_from_fisheye_translation_std_m{ 0.0 };
+	glm::dvec3 rgb_from_fisheye_rotation_std_deg{ 0.0 };
+	bool depth_checked = false; // measured depth = depth_scale * board depth + depth_offset_m
+	double depth_scale = 1.0, depth_offset_m = 0.0, depth_residual_rms_m = 0.0, depth_raw_rms_m = 0.0;
+	size_t depth_samples = 0;
+	std::string clock_offset; // how fisheye_time_offset_s was found
+};
+
 struct RigLoadResult {
 	bool ok = false;
 	std::string error; // names the file and the field, e.g. "calib/rig.yaml: fisheye.xi: missing"
@@ -36,7 +59,8 @@ struct RigLoadResult {
 // out together) gives a rig without a fisheye.
 RigLoadResult load_rig(const std::string &p_path);
 // Writes the rig file (without the fisheye's three fields when the rig has no fisheye); returns an empty string, or the error naming the file.
-std::string save_rig(const std::string &p_path, const Rig &p_rig);
+// With p_report, the calibration's report is written after the rig (calibration_report).
+std::string save_rig(const std::string &p_path, const Rig &p_rig, const RigCalibrationReport *p_report = nullptr);
 
 // The version of the schema that load_rig reads and save_rig writes (the roomprobe_rig field).
 inline constexpr int RIG_FILE_VERSION = 1;

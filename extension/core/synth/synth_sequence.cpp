@@ -340,12 +340,43 @@ std::vector<Pose> fisheye_board_poses(const CheckerboardSpec &p_board) {
 	return poses;
 }
 
+std::vector<Pose> pair_board_poses(const CheckerboardSpec &p_board) {
+	// In the RGB camera's frame: the board ahead of it and raised, where the upward fisheye sees it
+	// near its horizon (70 to 90 degrees off its axis) while it is inside the RGB image. Centre
+	// (x, elevation in degrees, distance), then tilt about the board's x and y, and spin.
+	struct View {
+		double x, elevation_deg, distance_m, tilt_x_deg, tilt_y_deg, spin_deg;
+	};
+	const View views[] = {
+		{ 0.0, 13.0, 0.9, 0.0, 0.0, 0.0 },
+		{ -0.16, 12.0, 0.85, 10.0, -20.0, 5.0 },
+		{ 0.16, 14.0, 0.95, -10.0, 20.0, -5.0 },
+		{ 0.08, 15.0, 1.05, 20.0, 10.0, 10.0 },
+		{ -0.08, 12.5, 1.0, -15.0, -10.0, -10.0 },
+		{ 0.0, 14.0, 1.15, 25.0, 0.0, 3.0 },
+	};
+	std::vector<Pose> poses;
+	for (const View &v : views) {
+		const double elevation = v.elevation_deg * PI / 180.0;
+		const glm::dvec3 centre(v.x, -std::sin(elevation) * v.distance_m, std::cos(elevation) * v.distance_m);
+		const double ax = v.tilt_x_deg * PI / 180.0, ay = v.tilt_y_deg * PI / 180.0, az = v.spin_deg * PI / 180.0;
+		// The board's normal points away from the cameras, along the line of sight, tilted.
+		const glm::dvec3 sight = glm::normalize(centre);
+		const glm::dvec3 across = glm::normalize(glm::cross(glm::dvec3(0.0, 1.0, 0.0), sight)); // the image's x
+		const glm::dvec3 up = glm::cross(sight, across);
+		const glm::dvec3 z = glm::normalize(std::cos(ax) * std::cos(ay) * sight + std::sin(ax) * up + std::sin(ay) * across);
+		const glm::dvec3 x_hint = std::cos(az) * across + std::sin(az) * up;
+		poses.push_back(board_pose(p_board, centre, z, x_hint));
+	}
+	return poses;
+}
+
 CalibrationResult write_calibration_views(const std::string &p_folder, const Rig &p_rig, const CheckerboardSpec &p_board, int p_samples_per_axis) {
 	CalibrationResult result;
 	namespace fs = std::filesystem;
 	const fs::path root = fs::path(p_folder) / "calibration";
 	std::error_code ec;
-	for (const char *sub : { "rgb", "fisheye" }) {
+	for (const char *sub : { "rgb", "fisheye", "pairs" }) {
 		fs::create_directories(root / sub, ec);
 		if (ec) {
 			result.error = (root / sub).string() + ": cannot create the folder (" + ec.message() + ")";
@@ -372,52 +403,91 @@ CalibrationResult write_calibration_views(const std::string &p_folder, const Rig
 	fs_out << "}";
 	fs_out << "views" << "[";
 	const std::vector<glm::dvec3> corners = checkerboard_corners(p_board);
+	// One rendered image: the camera (rgb or fisheye), the board in that camera's frame, the file.
+	struct Shot {
+		bool is_rgb;
+		Pose camera_from_board;
+		std::string image; // relative to p_folder
+		std::string depth; // RGB of a pair: its depth image, else empty
+		int pair; // -1: a view of one camera
+	};
+	std::vector<Shot> shots;
+	char name[64];
 	for (int camera = 0; camera < 2; ++camera) {
 		const bool is_rgb = camera == 0;
 		const std::vector<Pose> poses = is_rgb ? pinhole_board_poses(p_board) : fisheye_board_poses(p_board);
 		for (size_t v = 0; v < poses.size(); ++v) {
-			const Scene scene = make_checkerboard_scene(p_board, poses[v]);
-			const SynthRenderer renderer(scene);
-			if (!renderer.ok()) {
-				result.error = "checkerboard scene: " + renderer.error();
-				return result;
-			}
-			cv::Mat image;
-			if (is_rgb) {
-				RgbdOptions options;
-				options.samples_per_axis = p_samples_per_axis;
-				image = render_rgbd(renderer, p_rig.rgb, p_rig.depth_scale_m, Pose(), 0.0, options).rgb;
-			} else {
-				FisheyeOptions options;
-				options.samples_per_axis = p_samples_per_axis;
-				image = render_fisheye(renderer, p_rig.fisheye, Pose(), 0.0, options).image;
-			}
-			char name[64];
 			std::snprintf(name, sizeof(name), "calibration/%s/%03zu.png", is_rgb ? "rgb" : "fisheye", v);
-			const std::string error = write_png_rgb((fs::path(p_folder) / name).string(), image);
-			if (!error.empty()) {
-				result.error = error;
-				return result;
-			}
-			fs_out << "{";
-			fs_out << "camera" << (is_rgb ? "rgb" : "fisheye");
-			fs_out << "image" << std::string(name);
-			write_pose(fs_out, "camera_from_board", poses[v]);
-			// The true pixel of every inner corner; -1, -1 where the model cannot see it.
-			fs_out << "corners_px" << "[:";
-			for (const glm::dvec3 &corner : corners) {
-				const glm::dvec3 p = transform_point(poses[v], corner);
-				glm::dvec2 pixel(-1.0);
-				const bool seen = is_rgb ? project_pinhole(p_rig.rgb, p, &pixel) : project_omni(p_rig.fisheye, p, &pixel);
-				if (!seen) {
-					pixel = glm::dvec2(-1.0);
-				}
-				fs_out << pixel.x << pixel.y;
-			}
-			fs_out << "]";
-			fs_out << "}";
-			++result.views;
+			shots.push_back({ is_rgb, poses[v], name, "", -1 });
 		}
+	}
+	if (p_rig.has_fisheye()) {
+		const std::vector<Pose> pairs = pair_board_poses(p_board);
+		const Pose fisheye_from_rgb = inverse(p_rig.rgb_from_fisheye);
+		for (size_t v = 0; v < pairs.size(); ++v) {
+			std::snprintf(name, sizeof(name), "calibration/pairs/%03zu_rgb.png", v);
+			char depth[64];
+			std::snprintf(depth, sizeof(depth), "calibration/pairs/%03zu_depth.png", v);
+			shots.push_back({ true, pairs[v], name, depth, int(v) });
+			std::snprintf(name, sizeof(name), "calibration/pairs/%03zu_fisheye.png", v);
+			shots.push_back({ false, compose(fisheye_from_rgb, pairs[v]), name, "", int(v) });
+		}
+	}
+	for (const Shot &shot : shots) {
+		const Scene scene = make_checkerboard_scene(p_board, shot.camera_from_board);
+		const SynthRenderer renderer(scene);
+		if (!renderer.ok()) {
+			result.error = "checkerboard scene: " + renderer.error();
+			return result;
+		}
+		cv::Mat image, depth;
+		if (shot.is_rgb) {
+			RgbdOptions options;
+			options.samples_per_axis = p_samples_per_axis;
+			options.noise_seed = uint64_t(result.views + 1);
+			RgbdImage rendered = render_rgbd(renderer, p_rig.rgb, p_rig.depth_scale_m, Pose(), 0.0, options);
+			image = rendered.rgb;
+			depth = rendered.depth;
+		} else {
+			FisheyeOptions options;
+			options.samples_per_axis = p_samples_per_axis;
+			image = render_fisheye(renderer, p_rig.fisheye, Pose(), 0.0, options).image;
+		}
+		std::string error = write_png_rgb((fs::path(p_folder) / shot.image).string(), image);
+		if (error.empty() && !shot.depth.empty()) {
+			const std::string path = (fs::path(p_folder) / shot.depth).string();
+			if (!cv::imwrite(path, depth)) {
+				error = path + ": cannot write the image";
+			}
+		}
+		if (!error.empty()) {
+			result.error = error;
+			return result;
+		}
+		fs_out << "{";
+		fs_out << "camera" << (shot.is_rgb ? "rgb" : "fisheye");
+		fs_out << "image" << shot.image;
+		if (shot.pair >= 0) {
+			fs_out << "pair" << shot.pair;
+		}
+		if (!shot.depth.empty()) {
+			fs_out << "depth" << shot.depth;
+		}
+		write_pose(fs_out, "camera_from_board", shot.camera_from_board);
+		// The true pixel of every inner corner; -1, -1 where the model cannot see it.
+		fs_out << "corners_px" << "[:";
+		for (const glm::dvec3 &corner : corners) {
+			const glm::dvec3 p = transform_point(shot.camera_from_board, corner);
+			glm::dvec2 pixel(-1.0);
+			const bool seen = shot.is_rgb ? project_pinhole(p_rig.rgb, p, &pixel) : project_omni(p_rig.fisheye, p, &pixel);
+			if (!seen) {
+				pixel = glm::dvec2(-1.0);
+			}
+			fs_out << pixel.x << pixel.y;
+		}
+		fs_out << "]";
+		fs_out << "}";
+		++result.views;
 	}
 	fs_out << "]";
 	fs_out.release();

@@ -77,6 +77,9 @@ Scene make_checkerboard_scene(const CheckerboardSpec &p_board, const Pose &p_cam
 // The fixed board poses (camera_from_board) the calibration views use.
 std::vector<Pose> pinhole_board_poses(const CheckerboardSpec &p_board);
 std::vector<Pose> fisheye_board_poses(const CheckerboardSpec &p_board);
+// Boards both cameras see at once (rgb_from_board): ahead of the RGB camera and raised, near the
+// upward fisheye's horizon. Their views calibrate rgb_from_fisheye and the depth.
+std::vector<Pose> pair_board_poses(const CheckerboardSpec &p_board);
 
 // ---------------------------------------------------------------- the recording
 
@@ -126,8 +129,10 @@ std::vector<double> fisheye_frame_times(const SequenceOptions &p_options, double
 SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, const Scene &p_scene, const SequenceOptions &p_options);
 
 // Renders and writes the checkerboard views of both cameras into p_folder/calibration/:
-// rgb/NNN.png, fisheye/NNN.png and boards.yaml (the board, and per view its camera, image,
-// camera_from_board and the true pixel of every inner corner).
+// rgb/NNN.png, fisheye/NNN.png, for a rig with a fisheye pairs/NNN_rgb.png, NNN_fisheye.png and
+// NNN_depth.png (both cameras at once, and the RGB-D camera's depth), and boards.yaml (the board,
+// and per image its camera, pair, image, camera_from_board and the true pixel of every inner
+// corner).
 struct CalibrationResult {
 	bool ok = false;
 	std::string error;

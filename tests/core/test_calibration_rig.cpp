@@ -1,0 +1,241 @@
+// Calibrating the rig (calibration/, paper §3.2) from the synthetic rig's checkerboard views, whose
+// truth is known (synth/synth_sequence.h renders them with test_rig()), and refusing degenerate
+// input with its reason.
+
+#include "calibration/calibration_views.h"
+#include "calibration/rig_calibration.h"
+#include "synth/synth_sequence.h"
+#include "synth_test_rig.h"
+
+#include <doctest/doctest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+
+using namespace roomprobe;
+namespace fs = std::filesystem;
+
+namespace {
+
+bool contains(const std::string &p_text, const std::string &p_part) {
+	return p_text.find(p_part) != std::string::npos;
+}
+
+// The synthetic rig's views, rendered once for every test here and removed at exit.
+struct RenderedViews {
+	fs::path folder;
+	std::string error;
+	RenderedViews() {
+		folder = fs::temp_directory_path() / ("roomprobe_test_calibration_" + std::to_string(::getpid()));
+		fs::remove_all(folder);
+		const synth::CalibrationResult written = synth::write_calibration_views(folder.string(), test_rig(), synth::CheckerboardSpec(), 4);
+		error = written.ok ? "" : written.error;
+	}
+	~RenderedViews() {
+		std::error_code ec;
+		fs::remove_all(folder, ec);
+	}
+};
+
+const CalibrationViews &synthetic_views() {
+	static RenderedViews rendered;
+	static CalibrationViews views = [] {
+		REQUIRE_MESSAGE(rendered.error.empty(), rendered.error);
+		return load_calibration_views(rendered.folder.string(), CalibrationViewsOptions());
+	}();
+	return views;
+}
+
+double angle_deg(const glm::dquat &p_a, const glm::dquat &p_b) {
+	const double d = std::abs(glm::dot(glm::normalize(p_a), glm::normalize(p_b)));
+	return 2.0 * std::acos(std::min(1.0, d)) * 180.0 / 3.14159265358979323846;
+}
+
+} // namespace
+
+TEST_CASE("calibration: the synthetic rig's views give back its intrinsics, rgb_from_fisheye and depth") {
+	const CalibrationViews &views = synthetic_views();
+	REQUIRE_MESSAGE(views.error.empty(), views.error);
+	const Rig truth = test_rig();
+	const synth::CheckerboardSpec spec;
+	CHECK(views.board_from_file);
+	CHECK(views.board.inner_x == spec.squares_x - 1);
+	CHECK(views.board.inner_y == spec.squares_y - 1);
+	for (const std::string &missed : views.missed) {
+		MESSAGE("not used: " << missed);
+	}
+	// Every RGB view detects; so does every pair, in both cameras.
+	CHECK(views.rgb.size() == synth::pinhole_board_poses(synth::CheckerboardSpec()).size() + synth::pair_board_poses(spec).size());
+	CHECK(views.pairs.size() == synth::pair_board_poses(spec).size());
+	// The image circle found from the images is the rig's.
+	CHECK(std::abs(views.fisheye_circle.cx - truth.fisheye.circle_cx) < 1.0);
+	CHECK(std::abs(views.fisheye_circle.cy - truth.fisheye.circle_cy) < 1.0);
+	CHECK(std::abs(views.fisheye_circle.radius - truth.fisheye.circle_radius) < 1.5);
+
+	const RigCalibration calibrated = calibrate_rig(views, RigCalibrationOptions());
+	REQUIRE_MESSAGE(calibrated.error.empty(), calibrated.error);
+	const Rig &rig = calibrated.rig;
+	const RigCalibrationReport &report = calibrated.report;
+	MESSAGE("RGB: fx " << rig.rgb.fx << " fy " << rig.rgb.fy << " cx " << rig.rgb.cx << " cy " << rig.rgb.cy << ", RMS " << report.rgb_rms_px << " px over "
+					   << report.rgb_views << " views");
+	MESSAGE("fisheye: xi " << rig.fisheye.xi << " fx " << rig.fisheye.fx << " fy " << rig.fisheye.fy << " cx " << rig.fisheye.cx << " cy "
+						   << rig.fisheye.cy << ", RMS " << report.fisheye_rms_px << " px over " << report.fisheye_views << " views");
+	// The bounds: focal lengths within 0.3 %, principal points within 1 px.
+	CHECK(std::abs(rig.rgb.fx / truth.rgb.fx - 1.0) < 0.003);
+	CHECK(std::abs(rig.rgb.fy / truth.rgb.fy - 1.0) < 0.003);
+	CHECK(std::abs(rig.rgb.cx - truth.rgb.cx) < 1.0);
+	CHECK(std::abs(rig.rgb.cy - truth.rgb.cy) < 1.0);
+	// The unified model's focal length trades against xi; its projection is what must agree: the
+	// generalised focal over (1 + xi), the image scale at the axis, within 0.3 %.
+	CHECK(std::abs(rig.fisheye.fx / (1.0 + rig.fisheye.xi) / (truth.fisheye.fx / (1.0 + truth.fisheye.xi)) - 1.0) < 0.003);
+	CHECK(std::abs(rig.fisheye.fy / (1.0 + rig.fisheye.xi) / (truth.fisheye.fy / (1.0 + truth.fisheye.xi)) - 1.0) < 0.003);
+	CHECK(std::abs(rig.fisheye.cx - truth.fisheye.cx) < 1.0);
+	CHECK(std::abs(rig.fisheye.cy - truth.fisheye.cy) < 1.0);
+	CHECK(std::abs(rig.fisheye.max_angle_deg - truth.fisheye.max_angle_deg) < 1.0);
+	// rgb_from_fisheye within 2 mm and 0.2 degrees.
+	const double translation_mm = glm::length(rig.rgb_from_fisheye.translation - truth.rgb_from_fisheye.translation) * 1000.0;
+	const double rotation_deg = angle_deg(rig.rgb_from_fisheye.rotation, truth.rgb_from_fisheye.rotation);
+	MESSAGE("rgb_from_fisheye: " << translation_mm << " mm and " << rotation_deg << " deg off the truth; std " << report.rgb_from_fisheye_translation_std_m.x * 1000.0
+								 << ", " << report.rgb_from_fisheye_translation_std_m.y * 1000.0 << ", " << report.rgb_from_fisheye_translation_std_m.z * 1000.0
+								 << " mm; pairs RMS " << report.pair_rgb_rms_px << " / " << report.pair_fisheye_rms_px << " px");
+	CHECK(translation_mm < 2.0);
+	CHECK(rotation_deg < 0.2);
+	// Every reprojection RMS is sub-pixel, and every uncertainty is a positive, finite number.
+	CHECK(report.rgb_rms_px < 0.5);
+	CHECK(report.fisheye_rms_px < 0.5);
+	CHECK(report.pair_rgb_rms_px < 0.5);
+	CHECK(report.pair_fisheye_rms_px < 0.5);
+	for (double s : { report.rgb_std.fx, report.rgb_std.cx, report.fisheye_std.fx, report.fisheye_std.xi, report.rgb_from_fisheye_translation_std_m.x,
+				 report.rgb_from_fisheye_rotation_std_deg.z }) {
+		CHECK(std::isfinite(s));
+		CHECK(s > 0.0);
+	}
+	// The synthetic depth is unbiased (Kinect-like noise only): scale 1 and offset 0 come back.
+	REQUIRE(report.depth_checked);
+	MESSAGE("depth: scale " << report.depth_scale << ", offset " << report.depth_offset_m * 1000.0 << " mm, residual " << report.depth_residual_rms_m * 1000.0
+							<< " mm over " << report.depth_samples << " pixels");
+	CHECK(std::abs(report.depth_scale - 1.0) < 0.01);
+	CHECK(std::abs(report.depth_offset_m) < 0.005);
+	CHECK(report.depth_residual_rms_m < 0.01);
+}
+
+TEST_CASE("calibration: degenerate input is refused with its reason") {
+	const CalibrationViews &views = synthetic_views();
+	REQUIRE_MESSAGE(views.error.empty(), views.error);
+	SUBCASE("too few views") {
+		const std::vector<BoardView> three(views.rgb.begin(), views.rgb.begin() + 3);
+		const PinholeCalibration fit = calibrate_pinhole(views.board, views.rgb_size, three);
+		CHECK(contains(fit.error, "RGB camera: too few views"));
+		CHECK(contains(fit.error, "3"));
+	}
+	SUBCASE("the board always at the centre of the image") {
+		// The same views squeezed towards the image's centre: a fit would have nothing at the edges.
+		std::vector<BoardView> central = views.rgb;
+		for (BoardView &view : central) {
+			for (cv::Point2f &c : view.corners) {
+				c = cv::Point2f(320.0f, 240.0f) + 0.3f * (c - cv::Point2f(320.0f, 240.0f));
+			}
+		}
+		CHECK(contains(calibrate_pinhole(views.board, views.rgb_size, central).error, "always near the centre"));
+		std::vector<BoardView> fisheye_central = views.fisheye;
+		for (BoardView &view : fisheye_central) {
+			for (cv::Point2f &c : view.corners) {
+				c = cv::Point2f(511.5f, 511.5f) + 0.2f * (c - cv::Point2f(511.5f, 511.5f));
+			}
+		}
+		const OmniCalibration fit = calibrate_omni(views.board, views.fisheye_size, fisheye_central, views.fisheye_circle);
+		CHECK(contains(fit.error, "fisheye: the board is always near the centre"));
+	}
+	SUBCASE("no view seen by both cameras") {
+		CalibrationViews without_pairs = views;
+		without_pairs.pairs.clear();
+		const RigCalibration calibrated = calibrate_rig(without_pairs, RigCalibrationOptions());
+		CHECK(contains(calibrated.error, "no view where both cameras see the whole board"));
+	}
+	SUBCASE("a board that looks the same turned by half a turn cannot pair the cameras") {
+		BoardSpec symmetric = views.board;
+		symmetric.inner_y = 7; // 9x7: odd by odd
+		CHECK(contains(calibrate_rgb_from_fisheye(symmetric, test_rig().rgb, test_rig().fisheye, views.pairs).error, "half a turn"));
+	}
+	SUBCASE("a square board, and a folder with nothing to calibrate from") {
+		CHECK(contains(check_board(BoardSpec{ 7, 7, 0.03 }), "7x7 inner corners"));
+		const fs::path empty = fs::temp_directory_path() / ("roomprobe_test_calibration_empty_" + std::to_string(::getpid()));
+		fs::create_directories(empty);
+		const CalibrationViews none = load_calibration_views(empty.string(), CalibrationViewsOptions());
+		CHECK(contains(none.error, "no views"));
+		CHECK(contains(none.error, empty.string()));
+		CHECK(contains(load_calibration_views((empty / "missing").string(), CalibrationViewsOptions()).error, "not a folder"));
+		fs::remove_all(empty);
+	}
+}
+
+TEST_CASE("calibration: the rig file keeps the calibration's report, and loads as before") {
+	const CalibrationViews &views = synthetic_views();
+	REQUIRE_MESSAGE(views.error.empty(), views.error);
+	const RigCalibration calibrated = calibrate_rig(views, RigCalibrationOptions());
+	REQUIRE_MESSAGE(calibrated.error.empty(), calibrated.error);
+	const fs::path path = fs::temp_directory_path() / ("roomprobe_test_calibrated_rig_" + std::to_string(::getpid()) + ".yaml");
+	REQUIRE(save_rig(path.string(), calibrated.rig, &calibrated.report).empty());
+	const RigLoadResult loaded = load_rig(path.string());
+	REQUIRE_MESSAGE(loaded.ok, loaded.error);
+	CHECK(loaded.rig.rgb.fx == doctest::Approx(calibrated.rig.rgb.fx));
+	CHECK(loaded.rig.fisheye.xi == doctest::Approx(calibrated.rig.fisheye.xi));
+	CHECK(glm::length(loaded.rig.rgb_from_fisheye.translation - calibrated.rig.rgb_from_fisheye.translation) < 1e-9);
+	cv::FileStorage file(path.string(), cv::FileStorage::READ);
+	const cv::FileNode report = file["calibration_report"];
+	REQUIRE(report.isMap());
+	CHECK(double(report["rgb_rms_px"]) == doctest::Approx(calibrated.report.rgb_rms_px));
+	CHECK(int(report["pair_views"]) == int(views.pairs.size()));
+	CHECK(double(report["depth"]["scale"]) == doctest::Approx(calibrated.report.depth_scale));
+	fs::remove(path);
+}
+
+namespace {
+
+const std::string k_ocamcalib_dir = std::string(ROOMPROBE_SHARED_DATA) + "/fisheye-ocamcalib";
+bool ocamcalib_missing() {
+	const bool missing = !fs::exists(k_ocamcalib_dir + "/calib_results.txt");
+	if (missing) {
+		std::fprintf(stderr, "test_calibration_rig: skipping the real fisheye images: %s is missing\n", k_ocamcalib_dir.c_str());
+	}
+	return missing;
+}
+
+} // namespace
+
+TEST_CASE("calibration: the real OCamCalib images calibrate the fisheye in the unified model to a sub-0.3 px RMS" * doctest::skip(ocamcalib_missing())) {
+	// Their board: 7 x 9 squares of 117 mm (test_camera_scaramuzza.cpp says why not checkerboard_sizes.txt's 5 x 7).
+	const BoardSpec board{ 6, 8, 0.117 };
+	std::vector<BoardView> views;
+	std::vector<cv::Mat> images;
+	cv::Size size;
+	for (const fs::directory_entry &entry : fs::directory_iterator(k_ocamcalib_dir)) {
+		if (entry.path().extension() != ".jpg") {
+			continue;
+		}
+		const cv::Mat image = cv::imread(entry.path().string(), cv::IMREAD_GRAYSCALE);
+		REQUIRE(!image.empty());
+		size = image.size();
+		images.push_back(image);
+		const BoardDetection found = detect_board(image, board);
+		if (found.found) {
+			views.push_back({ entry.path().filename().string(), found.corners });
+		}
+	}
+	CHECK(views.size() >= 14);
+	const ImageCircle circle = find_image_circle(images);
+	MESSAGE("image circle (" << circle.cx << ", " << circle.cy << ") r " << circle.radius << " px; " << views.size() << " boards found");
+	const OmniCalibration fit = calibrate_omni(board, size, views, circle);
+	REQUIRE_MESSAGE(fit.error.empty(), fit.error);
+	MESSAGE("cv::omnidir::calibrate on the real images: RMS " << fit.rms_px << " px over " << fit.views_used << " views; xi " << fit.camera.xi << ", fx "
+															  << fit.camera.fx << ", max angle " << fit.camera.max_angle_deg << " deg");
+	CHECK(fit.rms_px <= 0.3);
+	CHECK(fit.views_used >= 12);
+	// The same lens as OCamCalib's calibration says: the image centre within a few pixels.
+	const ScaramuzzaLoadResult ocam = load_ocamcalib(k_ocamcalib_dir + "/calib_results.txt");
+	REQUIRE(ocam.ok);
+	CHECK(std::abs(fit.camera.cx - ocam.model.yc) < 5.0);
+	CHECK(std::abs(fit.camera.cy - ocam.model.xc) < 5.0);
+}

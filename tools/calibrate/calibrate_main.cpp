@@ -1,0 +1,170 @@
+// roomprobe_calibrate: the rig file from checkerboard views of both cameras, in one command (paper
+// §3.2; calibration/rig_calibration.h): the RGB camera's intrinsics, the fisheye's in the unified
+// model (or imported from OCamCalib), rgb_from_fisheye from the views both cameras took at once,
+// and the depth checked against the board's plane. The views' layout is in calib/README.md.
+//
+// usage: roomprobe_calibrate (--images DIR | --recording DIR) --out rig.yaml [--board 9x6]
+//          [--square-m 0.035] [--depth-scale-m 0.001] [--ocamcalib calib_results.txt] [--force]
+//   --images DIR      a folder of views: rgb/, fisheye/, pairs/NAME_{rgb,fisheye,depth}.png
+//   --recording DIR   a recording whose calibration/ holds them (./roomprobe synth writes one)
+//   --board CxR       the board's inner corners across and down (default: the folder's board.yaml)
+//   --ocamcalib FILE  the fisheye from OCamCalib's calib_results.txt instead of its views
+//   --force           overwrite an existing --out file (it never is otherwise)
+// A progress line shows while the boards are found; the fits' figures follow, and the last line is
+// a summary.
+
+#include "../common/cli.h"
+
+#include <calibration/calibration_views.h>
+#include <calibration/rig_calibration.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+using namespace roomprobe;
+
+namespace {
+
+int usage_error(const std::string &p_message) {
+	std::fprintf(stderr,
+			"roomprobe_calibrate: %s\nusage: roomprobe_calibrate (--images DIR | --recording DIR) --out rig.yaml [--board 9x6] [--square-m 0.035] "
+			"[--depth-scale-m 0.001] [--ocamcalib calib_results.txt] [--force]\n",
+			p_message.c_str());
+	return 2;
+}
+
+bool parse_board(const std::string &p_text, BoardSpec *r_board) {
+	int x = 0, y = 0;
+	char separator = 0, rest = 0;
+	if (std::sscanf(p_text.c_str(), "%d%c%d%c", &x, &separator, &y, &rest) != 3 || (separator != 'x' && separator != 'X')) {
+		return false;
+	}
+	r_board->inner_x = x;
+	r_board->inner_y = y;
+	return true;
+}
+
+} // namespace
+
+int main(int p_argc, char **p_argv) {
+	std::string images, out, ocamcalib_path;
+	bool force = false, board_given = false, square_given = false;
+	CalibrationViewsOptions view_options;
+	RigCalibrationOptions options;
+	cli::Arguments args(p_argc, p_argv, 1);
+	std::string arg;
+	while (args.next(&arg)) {
+		if (arg == "--images" || arg == "--recording") {
+			if (!args.value(&images)) {
+				return usage_error(arg + " needs a folder");
+			}
+		} else if (arg == "--out") {
+			if (!args.value(&out)) {
+				return usage_error("--out needs a file");
+			}
+		} else if (arg == "--board") {
+			std::string text;
+			if (!args.value(&text) || !parse_board(text, &view_options.board)) {
+				return usage_error("--board needs the inner corners as COLSxROWS, e.g. 9x6");
+			}
+			board_given = true;
+		} else if (arg == "--square-m") {
+			if (!args.positive_number(&view_options.board.square_m)) {
+				return usage_error("--square-m needs the side of a square in metres, > 0");
+			}
+			square_given = true;
+		} else if (arg == "--depth-scale-m") {
+			if (!args.positive_number(&options.depth_scale_m)) {
+				return usage_error("--depth-scale-m needs metres per depth unit, > 0 (0.001 for millimetres)");
+			}
+		} else if (arg == "--ocamcalib") {
+			if (!args.value(&ocamcalib_path)) {
+				return usage_error("--ocamcalib needs OCamCalib's calib_results.txt");
+			}
+		} else if (arg == "--force") {
+			force = true;
+		} else {
+			return usage_error("unknown argument '" + arg + "'");
+		}
+	}
+	if (images.empty() || out.empty()) {
+		return usage_error("--images (or --recording) and --out are needed");
+	}
+	if (board_given != square_given) {
+		return usage_error("--board and --square-m go together (the folder's board.yaml is used when both are left out)");
+	}
+	std::error_code ec;
+	if (std::filesystem::exists(out, ec) && !force) {
+		std::fprintf(stderr, "roomprobe_calibrate: %s: exists; it is not overwritten (remove it, or pass --force)\n", out.c_str());
+		return 1;
+	}
+	ScaramuzzaModel ocamcalib;
+	if (!ocamcalib_path.empty()) {
+		const ScaramuzzaLoadResult loaded = load_ocamcalib(ocamcalib_path);
+		if (!loaded.ok) {
+			std::fprintf(stderr, "roomprobe_calibrate: %s\n", loaded.error.c_str());
+			return 1;
+		}
+		ocamcalib = loaded.model;
+		options.ocamcalib = &ocamcalib;
+		options.ocamcalib_name = ocamcalib_path;
+	}
+
+	view_options.board_given = board_given;
+	view_options.depth_scale_m = options.depth_scale_m;
+	view_options.progress = [](size_t p_done, size_t p_total, const std::string &p_image) {
+		std::printf("\r  finding the board: %zu / %zu  %-40s", p_done, p_total, p_image.c_str());
+		std::fflush(stdout);
+	};
+	const CalibrationViews views = load_calibration_views(images, view_options);
+	std::printf("\n");
+	if (!views.error.empty()) {
+		std::fprintf(stderr, "roomprobe_calibrate: %s\n", views.error.c_str());
+		return 1;
+	}
+	std::printf("board %dx%d inner corners, %g mm squares%s: found in %zu RGB and %zu fisheye images, %zu pairs; not in %zu\n", views.board.inner_x,
+			views.board.inner_y, views.board.square_m * 1000.0, views.board_from_file ? " (from the folder)" : "", views.rgb.size(), views.fisheye.size(),
+			views.pairs.size(), views.missed.size());
+	for (const std::string &missed : views.missed) {
+		std::printf("  not used: %s\n", missed.c_str());
+	}
+	std::printf("fitting...\n");
+	std::fflush(stdout);
+	const RigCalibration calibration = calibrate_rig(views, options);
+	if (!calibration.error.empty()) {
+		std::fprintf(stderr, "roomprobe_calibrate: %s: %s\n", images.c_str(), calibration.error.c_str());
+		return 1;
+	}
+	const Rig &rig = calibration.rig;
+	const RigCalibrationReport &r = calibration.report;
+	std::printf("RGB camera: fx %.3f fy %.3f (+-%.3f %.3f) cx %.3f cy %.3f (+-%.3f %.3f) px, k1 %.5f k2 %.5f p1 %.6f p2 %.6f; RMS %.3f px over %zu views\n", rig.rgb.fx,
+			rig.rgb.fy, r.rgb_std.fx, r.rgb_std.fy, rig.rgb.cx, rig.rgb.cy, r.rgb_std.cx, r.rgb_std.cy, rig.rgb.k1, rig.rgb.k2, rig.rgb.p1, rig.rgb.p2, r.rgb_rms_px,
+			r.rgb_views);
+	if (rig.has_fisheye()) {
+		const OmniParams &f = rig.fisheye;
+		std::printf("fisheye (%s): xi %.4f (+-%.4f) fx %.3f fy %.3f cx %.3f cy %.3f px; image circle (%.1f, %.1f) r %.1f px, %.1f deg; RMS %.3f px\n",
+				r.fisheye_method.c_str(), f.xi, r.fisheye_std.xi, f.fx, f.fy, f.cx, f.cy, f.circle_cx, f.circle_cy, f.circle_radius, f.max_angle_deg, r.fisheye_rms_px);
+		const glm::dvec3 &t = rig.rgb_from_fisheye.translation;
+		std::printf("rgb_from_fisheye: t (%.4f, %.4f, %.4f) m (+-%.2f %.2f %.2f mm), rotation +-(%.3f %.3f %.3f) deg; RMS %.3f px RGB, %.3f px fisheye over "
+					"%zu pairs\n",
+				t.x, t.y, t.z, r.rgb_from_fisheye_translation_std_m.x * 1e3, r.rgb_from_fisheye_translation_std_m.y * 1e3, r.rgb_from_fisheye_translation_std_m.z * 1e3,
+				r.rgb_from_fisheye_rotation_std_deg.x, r.rgb_from_fisheye_rotation_std_deg.y, r.rgb_from_fisheye_rotation_std_deg.z, r.pair_rgb_rms_px,
+				r.pair_fisheye_rms_px, r.pair_views);
+	}
+	if (r.depth_checked) {
+		std::printf("depth against the boards: measured = %.4f x board %+.2f mm; residual %.2f mm RMS (%.2f mm before the scale and offset) over %zu pixels\n",
+				r.depth_scale, r.depth_offset_m * 1e3, r.depth_residual_rms_m * 1e3, r.depth_raw_rms_m * 1e3, r.depth_samples);
+	}
+	for (const std::string &note : calibration.notes) {
+		std::printf("note: %s\n", note.c_str());
+	}
+	const std::string error = save_rig(out, rig, &calibration.report);
+	if (!error.empty()) {
+		std::fprintf(stderr, "roomprobe_calibrate: %s\n", error.c_str());
+		return 1;
+	}
+	std::printf("summary: out=%s rgb_rms_px=%.3f fisheye_rms_px=%.3f pair_rgb_rms_px=%.3f pair_fisheye_rms_px=%.3f depth_scale=%.4f depth_residual_mm=%.2f ok=1\n",
+			out.c_str(), r.rgb_rms_px, r.fisheye_rms_px, r.pair_rgb_rms_px, r.pair_fisheye_rms_px, r.depth_scale, r.depth_residual_rms_m * 1e3);
+	return 0;
+}
