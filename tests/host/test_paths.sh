@@ -161,12 +161,27 @@ test_unusable_paths_refused() {
 	fi
 }
 
-tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused)
+# calibrate never overwrites a rig file, and writes none from a folder without views.
+test_calibrate_refuses_and_never_overwrites() {
+	mkdir -p "$scratch/views-empty"
+	printf 'precious\n' >"$scratch/rig.yaml"
+	rp calibrate --images "$scratch/views-empty" --out "$scratch/rig.yaml"
+	check "calibrate onto an existing --out exited with status $rc" test "$rc" -ne 0
+	check "the message does not say the file is kept" says "$scratch/rig.yaml: exists; it is not overwritten"
+	check "the existing rig file changed" grep -qx precious "$scratch/rig.yaml"
+	rp calibrate --images "$scratch/views-empty" --out "$scratch/new-rig.yaml"
+	check "calibrate from a folder without views exited with status $rc" test "$rc" -ne 0
+	check "the message does not name the folder and say it has no views" says "$scratch/views-empty: no views"
+	check "a rig file was written from no views" test ! -e "$scratch/new-rig.yaml"
+}
+
+tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
+	calibrate_refuses_and_never_overwrites)
 passed=0 failed=0 start=$(date +%s.%N)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.
-echo "    building roomprobe_synth, roomprobe_eval and roomprobe_bench"
+echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench and roomprobe_calibrate"
 cd "$repo" || exit 1
-rp build -Q build/bin/roomprobe_synth build/bin/roomprobe_eval build/bin/roomprobe_bench
+rp build -Q build/bin/roomprobe_synth build/bin/roomprobe_eval build/bin/roomprobe_bench build/bin/roomprobe_calibrate
 built=$rc
 for t in "${tests[@]}"; do
 	name=host::$t
