@@ -81,6 +81,15 @@ struct RgbdFrame {
 	ColorFrame color;
 };
 
+// "a, b, c", for messages and listings.
+inline std::string comma_list(const std::vector<std::string> &p_items) {
+	std::string text;
+	for (const std::string &item : p_items) {
+		text += (text.empty() ? "" : ", ") + item;
+	}
+	return text;
+}
+
 // "3 devices listed: a, b, c" (or "no devices listed"), for errors about a device not found.
 inline std::string describe_listed(const std::vector<DeviceInfo> &p_devices) {
 	if (p_devices.empty()) {

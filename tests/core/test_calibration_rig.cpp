@@ -209,7 +209,7 @@ TEST_CASE("calibration: the real OCamCalib images calibrate the fisheye in the u
 	// Their board: 7 x 9 squares of 117 mm (test_camera_scaramuzza.cpp says why not checkerboard_sizes.txt's 5 x 7).
 	const BoardSpec board{ 6, 8, 0.117 };
 	std::vector<BoardView> views;
-	std::vector<cv::Mat> images;
+	cv::Mat brightest;
 	cv::Size size;
 	for (const fs::directory_entry &entry : fs::directory_iterator(k_ocamcalib_dir)) {
 		if (entry.path().extension() != ".jpg") {
@@ -218,14 +218,14 @@ TEST_CASE("calibration: the real OCamCalib images calibrate the fisheye in the u
 		const cv::Mat image = cv::imread(entry.path().string(), cv::IMREAD_GRAYSCALE);
 		REQUIRE(!image.empty());
 		size = image.size();
-		images.push_back(image);
+		keep_brightest(brightest, image);
 		const BoardDetection found = detect_board(image, board);
 		if (found.found) {
 			views.push_back({ entry.path().filename().string(), found.corners });
 		}
 	}
 	CHECK(views.size() >= 14);
-	const ImageCircle circle = find_image_circle(images);
+	const ImageCircle circle = find_image_circle(brightest);
 	MESSAGE("image circle (" << circle.cx << ", " << circle.cy << ") r " << circle.radius << " px; " << views.size() << " boards found");
 	const OmniCalibration fit = calibrate_omni(board, size, views, circle);
 	REQUIRE_MESSAGE(fit.error.empty(), fit.error);

@@ -5,6 +5,7 @@
 #include "capture/live_rig.h"
 #include "recording/recording_reader.h"
 #include "synth_test_rig.h"
+#include "test_images.h"
 
 #include <recording/oni_writer.h>
 
@@ -76,24 +77,6 @@ struct ScriptedOni {
 	}
 };
 
-bool same_image(const cv::Mat &p_a, const cv::Mat &p_b) {
-	if (p_a.size() != p_b.size() || p_a.type() != p_b.type()) {
-		return false;
-	}
-	if (p_a.depth() == CV_32F) { // depth: NaN (no reading) on both sides, equal elsewhere
-		cv::Mat a_nan = p_a != p_a;
-		cv::Mat b_nan = p_b != p_b;
-		if (cv::countNonZero(a_nan != b_nan) > 0) {
-			return false;
-		}
-		cv::Mat a = p_a.clone(), b = p_b.clone();
-		a.setTo(0.0f, a_nan);
-		b.setTo(0.0f, b_nan);
-		return cv::norm(a, b, cv::NORM_INF) <= 1e-6;
-	}
-	return cv::norm(p_a, p_b, cv::NORM_INF) == 0.0;
-}
-
 } // namespace
 
 TEST_CASE("live rig: 5 s recorded from OpenNI2 (an .oni) and Aravis' Fake camera play back frame for frame, with the same timestamps, images and device data") {
@@ -164,8 +147,8 @@ TEST_CASE("live rig: 5 s recorded from OpenNI2 (an .oni) and Aravis' Fake camera
 		previous_s = frame.frame.timestamp_s;
 		const auto sent = rgbd_sent.find(frame.frame.timestamp_s);
 		REQUIRE_MESSAGE(sent != rgbd_sent.end(), "recorded RGB-D frame " << i << " at " << frame.frame.timestamp_s << " s was never delivered");
-		CHECK(same_image(frame.frame.rgb, sent->second.rgb));
-		CHECK(same_image(frame.frame.depth_m, sent->second.depth_m));
+		CHECK(same_pixels(frame.frame.rgb, sent->second.rgb));
+		CHECK(same_pixels(frame.frame.depth_m, sent->second.depth_m));
 		CHECK(frame.frame.capture.device_frame_id == sent->second.capture.device_frame_id);
 		CHECK(frame.frame.capture.device_time_s == doctest::Approx(sent->second.capture.device_time_s).epsilon(1e-9));
 		// And it is the .oni's frame its device counter names.
@@ -190,7 +173,7 @@ TEST_CASE("live rig: 5 s recorded from OpenNI2 (an .oni) and Aravis' Fake camera
 		previous_s = frame.frame.timestamp_s;
 		const auto sent = fisheye_sent.find(frame.frame.timestamp_s);
 		REQUIRE_MESSAGE(sent != fisheye_sent.end(), "recorded fisheye frame " << i << " at " << frame.frame.timestamp_s << " s was never delivered");
-		CHECK(same_image(frame.frame.image, sent->second.image));
+		CHECK(same_pixels(frame.frame.image, sent->second.image));
 		CHECK(frame.frame.capture.device_frame_id == sent->second.capture.device_frame_id);
 		// The exposure set is the exposure every frame says it had (the Fake camera keeps it exactly).
 		CHECK(frame.frame.capture.exposure_us == doctest::Approx(5000.0).epsilon(1e-6));

@@ -7,6 +7,7 @@
 #include "recording/recording_queue.h"
 #include "recording/recording_reader.h"
 #include "synth_test_rig.h"
+#include "test_images.h"
 
 #include <doctest/doctest.h>
 
@@ -65,10 +66,6 @@ FisheyeFrame make_fisheye(int p_frame, double p_time_s, int p_width, int p_heigh
 	return frame;
 }
 
-bool same_image(const cv::Mat &p_a, const cv::Mat &p_b) {
-	return p_a.size() == p_b.size() && p_a.type() == p_b.type() && cv::norm(p_a, p_b, cv::NORM_INF) == 0.0;
-}
-
 } // namespace
 
 TEST_CASE("recording queue: frames pushed from two threads play back frame for frame, with the same timestamps and images") {
@@ -120,7 +117,7 @@ TEST_CASE("recording queue: frames pushed from two threads play back frame for f
 		REQUIRE_MESSAGE(frame.ok, frame.error);
 		CHECK(frame.frame.timestamp_s == rgbd_times[i]);
 		const RgbdFrame expected = make_rgbd(int(i), rgbd_times[i]);
-		CHECK(same_image(frame.frame.rgb, expected.rgb));
+		CHECK(same_pixels(frame.frame.rgb, expected.rgb));
 		// Depth is stored in whole units of depth_scale_m (1 mm): within half a unit, NaN kept.
 		for (int y = 0; y < 48; y++) {
 			for (int x = 0; x < 64; x++) {
@@ -137,7 +134,7 @@ TEST_CASE("recording queue: frames pushed from two threads play back frame for f
 		const FisheyeFrameResult frame = reader.read_fisheye(i);
 		REQUIRE_MESSAGE(frame.ok, frame.error);
 		CHECK(frame.frame.timestamp_s == fisheye_times[i]);
-		CHECK(same_image(frame.frame.image, make_fisheye(int(i), fisheye_times[i], 40, 40).image));
+		CHECK(same_pixels(frame.frame.image, make_fisheye(int(i), fisheye_times[i], 40, 40).image));
 	}
 	fs::remove_all(folder);
 }
@@ -238,7 +235,7 @@ TEST_CASE("recording queue: Aravis' Fake camera recorded live for 2 s through it
 		const FisheyeFrameResult frame = reader.read_fisheye(i);
 		REQUIRE_MESSAGE(frame.ok, frame.error);
 		CHECK(frame.frame.timestamp_s == sent[i].timestamp_s);
-		CHECK(same_image(frame.frame.image, sent[i].image));
+		CHECK(same_pixels(frame.frame.image, sent[i].image));
 	}
 	fs::remove_all(folder);
 }

@@ -62,10 +62,7 @@ int main(int p_argc, char **p_argv) {
 			info.modes = { "(cannot open it to read its modes: " + opened.error + ")" };
 		} else {
 			const AravisCamera &camera = *opened.value;
-			std::string formats;
-			for (const std::string &format : camera.get_available_pixel_formats()) {
-				formats += (formats.empty() ? "" : ", ") + format;
-			}
+			const std::string formats = comma_list(camera.get_available_pixel_formats());
 			info.modes = { "sensor " + std::to_string(camera.get_sensor_width()) + "x" + std::to_string(camera.get_sensor_height()) + ", region " +
 								   std::to_string(camera.get_width()) + "x" + std::to_string(camera.get_height()) + ", now " + camera.get_pixel_format(),
 				"pixel formats: " + (formats.empty() ? std::string("(not listed)") : formats),

@@ -82,9 +82,7 @@ int main(int p_argc, char **p_argv) {
 			}
 		} else if (arg == "--rgbd-latency-ms" || arg == "--fisheye-latency-ms") {
 			double &latency = arg == "--rgbd-latency-ms" ? rgbd_latency_ms : fisheye_latency_ms;
-			std::string v;
-			char *end = nullptr;
-			if (!args.value(&v) || (latency = std::strtod(v.c_str(), &end), end == v.c_str() || *end != '\0') || !(latency >= 0.0 && latency <= 1000.0)) {
+			if (!args.non_negative_number(&latency) || latency > 1000.0) {
 				return usage_error(arg + " needs a number of milliseconds within 0 to 1000");
 			}
 		} else if (arg == "--no-rgbd") {

@@ -103,7 +103,7 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 		return result;
 	}
 	const size_t total = rgb_files.size() + fisheye_files.size() + 2 * pair_files.size();
-	std::vector<cv::Mat> fisheye_images;
+	cv::Mat fisheye_brightest; // for the image circle
 	const auto detect = [&](const fs::path &p_file, bool p_is_rgb) {
 		Detected d;
 		d.view.name = fs::relative(p_file, root, ec).string();
@@ -125,7 +125,7 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 			return d;
 		}
 		if (!p_is_rgb) {
-			fisheye_images.push_back(d.image);
+			keep_brightest(fisheye_brightest, d.image);
 		}
 		BoardDetection found = detect_board(d.image, result.board);
 		if (!found.found) {
@@ -185,7 +185,7 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 	if (p_options.progress) {
 		p_options.progress(total, total, "");
 	}
-	result.fisheye_circle = find_image_circle(fisheye_images);
+	result.fisheye_circle = find_image_circle(fisheye_brightest);
 	return result;
 }
 

@@ -55,10 +55,19 @@ Pose pose_from_cv(const cv::Mat &p_rvec, const cv::Mat &p_tvec) {
 	return pose;
 }
 
+// The camera without its image circle and lens angle: a corner a fit moves across the rim still
+// projects, and the rim itself unprojects.
+OmniParams without_image_circle(const OmniParams &p_camera) {
+	OmniParams c = p_camera;
+	c.circle_radius = 0.0;
+	c.max_angle_deg = 0.0;
+	return c;
+}
+
 // The omni camera with its fit parameters at p_params[0..8] (xi, fx, fy, cx, cy, k1, k2, p1, p2),
-// no image circle (a corner the fit moves across the rim still projects).
+// without its image circle.
 OmniParams omni_from(const OmniParams &p_base, const std::vector<double> &p_params) {
-	OmniParams c = p_base;
+	OmniParams c = without_image_circle(p_base);
 	c.xi = p_params[0];
 	c.fx = p_params[1];
 	c.fy = p_params[2];
@@ -68,8 +77,6 @@ OmniParams omni_from(const OmniParams &p_base, const std::vector<double> &p_para
 	c.k2 = p_params[6];
 	c.p1 = p_params[7];
 	c.p2 = p_params[8];
-	c.circle_radius = 0.0;
-	c.max_angle_deg = 0.0;
 	return c;
 }
 
@@ -100,9 +107,7 @@ double rms_of(const std::vector<double> &p_residuals, size_t p_begin, size_t p_e
 // The board's pose in a fisheye from its corners: their rays turned so that their mean lies on a
 // virtual pinhole's axis (near the rim they are far from the fisheye's), then PnP there.
 bool fisheye_board_pose(const BoardSpec &p_board, const OmniParams &p_fisheye, const BoardView &p_view, Pose *r_fisheye_from_board) {
-	OmniParams open = p_fisheye;
-	open.circle_radius = 0.0;
-	open.max_angle_deg = 0.0;
+	const OmniParams open = without_image_circle(p_fisheye);
 	std::vector<glm::dvec3> rays;
 	glm::dvec3 mean(0.0);
 	for (const cv::Point2f &corner : p_view.corners) {
@@ -223,37 +228,35 @@ PinholeCalibration calibrate_pinhole(const BoardSpec &p_board, cv::Size p_image_
 	return result;
 }
 
-ImageCircle find_image_circle(const std::vector<cv::Mat> &p_images) {
-	ImageCircle circle;
-	cv::Mat brightest;
-	for (const cv::Mat &image : p_images) {
-		cv::Mat gray;
-		if (image.channels() == 3) {
-			cv::cvtColor(image, gray, cv::COLOR_RGB2GRAY);
-		} else {
-			gray = image;
-		}
-		brightest = brightest.empty() ? gray.clone() : cv::max(brightest, gray);
+void keep_brightest(cv::Mat &r_brightest, const cv::Mat &p_gray) {
+	if (r_brightest.empty()) {
+		r_brightest = p_gray.clone();
+	} else {
+		cv::max(r_brightest, p_gray, r_brightest);
 	}
-	if (brightest.empty()) {
+}
+
+ImageCircle find_image_circle(const cv::Mat &p_brightest) {
+	ImageCircle circle;
+	if (p_brightest.empty()) {
 		return circle;
 	}
 	cv::Mat inside;
-	cv::threshold(brightest, inside, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+	cv::threshold(p_brightest, inside, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
 	std::vector<std::vector<cv::Point>> contours;
 	cv::findContours(inside, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
 	const auto largest = std::max_element(contours.begin(), contours.end(),
 			[](const auto &p_a, const auto &p_b) { return cv::contourArea(p_a) < cv::contourArea(p_b); });
-	if (largest == contours.end() || cv::contourArea(*largest) > 0.97 * double(brightest.total())) {
-		circle.cx = (brightest.cols - 1) * 0.5; // the lens fills the image: no circle
-		circle.cy = (brightest.rows - 1) * 0.5;
+	if (largest == contours.end() || cv::contourArea(*largest) > 0.97 * double(p_brightest.total())) {
+		circle.cx = (p_brightest.cols - 1) * 0.5; // the lens fills the image: no circle
+		circle.cy = (p_brightest.rows - 1) * 0.5;
 		return circle;
 	}
 	// The rim's points that do not touch the image's border, fitted by a circle (least squares:
 	// x^2 + y^2 + D x + E y + F = 0).
 	cv::Mat a(0, 3, CV_64F), b(0, 1, CV_64F);
 	for (const cv::Point &p : *largest) {
-		if (p.x <= 0 || p.y <= 0 || p.x >= brightest.cols - 1 || p.y >= brightest.rows - 1) {
+		if (p.x <= 0 || p.y <= 0 || p.x >= p_brightest.cols - 1 || p.y >= p_brightest.rows - 1) {
 			continue;
 		}
 		const double row[3] = { double(p.x), double(p.y), 1.0 };
@@ -273,9 +276,7 @@ ImageCircle find_image_circle(const std::vector<cv::Mat> &p_images) {
 }
 
 double omni_max_angle_deg(const OmniParams &p_camera) {
-	OmniParams open = p_camera;
-	open.circle_radius = 0.0;
-	open.max_angle_deg = 0.0;
+	const OmniParams open = without_image_circle(p_camera);
 	double widest = 0.0;
 	const auto consider = [&](glm::dvec2 p_pixel) {
 		glm::dvec3 ray;
@@ -426,9 +427,7 @@ ExtrinsicCalibration calibrate_rgb_from_fisheye(const BoardSpec &p_board, const 
 	}
 	const size_t rgb_count = p_pairs.size() * corners.size() * 2;
 	const auto project_rgb = [&](const glm::dvec3 &p_point, glm::dvec2 *r_pixel) { return project_pinhole(p_rgb, p_point, r_pixel); };
-	OmniParams open = p_fisheye;
-	open.circle_radius = 0.0;
-	open.max_angle_deg = 0.0;
+	const OmniParams open = without_image_circle(p_fisheye);
 	const auto project_fisheye = [&](const glm::dvec3 &p_point, glm::dvec2 *r_pixel) { return project_omni(open, p_point, r_pixel); };
 	// Residuals: every pair's RGB corners, then every pair's fisheye corners, in pixels.
 	const ResidualFunction residuals = [&](const std::vector<double> &p_params, std::vector<double> &r_residuals) {
@@ -466,22 +465,18 @@ ExtrinsicCalibration calibrate_rgb_from_fisheye(const BoardSpec &p_board, const 
 	return result;
 }
 
-DepthAgreement fit_depth_to_boards(const BoardSpec &p_board, const PinholeParams &p_rgb, const std::vector<BoardPair> &p_pairs,
-		const std::vector<Pose> &p_rgb_from_board) {
+DepthAgreement fit_depth_to_boards(const PinholeParams &p_rgb, const std::vector<BoardPair> &p_pairs, const std::vector<Pose> &p_rgb_from_board) {
 	DepthAgreement result;
-	// Sums for measured = scale * board + offset.
-	double n = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, raw = 0.0;
+	// (board depth, measured depth) at every other pixel inside each pair's board.
 	std::vector<std::pair<double, double>> samples;
 	for (size_t i = 0; i < p_pairs.size() && i < p_rgb_from_board.size(); i++) {
 		const cv::Mat &depth = p_pairs[i].depth_m;
 		if (depth.empty() || depth.type() != CV_32FC1) {
 			continue;
 		}
-		// The board's inner-corner quadrilateral, shrunk by a quarter square from the edges of the
-		// depth's discontinuities.
-		const std::vector<cv::Point2f> &c = p_pairs[i].rgb.corners;
+		// Inside the inner corners' hull by 2 px: clear of the depth's discontinuity at the board's edge.
 		std::vector<cv::Point2f> hull;
-		cv::convexHull(c, hull);
+		cv::convexHull(p_pairs[i].rgb.corners, hull);
 		const cv::Rect box = cv::boundingRect(hull) & cv::Rect(0, 0, depth.cols, depth.rows);
 		const glm::dvec3 normal = p_rgb_from_board[i].rotation * glm::dvec3(0.0, 0.0, 1.0);
 		const double plane_d = glm::dot(normal, p_rgb_from_board[i].translation);
@@ -499,22 +494,24 @@ DepthAgreement fit_depth_to_boards(const BoardSpec &p_board, const PinholeParams
 				if (std::abs(along) < 1e-6) {
 					continue;
 				}
-				const double board_z = plane_d / along; // the ray's z is 1: this is the depth
-				n += 1.0;
-				sx += board_z;
-				sy += measured;
-				sxx += board_z * board_z;
-				sxy += board_z * measured;
-				raw += (measured - board_z) * (measured - board_z);
-				samples.emplace_back(board_z, measured);
+				samples.emplace_back(plane_d / along, measured); // the ray's z is 1: the board's depth
 			}
 		}
 	}
-	result.samples = size_t(n);
-	if (n < 100.0) {
-		result.error = "depth: fewer than 100 depth readings on the boards of the pairs (" + std::to_string(size_t(n)) +
+	result.samples = samples.size();
+	if (samples.size() < 100) {
+		result.error = "depth: fewer than 100 depth readings on the boards of the pairs (" + std::to_string(samples.size()) +
 				"); record depth with the pair views (pairs/NNN_depth.png)";
 		return result;
+	}
+	// measured = scale * board + offset, by least squares.
+	const double n = double(samples.size());
+	double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0;
+	for (const auto &[board_z, measured] : samples) {
+		sx += board_z;
+		sy += measured;
+		sxx += board_z * board_z;
+		sxy += board_z * measured;
 	}
 	const double denominator = n * sxx - sx * sx;
 	if (std::abs(denominator) < 1e-12 * n * n) {
@@ -523,10 +520,11 @@ DepthAgreement fit_depth_to_boards(const BoardSpec &p_board, const PinholeParams
 	}
 	result.scale = (n * sxy - sx * sy) / denominator;
 	result.offset_m = (sy - result.scale * sx) / n;
-	double residual = 0.0;
+	double residual = 0.0, raw = 0.0;
 	for (const auto &[board_z, measured] : samples) {
 		const double e = measured - (result.scale * board_z + result.offset_m);
 		residual += e * e;
+		raw += (measured - board_z) * (measured - board_z);
 	}
 	result.residual_rms_m = std::sqrt(residual / n);
 	result.raw_rms_m = std::sqrt(raw / n);
@@ -596,7 +594,7 @@ RigCalibration calibrate_rig(const CalibrationViews &p_views, const RigCalibrati
 	rig.fisheye_time_offset_s = 0.0;
 	report.clock_offset = "not estimated: fisheye_time_offset_s is 0 (right for a live rig on one host clock; set it by hand for recordings from two clocks)";
 	result.notes.push_back(report.clock_offset);
-	const DepthAgreement depth = fit_depth_to_boards(p_views.board, rig.rgb, p_views.pairs, extrinsic.rgb_from_board);
+	const DepthAgreement depth = fit_depth_to_boards(rig.rgb, p_views.pairs, extrinsic.rgb_from_board);
 	if (depth.error.empty()) {
 		report.depth_checked = true;
 		report.depth_scale = depth.scale;

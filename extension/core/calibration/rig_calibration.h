@@ -50,12 +50,15 @@ struct PinholeCalibration {
 // cv::calibrateCamera with k1, k2, p1, p2 (k3 fixed at 0: a few board views cannot tell it from k1, k2).
 PinholeCalibration calibrate_pinhole(const BoardSpec &p_board, cv::Size p_image_size, const std::vector<BoardView> &p_views);
 
-// The fisheye's image circle: the bright disc of the views' per-pixel maximum. Radius 0 when the
-// image has no dark border (the lens fills it).
+// The fisheye's image circle: the bright disc of p_brightest, the per-pixel maximum of its views
+// (CV_8UC1; keep_brightest makes it one view at a time). Radius 0 when the image has no dark
+// border (the lens fills it).
 struct ImageCircle {
 	double cx = 0.0, cy = 0.0, radius = 0.0; // pixels
 };
-ImageCircle find_image_circle(const std::vector<cv::Mat> &p_images);
+ImageCircle find_image_circle(const cv::Mat &p_brightest);
+// r_brightest becomes the per-pixel maximum of itself and p_gray (CV_8UC1); empty: p_gray.
+void keep_brightest(cv::Mat &r_brightest, const cv::Mat &p_gray);
 
 // The largest angle from the optical axis the camera sees: over its image circle's rim (or the
 // image's border when the radius is 0), degrees.
@@ -103,8 +106,7 @@ struct DepthAgreement {
 };
 
 // The depth images against the board planes of p_rgb_from_board, over the pixels inside each board.
-DepthAgreement fit_depth_to_boards(const BoardSpec &p_board, const PinholeParams &p_rgb, const std::vector<BoardPair> &p_pairs,
-		const std::vector<Pose> &p_rgb_from_board);
+DepthAgreement fit_depth_to_boards(const PinholeParams &p_rgb, const std::vector<BoardPair> &p_pairs, const std::vector<Pose> &p_rgb_from_board);
 
 struct CalibrationViews; // calibration_views.h
 

@@ -29,7 +29,6 @@ constexpr std::chrono::milliseconds WORKER_POLL(50);
 // Arrival times kept for the latency figures (frames older than this many are forgotten).
 constexpr size_t ARRIVALS_KEPT = 256;
 
-
 // The faces as Godot's RGBAH image with mipmaps wants them: level 0, then each half-size level
 // (box filter) down to 1x1, RGBA half floats.
 std::vector<uint16_t> gpu_face(const cv::Mat &p_face) {

@@ -63,21 +63,17 @@ bool RecordingQueue::is_open() const {
 bool RecordingQueue::push_rgbd(const RgbdFrame &p_frame) {
 	Item item;
 	item.stream = RecordingStream::Rgbd;
-	item.rgbd.timestamp_s = p_frame.timestamp_s;
-	item.rgbd.depth_timestamp_s = p_frame.depth_timestamp_s;
+	item.rgbd = p_frame; // every field; then pixels of its own
 	item.rgbd.rgb = p_frame.rgb.clone();
 	item.rgbd.depth_m = p_frame.depth_m.clone();
-	item.rgbd.capture = p_frame.capture;
 	return push(std::move(item), p_frame.timestamp_s);
 }
 
 bool RecordingQueue::push_fisheye(const FisheyeFrame &p_frame) {
 	Item item;
 	item.stream = RecordingStream::Fisheye;
-	item.fisheye.timestamp_s = p_frame.timestamp_s;
-	item.fisheye.hdr = p_frame.hdr;
+	item.fisheye = p_frame;
 	item.fisheye.image = p_frame.image.clone();
-	item.fisheye.capture = p_frame.capture;
 	return push(std::move(item), p_frame.timestamp_s);
 }
 

@@ -342,7 +342,7 @@ std::vector<Pose> fisheye_board_poses(const CheckerboardSpec &p_board) {
 
 std::vector<Pose> pair_board_poses(const CheckerboardSpec &p_board) {
 	// In the RGB camera's frame: the board ahead of it and raised, where the upward fisheye sees it
-	// near its horizon (70 to 90 degrees off its axis) while it is inside the RGB image. Centre
+	// near its horizon (about 75 to 90 degrees off its axis) while it is inside the RGB image. Centre
 	// (x, elevation in degrees, distance), then tilt about the board's x and y, and spin.
 	struct View {
 		double x, elevation_deg, distance_m, tilt_x_deg, tilt_y_deg, spin_deg;

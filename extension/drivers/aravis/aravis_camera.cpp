@@ -388,11 +388,7 @@ DriverStatus AravisCamera::set_pixel_format(const std::string &p_format) {
 	}
 	const std::vector<std::string> formats = get_available_pixel_formats();
 	if (std::find(formats.begin(), formats.end(), p_format) == formats.end()) {
-		std::string offered;
-		for (const std::string &format : formats) {
-			offered += (offered.empty() ? "" : ", ") + format;
-		}
-		return { what + "the camera offers " + (offered.empty() ? std::string("none it can name") : offered) };
+		return { what + "the camera offers " + (formats.empty() ? std::string("none it can name") : comma_list(formats)) };
 	}
 	ErrorSlot error;
 	arv_camera_set_pixel_format_from_string(state->camera.get(), p_format.c_str(), error.out());

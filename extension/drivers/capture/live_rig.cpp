@@ -10,6 +10,12 @@ size_t slot(RecordingStream p_stream) {
 
 } // namespace
 
+Rig live_capture_rig(const Rig &p_rig) {
+	Rig rig = p_rig;
+	rig.fisheye_time_offset_s = 0.0;
+	return rig;
+}
+
 LiveRig::~LiveRig() {
 	stop();
 	stop_recording();
@@ -17,8 +23,7 @@ LiveRig::~LiveRig() {
 
 std::string LiveRig::start(const Rig &p_rig, const LiveRigSettings &p_settings, FrameSink p_on_frame, StateSink p_on_state) {
 	stop();
-	rig = p_rig;
-	rig.fisheye_time_offset_s = 0.0; // both streams are stamped on the one host clock
+	rig = live_capture_rig(p_rig);
 	on_frame = std::move(p_on_frame);
 	const bool use_fisheye = p_settings.use_fisheye && rig.has_fisheye();
 	if (!p_settings.use_rgbd && !use_fisheye) {
@@ -94,7 +99,7 @@ void LiveRig::deliver(CapturedFrame &&p_frame) {
 		queue = recording;
 	}
 	if (queue) {
-		// The queue copies the frame (its pixels are shared, never written again).
+		// The queue keeps its own copy of the pixels: the sink below takes the frame.
 		if (p_frame.is_rgbd) {
 			queue->push_rgbd(p_frame.rgbd);
 		} else {

@@ -32,6 +32,10 @@ struct LiveRigSettings {
 	DeviceCaptureOptions capture; // latency_s comes from the rig, per device
 };
 
+// The rig as live capture stamps its frames: the file's, with fisheye_time_offset_s 0 (both
+// streams on the host's one clock). What a LiveRig records, and what the engine must be given.
+Rig live_capture_rig(const Rig &p_rig);
+
 class LiveRig {
 public:
 	using FrameSink = DeviceCapture::FrameSink;

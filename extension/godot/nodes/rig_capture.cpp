@@ -192,8 +192,7 @@ bool RigCapture::open_live() {
 		}
 		room = room_loaded.room;
 	}
-	live_rig = loaded.rig;
-	live_rig.fisheye_time_offset_s = 0.0; // both streams are stamped on one host clock
+	live_rig = drivers::live_capture_rig(loaded.rig);
 	has_live_room = !room_file.is_empty();
 	live_room = room;
 	live_open = true;
