@@ -1,9 +1,12 @@
-// Calibrating the rig (calibration/, paper §3.2) from the synthetic rig's checkerboard views, whose
-// truth is known (synth/synth_sequence.h renders them with test_rig()), and refusing degenerate
-// input with its reason.
+// Calibrating the rig (calibration/, paper §3.2) from the synthetic rig's checkerboard and
+// photometric views, whose truth is known (synth/synth_sequence.h renders them with test_rig() and
+// a fisheye whose response, vignetting and white balance are not the RGB camera's), and refusing
+// degenerate input with its reason.
 
 #include "calibration/calibration_views.h"
+#include "calibration/photometric_calibration.h"
 #include "calibration/rig_calibration.h"
+#include "recording/recording_writer.h"
 #include "synth/synth_sequence.h"
 #include "synth_test_rig.h"
 
@@ -13,6 +16,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 
 using namespace roomprobe;
 namespace fs = std::filesystem;
@@ -23,14 +27,33 @@ bool contains(const std::string &p_text, const std::string &p_part) {
 	return p_text.find(p_part) != std::string::npos;
 }
 
-// The synthetic rig's views, rendered once for every test here and removed at exit.
+// The fisheye's photometric truth: a log response, a white balance of its own, vignetting to
+// half at the rim.
+synth::FisheyeOptions fisheye_truth() {
+	synth::FisheyeOptions options;
+	options.tone_curve = ToneCurve::Log;
+	options.channel_gains = glm::dvec3(1.1, 1.0, 0.85);
+	options.vignetting_edge_gain = 0.5;
+	return options;
+}
+
+// The synthetic rig's views, rendered once for every test here and removed at exit: the boards,
+// and the exposure sweep and flat field in two_rooms.
 struct RenderedViews {
 	fs::path folder;
 	std::string error;
 	RenderedViews() {
 		folder = fs::temp_directory_path() / ("roomprobe_test_calibration_" + std::to_string(::getpid()));
 		fs::remove_all(folder);
-		const synth::CalibrationResult written = synth::write_calibration_views(folder.string(), test_rig(), synth::CheckerboardSpec(), 4);
+		const Rig rig = test_rig();
+		synth::CalibrationResult written = synth::write_calibration_views(folder.string(), rig, synth::CheckerboardSpec(), 4, fisheye_truth());
+		if (written.ok) {
+			const synth::SceneResult scene = synth::make_scene("two_rooms", synth::SceneOptions());
+			REQUIRE_MESSAGE(scene.ok, scene.error);
+			const synth::SynthRenderer renderer(scene.scene);
+			const Pose world_from_fisheye = compose(synth::make_handheld_trajectory(scene.scene, 1).world_from_rgb(0.0), rig.rgb_from_fisheye);
+			written = synth::write_photometric_views(folder.string(), renderer, rig.fisheye, world_from_fisheye, fisheye_truth());
+		}
 		error = written.ok ? "" : written.error;
 	}
 	~RenderedViews() {
@@ -39,9 +62,14 @@ struct RenderedViews {
 	}
 };
 
-const CalibrationViews &synthetic_views() {
+const RenderedViews &rendered_views() {
 	static RenderedViews rendered;
+	return rendered;
+}
+
+const CalibrationViews &synthetic_views() {
 	static CalibrationViews views = [] {
+		const RenderedViews &rendered = rendered_views();
 		REQUIRE_MESSAGE(rendered.error.empty(), rendered.error);
 		return load_calibration_views(rendered.folder.string(), CalibrationViewsOptions());
 	}();
@@ -238,4 +266,161 @@ TEST_CASE("calibration: the real OCamCalib images calibrate the fisheye in the u
 	REQUIRE(ocam.ok);
 	CHECK(std::abs(fit.camera.cx - ocam.model.yc) < 5.0);
 	CHECK(std::abs(fit.camera.cy - ocam.model.xc) < 5.0);
+}
+
+TEST_CASE("calibration: the fisheye's response, vignetting and colour gains come back within 2 % of the truth") {
+	const CalibrationViews &views = synthetic_views();
+	REQUIRE_MESSAGE(views.error.empty(), views.error);
+	const RigCalibration calibrated = calibrate_rig(views, RigCalibrationOptions());
+	REQUIRE_MESSAGE(calibrated.error.empty(), calibrated.error);
+	const RigPhotometry &photometry = calibrated.rig.photometry;
+	REQUIRE(photometry.known);
+	CHECK(calibrated.report.photometry.find("Debevec") != std::string::npos);
+	const synth::FisheyeOptions truth_options = fisheye_truth();
+	// The truth in the rig's unit (the RGB camera's linear value: radiance at exposure 1).
+	const CameraPhotometry truth = tone_curve_photometry(truth_options.tone_curve, 1.0, truth_options.channel_gains);
+	const CameraPhotometry &fisheye = photometry.fisheye;
+	// The response's shape, and the whole linearisation (response times gain), over the codes an
+	// 8-bit camera resolves (below 16 a code step is more than 2 % of the value).
+	double worst_shape = 0.0, worst_radiance = 0.0;
+	for (int c = 0; c < 3; c++) {
+		for (int k = 16; k <= 240; k++) {
+			const double shape = (fisheye.response[c][k] / fisheye.response[c][128]) / (truth.response[c][k] / truth.response[c][128]);
+			const double radiance = (fisheye.response[c][k] * fisheye.channel_gains[c]) / (truth.response[c][k] * truth.channel_gains[c]);
+			worst_shape = std::max(worst_shape, std::abs(shape - 1.0));
+			worst_radiance = std::max(worst_radiance, std::abs(radiance - 1.0));
+		}
+	}
+	MESSAGE("response shape within " << 100.0 * worst_shape << " %, radiance within " << 100.0 * worst_radiance << " % (codes 16..240)");
+	CHECK(worst_shape < 0.02);
+	CHECK(worst_radiance < 0.02);
+	// Vignetting over the image circle, against the renderer's model.
+	REQUIRE(fisheye.vignetting.size() >= 2);
+	double worst_vignetting = 0.0;
+	for (int i = 0; i <= 100; i++) {
+		const double r = i / 100.0;
+		const glm::dvec2 pixel(calibrated.rig.fisheye.circle_cx + r * calibrated.rig.fisheye.circle_radius, calibrated.rig.fisheye.circle_cy);
+		const double expected = synth::fisheye_vignetting(test_rig().fisheye, pixel, truth_options.vignetting_edge_gain);
+		worst_vignetting = std::max(worst_vignetting, std::abs(vignetting_at(fisheye.vignetting, r) / expected - 1.0));
+	}
+	MESSAGE("vignetting within " << 100.0 * worst_vignetting << " % over the image circle");
+	CHECK(worst_vignetting < 0.02);
+	// The frames' exposures scale from the reference the pairs were taken at.
+	CHECK(fisheye.reference_exposure_us == doctest::Approx(synth::SYNTH_EXPOSURE_UNIT_US));
+	CHECK(exposure_ratio(fisheye, 4.0 * synth::SYNTH_EXPOSURE_UNIT_US, 0.0) == doctest::Approx(4.0));
+	CHECK(exposure_ratio(fisheye, 4.0 * synth::SYNTH_EXPOSURE_UNIT_US, 6.0) == doctest::Approx(4.0 * std::pow(10.0, 6.0 / 20.0)));
+	CHECK(exposure_ratio(fisheye, std::nan(""), 0.0) == 1.0);
+	// The rig file keeps it (schema version 2) and the linearizer applies it.
+	const fs::path path = fs::temp_directory_path() / ("roomprobe_test_photometry_" + std::to_string(::getpid()) + ".yaml");
+	REQUIRE(save_rig(path.string(), calibrated.rig, &calibrated.report) == "");
+	const RigLoadResult loaded = load_rig(path.string());
+	fs::remove(path);
+	REQUIRE_MESSAGE(loaded.ok, loaded.error);
+	CHECK(loaded.rig.photometry.known);
+	CHECK(loaded.rig.photometry.fisheye.vignetting.size() == fisheye.vignetting.size());
+	CHECK(loaded.rig.photometry.fisheye.response[1][200] == doctest::Approx(fisheye.response[1][200]));
+	CHECK(loaded.rig.photometry.fisheye.channel_gains.z == doctest::Approx(fisheye.channel_gains.z));
+}
+
+TEST_CASE("calibration: photometric views that cannot be fitted are refused with their reason") {
+	const fs::path folder = fs::temp_directory_path() / ("roomprobe_test_photometric_" + std::to_string(::getpid()));
+	fs::remove_all(folder);
+	fs::create_directories(folder / "exposure");
+	const OmniParams lens = test_rig().fisheye;
+	const auto write = [&](const std::string &p_text) {
+		std::ofstream(folder / "photometric.yaml") << p_text;
+	};
+	const cv::Size size(lens.width, lens.height);
+	// No file: not present, no error.
+	CHECK_FALSE(load_photometric_views(folder.string(), size).present);
+	write("%YAML:1.0\nexposure_sweep: []\n");
+	CHECK(contains(load_photometric_views(folder.string(), size).error, "reference_exposure_us: missing"));
+	write("%YAML:1.0\nreference_exposure_us: 100\nexposure_sweep:\n  - { image: exposure/000.png, exposure_us: 100 }\n");
+	CHECK(contains(load_photometric_views(folder.string(), size).error, "exposure/000.png: cannot read the image"));
+	cv::imwrite((folder / "exposure/000.png").string(), cv::Mat(16, 16, CV_8UC3, cv::Scalar::all(100)));
+	CHECK(contains(load_photometric_views(folder.string(), size).error, "16x16, the fisheye's images are"));
+	// Too few exposures, or too narrow a sweep.
+	const std::vector<cv::Mat> one(2, cv::Mat(size, CV_8UC3, cv::Scalar::all(100)));
+	CHECK(contains(fit_response(one, { 100.0, 200.0 }, lens).error, "at least 3 images"));
+	const std::vector<cv::Mat> three(3, cv::Mat(size, CV_8UC3, cv::Scalar::all(100)));
+	CHECK(contains(fit_response(three, { 100.0, 200.0, 400.0 }, lens).error, "less than 4 stops"));
+	// A flat field that is all clipped shows no fall-off.
+	std::array<ResponseCurve, 3> linear;
+	for (ResponseCurve &curve : linear) {
+		curve = tone_curve_response(ToneCurve::Srgb);
+	}
+	CHECK(contains(fit_vignetting(cv::Mat(size, CV_8UC3, cv::Scalar::all(255)), linear, lens).error, "no usable pixel"));
+	fs::remove_all(folder);
+}
+
+TEST_CASE("calibration: a recording of the board held before the rig gives the same calibration from its own frames") {
+	const CalibrationViews &views = synthetic_views();
+	REQUIRE_MESSAGE(views.error.empty(), views.error);
+	// The rendered views as a recording's frames: the RGB camera's alone, the fisheye's alone, and
+	// the pairs, each pair's fisheye frame 5 ms from its RGB-D frame on the RGB-D clock.
+	const fs::path source = rendered_views().folder / "calibration";
+	const fs::path folder = fs::temp_directory_path() / ("roomprobe_test_board_recording_" + std::to_string(::getpid()));
+	fs::remove_all(folder);
+	const Rig truth = test_rig();
+	RecordingWriter writer;
+	REQUIRE(writer.open_without_room(folder.string(), truth).ok);
+	const auto rgb_of = [](const fs::path &p_path) {
+		cv::Mat rgb;
+		cv::cvtColor(cv::imread(p_path.string(), cv::IMREAD_COLOR), rgb, cv::COLOR_BGR2RGB);
+		return rgb;
+	};
+	char name[64];
+	for (int v = 0; v < 8; v++) {
+		RgbdFrame frame;
+		frame.timestamp_s = 0.5 * v;
+		std::snprintf(name, sizeof(name), "rgb/%03d.png", v);
+		frame.rgb = rgb_of(source / name);
+		frame.depth_m = cv::Mat(frame.rgb.size(), CV_32FC1, cv::Scalar(std::nan("")));
+		REQUIRE(writer.add_rgbd(frame).ok);
+	}
+	for (int p = 0; p < 6; p++) {
+		RgbdFrame frame;
+		frame.timestamp_s = 20.0 + 0.5 * p;
+		std::snprintf(name, sizeof(name), "pairs/%03d_rgb.png", p);
+		frame.rgb = rgb_of(source / name);
+		std::snprintf(name, sizeof(name), "pairs/%03d_depth.png", p);
+		frame.depth_m = cv::imread((source / name).string(), cv::IMREAD_UNCHANGED);
+		REQUIRE(writer.add_rgbd(frame).ok);
+	}
+	for (int v = 0; v < 8; v++) {
+		FisheyeFrame frame;
+		frame.timestamp_s = 10.0 + 0.5 * v;
+		std::snprintf(name, sizeof(name), "fisheye/%03d.png", v);
+		frame.image = rgb_of(source / name);
+		REQUIRE(writer.add_fisheye(frame).ok);
+	}
+	for (int p = 0; p < 6; p++) {
+		FisheyeFrame frame;
+		frame.timestamp_s = 20.0 + 0.5 * p - truth.fisheye_time_offset_s + 0.005;
+		std::snprintf(name, sizeof(name), "pairs/%03d_fisheye.png", p);
+		frame.image = rgb_of(source / name);
+		REQUIRE(writer.add_fisheye(frame).ok);
+	}
+	REQUIRE(writer.close().ok);
+
+	// Which board: the recording does not say, and the caller did not either.
+	CHECK(contains(load_calibration_views(folder.string(), CalibrationViewsOptions()).error, "which board?"));
+	CalibrationViewsOptions options;
+	options.board = views.board;
+	options.board_given = true;
+	const CalibrationViews from_frames = load_calibration_views(folder.string(), options);
+	fs::remove_all(folder);
+	REQUIRE_MESSAGE(from_frames.error.empty(), from_frames.error);
+	CHECK(from_frames.rgb.size() == views.rgb.size());
+	CHECK(from_frames.fisheye.size() == views.fisheye.size());
+	CHECK(from_frames.pairs.size() == views.pairs.size());
+	const RigCalibration calibrated = calibrate_rig(from_frames, RigCalibrationOptions());
+	REQUIRE_MESSAGE(calibrated.error.empty(), calibrated.error);
+	const Rig &rig = calibrated.rig;
+	CHECK(std::abs(rig.rgb.fx / truth.rgb.fx - 1.0) < 0.003);
+	CHECK(std::abs(rig.rgb.cx - truth.rgb.cx) < 1.0);
+	CHECK(std::abs(rig.fisheye.fx / (1.0 + rig.fisheye.xi) / (truth.fisheye.fx / (1.0 + truth.fisheye.xi)) - 1.0) < 0.003);
+	CHECK(glm::length(rig.rgb_from_fisheye.translation - truth.rgb_from_fisheye.translation) < 0.002);
+	CHECK(angle_deg(rig.rgb_from_fisheye.rotation, truth.rgb_from_fisheye.rotation) < 0.2);
+	CHECK(calibrated.report.depth_checked); // the pairs' depth came through the recording
 }

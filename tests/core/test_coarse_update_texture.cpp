@@ -81,7 +81,7 @@ TEST_CASE("coarse update: texel geometry, conversions, masks and the two policie
 	// A worse view (from a corner, further and more oblique) does not replace the best one...
 	const Pose corner = upward_fisheye(glm::dvec3(0.4, 0.3, 0.4));
 	cv::Mat grey1(params.height, params.width, CV_8UC1, cv::Scalar(10));
-	CoarseTexture last { texture.color.clone(), texture.observed.clone(), texture.quality.clone(), texture.updated.clone() };
+	CoarseTexture last { texture.color.clone(), texture.observed.clone(), texture.quality.clone(), texture.updated.clone(), texture.saturated.clone() };
 	stats = update_coarse_texture(mesh, geometry, params, corner, grey1, nullptr, &texture);
 	CHECK(stats.texels_visible > stats.texels_updated);
 	CHECK(texture.updated.at<uint8_t>(above) == 0);
@@ -272,7 +272,7 @@ TEST_CASE("coarse update: from the frame's texel projection, the same as project
 		const cv::Mat *frame_mask = k % 2 ? &mask : nullptr;
 		project_texels(geometry, params, poses[k], &projection);
 		// The lighting pairs the update gathers: the plain samples of the texels observed before.
-		const CoarseTexture before { fast.color.clone(), fast.observed.clone(), fast.quality.clone(), fast.updated.clone() };
+		const CoarseTexture before { fast.color.clone(), fast.observed.clone(), fast.quality.clone(), fast.updated.clone(), fast.saturated.clone() };
 		cv::Mat before_samples, before_visible;
 		sample_coarse_texels(geometry, params, poses[k], image, frame_mask, before.observed, pairs.step, TextureUpdateOptions(), &before_samples, &before_visible);
 		const TextureUpdateStats a = update_coarse_texture(mesh, geometry, params, poses[k], image, frame_mask, &plain);
@@ -319,4 +319,53 @@ TEST_CASE("coarse update: from the frame's texel projection, the same as project
 	CHECK(differing <= int(geometry.surface_texels / 10000));
 	CHECK(worst_quality < 1e-4);
 	MESSAGE("projection path: " << differing << " texels differ of " << geometry.surface_texels << ", worst relative quality difference " << worst_quality);
+}
+
+TEST_CASE("coarse update: HDR, a clipped value never replaces an unclipped one and is filled from a shorter exposure") {
+	const RoomMesh mesh = build(living_room());
+	const TexelGeometry geometry = make_texel_geometry(mesh);
+	const OmniParams params = test_rig().fisheye;
+	const Pose centre = upward_fisheye(glm::dvec3(2.5, 1.2, 2.0));
+	TexelProjection projection;
+	project_texels(geometry, params, centre, &projection);
+	CoarseTexture texture = make_coarse_texture(mesh);
+	// Linearised frames (CV_32FC3 radiance) with their saturation masks, all seen from one pose:
+	// the same quality each time, so only the clipping decides.
+	const auto frame = [&](float p_value, bool p_clipped) {
+		return std::pair(cv::Mat(params.height, params.width, CV_32FC3, cv::Scalar::all(p_value)),
+				cv::Mat(params.height, params.width, CV_8UC1, cv::Scalar(p_clipped ? 255 : 0)));
+	};
+	const Chart &ceiling = mesh.charts[mesh.floorplan.points.size() + 1];
+	const cv::Point texel(ceiling.x + ceiling.w / 2, ceiling.y + ceiling.h / 2);
+	const auto update = [&](const std::pair<cv::Mat, cv::Mat> &p_frame) {
+		return update_coarse_texture(mesh, geometry, projection, params, centre, p_frame.first, nullptr, &texture, TextureUpdateOptions(), nullptr, &p_frame.second);
+	};
+	// A long exposure clips at 0.8: the texel holds that lower bound, marked clipped.
+	CHECK(update(frame(0.8f, true)).texels_updated > 0);
+	CHECK(texture.color.at<cv::Vec3f>(texel)[0] == doctest::Approx(0.8));
+	CHECK(texture.saturated.at<uint8_t>(texel) == 255);
+	// A longer one clips lower: the brighter bound stays.
+	CHECK(update(frame(0.2f, true)).texels_updated == 0);
+	CHECK(texture.color.at<cv::Vec3f>(texel)[0] == doctest::Approx(0.8));
+	// A shorter exposure sees the true 3.0 unclipped: it replaces the clipped value.
+	CHECK(update(frame(3.0f, false)).texels_updated > 0);
+	CHECK(texture.color.at<cv::Vec3f>(texel)[0] == doctest::Approx(3.0));
+	CHECK(texture.saturated.at<uint8_t>(texel) == 0);
+	// A clipped observation does not replace it (a bound below the value says nothing).
+	CHECK(update(frame(0.8f, true)).texels_updated == 0);
+	CHECK(texture.color.at<cv::Vec3f>(texel)[0] == doctest::Approx(3.0));
+	// An unclipped one as good still follows the scene (§4.6), as without HDR.
+	CHECK(update(frame(2.0f, false)).texels_updated > 0);
+	CHECK(texture.color.at<cv::Vec3f>(texel)[0] == doctest::Approx(2.0));
+	// A bound well above the kept value proves it wrong (a light came on): it takes the bound,
+	// clipped, for a shorter exposure to fill.
+	CHECK(update(frame(2.4f, true)).texels_updated == 0); // within the noise margin
+	CHECK(update(frame(2.6f, true)).texels_updated > 0);
+	CHECK(texture.color.at<cv::Vec3f>(texel)[0] == doctest::Approx(2.6));
+	CHECK(texture.saturated.at<uint8_t>(texel) == 255);
+	CHECK(update(frame(20.0f, false)).texels_updated > 0);
+	CHECK(texture.color.at<cv::Vec3f>(texel)[0] == doctest::Approx(20.0));
+	// Without a mask nothing counts as clipped: the frame is taken as it is.
+	CHECK(update_coarse_texture(mesh, geometry, projection, params, centre, frame(0.5f, true).first, nullptr, &texture).texels_updated > 0);
+	CHECK(texture.color.at<cv::Vec3f>(texel)[0] == doctest::Approx(0.5));
 }

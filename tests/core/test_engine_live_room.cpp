@@ -31,6 +31,7 @@
 #include <cmath>
 #include <functional>
 #include <future>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <thread>
@@ -111,9 +112,9 @@ const Recording &recording() {
 		const synth::FisheyeOptions fisheye_options;
 		const synth::RgbdOptions rgbd_options;
 		r->photometry.known = true;
-		r->photometry.fisheye_exposure = fisheye_options.exposure;
-		r->photometry.rgb_exposure = rgbd_options.exposure;
-		r->photometry.fisheye_vignetting_edge_gain = fisheye_options.vignetting_edge_gain;
+		r->photometry.fisheye = tone_curve_photometry(fisheye_options.tone_curve, fisheye_options.exposure, fisheye_options.channel_gains);
+		r->photometry.fisheye.vignetting = radial_vignetting_table(fisheye_options.vignetting_edge_gain);
+		r->photometry.rgb = tone_curve_photometry(ToneCurve::Srgb, rgbd_options.exposure);
 		r->floorplan = room.scene.room.floorplan;
 		r->initial_rgb_pose = room.trajectory.world_from_rgb(0.0);
 		r->probe = room.scene.probe_position;
@@ -319,8 +320,8 @@ TEST_CASE("engine: step mode is the old sequential path (DenseSlam, fisheye_pose
 	REQUIRE(linearizer.active());
 	CoarsePipelineOptions options = cfg.coarse;
 	options.pose_source = PoseSource::Tracked;
-	options.lighting_options.saturated_threshold = linearizer.lut()[250];
-	options.lighting_options.black_threshold = linearizer.lut()[5];
+	options.lighting_options.saturated_threshold = std::numeric_limits<float>::infinity();
+	options.lighting_options.black_threshold = linearizer.centre_radiance(5);
 	CoarsePipeline coarse(options);
 	REQUIRE(coarse.configure(rec.rig, rec.floorplan) == "");
 	Trajectory trajectory;
@@ -344,7 +345,9 @@ TEST_CASE("engine: step mode is the old sequential path (DenseSlam, fisheye_pose
 			continue;
 		}
 		FisheyeFrame linear = frame;
-		linear.image = linearizer.linearise(frame.image);
+		LinearFrame radiance = linearizer.linearise(frame.image);
+		linear.image = radiance.radiance;
+		linear.saturated = radiance.saturated;
 		linear.hdr = linear.image.type() == CV_32FC3;
 		CHECK(linear.hdr);
 		coarse.add_fisheye_frame(linear, pose);
@@ -354,7 +357,7 @@ TEST_CASE("engine: step mode is the old sequential path (DenseSlam, fisheye_pose
 	const CoarseCubemapRenderer renderer(coarse.mesh());
 	Cubemap expected = renderer.render(coarse.completed_color(), rec.probe, PROBE_SIZE);
 	REQUIRE(is_valid_cubemap(expected));
-	const std::array<float, 256> rgb_lut = linearising_lut(rec.photometry.rgb_exposure);
+	const ResponseCurve rgb_lut = rgb_radiance_lut(rec.photometry);
 	DenseRenderOptions dense_options;
 	dense_options.scale = cfg.dense_render_scale;
 	dense_options.lut = &rgb_lut;

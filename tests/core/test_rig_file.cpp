@@ -1,5 +1,6 @@
-// The rig calibration file (rig/rig.h, calib/README.md): calib/synthetic_rig.yaml's values, the
-// save/load round trip, and an error naming the file and the field for each bad file.
+// The rig calibration file (rig/rig.h, calib/README.md): calib/synthetic_rig.yaml's values (a
+// version 1 file), the save/load round trip (version 2, with photometry), and an error naming the
+// file and the field for each bad file.
 
 #include "rig/rig.h"
 
@@ -198,7 +199,7 @@ TEST_CASE("rig file: each bad file gives an error naming the file and the field"
 		{ "short_quaternion", replace_once(good, "[0.7071067811865476, 0.0, 0.0, 0.7071067811865476]", "[0.0, 0.0, 1.0]"),
 				"rgb_from_fisheye.rotation_xyzw", "4 numbers" },
 		{ "text_translation", replace_once(good, "[0.0, -0.08, 0.02]", "[0.0, up, 0.02]"), "rgb_from_fisheye.translation_m[1]", "number" },
-		{ "unknown_version", replace_once(good, "roomprobe_rig: 1", "roomprobe_rig: 2"), "roomprobe_rig", "unknown version 2" },
+		{ "unknown_version", replace_once(good, "roomprobe_rig: 1", "roomprobe_rig: 3"), "roomprobe_rig", "unknown version 3" },
 		{ "no_version", replace_once(good, "roomprobe_rig: 1\n", ""), "roomprobe_rig", "missing" },
 		{ "misspelt_field", replace_once(good, "circle_radius:", "circle_radious:"), "fisheye.circle_radious", "unknown field" },
 		{ "missing_offset", replace_once(good, "fisheye_time_offset_s: 0.0137\n", ""), "fisheye_time_offset_s", "missing" },
@@ -329,4 +330,71 @@ TEST_CASE("rig file: an RGB-D camera alone (no fisheye) saves and loads; a fishe
 	const RigLoadResult partial = load_rig(only_fisheye_gone);
 	CHECK_FALSE(partial.ok);
 	CHECK(contains(partial.error, only_fisheye_gone + ": fisheye: missing"));
+}
+
+TEST_CASE("rig file: version 2 keeps the photometry; version 1 files load without one; bad photometry names its field") {
+	TempDir dir("rig_photometry");
+	const RigLoadResult v1 = load_rig(synthetic_rig_path());
+	REQUIRE_MESSAGE(v1.ok, v1.error);
+	CHECK_FALSE(v1.rig.photometry.known);
+	Rig rig = v1.rig;
+	rig.photometry.known = true;
+	rig.photometry.fisheye = tone_curve_photometry(ToneCurve::Log, 2.0, glm::dvec3(1.1, 1.0, 0.85));
+	rig.photometry.fisheye.vignetting = radial_vignetting_table(0.5);
+	rig.photometry.fisheye.reference_exposure_us = 8000.0;
+	rig.photometry.fisheye.reference_gain_db = 3.0;
+	rig.photometry.rgb = tone_curve_photometry(ToneCurve::Srgb, 1.0);
+	const std::string path = (dir.path / "v2.yaml").string();
+	REQUIRE(save_rig(path, rig) == "");
+	const std::string text = read_text(path);
+	CHECK(contains(text, "roomprobe_rig: 2"));
+	const RigLoadResult v2 = load_rig(path);
+	REQUIRE_MESSAGE(v2.ok, v2.error);
+	check_same_rig(v2.rig, rig);
+	const CameraPhotometry &f = v2.rig.photometry.fisheye;
+	CHECK(v2.rig.photometry.known);
+	for (int c = 0; c < 3; c++) {
+		for (int k = 0; k < 256; k++) {
+			CHECK(f.response[c][k] == doctest::Approx(rig.photometry.fisheye.response[c][k]).epsilon(1e-6));
+		}
+		CHECK(f.channel_gains[c] == doctest::Approx(rig.photometry.fisheye.channel_gains[c]));
+	}
+	CHECK(f.vignetting.size() == 33);
+	CHECK(f.vignetting.back() == doctest::Approx(0.5).epsilon(1e-6));
+	CHECK(f.reference_exposure_us == 8000.0);
+	CHECK(f.reference_gain_db == 3.0);
+	CHECK(std::isnan(v2.rig.photometry.rgb.reference_exposure_us));
+
+	struct Case {
+		const char *name;
+		std::string text;
+		const char *field;
+		const char *hint;
+	};
+	const Case cases[] = {
+		{ "v1_with_photometry", replace_once(text, "roomprobe_rig: 2", "roomprobe_rig: 1"), "photometry", "needs roomprobe_rig: 2" },
+		{ "missing_response", replace_block(text, "      response_g:", "      response_b:", ""), "photometry.fisheye.response_g", "missing" },
+		{ "saturation_300", replace_once(text, "      saturation_code: 250\n   rgb:", "      saturation_code: 300\n   rgb:"), "photometry.fisheye.saturation_code",
+				"1 to 255" },
+		{ "negative_gain", replace_block(text, "      channel_gains: [", "]\n      reference_exposure_us", "      channel_gains: [ -1., 1., 1. "),
+				"photometry.fisheye.channel_gains[0]", "positive" },
+		{ "unknown_field", replace_once(text, "   rgb:\n", "   rgb:\n      gamma: 2.2\n"), "photometry.rgb.gamma", "unknown field" },
+	};
+	for (const Case &c : cases) {
+		const std::string case_name = c.name;
+		CAPTURE(case_name);
+		const std::string bad = dir.write(std::string(c.name) + ".yaml", c.text);
+		const RigLoadResult loaded = load_rig(bad);
+		CHECK_FALSE(loaded.ok);
+		CAPTURE(loaded.error);
+		CHECK(contains(loaded.error, bad + ": " + c.field + ":"));
+		CHECK(contains(loaded.error, c.hint));
+	}
+	// Values no file may hold are refused when saving too.
+	Rig falling = rig;
+	falling.photometry.fisheye.response[1][100] = falling.photometry.fisheye.response[1][99] * 0.5f;
+	CHECK(contains(save_rig((dir.path / "falling.yaml").string(), falling), "photometry.fisheye.response_g[100]: must not be less than the code below it"));
+	Rig first = rig;
+	first.photometry.fisheye.vignetting[0] = 0.9f;
+	CHECK(contains(save_rig((dir.path / "first.yaml").string(), first), "photometry.fisheye.vignetting[0]: must be 1"));
 }

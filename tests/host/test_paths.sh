@@ -175,8 +175,24 @@ test_calibrate_refuses_and_never_overwrites() {
 	check "a rig file was written from no views" test ! -e "$scratch/new-rig.yaml"
 }
 
+# synth's photometric options refuse a bad value with a message naming it, and write nothing.
+test_synth_photometric_options_refused() {
+	local dir=$scratch/synth-refused
+	local -a cases=("--bracket-ev -5,x|--bracket-ev needs 1 to 16 stops" "--tone-curve gamma|--tone-curve needs srgb or log, got 'gamma'"
+		"--fisheye-gains 1,1|--fisheye-gains needs three gains" "--vignetting 0|--vignetting needs the gain at the image circle's rim"
+		"--exposure sometimes|--exposure needs fixed, auto or bracket, got 'sometimes'")
+	for c in "${cases[@]}"; do
+		# shellcheck disable=SC2086 # the option and its value are two words
+		rp synth --scene living_room --hdri none --out "$dir" --seconds 0.2 ${c%%|*}
+		check "synth ${c%%|*} exited with status $rc" test "$rc" -ne 0
+		check "synth ${c%%|*}: the message does not say '${c#*|}'" says "${c#*|}"
+		# (./roomprobe makes an --out folder outside the clone before the tool runs: it stays, empty)
+		check "synth ${c%%|*} wrote into $dir" test -z "$(ls -A "$dir" 2>/dev/null)"
+	done
+}
+
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
-	calibrate_refuses_and_never_overwrites)
+	calibrate_refuses_and_never_overwrites synth_photometric_options_refused)
 passed=0 failed=0 start=$(date +%s.%N)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.
 echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench and roomprobe_calibrate"

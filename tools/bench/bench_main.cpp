@@ -553,6 +553,9 @@ bool open_recording(const Arguments &p_args, int p_probe_size, RecordingSetup *r
 		std::fprintf(stderr, "roomprobe_bench: --recording %s: %s\n", p_args.recording.c_str(), error.c_str());
 		return false;
 	}
+	if (!photometry.known) {
+		photometry = reader.get_rig().photometry; // a calibrated rig's
+	}
 	const RoomInfo &room = reader.get_room();
 	LiveRoomConfig &config = r_setup->config;
 	config.has_rig = true;
@@ -593,8 +596,10 @@ void print_recording_header(const char *p_mode, const Arguments &p_args, const R
 			1000.0 * p_setup.config.coarse.texel_size_m);
 	print_settings(slam);
 	if (photometry.known) {
-		std::printf("  photometry (synth.yaml): fisheye exposure %.3f, RGB exposure %.3f, vignetting edge gain %.3f\n", photometry.fisheye_exposure,
-				photometry.rgb_exposure, photometry.fisheye_vignetting_edge_gain);
+		const glm::dvec3 &g = photometry.fisheye.channel_gains;
+		std::printf("  photometry: fisheye gains %.3f %.3f %.3f, %zu vignetting nodes, %s exposure; RGB gain %.3f\n", g.x, g.y, g.z,
+				photometry.fisheye.vignetting.size(), std::isfinite(photometry.fisheye.reference_exposure_us) ? "per-frame" : "fixed",
+				photometry.rgb.channel_gains.y);
 	} else {
 		std::printf("  photometry: unknown (frames as recorded)\n");
 	}
@@ -1004,9 +1009,7 @@ int bench_recording(const Arguments &p_args) {
 			OPTION_REPEATS);
 	const DenseSlam *slam = engine.slam_model();
 	std::array<float, 256> rgb_lut{};
-	if (setup.config.photometry.known) {
-		rgb_lut = linearising_lut(setup.config.photometry.rgb_exposure);
-	}
+	rgb_lut = rgb_radiance_lut(setup.config.photometry);
 	std::printf("  %-6s %-6s %10s %16s %10s   %s\n", "size", "scale", "ms", "covered texels", "of all", "render_at (coarse + dense, engine's scale), ms");
 	for (int size : { 128, 256 }) {
 		const Cubemap base = engine.render_at(probe, size, true, false);

@@ -1,12 +1,17 @@
 // roomprobe_calibrate: the rig file from checkerboard views of both cameras, in one command (paper
 // §3.2; calibration/rig_calibration.h): the RGB camera's intrinsics, the fisheye's in the unified
 // model (or imported from OCamCalib), rgb_from_fisheye from the views both cameras took at once,
-// and the depth checked against the board's plane. The views' layout is in calib/README.md.
+// and the depth checked against the board's plane; the fisheye's photometry (response,
+// vignetting, colour gains: calibration/photometric_calibration.h) when the views include
+// photometric.yaml; with --recording, the clock offset between the cameras from the recording's
+// own frames (calibration/clock_offset.h). The views' layout is in calib/README.md.
 //
 // usage: roomprobe_calibrate (--images DIR | --recording DIR) --out rig.yaml [--board 9x6]
 //          [--square-m 0.035] [--depth-scale-m 0.001] [--ocamcalib calib_results.txt] [--force]
 //   --images DIR      a folder of views: rgb/, fisheye/, pairs/NAME_{rgb,fisheye,depth}.png
-//   --recording DIR   a recording whose calibration/ holds them (./roomprobe synth writes one)
+//   --recording DIR   a recording whose calibration/ holds them (./roomprobe synth writes one); its
+//                     frames, the rig moved by hand, give the clock offset
+//   --clock-seconds S how much of the recording the clock offset uses (default 6)
 //   --board CxR       the board's inner corners across and down (default: the folder's board.yaml)
 //   --ocamcalib FILE  the fisheye from OCamCalib's calib_results.txt instead of its views
 //   --force           overwrite an existing --out file (it never is otherwise)
@@ -16,9 +21,12 @@
 #include "../common/cli.h"
 
 #include <calibration/calibration_views.h>
+#include <calibration/clock_offset.h>
 #include <calibration/rig_calibration.h>
+#include <recording/recording_reader.h>
 
 #include <cstdio>
+#include <vector>
 #include <filesystem>
 #include <string>
 
@@ -29,7 +37,7 @@ namespace {
 int usage_error(const std::string &p_message) {
 	std::fprintf(stderr,
 			"roomprobe_calibrate: %s\nusage: roomprobe_calibrate (--images DIR | --recording DIR) --out rig.yaml [--board 9x6] [--square-m 0.035] "
-			"[--depth-scale-m 0.001] [--ocamcalib calib_results.txt] [--force]\n",
+			"[--depth-scale-m 0.001] [--ocamcalib calib_results.txt] [--clock-seconds 6] [--force]\n",
 			p_message.c_str());
 	return 2;
 }
@@ -49,7 +57,8 @@ bool parse_board(const std::string &p_text, BoardSpec *r_board) {
 
 int main(int p_argc, char **p_argv) {
 	std::string images, out, ocamcalib_path;
-	bool force = false, board_given = false, square_given = false;
+	bool force = false, board_given = false, square_given = false, is_recording = false;
+	ClockOffsetOptions clock_options;
 	CalibrationViewsOptions view_options;
 	RigCalibrationOptions options;
 	cli::Arguments args(p_argc, p_argv, 1);
@@ -58,6 +67,11 @@ int main(int p_argc, char **p_argv) {
 		if (arg == "--images" || arg == "--recording") {
 			if (!args.value(&images)) {
 				return usage_error(arg + " needs a folder");
+			}
+			is_recording = arg == "--recording";
+		} else if (arg == "--clock-seconds") {
+			if (!args.positive_number(&clock_options.max_seconds)) {
+				return usage_error("--clock-seconds needs a number of seconds, > 0");
 			}
 		} else if (arg == "--out") {
 			if (!args.value(&out)) {
@@ -136,8 +150,53 @@ int main(int p_argc, char **p_argv) {
 		std::fprintf(stderr, "roomprobe_calibrate: %s: %s\n", images.c_str(), calibration.error.c_str());
 		return 1;
 	}
-	const Rig &rig = calibration.rig;
-	const RigCalibrationReport &r = calibration.report;
+	Rig rig = calibration.rig;
+	RigCalibrationReport r = calibration.report;
+	std::vector<std::string> notes = calibration.notes;
+	if (is_recording && rig.has_fisheye()) {
+		RecordingReader reader;
+		const RecordingStatus opened = reader.open(images);
+		if (!opened.ok) {
+			notes.push_back("clock offset not estimated: " + opened.error);
+		} else {
+			clock_options.progress = [](const std::string &p_line) {
+				std::printf("  clock offset: %s\n", p_line.c_str());
+				std::fflush(stdout);
+			};
+			const ClockOffsetEstimate clock = estimate_clock_offset(reader, rig, clock_options);
+			const RgbdFrameResult first = reader.read_rgbd(0);
+			const bool live = first.ok && first.frame.capture.is_known(); // the devices reported: recorded live, one clock
+			if (clock.error.empty() && live) {
+				// Live, both streams are stamped on the host's clock less each device's latency, and
+				// the engine takes fisheye_time_offset_s as 0: what is left is the latencies'
+				// difference. Fisheye stamp + offset = the frame's true time, so the fisheye's
+				// latency is the offset less (or the RGB-D camera's the more, never below 0).
+				const Rig &recorded = reader.get_rig();
+				rig.fisheye_time_offset_s = 0.0;
+				rig.rgbd_latency_s = recorded.rgbd_latency_s;
+				rig.fisheye_latency_s = recorded.fisheye_latency_s - clock.offset_s;
+				if (rig.fisheye_latency_s < 0.0) {
+					rig.rgbd_latency_s -= rig.fisheye_latency_s;
+					rig.fisheye_latency_s = 0.0;
+				}
+				notes.push_back("recorded live (one clock): the offset found is the cameras' latency difference, written as rgbd_latency_s " +
+						std::to_string(rig.rgbd_latency_s) + " s and fisheye_latency_s " + std::to_string(rig.fisheye_latency_s) + " s; fisheye_time_offset_s stays 0");
+			}
+			if (clock.error.empty()) {
+				std::erase(notes, r.clock_offset);
+				if (!live) {
+					rig.fisheye_time_offset_s = clock.offset_s;
+				}
+				char text[256];
+				std::snprintf(text, sizeof(text), "from the recording's motion: %zu fisheye rotations against the RGB-D camera's, %.1f deg turned, residual %.3f deg, std %.2f ms",
+						clock.steps_used, clock.turn_deg, clock.residual_rms_deg, clock.std_s * 1000.0);
+				r.clock_offset = text;
+				std::printf("clock offset: fisheye_time_offset_s %.4f s (+-%.2f ms), %s\n", clock.offset_s, clock.std_s * 1000.0, text);
+			} else {
+				notes.push_back("clock offset not estimated from the recording: " + clock.error);
+			}
+		}
+	}
 	std::printf("RGB camera: fx %.3f fy %.3f (+-%.3f %.3f) cx %.3f cy %.3f (+-%.3f %.3f) px, k1 %.5f k2 %.5f p1 %.6f p2 %.6f; RMS %.3f px over %zu views\n", rig.rgb.fx,
 			rig.rgb.fy, r.rgb_std.fx, r.rgb_std.fy, rig.rgb.cx, rig.rgb.cy, r.rgb_std.cx, r.rgb_std.cy, rig.rgb.k1, rig.rgb.k2, rig.rgb.p1, rig.rgb.p2, r.rgb_rms_px,
 			r.rgb_views);
@@ -156,15 +215,23 @@ int main(int p_argc, char **p_argv) {
 		std::printf("depth against the boards: measured = %.4f x board %+.2f mm; residual %.2f mm RMS (%.2f mm before the scale and offset) over %zu pixels\n",
 				r.depth_scale, r.depth_offset_m * 1e3, r.depth_residual_rms_m * 1e3, r.depth_raw_rms_m * 1e3, r.depth_samples);
 	}
-	for (const std::string &note : calibration.notes) {
+	if (rig.photometry.known) {
+		const glm::dvec3 &g = rig.photometry.fisheye.channel_gains;
+		std::printf("fisheye photometry: %s; response residual %.4f (ln), vignetting %.2f %% at the rim (fit %.2f %% RMS), colour gains %.4f %.4f %.4f (fit %.2f %% RMS)\n",
+				r.photometry.c_str(), r.response_fit_rms, rig.photometry.fisheye.vignetting.empty() ? 100.0 : 100.0 * rig.photometry.fisheye.vignetting.back(),
+				100.0 * r.vignetting_fit_rms, g.x, g.y, g.z, 100.0 * r.colour_fit_rms);
+	}
+	for (const std::string &note : notes) {
 		std::printf("note: %s\n", note.c_str());
 	}
-	const std::string error = save_rig(out, rig, &calibration.report);
+	const std::string error = save_rig(out, rig, &r);
 	if (!error.empty()) {
 		std::fprintf(stderr, "roomprobe_calibrate: %s\n", error.c_str());
 		return 1;
 	}
-	std::printf("summary: out=%s rgb_rms_px=%.3f fisheye_rms_px=%.3f pair_rgb_rms_px=%.3f pair_fisheye_rms_px=%.3f depth_scale=%.4f depth_residual_mm=%.2f ok=1\n",
-			out.c_str(), r.rgb_rms_px, r.fisheye_rms_px, r.pair_rgb_rms_px, r.pair_fisheye_rms_px, r.depth_scale, r.depth_residual_rms_m * 1e3);
+	std::printf("summary: out=%s rgb_rms_px=%.3f fisheye_rms_px=%.3f pair_rgb_rms_px=%.3f pair_fisheye_rms_px=%.3f depth_scale=%.4f depth_residual_mm=%.2f "
+				"fisheye_time_offset_ms=%.2f photometry=%d ok=1\n",
+			out.c_str(), r.rgb_rms_px, r.fisheye_rms_px, r.pair_rgb_rms_px, r.pair_fisheye_rms_px, r.depth_scale, r.depth_residual_rms_m * 1e3,
+			rig.fisheye_time_offset_s * 1000.0, rig.photometry.known ? 1 : 0);
 	return 0;
 }

@@ -6,8 +6,30 @@
 #include <cstddef>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 namespace roomprobe::cli {
+
+// p_text as finite numbers separated by commas ("0.3,8", "-5,0"); false on anything else.
+inline bool parse_number_list(const std::string &p_text, std::vector<double> *r_values) {
+	r_values->clear();
+	const char *at = p_text.c_str();
+	while (true) {
+		char *end = nullptr;
+		const double x = std::strtod(at, &end);
+		if (end == at || !std::isfinite(x)) {
+			return false;
+		}
+		r_values->push_back(x);
+		if (*end == '\0') {
+			return true;
+		}
+		if (*end != ',') {
+			return false;
+		}
+		at = end + 1;
+	}
+}
 
 class Arguments {
 public:
@@ -76,22 +98,12 @@ public:
 	// The value as exactly p_count finite numbers separated by commas ("0.3,8"); false otherwise.
 	bool number_list(size_t p_count, double *r_values) {
 		std::string v;
-		if (!value(&v)) {
+		std::vector<double> values;
+		if (!value(&v) || !parse_number_list(v, &values) || values.size() != p_count) {
 			return false;
 		}
-		const char *at = v.c_str();
 		for (size_t i = 0; i < p_count; i++) {
-			char *end = nullptr;
-			const double x = std::strtod(at, &end);
-			if (end == at || !std::isfinite(x)) {
-				return false;
-			}
-			r_values[i] = x;
-			const bool last = i + 1 == p_count;
-			if (last ? *end != '\0' : *end != ',') {
-				return false;
-			}
-			at = end + 1;
+			r_values[i] = values[i];
 		}
 		return true;
 	}

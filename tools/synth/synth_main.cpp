@@ -3,15 +3,19 @@
 //   roomprobe_synth --scene two_rooms|living_room|panorama_room --out DIR [--seconds 10] [--seed N]
 //                   [--rig calib/synthetic_rig.yaml] [--hdri PATH|none] [--cubemap-size 128]
 //                   [--fisheye-rate 12] [--rgbd-rate 30] [--fisheye-hdr] [--exr-float] [--no-calibration]
-//                   [--threads N]
+//                   [--threads N] [--exposure fixed|auto|bracket] [--bracket-ev -5,0]
+//                   [--tone-curve srgb|log] [--fisheye-gains R,G,B] [--vignetting 0.5]
 
 #include <io/opencv.h>
 
 #include <rig/rig.h>
 #include <synth/synth_sequence.h>
 
+#include "../common/cli.h"
+
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +23,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -40,7 +45,12 @@ void usage(std::FILE *p_out) {
 			"  --fisheye-rate HZ   fisheye frame rate (default 12)\n"
 			"  --fisheye-hdr       write fisheye frames as linear EXR instead of 8-bit PNG\n"
 			"  --exr-float         write EXRs (cubemaps, HDR fisheye) as 32-bit float rather than half\n"
-			"  --no-calibration    skip the checkerboard views (calibration/)\n"
+			"  --no-calibration    skip the checkerboard and photometric views (calibration/)\n"
+			"  --exposure MODE     the fisheye's exposure: fixed (default), auto (auto-exposure) or bracket\n"
+			"  --bracket-ev LIST   bracket's stops about the reference exposure, in turn (default -5,0)\n"
+			"  --tone-curve NAME   the fisheye's response: srgb (default) or log\n"
+			"  --fisheye-gains R,G,B  the fisheye's white balance against the RGB camera (default 1,1,1)\n"
+			"  --vignetting GAIN   the fisheye's gain at its image circle's rim, (0, 1] (default 0.5)\n"
 			"  --threads N         use at most N threads (default: all cores)\n"
 			"  -h, --help          this text\n",
 			DEFAULT_HDRI);
@@ -151,6 +161,34 @@ int main(int argc, char **argv) {
 			}
 		} else if (arg == "--no-calibration") {
 			options.calibration_views = false;
+		} else if (arg == "--exposure") {
+			if (!value(&text) || (text != "fixed" && text != "auto" && text != "bracket")) {
+				return fail("--exposure needs fixed, auto or bracket, got '" + text + "'");
+			}
+			options.exposure_mode = text == "auto" ? synth::ExposureMode::Auto : text == "bracket" ? synth::ExposureMode::Bracket : synth::ExposureMode::Fixed;
+		} else if (arg == "--bracket-ev") {
+			std::vector<double> stops;
+			if (!value(&text) || !cli::parse_number_list(text, &stops) || stops.empty() || stops.size() > 16 ||
+					std::any_of(stops.begin(), stops.end(), [](double p_ev) { return std::abs(p_ev) > 10.0; })) {
+				return fail("--bracket-ev needs 1 to 16 stops within [-10, 10], comma-separated (e.g. -5,0), got '" + text + "'");
+			}
+			options.bracket_ev = stops;
+		} else if (arg == "--tone-curve") {
+			if (!value(&text) || !parse_tone_curve(text, &options.fisheye.tone_curve)) {
+				return fail("--tone-curve needs srgb or log, got '" + text + "'");
+			}
+		} else if (arg == "--fisheye-gains") {
+			std::vector<double> gains;
+			if (!value(&text) || !cli::parse_number_list(text, &gains) || gains.size() != 3 ||
+					std::any_of(gains.begin(), gains.end(), [](double p_gain) { return !(p_gain > 0.0 && p_gain <= 10.0); })) {
+				return fail("--fisheye-gains needs three gains in (0, 10], comma-separated (e.g. 1.1,1,0.85), got '" + text + "'");
+			}
+			options.fisheye.channel_gains = glm::dvec3(gains[0], gains[1], gains[2]);
+		} else if (arg == "--vignetting") {
+			if (!value(&text) || !parse_double(text, &options.fisheye.vignetting_edge_gain) || !(options.fisheye.vignetting_edge_gain > 0.0) ||
+					options.fisheye.vignetting_edge_gain > 1.0) {
+				return fail("--vignetting needs the gain at the image circle's rim, in (0, 1] (1: none), got '" + text + "'");
+			}
 		} else {
 			usage(stderr);
 			return fail("unknown argument '" + arg + "'");

@@ -1,5 +1,6 @@
 #include "calibration_views.h"
 
+#include <recording/recording_reader.h>
 #include <recording/recording_types.h>
 
 #include <algorithm>
@@ -61,6 +62,125 @@ struct Detected {
 	BoardView view;
 };
 
+// Evenly spread indices: at most p_keep of p_count (all when fewer).
+std::vector<size_t> spread(size_t p_count, size_t p_keep) {
+	std::vector<size_t> indices;
+	if (p_count == 0 || p_keep == 0) {
+		return indices;
+	}
+	const size_t keep = std::min(p_count, p_keep);
+	for (size_t i = 0; i < keep; i++) {
+		indices.push_back(keep == 1 ? 0 : i * (p_count - 1) / (keep - 1));
+	}
+	return indices;
+}
+
+// The views in a recording's own frames (a recording of the board held before the rig): every
+// few frames of each camera where the whole board is found, and pairs of an RGB-D frame and the
+// fisheye frame taken within PAIR_TOLERANCE_S of it (on the RGB-D clock, through the recording's
+// fisheye_time_offset_s; 0 for live recordings, one clock).
+constexpr double PAIR_TOLERANCE_S = 0.02;
+constexpr size_t CANDIDATES = 120; // frames examined per camera
+constexpr size_t KEEP_VIEWS = 30; // kept per camera
+constexpr size_t KEEP_PAIRS = 15;
+
+void load_recording_views(const fs::path &p_root, const CalibrationViewsOptions &p_options, CalibrationViews *r_views) {
+	RecordingReader reader;
+	const RecordingStatus opened = reader.open(p_root.string());
+	if (!opened.ok) {
+		r_views->error = opened.error;
+		return;
+	}
+	const Rig &rig = reader.get_rig();
+	const std::vector<size_t> rgb_candidates = spread(reader.rgbd_count(), CANDIDATES);
+	const std::vector<size_t> fisheye_candidates = rig.has_fisheye() ? spread(reader.fisheye_count(), CANDIDATES) : std::vector<size_t>();
+	const size_t total = rgb_candidates.size() + fisheye_candidates.size();
+	struct Found {
+		size_t index;
+		double time_s; // RGB-D clock
+		BoardView view;
+	};
+	std::vector<Found> rgb_found, fisheye_found;
+	cv::Mat fisheye_brightest;
+	size_t done = 0, unreadable = 0;
+	const auto progress = [&](const std::string &p_name) {
+		if (p_options.progress) {
+			p_options.progress(done, total, p_name);
+		}
+		done++;
+		r_views->images++;
+	};
+	for (size_t k : fisheye_candidates) {
+		const std::string name = "fisheye frame " + std::to_string(k);
+		progress(name);
+		const FisheyeFrameResult read = reader.read_fisheye(k);
+		if (!read.ok) {
+			unreadable++;
+			continue;
+		}
+		const cv::Mat gray = gray_8bit(read.frame.image);
+		r_views->fisheye_size = gray.size();
+		keep_brightest(fisheye_brightest, gray);
+		BoardDetection found = detect_board(gray, r_views->board);
+		if (found.found) {
+			fisheye_found.push_back({ k, read.frame.timestamp_s + rig.fisheye_time_offset_s, { name, std::move(found.corners) } });
+		}
+	}
+	for (size_t i : rgb_candidates) {
+		const std::string name = "RGB frame " + std::to_string(i);
+		progress(name);
+		const RgbdFrameResult read = reader.read_rgbd(i);
+		if (!read.ok) {
+			unreadable++;
+			continue;
+		}
+		r_views->rgb_size = read.frame.rgb.size();
+		BoardDetection found = detect_board(gray_8bit(read.frame.rgb), r_views->board);
+		if (!found.found) {
+			continue;
+		}
+		Found rgb{ i, read.frame.timestamp_s, { name, std::move(found.corners) } };
+		// Its pair: the fisheye frame with the board nearest in time, if near enough.
+		const Found *nearest = nullptr;
+		for (const Found &f : fisheye_found) {
+			if (std::abs(f.time_s - rgb.time_s) <= PAIR_TOLERANCE_S && (!nearest || std::abs(f.time_s - rgb.time_s) < std::abs(nearest->time_s - rgb.time_s))) {
+				nearest = &f;
+			}
+		}
+		if (nearest && r_views->pairs.size() < 4 * KEEP_PAIRS) {
+			BoardPair pair;
+			pair.rgb = rgb.view;
+			pair.fisheye = nearest->view;
+			pair.rgb_image = read.frame.rgb;
+			pair.depth_m = read.frame.depth_m;
+			const FisheyeFrameResult fisheye = reader.read_fisheye(nearest->index);
+			if (fisheye.ok && fisheye.frame.image.type() == CV_8UC3) {
+				pair.fisheye_image = fisheye.frame.image;
+			}
+			r_views->pairs.push_back(std::move(pair));
+		}
+		rgb_found.push_back(std::move(rgb));
+	}
+	if (p_options.progress) {
+		p_options.progress(total, total, "");
+	}
+	for (size_t i : spread(rgb_found.size(), KEEP_VIEWS)) {
+		r_views->rgb.push_back(rgb_found[i].view);
+	}
+	for (size_t i : spread(fisheye_found.size(), KEEP_VIEWS)) {
+		r_views->fisheye.push_back(fisheye_found[i].view);
+	}
+	std::vector<BoardPair> pairs;
+	for (size_t i : spread(r_views->pairs.size(), KEEP_PAIRS)) {
+		pairs.push_back(std::move(r_views->pairs[i]));
+	}
+	r_views->pairs = std::move(pairs);
+	r_views->missed.push_back(std::to_string(rgb_candidates.size() - rgb_found.size()) + " of " + std::to_string(rgb_candidates.size()) +
+			" RGB frames and " + std::to_string(fisheye_candidates.size() - fisheye_found.size()) + " of " + std::to_string(fisheye_candidates.size()) +
+			" fisheye frames examined did not show the whole board" + (unreadable ? " (" + std::to_string(unreadable) + " unreadable)" : std::string()));
+	r_views->fisheye_circle = find_image_circle(fisheye_brightest);
+}
+
 } // namespace
 
 CalibrationViews load_calibration_views(const std::string &p_folder, const CalibrationViewsOptions &p_options) {
@@ -71,10 +191,14 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 		result.error = p_folder + ": not a folder";
 		return result;
 	}
-	// A recording keeps its views in calibration/ (its rgb/ holds the sequence's frames).
-	if (fs::is_directory(root / "calibration", ec) && (fs::exists(root / "rgb.txt", ec) || !fs::is_directory(root / "rgb", ec))) {
+	// A recording keeps its views in calibration/ (its rgb/ holds the sequence's frames); one
+	// without that folder is a recording of the board itself, whose frames are the views.
+	const bool recording = fs::exists(root / "rgb.txt", ec);
+	if (fs::is_directory(root / "calibration", ec) && (recording || !fs::is_directory(root / "rgb", ec))) {
 		root /= "calibration";
 	}
+	const bool from_frames = recording && root == fs::path(p_folder);
+	result.folder = root.string();
 	result.board = p_options.board;
 	if (!p_options.board_given) {
 		std::string error;
@@ -87,6 +211,14 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 	const std::string board_problem = check_board(result.board);
 	if (!board_problem.empty()) {
 		result.error = board_problem;
+		return result;
+	}
+	if (from_frames) {
+		if (!p_options.board_given && !result.board_from_file) {
+			result.error = root.string() + ": which board? Put a board.yaml in the recording (inner_corners_x, inner_corners_y, square_m) or pass --board and --square-m";
+			return result;
+		}
+		load_recording_views(root, p_options, &result);
 		return result;
 	}
 	const std::vector<fs::path> rgb_files = images_in(root / "rgb");
@@ -171,6 +303,12 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 		BoardPair pair;
 		pair.rgb = std::move(rgb.view);
 		pair.fisheye = std::move(fisheye.view);
+		for (const auto &[path, image] : { std::pair(file, &pair.rgb_image), std::pair(fisheye_file, &pair.fisheye_image) }) {
+			const cv::Mat bgr = cv::imread(path.string(), cv::IMREAD_COLOR);
+			if (!bgr.empty()) {
+				cv::cvtColor(bgr, *image, cv::COLOR_BGR2RGB);
+			}
+		}
 		const fs::path depth_file = file.parent_path() / (name + "_depth.png");
 		if (fs::exists(depth_file, ec)) {
 			const cv::Mat raw = cv::imread(depth_file.string(), cv::IMREAD_UNCHANGED);

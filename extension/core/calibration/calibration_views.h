@@ -11,6 +11,13 @@
 //
 // Each image's board is detected (checkerboard.h); the views of a pair count for each camera's
 // intrinsics too.
+//
+// A recording without calibration/ is a recording of the board held before the rig (./roomprobe
+// record): its frames are the views. Up to 120 frames of each camera, spread over the recording,
+// are searched; up to 30 views per camera are kept (spread), and up to 15 pairs: an RGB-D frame
+// and the fisheye frame within 20 ms of it (one clock when recorded live), both with the board.
+// Hold the board still a moment at each pose. Its board comes from board.yaml in the recording
+// or from the caller.
 
 #include "rig_calibration.h"
 
@@ -22,6 +29,7 @@ namespace roomprobe {
 
 struct CalibrationViews {
 	std::string error; // the folder or board unusable, naming it
+	std::string folder; // where the views are (p_folder, or its calibration/)
 	BoardSpec board;
 	bool board_from_file = false;
 	cv::Size rgb_size, fisheye_size; // 0x0: no image of that camera
@@ -39,7 +47,8 @@ struct CalibrationViewsOptions {
 	std::function<void(size_t p_done, size_t p_total, const std::string &p_image)> progress;
 };
 
-// Reads p_folder (or p_folder/calibration when it holds a recording's views).
+// Reads p_folder (p_folder/calibration when it holds a recording's views; the recording's frames
+// when it is a recording without one).
 CalibrationViews load_calibration_views(const std::string &p_folder, const CalibrationViewsOptions &p_options);
 
 } // namespace roomprobe

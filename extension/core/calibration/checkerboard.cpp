@@ -98,4 +98,18 @@ BoardDetection detect_board(const cv::Mat &p_image, const BoardSpec &p_board) {
 	return result;
 }
 
+cv::Mat gray_8bit(const cv::Mat &p_image) {
+	cv::Mat eight = p_image;
+	if (p_image.depth() != CV_8U) {
+		p_image.convertTo(eight, CV_8U, 255.0);
+	}
+	cv::Mat gray;
+	if (eight.channels() == 3) {
+		cv::cvtColor(eight, gray, cv::COLOR_RGB2GRAY);
+	} else {
+		gray = eight;
+	}
+	return gray;
+}
+
 } // namespace roomprobe

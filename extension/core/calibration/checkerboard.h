@@ -38,4 +38,8 @@ struct BoardDetection {
 // 0 is the one next to the black outside square.
 BoardDetection detect_board(const cv::Mat &p_image, const BoardSpec &p_board);
 
+// A recording's frame as the detectors and trackers take it: 8-bit grey from R, G, B (or grey),
+// an HDR frame (CV_32F, linear) scaled by 255 and clipped.
+cv::Mat gray_8bit(const cv::Mat &p_image);
+
 } // namespace roomprobe

@@ -1,6 +1,7 @@
 #include "rig_calibration.h"
 
 #include "calibration_views.h"
+#include "photometric_calibration.h"
 
 #include <camera/least_squares.h>
 #include <camera/omni_camera.h>
@@ -604,6 +605,22 @@ RigCalibration calibrate_rig(const CalibrationViews &p_views, const RigCalibrati
 		report.depth_samples = depth.samples;
 	} else {
 		result.notes.push_back(depth.error);
+	}
+	const PhotometricViews photometric_views = load_photometric_views(p_views.folder, p_views.fisheye_size);
+	const PhotometricCalibration photometric = calibrate_photometry(photometric_views, p_views.board, p_views.pairs, rig.fisheye);
+	if (photometric.error.empty()) {
+		rig.photometry = photometric.photometry;
+		report.photometry = photometric.method;
+		report.response_fit_rms = photometric.response_rms_ln;
+		report.vignetting_fit_rms = photometric.vignetting_rms;
+		report.colour_fit_rms = photometric.colour_rms;
+	} else if (photometric_views.present) {
+		// The user took photometric views: a failed fit is an error, not a rig without photometry.
+		result.error = "photometric calibration: " + photometric.error;
+		return result;
+	} else {
+		report.photometry = "not calibrated: no photometric.yaml";
+		result.notes.push_back(photometric.error);
 	}
 	const std::string problem = check_rig(rig);
 	if (!problem.empty()) {

@@ -80,6 +80,7 @@ struct BoardPair {
 	BoardView rgb;
 	BoardView fisheye;
 	cv::Mat depth_m; // CV_32FC1, metres, NaN where there is no reading; empty when not recorded
+	cv::Mat rgb_image, fisheye_image; // CV_8UC3 R, G, B: the board's colours (photometric calibration)
 };
 
 struct ExtrinsicCalibration {

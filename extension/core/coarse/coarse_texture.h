@@ -20,6 +20,9 @@ struct CoarseTexture {
 	// CV_8UC1: 255 where the latest fisheye frame updated the texel (§4.6 adds the lighting
 	// change to the others).
 	cv::Mat updated;
+	// CV_8UC1: 255 where the value held was clipped in its frame (a lower bound of the radiance;
+	// coarse/texture_update.h lets any unclipped observation replace it).
+	cv::Mat saturated;
 };
 
 // An empty texture for p_mesh's atlas: black, nothing observed.

@@ -162,6 +162,20 @@ cv::Vec3f sample_image(const cv::Mat &p_image, const glm::dvec2 &p_pixel) {
 	}
 }
 
+// A clipped sample this much brighter than the unclipped value kept proves that value wrong: its
+// radiance is at least the sample's (a margin over 1 for the noise of the two linearisations).
+constexpr float CONTRADICTION = 1.25f;
+
+// Whether any of the four pixels a bilinear sample at p_pixel reads is clipped (p_saturated:
+// CV_8UC1, 255 where clipped).
+bool sample_saturated(const cv::Mat &p_saturated, const glm::dvec2 &p_pixel) {
+	const int x0 = std::max(floor_int(p_pixel.x), 0), y0 = std::max(floor_int(p_pixel.y), 0);
+	const int x1 = std::min(x0 + 1, p_saturated.cols - 1), y1 = std::min(y0 + 1, p_saturated.rows - 1);
+	const uint8_t *top = p_saturated.ptr<uint8_t>(std::min(y0, p_saturated.rows - 1)), *bottom = p_saturated.ptr<uint8_t>(y1);
+	const int xa = std::min(x0, p_saturated.cols - 1);
+	return (top[xa] | top[x1] | bottom[xa] | bottom[x1]) != 0;
+}
+
 // One frame's fisheye, as the per-texel visibility test needs it.
 struct FisheyeView {
 	const OmniParams *params = nullptr;
@@ -341,7 +355,7 @@ void sample_texels(const TexelGeometry &p_geometry, const TexelProjection *p_pro
 
 TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const TexelProjection *p_projection, const OmniParams &p_params,
 		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, CoarseTexture *io_texture,
-		const TextureUpdateOptions &p_options, LightingPairs *r_pairs) {
+		const TextureUpdateOptions &p_options, LightingPairs *r_pairs, const cv::Mat *p_saturated) {
 	TextureUpdateStats stats;
 	const auto start = std::chrono::steady_clock::now();
 	const int w = p_mesh.atlas_width, h = p_mesh.atlas_height;
@@ -358,6 +372,12 @@ TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p
 	}
 	if (p_visibility_mask && (p_visibility_mask->size() != cv::Size(w, h) || p_visibility_mask->type() != CV_8UC1)) {
 		return stats;
+	}
+	if (p_saturated && (p_saturated->empty() || p_saturated->size() != p_fisheye_image.size() || p_saturated->type() != CV_8UC1)) {
+		p_saturated = nullptr; // no mask of this frame: nothing is known to be clipped
+	}
+	if (tex.saturated.size() != cv::Size(w, h) || tex.saturated.type() != CV_8UC1) {
+		tex.saturated = cv::Mat(h, w, CV_8UC1, cv::Scalar(0)); // a texture from before the mask existed
 	}
 
 	const FisheyeView view = fisheye_view(p_params, p_world_from_fisheye, p_fisheye_image.cols, p_fisheye_image.rows, p_options);
@@ -384,6 +404,7 @@ TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p
 			cv::Vec3f *color_row = tex.color.ptr<cv::Vec3f>(y);
 			float *quality_row = tex.quality.ptr<float>(y);
 			uint8_t *observed_row = tex.observed.ptr<uint8_t>(y);
+			uint8_t *saturated_row = tex.saturated.ptr<uint8_t>(y);
 			for (int x = 0; x < w; ++x) {
 				if (x % TexelGeometry::tile_size == 0 && !pixels.tile_seen(x / TexelGeometry::tile_size, y / TexelGeometry::tile_size)) {
 					x += TexelGeometry::tile_size - 1; // the tile is not seen
@@ -399,10 +420,12 @@ TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p
 					continue;
 				}
 				++visible;
+				const bool clipped = p_saturated && sample_saturated(*p_saturated, pixel);
 				cv::Vec3f sample;
 				bool sampled = false;
-				if (pairs_row && x % pair_step == 0 && observed_row[x] != 0) {
-					// Observed before (this texel's own write comes below): a lighting pair.
+				if (pairs_row && x % pair_step == 0 && observed_row[x] != 0 && !clipped && saturated_row[x] == 0) {
+					// Observed before (this texel's own write comes below), neither value clipped: a
+					// lighting pair.
 					sample = sample_image(p_fisheye_image, pixel);
 					sampled = true;
 					pairs_row->push_back({ color_row[x], sample });
@@ -421,16 +444,40 @@ TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p
 					// (Where an edge's projection fails, at the model's limit, the closed form stays.)
 					quality = observation_quality(cos_view, distance, 0.0, p_options) * edge;
 				}
-				if (best) {
-					if (quality <= 0.0 || (observed_row[x] && quality < quality_row[x] * keep_fraction)) {
+				if (best && quality <= 0.0) {
+					continue;
+				}
+				// HDR (rig/photometry.h): a clipped value is only a lower bound of the radiance. It
+				// never replaces an unclipped one, unless the bound itself proves that one wrong (the
+				// scene changed: a light switched on is clipped at the long exposure first); an
+				// unclipped one always replaces it; between two clipped ones the brighter bound (a
+				// shorter exposure's) wins.
+				const bool kept_clipped = observed_row[x] && saturated_row[x] != 0;
+				if (!sampled) {
+					sample = sample_image(p_fisheye_image, pixel);
+				}
+				const float kept_sum = color_row[x][0] + color_row[x][1] + color_row[x][2];
+				if (observed_row[x] && clipped && !kept_clipped && !(sample[0] + sample[1] + sample[2] > CONTRADICTION * kept_sum)) {
+					continue;
+				}
+				bool reset_quality = false;
+				if (kept_clipped && !clipped) {
+					reset_quality = true;
+				} else if (clipped && !kept_clipped) {
+					reset_quality = true; // contradicted above
+				} else if (kept_clipped && clipped) {
+					if (!(sample[0] + sample[1] + sample[2] > kept_sum)) {
 						continue;
 					}
+				} else if (best && observed_row[x] && quality < quality_row[x] * keep_fraction) {
+					continue;
 				}
-				color_row[x] = sampled ? sample : sample_image(p_fisheye_image, pixel);
+				color_row[x] = sample;
+				saturated_row[x] = clipped ? 255 : 0;
 				// Best: the best quality ever seen, not the new (possibly epsilon-worse) one's, so that
 				// a run of slightly worse views cannot ratchet the reference down (measured: with the
 				// new one's, epsilon = 0.1 came out worse than the "last" policy).
-				quality_row[x] = static_cast<float>(best && observed_row[x] ? std::max(double(quality_row[x]), quality) : quality);
+				quality_row[x] = static_cast<float>(best && observed_row[x] && !reset_quality ? std::max(double(quality_row[x]), quality) : quality);
 				observed_row[x] = 255;
 				updated_row[x] = 255;
 				++updated;
@@ -572,13 +619,14 @@ void sample_coarse_texels(const TexelGeometry &p_geometry, const TexelProjection
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const OmniParams &p_params,
 		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask,
 		CoarseTexture *io_texture, const TextureUpdateOptions &p_options) {
-	return update_texture(p_mesh, p_geometry, nullptr, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, io_texture, p_options, nullptr);
+	return update_texture(p_mesh, p_geometry, nullptr, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, io_texture, p_options, nullptr, nullptr);
 }
 
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const TexelProjection &p_projection, const OmniParams &p_params,
 		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, CoarseTexture *io_texture,
-		const TextureUpdateOptions &p_options, LightingPairs *r_pairs) {
-	return update_texture(p_mesh, p_geometry, &p_projection, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, io_texture, p_options, r_pairs);
+		const TextureUpdateOptions &p_options, LightingPairs *r_pairs, const cv::Mat *p_saturated) {
+	return update_texture(p_mesh, p_geometry, &p_projection, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, io_texture, p_options, r_pairs,
+			p_saturated);
 }
 
 const std::vector<LightingSample> &LightingPairs::gather() {

@@ -151,10 +151,18 @@ struct LightingPairs {
 
 // The same from the frame's projection (project_texels with the same fisheye and pose): one
 // projection a texel instead of three; the same result up to rounding. With r_pairs, also
-// gathers the lighting estimate's pairs (its step is read, its rows filled).
+// gathers the lighting estimate's pairs (its step is read, its rows filled), leaving out texels
+// whose kept or new value is clipped.
+// p_saturated (CV_8UC1, the image's size, 255 where a channel was clipped: LinearFrame's mask)
+// makes the update HDR: a sample touching a clipped pixel is a lower bound, which never replaces
+// an unclipped observation, except one it proves wrong (the bound over 1.25 times the kept
+// value: the scene has changed, e.g. a light came on); an unclipped one always replaces a clipped
+// one (so a texel clipped at a long exposure is filled from a shorter one); between two clipped
+// ones the brighter stays.
+// io_texture->saturated records which texels hold a clipped value. Null: nothing is clipped.
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeometry &p_geometry, const TexelProjection &p_projection, const OmniParams &p_params,
 		const Pose &p_world_from_fisheye, const cv::Mat &p_fisheye_image, const cv::Mat *p_visibility_mask, CoarseTexture *io_texture,
-		const TextureUpdateOptions &p_options = TextureUpdateOptions(), LightingPairs *r_pairs = nullptr);
+		const TextureUpdateOptions &p_options = TextureUpdateOptions(), LightingPairs *r_pairs = nullptr, const cv::Mat *p_saturated = nullptr);
 
 // The same, computing the texel geometry on the fly (slower: prefer the overload above per frame).
 TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const OmniParams &p_params, const Pose &p_world_from_fisheye,

@@ -6,6 +6,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <limits>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -219,9 +220,7 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 		}
 		linearizer.configure(cfg.photometry, cfg.rig.fisheye);
 		rgb_lut_active = cfg.photometry.known;
-		if (rgb_lut_active) {
-			rgb_lut = linearising_lut(cfg.photometry.rgb_exposure);
-		}
+		rgb_lut = rgb_radiance_lut(cfg.photometry);
 		if (cfg.dense) {
 			auto fresh = std::make_unique<DenseSlam>(cfg.slam);
 			const std::string error = fresh->configure(cfg.rig.rgb, cfg.initial_rgb_pose);
@@ -244,10 +243,11 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 			CoarsePipelineOptions options = cfg.coarse;
 			options.pose_source = cfg.coarse_poses;
 			if (linearizer.active()) {
-				// Thresholds in linearised units: the centre pixel's 250 / 255 and 5 / 255 (the
-				// vignetting correction only raises values, so saturated pixels stay above).
-				options.lighting_options.saturated_threshold = linearizer.lut()[250];
-				options.lighting_options.black_threshold = linearizer.lut()[5];
+				// Clipped pixels come with the frame's saturation mask, which the texture update
+				// keeps out of the lighting pairs; black in linearised units: the centre pixel's 5
+				// at the reference exposure.
+				options.lighting_options.saturated_threshold = std::numeric_limits<float>::infinity();
+				options.lighting_options.black_threshold = linearizer.centre_radiance(5);
 			}
 			auto fresh = std::make_unique<CoarsePipeline>(options);
 			const std::string error = fresh->configure(cfg.rig, cfg.floorplan);
@@ -589,7 +589,9 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 		}
 		pose.translation -= cfg.room_origin_m; // into the room's frame
 		FisheyeFrame frame = p_frame;
-		frame.image = linearizer.linearise(p_frame.image);
+		LinearFrame linear = linearizer.linearise(p_frame.image, exposure_ratio(cfg.photometry.fisheye, p_frame.capture.exposure_us, p_frame.capture.gain));
+		frame.image = linear.radiance;
+		frame.saturated = linear.saturated;
 		frame.hdr = frame.image.type() == CV_32FC3;
 		auto snapshot = std::make_shared<CoarseSnapshot>();
 		const std::lock_guard<std::mutex> coarse_lock(coarse_mutex);

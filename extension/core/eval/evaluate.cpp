@@ -135,6 +135,9 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 			result.error = error;
 			return result;
 		}
+		if (!photometry.known) {
+			photometry = rig.photometry; // a calibrated rig's (none in a version 1 rig file)
+		}
 	}
 	result.linearised = photometry.known;
 	// The baseline sees the frames as the engines do.
@@ -241,7 +244,9 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 				continue;
 			}
 			const Clock::time_point start = Clock::now();
-			baseline.add_frame(linearizer.linearise(frame.frame.image), rig.fisheye, pose);
+			baseline.add_frame(
+					linearizer.linearise(frame.frame.image, exposure_ratio(photometry.fisheye, frame.frame.capture.exposure_us, frame.frame.capture.gain)).radiance,
+					rig.fisheye, pose);
 			baseline_total_ms += ms_since(start);
 			for (const auto &[engine, config] : engines) {
 				engine->push_fisheye(frame.frame);
@@ -316,16 +321,19 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		return result;
 	}
 	for (VariantScores &v : result.variants) {
-		double after_psnr = 0.0, after_ssim = 0.0;
+		double after_psnr = 0.0, after_ssim = 0.0, after_linear = 0.0, after_irradiance = 0.0;
 		for (const FrameScore &f : v.frames) {
 			v.mean_psnr_db += f.metrics.psnr_db;
 			v.mean_ssim += f.metrics.ssim;
 			v.mean_psnr_linear_db += f.metrics.psnr_linear_db;
 			v.mean_ssim_linear += f.metrics.ssim_linear;
+			v.mean_irradiance_error += f.metrics.irradiance_error;
 			if (result.light_switch_s >= 0.0 && f.timestamp_s > result.light_switch_s) {
 				v.after_switch_frames++;
 				after_psnr += f.metrics.psnr_db;
 				after_ssim += f.metrics.ssim;
+				after_linear += f.metrics.psnr_linear_db;
+				after_irradiance += f.metrics.irradiance_error;
 			}
 		}
 		const double n = double(v.frames.size());
@@ -333,9 +341,13 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		v.mean_ssim /= n;
 		v.mean_psnr_linear_db /= n;
 		v.mean_ssim_linear /= n;
+		v.mean_irradiance_error /= n;
 		if (v.after_switch_frames > 0) {
-			v.after_switch_psnr_db = after_psnr / double(v.after_switch_frames);
-			v.after_switch_ssim = after_ssim / double(v.after_switch_frames);
+			const double after = double(v.after_switch_frames);
+			v.after_switch_psnr_db = after_psnr / after;
+			v.after_switch_ssim = after_ssim / after;
+			v.after_switch_psnr_linear_db = after_linear / after;
+			v.after_switch_irradiance_error = after_irradiance / after;
 		}
 	}
 	const double per_frame = result.fisheye_frames_used > 0 ? 1.0 / double(result.fisheye_frames_used) : 0.0;
@@ -362,26 +374,26 @@ std::string format_evaluation(const EvaluationResult &p_result, bool p_per_frame
 		return "evaluation failed: " + p_result.error + "\n";
 	}
 	if (p_per_frame) {
-		out << "per frame: t [s], then PSNR [dB] / SSIM of each variant\n";
+		out << "per frame: t [s], then PSNR [dB] / SSIM / irradiance error [%] of each variant\n";
 		const size_t n = p_result.variants[0].frames.size();
 		for (size_t i = 0; i < n; i++) {
 			std::snprintf(line, sizeof(line), "%8.3f", p_result.variants[0].frames[i].timestamp_s);
 			out << line;
 			for (const VariantScores &v : p_result.variants) {
-				std::snprintf(line, sizeof(line), "  %6.2f/%.4f", v.frames[i].metrics.psnr_db, v.frames[i].metrics.ssim);
+				std::snprintf(line, sizeof(line), "  %6.2f/%.4f/%.1f", v.frames[i].metrics.psnr_db, v.frames[i].metrics.ssim, 100.0 * v.frames[i].metrics.irradiance_error);
 				out << line;
 			}
 			out << "\n";
 		}
 	}
 	std::snprintf(line, sizeof(line), "%zu cubemaps (%d px faces), %zu fisheye frames, poses: ground truth, frames %s\n", p_result.cubemaps,
-			p_result.cubemap_size, p_result.fisheye_frames_used, p_result.linearised ? "linearised (synth.yaml)" : "as recorded");
+			p_result.cubemap_size, p_result.fisheye_frames_used, p_result.linearised ? "linearised" : "as recorded");
 	out << line;
-	std::snprintf(line, sizeof(line), "%-20s %10s %8s %12s %10s\n", "variant", "PSNR[dB]", "SSIM", "PSNRlin[dB]", "SSIMlin");
+	std::snprintf(line, sizeof(line), "%-20s %10s %8s %12s %10s %9s\n", "variant", "PSNR[dB]", "SSIM", "PSNRlin[dB]", "SSIMlin", "Eirr[%]");
 	out << line;
 	for (const VariantScores &v : p_result.variants) {
-		std::snprintf(line, sizeof(line), "%-20s %10.2f %8.4f %12.2f %10.4f\n", v.name.c_str(), v.mean_psnr_db, v.mean_ssim, v.mean_psnr_linear_db,
-				v.mean_ssim_linear);
+		std::snprintf(line, sizeof(line), "%-20s %10.2f %8.4f %12.2f %10.4f %9.2f\n", v.name.c_str(), v.mean_psnr_db, v.mean_ssim, v.mean_psnr_linear_db,
+				v.mean_ssim_linear, 100.0 * v.mean_irradiance_error);
 		out << line;
 	}
 	if (p_result.light_switch_s >= 0.0) {
@@ -389,7 +401,8 @@ std::string format_evaluation(const EvaluationResult &p_result, bool p_per_frame
 				p_result.variants[0].after_switch_frames);
 		out << line;
 		for (const VariantScores &v : p_result.variants) {
-			std::snprintf(line, sizeof(line), "%-20s %10.2f %8.4f\n", v.name.c_str(), v.after_switch_psnr_db, v.after_switch_ssim);
+			std::snprintf(line, sizeof(line), "%-20s %10.2f %8.4f %12.2f %10s %9.2f\n", v.name.c_str(), v.after_switch_psnr_db, v.after_switch_ssim,
+					v.after_switch_psnr_linear_db, "", 100.0 * v.after_switch_irradiance_error);
 			out << line;
 		}
 	}

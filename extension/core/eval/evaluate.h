@@ -58,8 +58,10 @@ struct VariantScores {
 	std::string name;
 	std::vector<FrameScore> frames;
 	double mean_psnr_db = 0.0, mean_ssim = 0.0, mean_psnr_linear_db = 0.0, mean_ssim_linear = 0.0;
+	double mean_irradiance_error = 0.0; // CubemapMetrics::irradiance_error's mean
 	size_t after_switch_frames = 0;
 	double after_switch_psnr_db = 0.0, after_switch_ssim = 0.0; // 0 frames: 0
+	double after_switch_psnr_linear_db = 0.0, after_switch_irradiance_error = 0.0;
 	Cubemap last; // the estimate of the last frame
 };
 

@@ -1,9 +1,14 @@
 #include "metrics.h"
 
 #include <envmap/export.h>
+#include <envmap/spherical_harmonics.h>
+
+#include <glm/vec3.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
+#include <vector>
 
 namespace roomprobe {
 
@@ -75,6 +80,26 @@ static cv::Mat luminance(const cv::Mat &p_rgb) {
 	return out;
 }
 
+namespace {
+
+// The irradiance's luminance at 64 normals on a Fibonacci lattice.
+std::vector<double> irradiance_luminance(const Cubemap &p_cubemap) {
+	const ShCoefficients irradiance = convolve_cosine_lobe(project_sh(p_cubemap));
+	const int count = 64;
+	const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+	std::vector<double> values;
+	for (int i = 0; i < count; i++) {
+		const double z = 1.0 - (2.0 * i + 1.0) / count;
+		const double r = std::sqrt(1.0 - z * z);
+		const glm::dvec3 normal(r * std::cos(golden * i), r * std::sin(golden * i), z);
+		const glm::dvec3 e = evaluate_sh(irradiance, normal);
+		values.push_back(0.2126 * e.x + 0.7152 * e.y + 0.0722 * e.z);
+	}
+	return values;
+}
+
+} // namespace
+
 CubemapMetrics compare_cubemaps(const Cubemap &p_estimate, const Cubemap &p_ground_truth) {
 	CubemapMetrics m;
 	if (!is_valid_cubemap(p_estimate) || !is_valid_cubemap(p_ground_truth) || p_estimate.size != p_ground_truth.size) {
@@ -109,6 +134,14 @@ CubemapMetrics compare_cubemaps(const Cubemap &p_estimate, const Cubemap &p_grou
 	m.ssim = ssim_sum / 6.0;
 	m.psnr_linear_db = psnr_from_mse(linear_sum / linear_count, peak);
 	m.ssim_linear = ssim_linear_sum / 6.0;
+	const std::vector<double> estimate = irradiance_luminance(p_estimate), truth = irradiance_luminance(p_ground_truth);
+	double sum2 = 0.0, mean = 0.0;
+	for (size_t i = 0; i < truth.size(); i++) {
+		sum2 += (estimate[i] - truth[i]) * (estimate[i] - truth[i]);
+		mean += truth[i];
+	}
+	mean /= double(truth.size());
+	m.irradiance_error = mean > 0.0 ? std::sqrt(sum2 / double(truth.size())) / mean : 0.0;
 	return m;
 }
 

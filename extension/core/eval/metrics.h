@@ -17,6 +17,11 @@
 //
 // On the linear HDR values as well: PSNR with the ground truth's largest channel value as the
 // peak, and the SSIM of linear luminance with L = that peak.
+//
+// The irradiance error: what a diffuse (or PRT) object sees. Both maps are projected onto 5 bands
+// of SH (envmap/spherical_harmonics.h) and convolved with the clamped cosine; the irradiance's
+// luminance E(n) is evaluated at 64 normals n spread evenly over the sphere (a Fibonacci
+// lattice), and the error is RMS(E_estimate - E_truth) / mean(E_truth): 0.05 is 5 %.
 
 #include <envmap/cubemap.h>
 
@@ -30,6 +35,7 @@ struct CubemapMetrics {
 	double ssim = 0.0; // tone-mapped 8-bit luma
 	double psnr_linear_db = 0.0; // linear HDR, peak = the ground truth's largest value
 	double ssim_linear = 0.0; // linear luminance, L = that peak
+	double irradiance_error = 0.0; // relative, SH irradiance over 64 normals (above)
 };
 
 // The tone-mapped 8-bit view of a face (CV_8UC3 R, G, B), as in the PNG net.

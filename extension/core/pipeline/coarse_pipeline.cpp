@@ -83,7 +83,7 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 	const bool estimate_lighting = opts.lighting && frames > 0;
 	lighting_pairs.step = opts.lighting_options.sample_step;
 	stats.update = update_coarse_texture(room, geometry, projection, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, &coarse, opts.update,
-			estimate_lighting ? &lighting_pairs : nullptr);
+			estimate_lighting ? &lighting_pairs : nullptr, p_frame.saturated.empty() ? nullptr : &p_frame.saturated);
 	t.update_ms += ms_since(start);
 
 	// 3. Lighting change (§4.6) from those pairs, applied to the observed texels this frame did not

@@ -90,7 +90,9 @@ public:
 	bool is_configured() const { return configured; }
 
 	// Integrates one fisheye frame (image types as update_coarse_texture accepts) taken at
-	// p_world_from_fisheye. Returns what each stage did; zero stats before configure().
+	// p_world_from_fisheye; a linearised frame's saturation mask (FisheyeFrame::saturated) makes
+	// the texture HDR (coarse/texture_update.h). Returns what each stage did; zero stats before
+	// configure().
 	CoarseFrameStats add_fisheye_frame(const FisheyeFrame &p_frame, const Pose &p_world_from_fisheye);
 
 	// The environment map at p_position (world metres) of the completed texture (the raw one

@@ -42,7 +42,8 @@ struct CaptureInfo {
 	double device_time_s = std::numeric_limits<double>::quiet_NaN(); // the device's own clock, seconds
 	int64_t device_frame_id = -1; // the device's frame counter (a jump: frames the device dropped)
 	// The fisheye's exposure time (microseconds) and gain (the camera's unit, usually dB) when
-	// the frame was taken: what a photometric model needs to bring frames to one radiance scale.
+	// the frame was taken: what a photometric model needs to bring frames to one radiance scale
+	// (rig/photometry.h exposure_ratio).
 	double exposure_us = std::numeric_limits<double>::quiet_NaN();
 	double gain = std::numeric_limits<double>::quiet_NaN();
 	bool is_known() const; // any value known
@@ -74,7 +75,10 @@ struct FisheyeFrame {
 	// The rig's fisheye size.
 	cv::Mat image;
 	bool hdr = false; // true exactly when image is CV_32FC3 (stored as EXR)
-	CaptureInfo capture; // live frames only
+	// CV_8UC1, 255 where a channel was clipped: set on a linearised 8-bit frame (rig/photometry.h),
+	// which the coarse texture reads; empty otherwise (never stored).
+	cv::Mat saturated;
+	CaptureInfo capture; // live frames and synthetic ones with their exposure
 };
 
 // The room of a recording (room.yaml).

@@ -83,9 +83,16 @@ std::string check_rig(const Rig &p_rig) {
 		c.fail("rgbd_latency_s", "must be within 0 to 1 seconds (got " + std::to_string(p_rig.rgbd_latency_s) + ")");
 	}
 
+	const std::string photometry_problem = check_photometry(p_rig.photometry);
+	if (!photometry_problem.empty()) {
+		c.fail(photometry_problem.substr(0, photometry_problem.find(": ")), photometry_problem.substr(photometry_problem.find(": ") + 2));
+	}
 	if (!p_rig.has_fisheye()) {
 		if (p_rig.fisheye_latency_s != 0.0) {
 			c.fail("fisheye_latency_s", "must be 0 for a rig without a fisheye");
+		}
+		if (p_rig.photometry.known) {
+			c.fail("photometry", "given for a rig without a fisheye (it describes both cameras)");
 		}
 		return c.error;
 	}
@@ -202,6 +209,65 @@ bool read_extrinsic(YamlFieldReader &p_reader, const cv::FileNode &p_root, Pose 
 	return true;
 }
 
+bool read_camera_photometry(YamlFieldReader &p_reader, const cv::FileNode &p_parent, const std::string &p_prefix, const char *p_key, CameraPhotometry *r_camera) {
+	cv::FileNode node;
+	if (!p_reader.map(p_parent, p_prefix, p_key, &node)) {
+		return false;
+	}
+	const std::string prefix = p_prefix + p_key + ".";
+	if (!p_reader.check_keys(node, prefix,
+				{ "response_r", "response_g", "response_b", "vignetting", "channel_gains", "reference_exposure_us", "reference_gain_db", "saturation_code" },
+				{ "response_r", "response_g", "response_b", "channel_gains", "saturation_code" })) {
+		return false;
+	}
+	const char *responses[3] = { "response_r", "response_g", "response_b" };
+	for (int c = 0; c < 3; c++) {
+		double values[256];
+		if (!p_reader.reals(node, prefix, responses[c], 256, values)) {
+			return false;
+		}
+		for (size_t k = 0; k < 256; k++) {
+			r_camera->response[size_t(c)][k] = float(values[k]);
+		}
+	}
+	double gains[3];
+	if (!p_reader.reals(node, prefix, "channel_gains", 3, gains) || !p_reader.integer(node, prefix, "saturation_code", &r_camera->saturation_code)) {
+		return false;
+	}
+	r_camera->channel_gains = glm::dvec3(gains[0], gains[1], gains[2]);
+	r_camera->vignetting.clear();
+	const cv::FileNode vignetting = node["vignetting"];
+	if (!vignetting.empty()) {
+		if (!vignetting.isSeq() || vignetting.size() > 4096) {
+			return p_reader.fail(prefix + "vignetting", "must be a list of at most 4096 numbers");
+		}
+		std::vector<double> values(vignetting.size());
+		if (!p_reader.numbers(vignetting, prefix + "vignetting", values.size(), values.data())) {
+			return false;
+		}
+		r_camera->vignetting.assign(values.begin(), values.end());
+	}
+	r_camera->reference_exposure_us = std::numeric_limits<double>::quiet_NaN();
+	r_camera->reference_gain_db = 0.0;
+	return (node["reference_exposure_us"].empty() || p_reader.real(node, prefix, "reference_exposure_us", &r_camera->reference_exposure_us)) &&
+			(node["reference_gain_db"].empty() || p_reader.real(node, prefix, "reference_gain_db", &r_camera->reference_gain_db));
+}
+
+bool read_photometry(YamlFieldReader &p_reader, const cv::FileNode &p_root, RigPhotometry *r_photometry) {
+	*r_photometry = RigPhotometry();
+	if (p_root["photometry"].empty()) {
+		return true;
+	}
+	cv::FileNode node;
+	if (!p_reader.map(p_root, "", "photometry", &node) || !p_reader.check_keys(node, "photometry.", { "radiance_unit", "fisheye", "rgb" }, { "fisheye", "rgb" }) ||
+			!read_camera_photometry(p_reader, node, "photometry.", "fisheye", &r_photometry->fisheye) ||
+			!read_camera_photometry(p_reader, node, "photometry.", "rgb", &r_photometry->rgb)) {
+		return false;
+	}
+	r_photometry->known = true;
+	return true;
+}
+
 bool read_rig(YamlFieldReader &p_reader, const cv::FileNode &p_root, Rig *r_rig) {
 	if (!p_root.isMap()) {
 		return p_reader.fail("roomprobe_rig", "missing (the file is not a map of fields; is it a RoomProbe rig file?)");
@@ -214,15 +280,19 @@ bool read_rig(YamlFieldReader &p_reader, const cv::FileNode &p_root, Rig *r_rig)
 	if (!p_reader.integer(p_root, "", "roomprobe_rig", &version)) {
 		return false;
 	}
-	if (version != RIG_FILE_VERSION) {
-		return p_reader.fail("roomprobe_rig", "unknown version " + std::to_string(version) + " (this build reads version " +
+	if (version != 1 && version != RIG_FILE_VERSION) {
+		return p_reader.fail("roomprobe_rig", "unknown version " + std::to_string(version) + " (this build reads versions 1 and " +
 						std::to_string(RIG_FILE_VERSION) + ")");
+	}
+	if (version == 1 && !p_root["photometry"].empty()) {
+		return p_reader.fail("photometry", "needs roomprobe_rig: 2 (version 1 files have no photometry)");
 	}
 	if (!p_reader.check_keys(p_root, "",
 				{ "roomprobe_rig", "rgb", "depth_scale_m", "fisheye", "rgb_from_fisheye", "fisheye_time_offset_s", "rgbd_latency_s", "fisheye_latency_s",
-						"calibration_report" },
+						"photometry", "calibration_report" },
 				{ "roomprobe_rig", "rgb", "depth_scale_m" }) ||
-			!read_rgb(p_reader, p_root, &r_rig->rgb) || !p_reader.real(p_root, "", "depth_scale_m", &r_rig->depth_scale_m)) {
+			!read_rgb(p_reader, p_root, &r_rig->rgb) || !p_reader.real(p_root, "", "depth_scale_m", &r_rig->depth_scale_m) ||
+			!read_photometry(p_reader, p_root, &r_rig->photometry)) {
 		return false;
 	}
 	// The live capture's latencies are optional (files from before them, synthetic rigs).
@@ -374,11 +444,51 @@ void write_report(cv::FileStorage &p_storage, const RigCalibrationReport &p_repo
 		p_storage << "rgb_from_fisheye_translation_std_m" << "[:" << t.x << t.y << t.z << "]";
 		p_storage << "rgb_from_fisheye_rotation_std_deg" << "[:" << a.x << a.y << a.z << "]";
 		p_storage << "clock_offset" << p_report.clock_offset;
+		if (!p_report.photometry.empty()) {
+			p_storage << "photometry" << "{" << "method" << p_report.photometry << "response_fit_rms_ln" << p_report.response_fit_rms << "vignetting_fit_rms"
+					  << p_report.vignetting_fit_rms << "colour_fit_rms" << p_report.colour_fit_rms << "}";
+		}
 	}
 	if (p_report.depth_checked) {
 		p_storage << "depth" << "{" << "scale" << p_report.depth_scale << "offset_m" << p_report.depth_offset_m << "residual_rms_m" << p_report.depth_residual_rms_m
 				  << "raw_rms_m" << p_report.depth_raw_rms_m << "samples" << int(p_report.depth_samples) << "}";
 	}
+	p_storage << "}";
+}
+
+void write_camera_photometry(cv::FileStorage &p_storage, const char *p_key, const CameraPhotometry &p_camera) {
+	p_storage << p_key << "{";
+	const char *responses[3] = { "response_r", "response_g", "response_b" };
+	for (int c = 0; c < 3; c++) {
+		p_storage << responses[c] << "[:";
+		for (float v : p_camera.response[size_t(c)]) {
+			p_storage << v;
+		}
+		p_storage << "]";
+	}
+	if (!p_camera.vignetting.empty()) {
+		p_storage << "vignetting" << "[:";
+		for (float v : p_camera.vignetting) {
+			p_storage << v;
+		}
+		p_storage << "]";
+	}
+	const glm::dvec3 &g = p_camera.channel_gains;
+	p_storage << "channel_gains" << "[:" << g.x << g.y << g.z << "]";
+	if (std::isfinite(p_camera.reference_exposure_us)) {
+		p_storage << "reference_exposure_us" << p_camera.reference_exposure_us << "reference_gain_db" << p_camera.reference_gain_db;
+	}
+	p_storage << "saturation_code" << p_camera.saturation_code;
+	p_storage << "}";
+}
+
+void write_photometry(cv::FileStorage &p_storage, const RigPhotometry &p_photometry) {
+	p_storage.writeComment("Photometry (rig/photometry.h): radiance_c = channel_gains_c * response_c[code] / exposure ratio / vignetting(r).\n"
+						   "response: linear value of each 8-bit code; vignetting: gain at radius i / (n - 1) of the image circle.");
+	p_storage << "photometry" << "{";
+	p_storage << "radiance_unit" << "linear value of the RGB camera at its exposure";
+	write_camera_photometry(p_storage, "fisheye", p_photometry.fisheye);
+	write_camera_photometry(p_storage, "rgb", p_photometry.rgb);
 	p_storage << "}";
 }
 
@@ -438,6 +548,9 @@ std::string save_rig(const std::string &p_path, const Rig &p_rig, const RigCalib
 		if (p_rig.fisheye_latency_s != 0.0) {
 			storage.writeComment("Live capture: seconds from the fisheye taking a frame to its arrival.");
 			storage << "fisheye_latency_s" << p_rig.fisheye_latency_s;
+		}
+		if (p_rig.photometry.known) {
+			write_photometry(storage, p_rig.photometry);
 		}
 		if (p_report) {
 			write_report(storage, *p_report, true);

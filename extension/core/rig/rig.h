@@ -4,6 +4,7 @@
 
 #include <camera/camera_params.h>
 #include <math/pose.h>
+#include <rig/photometry.h>
 
 #include <glm/vec3.hpp>
 
@@ -25,6 +26,9 @@ struct Rig {
 	// clock less this (drivers/capture). Optional in the file; 0 when absent.
 	double rgbd_latency_s = 0.0;
 	double fisheye_latency_s = 0.0; // a rig without a fisheye leaves it 0
+	// How the cameras' codes become radiance (rig/photometry.h); optional in the file (version 2),
+	// unknown for version 1 files and rigs never calibrated photometrically.
+	RigPhotometry photometry;
 
 	bool has_fisheye() const { return fisheye.width != 0 || fisheye.height != 0; }
 };
@@ -47,6 +51,11 @@ struct RigCalibrationReport {
 	double depth_scale = 1.0, depth_offset_m = 0.0, depth_residual_rms_m = 0.0, depth_raw_rms_m = 0.0;
 	size_t depth_samples = 0;
 	std::string clock_offset; // how fisheye_time_offset_s was found
+	// Photometric calibration (calibration/photometric_calibration.h), when it was done.
+	std::string photometry; // how: "exposure sweep of N images, flat field, M pair views", or why not
+	double response_fit_rms = std::numeric_limits<double>::quiet_NaN(); // Debevec's residual, ln units
+	double vignetting_fit_rms = std::numeric_limits<double>::quiet_NaN(); // flat field against the table, relative
+	double colour_fit_rms = std::numeric_limits<double>::quiet_NaN(); // fisheye against RGB on the board, relative
 };
 
 struct RigLoadResult {
@@ -62,8 +71,9 @@ RigLoadResult load_rig(const std::string &p_path);
 // With p_report, the calibration's report is written after the rig (calibration_report).
 std::string save_rig(const std::string &p_path, const Rig &p_rig, const RigCalibrationReport *p_report = nullptr);
 
-// The version of the schema that load_rig reads and save_rig writes (the roomprobe_rig field).
-inline constexpr int RIG_FILE_VERSION = 1;
+// The version of the schema that save_rig writes (the roomprobe_rig field). Version 2 added the
+// optional photometry; load_rig reads versions 1 and 2.
+inline constexpr int RIG_FILE_VERSION = 2;
 // A rotation in a rig file may be this far off unit norm (it is then normalised).
 inline constexpr double RIG_UNIT_TOLERANCE = 1e-6;
 // Checks the values (positive sizes and focal lengths, finite numbers, a unit rotation, a lens

@@ -441,6 +441,25 @@ cv::Mat to_srgb8(const cv::Mat &p_linear, double p_exposure) {
 	return out;
 }
 
+cv::Mat encode_8bit(const cv::Mat &p_linear, ToneCurve p_curve, const glm::dvec3 &p_channel_gains) {
+	CV_Assert(p_linear.type() == CV_32FC3);
+	if (p_curve == ToneCurve::Srgb && p_channel_gains == glm::dvec3(1.0)) {
+		return to_srgb8(p_linear, 1.0);
+	}
+	cv::Mat out(p_linear.size(), CV_8UC3);
+	const float gains[3] = { float(p_channel_gains.x), float(p_channel_gains.y), float(p_channel_gains.z) };
+	tbb::parallel_for(0, p_linear.rows, [&](int y) {
+		const cv::Vec3f *in = p_linear.ptr<cv::Vec3f>(y);
+		cv::Vec3b *o = out.ptr<cv::Vec3b>(y);
+		for (int x = 0; x < p_linear.cols; ++x) {
+			for (int c = 0; c < 3; ++c) {
+				o[x][c] = encode_tone(p_curve, in[x][c] * gains[c]);
+			}
+		}
+	});
+	return out;
+}
+
 // ---------------------------------------------------------------- RGB-D
 
 double kinect_depth_sigma_m(double p_z_m) {
@@ -585,7 +604,7 @@ FisheyeImage render_fisheye(const SynthRenderer &p_renderer, const OmniParams &p
 			row[x] = to_vec3f(sum * (exposure / static_cast<float>(n * n)));
 		}
 	});
-	image.image = to_srgb8(image.radiance, 1.0);
+	image.image = encode_8bit(image.radiance, p_options.tone_curve, p_options.channel_gains);
 	return image;
 }
 

@@ -94,6 +94,8 @@ private:
 
 // 8-bit sRGB of linear values times exposure, clipped (saturates at 1). CV_32FC3 -> CV_8UC3.
 cv::Mat to_srgb8(const cv::Mat &p_linear, double p_exposure = 1.0);
+// 8-bit codes of linear values times each channel's gain through a tone curve, clipped.
+cv::Mat encode_8bit(const cv::Mat &p_linear, ToneCurve p_curve, const glm::dvec3 &p_channel_gains);
 uint8_t linear_to_srgb8(float p_linear);
 float srgb8_to_linear(uint8_t p_code);
 
@@ -138,10 +140,15 @@ struct FisheyeOptions {
 	// Vignetting 1 / (1 + k r^2)^2 (cos^4-like), r = distance from the circle centre / radius,
 	// k chosen so that the gain at the circle's edge is this. 1: none.
 	double vignetting_edge_gain = 0.5;
+	// The 8-bit image's photometry (rig/photometry.h): code = tone_curve(radiance * exposure *
+	// vignetting * channel_gains), clipped. The gains are the fisheye's white balance, which the
+	// RGB camera does not share (calibration's colour transform undoes them).
+	ToneCurve tone_curve = ToneCurve::Srgb;
+	glm::dvec3 channel_gains{ 1.0 };
 };
 
 struct FisheyeImage {
-	cv::Mat image; // CV_8UC3 sRGB with saturation, R, G, B; black outside the image circle
+	cv::Mat image; // CV_8UC3 through the tone curve, with saturation, R, G, B; black outside the image circle
 	cv::Mat radiance; // CV_32FC3 linear R, G, B: exposure and vignetting applied, not clipped (the HDR frame)
 };
 

@@ -371,7 +371,84 @@ std::vector<Pose> pair_board_poses(const CheckerboardSpec &p_board) {
 	return poses;
 }
 
-CalibrationResult write_calibration_views(const std::string &p_folder, const Rig &p_rig, const CheckerboardSpec &p_board, int p_samples_per_axis) {
+const char *exposure_mode_name(ExposureMode p_mode) {
+	switch (p_mode) {
+		case ExposureMode::Auto:
+			return "auto";
+		case ExposureMode::Bracket:
+			return "bracket";
+		default:
+			return "fixed";
+	}
+}
+
+CalibrationResult write_photometric_views(const std::string &p_folder, const SynthRenderer &p_renderer, const OmniParams &p_fisheye,
+		const Pose &p_world_from_fisheye, const FisheyeOptions &p_options) {
+	CalibrationResult result;
+	namespace fs = std::filesystem;
+	const fs::path root = fs::path(p_folder) / "calibration";
+	std::error_code ec;
+	fs::create_directories(root / "exposure", ec);
+	if (ec) {
+		result.error = (root / "exposure").string() + ": cannot create the folder (" + ec.message() + ")";
+		return result;
+	}
+	const std::string yaml_path = (root / "photometric.yaml").string();
+	cv::FileStorage out;
+	try {
+		if (!out.open(yaml_path, cv::FileStorage::WRITE)) {
+			result.error = yaml_path + ": cannot write";
+			return result;
+		}
+	} catch (const cv::Exception &e) {
+		result.error = yaml_path + ": cannot write (" + e.what() + ")";
+		return result;
+	}
+	out << "roomprobe_photometric_views" << 1;
+	out << "reference_exposure_us" << SYNTH_EXPOSURE_UNIT_US * p_options.exposure;
+	// One rendering of the scene's radiance (exposure 1, vignetted), encoded at each stop.
+	FisheyeOptions unit = p_options;
+	unit.exposure = 1.0;
+	const FisheyeImage scene = render_fisheye(p_renderer, p_fisheye, p_world_from_fisheye, 0.0, unit);
+	out << "exposure_sweep" << "[";
+	char name[64];
+	for (int half_stop = -8; half_stop <= 8; half_stop++) {
+		const double exposure = p_options.exposure * std::pow(2.0, 0.5 * half_stop);
+		std::snprintf(name, sizeof(name), "exposure/%03d.png", half_stop + 8);
+		const std::string error = write_png_rgb((root / name).string(), encode_8bit(scene.radiance * exposure, p_options.tone_curve, p_options.channel_gains));
+		if (!error.empty()) {
+			result.error = error;
+			return result;
+		}
+		out << "{" << "image" << name << "exposure_us" << SYNTH_EXPOSURE_UNIT_US * exposure << "}";
+		++result.views;
+	}
+	out << "]";
+	// The flat field: radiance 0.7 / exposure everywhere, so the centre sits high in the range.
+	cv::Mat flat(p_fisheye.height, p_fisheye.width, CV_32FC3, cv::Scalar::all(0));
+	for (int y = 0; y < flat.rows; y++) {
+		cv::Vec3f *row = flat.ptr<cv::Vec3f>(y);
+		for (int x = 0; x < flat.cols; x++) {
+			const glm::dvec2 pixel(x, y);
+			if (omni_pixel_valid(p_fisheye, pixel)) {
+				row[x] = cv::Vec3f::all(float(0.7 * fisheye_vignetting(p_fisheye, pixel, p_options.vignetting_edge_gain)));
+			}
+		}
+	}
+	const std::string error = write_png_rgb((root / "flat_field.png").string(), encode_8bit(flat, p_options.tone_curve, p_options.channel_gains));
+	if (!error.empty()) {
+		result.error = error;
+		return result;
+	}
+	out << "flat_field" << "{" << "image" << "flat_field.png" << "exposure_us" << SYNTH_EXPOSURE_UNIT_US * p_options.exposure << "}";
+	++result.views;
+	out.release();
+	result.ok = true;
+	return result;
+}
+
+CalibrationResult write_calibration_views(const std::string &p_folder, const Rig &p_rig, const CheckerboardSpec &p_board, int p_samples_per_axis,
+		const FisheyeOptions &p_fisheye) {
 	CalibrationResult result;
 	namespace fs = std::filesystem;
 	const fs::path root = fs::path(p_folder) / "calibration";
@@ -449,7 +526,7 @@ CalibrationResult write_calibration_views(const std::string &p_folder, const Rig
 			image = rendered.rgb;
 			depth = rendered.depth;
 		} else {
-			FisheyeOptions options;
+			FisheyeOptions options = p_fisheye;
 			options.samples_per_axis = p_samples_per_axis;
 			image = render_fisheye(renderer, p_rig.fisheye, Pose(), 0.0, options).image;
 		}
@@ -592,6 +669,7 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 	WriterThread thread(4);
 	bool stopped = false;
 	size_t done = 0;
+	double auto_multiplier = 1.0; // ExposureMode::Auto's state: the next frame's exposure over the reference
 	for (const Event &event : events) {
 		const Pose world_from_rgb = trajectory.world_from_rgb(event.time_s);
 		if (!event.fisheye) {
@@ -617,7 +695,25 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 			const double t_fisheye = fisheye_times[event.index];
 			const Pose world_from_fisheye = compose(world_from_rgb, p_rig.rgb_from_fisheye);
 			auto t0 = std::chrono::steady_clock::now();
-			FisheyeImage image = render_fisheye(renderer, p_rig.fisheye, world_from_fisheye, event.time_s, p_options.fisheye);
+			FisheyeOptions fisheye_options = p_options.fisheye;
+			double multiplier = 1.0;
+			if (p_options.exposure_mode == ExposureMode::Bracket && !p_options.bracket_ev.empty()) {
+				multiplier = std::pow(2.0, p_options.bracket_ev[event.index % p_options.bracket_ev.size()]);
+			} else if (p_options.exposure_mode == ExposureMode::Auto) {
+				multiplier = auto_multiplier;
+			}
+			fisheye_options.exposure *= multiplier;
+			FisheyeImage image = render_fisheye(renderer, p_rig.fisheye, world_from_fisheye, event.time_s, fisheye_options);
+			if (p_options.exposure_mode == ExposureMode::Auto) {
+				// The mean code in the image circle (black outside it); codes go roughly as the
+				// square root of the exposure, and the loop moves half way each frame.
+				cv::Mat gray;
+				cv::cvtColor(image.image, gray, cv::COLOR_RGB2GRAY);
+				const double mean_code = cv::mean(gray, gray > 0)[0];
+				if (mean_code > 0.0) {
+					auto_multiplier = std::clamp(auto_multiplier * std::pow(p_options.auto_target_code / mean_code, 1.1), 1.0 / 64.0, 8.0);
+				}
+			}
 			timings.fisheye_s += seconds_since(t0);
 			t0 = std::chrono::steady_clock::now();
 			auto faces = std::make_shared<CubemapFaces>(render_cubemap(renderer, p_scene.probe_position, event.time_s, p_options.cubemap_face_size));
@@ -627,6 +723,8 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 			frame->timestamp_s = t_fisheye;
 			frame->hdr = p_options.fisheye_hdr;
 			frame->image = p_options.fisheye_hdr ? image.radiance : image.image;
+			frame->capture.exposure_us = SYNTH_EXPOSURE_UNIT_US * fisheye_options.exposure;
+			frame->capture.gain = 0.0;
 			const double t_rgbd = event.time_s;
 			stopped = !thread.push([&writer, frame, faces, ldr, t_fisheye, t_rgbd, world_from_fisheye]() {
 				RecordingStatus s = writer.add_fisheye(*frame);
@@ -685,6 +783,20 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 		}
 		info << "fisheye_vignetting_edge_gain" << p_options.fisheye.vignetting_edge_gain;
 		info << "fisheye_exposure" << p_options.fisheye.exposure;
+		// Frames record their exposure in capture.txt: this is the one fisheye_exposure stands for.
+		info << "fisheye_reference_exposure_us" << SYNTH_EXPOSURE_UNIT_US * p_options.fisheye.exposure;
+		info << "fisheye_exposure_mode" << exposure_mode_name(p_options.exposure_mode);
+		if (p_options.exposure_mode == ExposureMode::Bracket) {
+			info << "fisheye_bracket_ev" << "[:";
+			for (double ev : p_options.bracket_ev) {
+				info << ev;
+			}
+			info << "]";
+		}
+		info << "fisheye_tone_curve" << tone_curve_name(p_options.fisheye.tone_curve);
+		const glm::dvec3 &gains = p_options.fisheye.channel_gains;
+		info << "fisheye_channel_gains" << "[:" << gains.x << gains.y << gains.z << "]";
+		info << "rgb_tone_curve" << "srgb";
 		info << "rgb_exposure" << p_options.rgbd.exposure;
 		info << "depth_noise" << (p_options.rgbd.depth_noise ? 1 : 0);
 		info << "cubemap_ldr_exposure" << p_options.cubemap_ldr_exposure;
@@ -699,13 +811,23 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 
 	if (p_options.calibration_views) {
 		const auto t0 = std::chrono::steady_clock::now();
-		const CalibrationResult calibration = write_calibration_views(p_folder, p_rig, CheckerboardSpec(), p_options.calibration_samples_per_axis);
-		timings.calibration_s = seconds_since(t0);
+		const CalibrationResult calibration =
+				write_calibration_views(p_folder, p_rig, CheckerboardSpec(), p_options.calibration_samples_per_axis, p_options.fisheye);
 		if (!calibration.ok) {
 			result.error = calibration.error;
 			return result;
 		}
 		timings.calibration_views = calibration.views;
+		if (p_options.photometric_views && p_rig.has_fisheye()) {
+			const Pose world_from_fisheye = compose(trajectory.world_from_rgb(rgbd_times.front()), p_rig.rgb_from_fisheye);
+			const CalibrationResult photometric = write_photometric_views(p_folder, renderer, p_rig.fisheye, world_from_fisheye, p_options.fisheye);
+			if (!photometric.ok) {
+				result.error = photometric.error;
+				return result;
+			}
+			timings.calibration_views += photometric.views;
+		}
+		timings.calibration_s = seconds_since(t0);
 	}
 	timings.total_s = seconds_since(start);
 	result.ok = true;

@@ -83,6 +83,16 @@ std::vector<Pose> pair_board_poses(const CheckerboardSpec &p_board);
 
 // ---------------------------------------------------------------- the recording
 
+// How the fisheye's exposure changes from frame to frame (each frame's exposure is recorded in
+// capture.txt, in microseconds: SYNTH_EXPOSURE_UNIT_US per unit of FisheyeOptions::exposure).
+enum class ExposureMode {
+	Fixed, // every frame at fisheye.exposure
+	Auto, // a camera's auto-exposure: steers the mean code in the image circle towards auto_target_code, a frame late, damped
+	Bracket, // cycles through bracket_ev stops about fisheye.exposure, frame by frame
+};
+inline constexpr double SYNTH_EXPOSURE_UNIT_US = 10000.0;
+const char *exposure_mode_name(ExposureMode p_mode);
+
 struct SequenceOptions {
 	double duration_s = 10.0;
 	uint64_t seed = 1;
@@ -93,7 +103,11 @@ struct SequenceOptions {
 	bool calibration_views = true;
 	int calibration_samples_per_axis = 4; // antialiasing of the board views (sub-pixel corners)
 	RgbdOptions rgbd; // noise_seed is set per frame from seed
-	FisheyeOptions fisheye;
+	FisheyeOptions fisheye; // its exposure is the reference (bracketing and auto-exposure scale it)
+	ExposureMode exposure_mode = ExposureMode::Fixed;
+	std::vector<double> bracket_ev = { -5.0, 0.0 }; // Bracket: stops (powers of 2) about the reference, in turn
+	double auto_target_code = 110.0; // Auto: the mean 8-bit code it aims at
+	bool photometric_views = true; // with calibration_views: an exposure sweep and a flat field (write_photometric_views)
 	double cubemap_ldr_exposure = 1.0; // of the 8-bit view next to each cubemap EXR
 	bool exr_full_float = false; // EXRs (cubemaps, HDR fisheye) as 32-bit float rather than half
 	std::function<void(const std::string &)> progress; // optional: a line now and then
@@ -138,6 +152,17 @@ struct CalibrationResult {
 	std::string error;
 	size_t views = 0;
 };
-CalibrationResult write_calibration_views(const std::string &p_folder, const Rig &p_rig, const CheckerboardSpec &p_board, int p_samples_per_axis);
+// The fisheye's views are taken with p_fisheye's photometry (tone curve, gains, vignetting, its
+// exposure: the reference).
+CalibrationResult write_calibration_views(const std::string &p_folder, const Rig &p_rig, const CheckerboardSpec &p_board, int p_samples_per_axis,
+		const FisheyeOptions &p_fisheye = FisheyeOptions());
+
+// The fisheye's photometric calibration views in p_folder/calibration/: an exposure sweep of the
+// static scene from p_world_from_fisheye at time 0 (exposure/NNN.png, half stops from -4 to +4 about
+// the reference), a flat field (flat_field.png: a uniform radiance over the lens, as through a
+// diffuser) and photometric.yaml listing each image's exposure (microseconds) and the reference
+// exposure at which the pairs' fisheye images were taken.
+CalibrationResult write_photometric_views(const std::string &p_folder, const SynthRenderer &p_renderer, const OmniParams &p_fisheye,
+		const Pose &p_world_from_fisheye, const FisheyeOptions &p_options);
 
 } // namespace roomprobe::synth

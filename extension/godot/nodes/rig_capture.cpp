@@ -156,6 +156,9 @@ bool RigCapture::open() {
 		fail(error);
 		return false;
 	}
+	if (!photometry.known) {
+		photometry = opened->get_rig().photometry; // a calibrated rig's; synth.yaml states a synthetic one's truth
+	}
 	reader = opened;
 	engine->edit_config([&](LiveRoomConfig &p_config) {
 		p_config.has_rig = true;
@@ -199,7 +202,7 @@ bool RigCapture::open_live() {
 	engine->edit_config([&](LiveRoomConfig &p_config) {
 		p_config.has_rig = true;
 		p_config.rig = live_rig;
-		p_config.photometry = RigPhotometry(); // the rig file carries none yet (the calibration issue)
+		p_config.photometry = live_rig.photometry; // unknown for a rig file without photometry (version 1)
 		p_config.initial_rgb_pose = has_live_room ? live_room.initial_rgb_pose : Pose();
 		p_config.keep_points = has_live_room ? live_room.probes : std::vector<glm::dvec3>();
 		p_config.ground_truth.clear();
