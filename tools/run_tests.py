@@ -440,20 +440,23 @@ def show_with_context(lines, bad, limit=60):
 
 # The synthetic recording the Godot tests play (tests/godot/test_nodes_rig_capture.gd).
 FIXTURE_RECORDING = os.path.join(rp.BUILD, "test-data", "living_room_1s")
+# The same second with the fisheye bracketed (every other frame 5 stops shorter), for the HDR test
+# (tests/godot/test_nodes_coarse_pipeline.gd).
+FIXTURE_BRACKETED = os.path.join(rp.BUILD, "test-data", "living_room_1s_bracketed")
 
 
-def make_fixture_recording():
+def make_fixture_recording(p_folder=FIXTURE_RECORDING, p_extra=()):
     """Renders a 1-second living_room recording with the synth tool, once per tool build."""
     tool = os.path.join(rp.BUILD, "bin", "roomprobe_synth")
-    stamp = os.path.join(FIXTURE_RECORDING, ".made-by")
+    stamp = os.path.join(p_folder, ".made-by")
     if not os.path.exists(tool):
         return
     made_by = f"{os.path.getmtime(tool)}"
     if os.path.exists(stamp) and open(stamp).read() == made_by:
         return
-    shutil.rmtree(FIXTURE_RECORDING, ignore_errors=True)
-    log = os.path.join(LOGS, "fixture-recording.log")
-    r = rp.run([tool, "--scene", "living_room", "--out", FIXTURE_RECORDING, "--seconds", "1", "--seed", "7"], log, 600)
+    shutil.rmtree(p_folder, ignore_errors=True)
+    log = os.path.join(LOGS, f"fixture-{os.path.basename(p_folder)}.log")
+    r = rp.run([tool, "--scene", "living_room", "--out", p_folder, "--seconds", "1", "--seed", "7", *p_extra], log, 600)
     if r.rc == 0:
         with open(stamp, "w") as f:
             f.write(made_by)
@@ -488,6 +491,7 @@ def suite_godot(opts, rendering, allow_empty):
     s.logs.append(os.path.join(LOGS, f"{name}.log"))
     if not rendering:
         make_fixture_recording()
+        make_fixture_recording(FIXTURE_BRACKETED, ("--exposure", "bracket", "--no-calibration"))
         make_fixture_oni()
     user = []
     if opts.filter:

@@ -144,6 +144,54 @@ func test_fisheye_frames_texture_the_room_and_the_ceiling_matches_the_truth() ->
 	assert_eq(room.get_warnings().size(), 0, "no warnings: %s" % [room.get_warnings()])
 
 
+## The brightest value of a face (largest channel).
+static func _face_max(p_face: Image) -> float:
+	var best := 0.0
+	for y in p_face.get_height():
+		for x in p_face.get_width():
+			var c := p_face.get_pixel(x, y)
+			best = maxf(best, maxf(c.r, maxf(c.g, c.b)))
+	return best
+
+
+## The probe's +Y face after every frame of p_recording, and the truth's.
+func _ceiling_faces(p_recording: String) -> Array:
+	var parts := _make_scene()
+	var rig = parts[0]
+	var room = parts[1]
+	var probe = parts[2]
+	rig.recording_path = p_recording
+	assert_true(rig.open(), rig.get_last_error())
+	while rig.step():
+		room.integrate_rig_frame()
+	room.finish_inpainting()
+	var truth := _ground_truth_faces()
+	probe.resolution = truth[0].get_width()
+	assert_true(probe.update_now())
+	var map: Image = probe.get_face_image(2)
+	_scene.free()
+	return [map, truth[2]]
+
+
+func test_a_bracketed_fisheye_gives_an_hdr_map_with_the_ceiling_light() -> void:
+	_dir = fixture_bracketed_recording()
+	if not need_fixture_recording(_dir):
+		return
+	# The ceiling panel (radiance 25) is on for the second half of the second. At the fisheye's
+	# one exposure it clips at about 1; bracketed, the short frames see it whole, and the map
+	# (RGBAH, never clamped) carries it to the materials.
+	var bracketed := _ceiling_faces(_dir)
+	var truth_max := _face_max(bracketed[1])
+	var map_max := _face_max(bracketed[0])
+	_dir = fixture_recording()
+	var fixed := _ceiling_faces(_dir)
+	var fixed_max := _face_max(fixed[0])
+	print("    +Y face's brightest value: truth %.2f, bracketed %.2f, one exposure %.2f" % [truth_max, map_max, fixed_max])
+	assert_true(truth_max > 20.0, "the truth shows the light (%.2f)" % truth_max)
+	assert_true(map_max > 0.5 * truth_max, "the bracketed map keeps the light (%.2f of %.2f)" % [map_max, truth_max])
+	assert_true(fixed_max < 0.2 * truth_max, "at one exposure the light is clipped (%.2f)" % fixed_max)
+
+
 func test_without_ground_truth_pose_source_says_why() -> void:
 	if not need_fixture_recording():
 		return

@@ -139,10 +139,17 @@ func fixture_recording() -> String:
 	return ProjectSettings.globalize_path("res://").path_join("../build/test-data/living_room_1s").simplify_path()
 
 
-## False, and the test skipped, when the fixture recording is not there.
-func need_fixture_recording() -> bool:
-	if not FileAccess.file_exists(fixture_recording().path_join("rgb.txt")):
-		skip("no synthetic recording at %s (the runner makes it with build/bin/roomprobe_synth)" % fixture_recording())
+## The same second with the fisheye bracketed (every other frame 5 stops shorter, each frame's
+## exposure in its capture.txt), as an absolute path.
+func fixture_bracketed_recording() -> String:
+	return fixture_recording() + "_bracketed"
+
+
+## False, and the test skipped, when the fixture recording (or p_path) is not there.
+func need_fixture_recording(p_path: String = "") -> bool:
+	var path := fixture_recording() if p_path.is_empty() else p_path
+	if not FileAccess.file_exists(path.path_join("rgb.txt")):
+		skip("no synthetic recording at %s (the runner makes it with build/bin/roomprobe_synth)" % path)
 		return false
 	return true
 
