@@ -79,4 +79,25 @@ bool EmbreeTriangleScene::intersect(const glm::dvec3 &p_origin, const glm::dvec3
 	return true;
 }
 
+bool EmbreeTriangleScene::occluded(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far) const {
+	if (!scene) {
+		return false;
+	}
+	RTCRay ray;
+	ray.org_x = static_cast<float>(p_origin.x);
+	ray.org_y = static_cast<float>(p_origin.y);
+	ray.org_z = static_cast<float>(p_origin.z);
+	ray.dir_x = static_cast<float>(p_direction.x);
+	ray.dir_y = static_cast<float>(p_direction.y);
+	ray.dir_z = static_cast<float>(p_direction.z);
+	ray.tnear = static_cast<float>(p_t_near);
+	ray.tfar = static_cast<float>(std::min(p_t_far, 1e30));
+	ray.time = 0.0f;
+	ray.mask = 0xffffffffu;
+	ray.id = 0;
+	ray.flags = 0;
+	rtcOccluded1(scene, &ray, nullptr);
+	return ray.tfar < 0.0f; // Embree sets tfar to -inf on a hit
+}
+
 } // namespace roomprobe

@@ -34,6 +34,9 @@ public:
 		glm::vec3 geometric_normal = glm::vec3(0.0f);
 	};
 	bool intersect(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far, RayHit *r_hit) const;
+	// Whether anything lies along origin + t * direction, t in (t_near, t_far) (Embree's any-hit
+	// query, cheaper than intersect). False before build(). Thread-safe once built.
+	bool occluded(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far) const;
 
 private:
 	RTCDevice device = nullptr;
