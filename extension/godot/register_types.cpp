@@ -3,6 +3,7 @@
 #include "nodes/dense_slam.h"
 #include "nodes/rig_capture.h"
 #include "nodes/room_probe.h"
+#include "resources/prt_transfer.h"
 
 #include <rp_godot/godot.h>
 
@@ -22,6 +23,8 @@ void initialize_roomprobe(GDExtensionInitializationLevel p_level) {
 	godot::ClassDB::register_class<roomprobe::DenseSLAM>();
 	godot::ClassDB::register_class<roomprobe::CoarseRoomModel>();
 	godot::ClassDB::register_class<roomprobe::RoomProbe>();
+	// Resources the materials read.
+	godot::ClassDB::register_class<roomprobe::PRTTransfer>();
 }
 
 void uninitialize_roomprobe(GDExtensionInitializationLevel) {}

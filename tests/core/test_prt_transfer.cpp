@@ -20,8 +20,8 @@ using namespace roomprobe;
 namespace {
 
 // A UV sphere: rings x segments quads, poles shared.
-TriangleMesh uv_sphere(const glm::vec3 &p_centre, float p_radius, int p_rings, int p_segments) {
-	TriangleMesh mesh;
+PrtMesh uv_sphere(const glm::vec3 &p_centre, float p_radius, int p_rings, int p_segments) {
+	PrtMesh mesh;
 	for (int r = 0; r <= p_rings; r++) {
 		const double theta = std::numbers::pi * r / p_rings;
 		for (int s = 0; s <= p_segments; s++) {
@@ -42,7 +42,7 @@ TriangleMesh uv_sphere(const glm::vec3 &p_centre, float p_radius, int p_rings, i
 }
 
 // An n x n grid of quads in the plane y = p_y, over [x0, x1] x [z0, z1], normal p_up (+Y or -Y).
-void add_grid(TriangleMesh *io_mesh, float p_x0, float p_x1, float p_z0, float p_z1, float p_y, int p_n, float p_up) {
+void add_grid(PrtMesh *io_mesh, float p_x0, float p_x1, float p_z0, float p_z1, float p_y, int p_n, float p_up) {
 	const uint32_t base = uint32_t(io_mesh->positions.size());
 	for (int j = 0; j <= p_n; j++) {
 		for (int i = 0; i <= p_n; i++) {
@@ -59,7 +59,7 @@ void add_grid(TriangleMesh *io_mesh, float p_x0, float p_x1, float p_z0, float p
 }
 
 // A wall quad from corner p_a to p_b (horizontal), p_height high, facing p_normal.
-void add_wall(TriangleMesh *io_mesh, const glm::vec3 &p_a, const glm::vec3 &p_b, float p_height, const glm::vec3 &p_normal) {
+void add_wall(PrtMesh *io_mesh, const glm::vec3 &p_a, const glm::vec3 &p_b, float p_height, const glm::vec3 &p_normal) {
 	const uint32_t base = uint32_t(io_mesh->positions.size());
 	for (const glm::vec3 &p : { p_a, p_b, p_a + glm::vec3(0, p_height, 0), p_b + glm::vec3(0, p_height, 0) }) {
 		io_mesh->positions.push_back(p);
@@ -111,10 +111,10 @@ double distance(const TransferVector &p_a, const TransferVector &p_b) {
 	return std::sqrt(s);
 }
 
-void build_scene(const std::vector<const TriangleMesh *> &p_meshes, EmbreeTriangleScene *r_scene) {
+void build_scene(const std::vector<const PrtMesh *> &p_meshes, EmbreeTriangleScene *r_scene) {
 	std::vector<float> xyz;
 	std::vector<uint32_t> indices;
-	for (const TriangleMesh *mesh : p_meshes) {
+	for (const PrtMesh *mesh : p_meshes) {
 		const uint32_t base = uint32_t(xyz.size() / 3);
 		for (const glm::vec3 &p : mesh->positions) {
 			xyz.insert(xyz.end(), { p.x, p.y, p.z });
@@ -129,8 +129,8 @@ void build_scene(const std::vector<const TriangleMesh *> &p_meshes, EmbreeTriang
 } // namespace
 
 TEST_CASE("prt transfer: a lone sphere's transfer is the clamped cosine in SH") {
-	const TriangleMesh sphere = uv_sphere(glm::vec3(0.0f), 0.5f, 12, 24);
-	REQUIRE(check_triangle_mesh(sphere) == "");
+	const PrtMesh sphere = uv_sphere(glm::vec3(0.0f), 0.5f, 12, 24);
+	REQUIRE(check_prt_mesh(sphere) == "");
 	TransferOptions options;
 	options.samples_per_vertex = 4096;
 	const TransferResult baked = bake_transfer(sphere, nullptr, options);
@@ -153,8 +153,8 @@ TEST_CASE("prt transfer: a lone sphere's transfer is the clamped cosine in SH") 
 // Errors are measured against the lobe's full scale (the unshadowed transfer's norm): 1 % of
 // what an unoccluded vertex receives, whatever the fraction of sky the vertex sees.
 TEST_CASE("prt transfer: a sphere resting on a plane matches a brute-force reference within 1 % of the unshadowed lobe") {
-	const TriangleMesh sphere = uv_sphere(glm::vec3(0.0f, 0.5f, 0.0f), 0.5f, 16, 32);
-	TriangleMesh plane;
+	const PrtMesh sphere = uv_sphere(glm::vec3(0.0f, 0.5f, 0.0f), 0.5f, 16, 32);
+	PrtMesh plane;
 	add_grid(&plane, -20.0f, 20.0f, -20.0f, 20.0f, 0.0f, 1, 1.0f);
 	TransferOptions options;
 	options.samples_per_vertex = 4096;
@@ -185,7 +185,7 @@ TEST_CASE("prt transfer: a sphere resting on a plane matches a brute-force refer
 TEST_CASE("prt transfer: the inside of a cup is darker than the ground outside it, by the reference's amount") {
 	// A 1 m square cup, 0.6 m deep, open at the top, on a ground plane; walls one-sided (facing in),
 	// which rays hit from both sides.
-	TriangleMesh mesh;
+	PrtMesh mesh;
 	add_grid(&mesh, -0.5f, 0.5f, -0.5f, 0.5f, 0.0f, 4, 1.0f); // the cup's floor; vertex 12 is its centre
 	add_grid(&mesh, 1.5f, 3.5f, -1.0f, 1.0f, 0.0f, 2, 1.0f); // ground outside; vertex 25 + 4 is its centre (2.5, 0, 0)
 	const float h = 0.6f;
@@ -193,7 +193,7 @@ TEST_CASE("prt transfer: the inside of a cup is darker than the ground outside i
 	add_wall(&mesh, { 0.5f, 0, 0.5f }, { -0.5f, 0, 0.5f }, h, { 0, 0, -1 });
 	add_wall(&mesh, { -0.5f, 0, 0.5f }, { -0.5f, 0, -0.5f }, h, { 1, 0, 0 });
 	add_wall(&mesh, { 0.5f, 0, -0.5f }, { 0.5f, 0, 0.5f }, h, { -1, 0, 0 });
-	REQUIRE(check_triangle_mesh(mesh) == "");
+	REQUIRE(check_prt_mesh(mesh) == "");
 	TransferOptions options;
 	options.samples_per_vertex = 4096;
 	const TransferResult baked = bake_transfer(mesh, nullptr, options);
@@ -221,22 +221,22 @@ TEST_CASE("prt transfer: the inside of a cup is darker than the ground outside i
 }
 
 TEST_CASE("prt transfer: bad meshes are refused with the reason; the cache key follows the mesh and the settings") {
-	TriangleMesh mesh = uv_sphere(glm::vec3(0.0f), 1.0f, 12, 24);
-	TriangleMesh broken = mesh;
+	PrtMesh mesh = uv_sphere(glm::vec3(0.0f), 1.0f, 12, 24);
+	PrtMesh broken = mesh;
 	broken.indices.push_back(9999);
-	CHECK(check_triangle_mesh(broken).find("not a multiple of 3") != std::string::npos);
+	CHECK(check_prt_mesh(broken).find("not a multiple of 3") != std::string::npos);
 	broken.indices.push_back(0);
 	broken.indices.push_back(0);
 	CHECK(bake_transfer(broken, nullptr).error.find("beyond the") != std::string::npos);
-	TriangleMesh no_normals = mesh;
+	PrtMesh no_normals = mesh;
 	no_normals.normals.pop_back();
 	CHECK(bake_transfer(no_normals, nullptr).error.find("normals for") != std::string::npos);
-	TriangleMesh nan = mesh;
+	PrtMesh nan = mesh;
 	nan.positions[3].y = std::nanf("");
-	CHECK(check_triangle_mesh(nan) == "vertex 3 is not finite");
-	CHECK(bake_transfer(TriangleMesh(), nullptr).error == "the mesh has no triangles");
+	CHECK(check_prt_mesh(nan) == "vertex 3 is not finite");
+	CHECK(bake_transfer(PrtMesh(), nullptr).error == "the mesh has no triangles");
 	// Normals from the triangles: outward on a sphere wound counter-clockwise.
-	TriangleMesh renormal = mesh;
+	PrtMesh renormal = mesh;
 	compute_vertex_normals(&renormal);
 	for (size_t v = 0; v < mesh.vertex_count(); v++) {
 		CAPTURE(v);
@@ -246,7 +246,7 @@ TEST_CASE("prt transfer: bad meshes are refused with the reason; the cache key f
 	const TransferOptions options;
 	const uint64_t key = transfer_cache_key(mesh, nullptr, options);
 	CHECK(transfer_cache_key(mesh, nullptr, options) == key);
-	TriangleMesh moved = mesh;
+	PrtMesh moved = mesh;
 	moved.positions[0].x += 1e-3f;
 	CHECK(transfer_cache_key(moved, nullptr, options) != key);
 	TransferOptions more = options;

@@ -251,3 +251,63 @@ func _make_view(material: Material, cam_position: Vector3, cam_rotation: Vector3
 	cam.current = true
 	vp.add_child(cam)
 	return vp
+
+
+## A sphere lit through its PRT transfer (prt_diffuse.gdshader) against the same sphere shaded
+## by the SH irradiance at its normals (rough_metal at roughness 1): a convex mesh shadows
+## nothing, so both are albedo / pi times the same irradiance, and any slip in the transfer's
+## layout, its VERTEX_ID lookup or the SH convention shows as a difference.
+func test_prt_sphere_matches_the_sh_diffuse_shading() -> void:
+	if not rendering:
+		return skip("needs a renderer (rendering suite: --rendering under a display)")
+	_holder = Node3D.new()
+	_holder.visible = false
+	_holder.add_child(_coloured_room({}))
+	var probe = ClassDB.instantiate("RoomProbe")
+	probe.resolution = 64
+	probe.position = CENTRE
+	_holder.add_child(probe)
+	probe.coarse_model = NodePath("../Room")
+	add_to_tree(_holder)
+	assert_true(probe.update_now())
+	var sphere_mesh := SphereMesh.new()
+	sphere_mesh.radius = 0.8
+	sphere_mesh.height = 1.6
+	var prt = ClassDB.instantiate("PRTTransfer")
+	prt.mesh = sphere_mesh
+	prt.samples_per_vertex = 1024
+	assert_true(prt.bake(), prt.get_last_error())
+	var prt_material := ShaderMaterial.new()
+	prt_material.shader = load("res://shaders/prt_diffuse.gdshader")
+	prt_material.set_shader_parameter("transfer", prt.get_transfer_texture())
+	prt_material.set_shader_parameter("sh", probe.get_sh_coefficients())
+	# albedo is a source_color (sRGB in, linear in the shader); rough_metal's tint is linear.
+	prt_material.set_shader_parameter("albedo", Color(0.95, 0.64, 0.54).linear_to_srgb())
+	var sh_material := ShaderMaterial.new()
+	sh_material.shader = load("res://shaders/rough_metal.gdshader")
+	sh_material.set_shader_parameter("environment", probe.get_cubemap())
+	sh_material.set_shader_parameter("sh", probe.get_sh_coefficients())
+	sh_material.set_shader_parameter("roughness", 1.0)  # all SH irradiance / pi, tint as albedo
+	_viewport = SubViewport.new()
+	_viewport.size = Vector2i(4, 4)
+	var shots: Array[SubViewport] = []
+	for material in [prt_material, sh_material]:
+		var vp := _make_view(material, Vector3(0, 0, 3), Vector3(0, 0, 0))
+		(vp.get_child(1) as MeshInstance3D).mesh = sphere_mesh
+		_viewport.add_child(vp)
+		shots.append(vp)
+	add_to_tree(_viewport)
+	await wait_frames(4)
+	var images: Array[Image] = [shots[0].get_texture().get_image(), shots[1].get_texture().get_image()]
+	if not artifacts_dir.is_empty():
+		images[0].save_png(artifacts_dir.path_join("prt_sphere.png"))
+		images[1].save_png(artifacts_dir.path_join("sh_sphere.png"))
+	var worst := 0.0
+	for p in [Vector2i(48, 48), Vector2i(48, 30), Vector2i(48, 66), Vector2i(30, 48), Vector2i(66, 48)]:
+		var a := images[0].get_pixelv(p).srgb_to_linear()
+		var b := images[1].get_pixelv(p).srgb_to_linear()
+		assert_true(b.get_luminance() > 0.05, "the SH sphere is lit at %s: %s" % [p, b])
+		worst = maxf(worst, Vector3(a.r - b.r, a.g - b.g, a.b - b.b).length() / maxf(b.get_luminance(), 1e-3))
+	print("    PRT sphere against the SH-shaded sphere: worst relative difference %.3f" % worst)
+	# Per-vertex (PRT) against per-pixel (SH) shading of a 64-segment sphere, 8-bit output: a few %.
+	assert_true(worst < 0.05, "PRT and SH shading agree (%.3f)" % worst)

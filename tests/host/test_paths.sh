@@ -191,8 +191,30 @@ test_synth_photometric_options_refused() {
 	done
 }
 
+# bake-prt bakes an OBJ given relative to the caller's folder, reuses the bake while the mesh is
+# unchanged, and refuses a bad option with its message.
+test_bake_prt_bakes_and_caches() {
+	local dir=$repo/build/test-data/bake-prt
+	rm -rf "$dir" && mkdir -p "$dir"
+	printf 'v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nv 0 1 0\nf 1 4 3 2\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n' >"$dir/pyramid.obj"
+	cd "$dir" || return
+	rp bake-prt pyramid.obj --samples 64
+	check "bake-prt exited with status $rc" test "$rc" -eq 0
+	check "bake-prt printed no summary with cached=0" says "cached=0"
+	check "bake-prt showed no progress" says "baking PRT transfer: 5 / 5 vertices"
+	check "bake-prt wrote no pyramid_prt.res" test -s "$dir/pyramid_prt.res"
+	rp bake-prt pyramid.obj --samples 64
+	check "an unchanged mesh was baked again" says "cached=1"
+	rp bake-prt pyramid.obj --samples 7
+	check "bake-prt --samples 7 exited with status $rc" test "$rc" -ne 0
+	check "the message does not name --samples" says "--samples needs a whole number of directions in [16, 65536], got '7'"
+	rp bake-prt missing.obj
+	check "the message does not name the missing mesh" says "$dir/missing.obj: no such file"
+	cd "$repo" || return
+}
+
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
-	calibrate_refuses_and_never_overwrites synth_photometric_options_refused)
+	calibrate_refuses_and_never_overwrites synth_photometric_options_refused bake_prt_bakes_and_caches)
 passed=0 failed=0 start=$(date +%s.%N)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.
 echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench and roomprobe_calibrate"

@@ -38,7 +38,7 @@ void frame_around(const glm::dvec3 &p_n, glm::dvec3 *r_t, glm::dvec3 *r_b) {
 	*r_b = glm::dvec3(b, sign + p_n.y * p_n.y * a, -p_n.y);
 }
 
-void append_mesh(const TriangleMesh &p_mesh, std::vector<float> *io_xyz, std::vector<uint32_t> *io_indices) {
+void append_mesh(const PrtMesh &p_mesh, std::vector<float> *io_xyz, std::vector<uint32_t> *io_indices) {
 	const uint32_t base = uint32_t(io_xyz->size() / 3);
 	for (const glm::vec3 &p : p_mesh.positions) {
 		io_xyz->insert(io_xyz->end(), { p.x, p.y, p.z });
@@ -50,7 +50,7 @@ void append_mesh(const TriangleMesh &p_mesh, std::vector<float> *io_xyz, std::ve
 
 } // namespace
 
-std::string check_triangle_mesh(const TriangleMesh &p_mesh) {
+std::string check_prt_mesh(const PrtMesh &p_mesh) {
 	if (p_mesh.positions.empty() || p_mesh.indices.empty()) {
 		return "the mesh has no triangles";
 	}
@@ -78,7 +78,7 @@ std::string check_triangle_mesh(const TriangleMesh &p_mesh) {
 	return std::string();
 }
 
-void compute_vertex_normals(TriangleMesh *io_mesh) {
+void compute_vertex_normals(PrtMesh *io_mesh) {
 	std::vector<glm::dvec3> sums(io_mesh->positions.size(), glm::dvec3(0.0));
 	for (size_t t = 0; t + 2 < io_mesh->indices.size(); t += 3) {
 		const uint32_t a = io_mesh->indices[t], b = io_mesh->indices[t + 1], c = io_mesh->indices[t + 2];
@@ -98,12 +98,12 @@ void compute_vertex_normals(TriangleMesh *io_mesh) {
 	}
 }
 
-TransferResult bake_transfer(const TriangleMesh &p_mesh, const TriangleMesh *p_occluders, const TransferOptions &p_options) {
+TransferResult bake_transfer(const PrtMesh &p_mesh, const PrtMesh *p_occluders, const TransferOptions &p_options) {
 	TransferResult result;
 	const auto start = std::chrono::steady_clock::now();
-	std::string problem = check_triangle_mesh(p_mesh);
+	std::string problem = check_prt_mesh(p_mesh);
 	if (problem.empty() && p_occluders && !p_occluders->positions.empty()) {
-		problem = check_triangle_mesh(*p_occluders);
+		problem = check_prt_mesh(*p_occluders);
 		if (!problem.empty()) {
 			problem = "occluders: " + problem;
 		}
@@ -194,7 +194,7 @@ glm::dvec3 transfer_irradiance(const TransferVector &p_transfer, const ShCoeffic
 	return e;
 }
 
-uint64_t transfer_cache_key(const TriangleMesh &p_mesh, const TriangleMesh *p_occluders, const TransferOptions &p_options) {
+uint64_t transfer_cache_key(const PrtMesh &p_mesh, const PrtMesh *p_occluders, const TransferOptions &p_options) {
 	uint64_t hash = 0xcbf29ce484222325ULL;
 	const auto feed = [&hash](const void *p_data, size_t p_bytes) {
 		const unsigned char *bytes = static_cast<const unsigned char *>(p_data);
@@ -202,7 +202,7 @@ uint64_t transfer_cache_key(const TriangleMesh &p_mesh, const TriangleMesh *p_oc
 			hash = (hash ^ bytes[i]) * 0x100000001b3ULL;
 		}
 	};
-	for (const TriangleMesh *mesh : { &p_mesh, p_occluders }) {
+	for (const PrtMesh *mesh : { &p_mesh, p_occluders }) {
 		if (!mesh) {
 			continue;
 		}

@@ -30,7 +30,7 @@
 namespace roomprobe {
 
 // A triangle mesh with one normal per vertex (plain data).
-struct TriangleMesh {
+struct PrtMesh {
 	std::vector<glm::vec3> positions; // metres (any unit: the transfer is unitless)
 	std::vector<glm::vec3> normals; // unit, one per position
 	std::vector<uint32_t> indices; // 3 per triangle, counter-clockwise seen from outside
@@ -41,10 +41,10 @@ struct TriangleMesh {
 
 // "" or what is wrong: sizes that disagree, an index out of range, a non-finite position, a
 // normal that is not unit length.
-std::string check_triangle_mesh(const TriangleMesh &p_mesh);
+std::string check_prt_mesh(const PrtMesh &p_mesh);
 
 // Per-vertex normals from the triangles (area-weighted), for meshes that come without.
-void compute_vertex_normals(TriangleMesh *io_mesh);
+void compute_vertex_normals(PrtMesh *io_mesh);
 
 using TransferVector = std::array<float, SH_COEFFICIENTS>;
 
@@ -69,7 +69,7 @@ struct TransferResult {
 
 // The transfer of every vertex of p_mesh, self-shadowed, and shadowed by p_occluders too when
 // given (e.g. the plane an object stands on: it casts shadows, it gets no transfer).
-TransferResult bake_transfer(const TriangleMesh &p_mesh, const TriangleMesh *p_occluders, const TransferOptions &p_options = TransferOptions());
+TransferResult bake_transfer(const PrtMesh &p_mesh, const PrtMesh *p_occluders, const TransferOptions &p_options = TransferOptions());
 
 // The transfer without any occlusion, A_l y_i(n): what bake_transfer approaches for a convex mesh.
 TransferVector unshadowed_transfer(const glm::dvec3 &p_normal);
@@ -79,6 +79,6 @@ glm::dvec3 transfer_irradiance(const TransferVector &p_transfer, const ShCoeffic
 
 // A 64-bit hash (FNV-1a) of the mesh's positions, normals and indices and of the bake's sample
 // count and seed: a cached transfer is reused only while this matches.
-uint64_t transfer_cache_key(const TriangleMesh &p_mesh, const TriangleMesh *p_occluders, const TransferOptions &p_options);
+uint64_t transfer_cache_key(const PrtMesh &p_mesh, const PrtMesh *p_occluders, const TransferOptions &p_options);
 
 } // namespace roomprobe

@@ -1,0 +1,196 @@
+#include "prt_transfer.h"
+
+#include "../convert/mesh_convert.h"
+
+#include <prt/prt_transfer.h>
+
+#include <cinttypes>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+using namespace godot;
+
+namespace roomprobe {
+
+namespace {
+
+String key_text(uint64_t p_key) {
+	char text[24];
+	std::snprintf(text, sizeof(text), "%016" PRIx64, p_key);
+	return String(text);
+}
+
+TransferOptions options_with(int p_samples) {
+	TransferOptions options;
+	options.samples_per_vertex = p_samples;
+	return options;
+}
+
+} // namespace
+
+void PRTTransfer::set_mesh(const Ref<Mesh> &p_mesh) {
+	mesh = p_mesh;
+	emit_changed();
+}
+
+Ref<Mesh> PRTTransfer::get_mesh() const {
+	return mesh;
+}
+
+void PRTTransfer::set_surface(int p_surface) {
+	surface = p_surface < 0 ? 0 : p_surface;
+	emit_changed();
+}
+
+int PRTTransfer::get_surface() const {
+	return surface;
+}
+
+void PRTTransfer::set_samples_per_vertex(int p_samples) {
+	// Clamped to the range the inspector offers: 16 (a quick look) to 65536 (a reference).
+	samples_per_vertex = p_samples < 16 ? 16 : (p_samples > 65536 ? 65536 : p_samples);
+	emit_changed();
+}
+
+int PRTTransfer::get_samples_per_vertex() const {
+	return samples_per_vertex;
+}
+
+void PRTTransfer::set_transfer(const Ref<Image> &p_transfer) {
+	transfer = p_transfer;
+	emit_changed();
+}
+
+Ref<Image> PRTTransfer::get_transfer() const {
+	return transfer;
+}
+
+void PRTTransfer::set_cache_key(const String &p_key) {
+	cache_key = p_key;
+}
+
+String PRTTransfer::get_cache_key() const {
+	return cache_key;
+}
+
+void PRTTransfer::set_print_progress(bool p_on) {
+	print_progress = p_on;
+}
+
+bool PRTTransfer::get_print_progress() const {
+	return print_progress;
+}
+
+String PRTTransfer::current_key() const {
+	PrtMesh triangles;
+	if (!prt_mesh_from_surface(mesh, surface, &triangles).empty()) {
+		return String();
+	}
+	return key_text(transfer_cache_key(triangles, nullptr, options_with(samples_per_vertex)));
+}
+
+bool PRTTransfer::is_baked() const {
+	return transfer.is_valid() && !cache_key.is_empty() && cache_key == current_key();
+}
+
+bool PRTTransfer::bake() {
+	last_seconds = 0.0;
+	last_rays = 0;
+	last_error = String();
+	PrtMesh triangles;
+	const std::string problem = prt_mesh_from_surface(mesh, surface, &triangles);
+	if (!problem.empty()) {
+		last_error = String(("PRTTransfer: " + problem).c_str());
+		ERR_FAIL_COND_V_MSG(true, false, last_error);
+	}
+	TransferOptions options = options_with(samples_per_vertex);
+	if (print_progress) {
+		// From the bake's worker threads: a plain line to stdout (not Godot's print, which is the
+		// main thread's).
+		options.progress = [](size_t p_done, size_t p_total) {
+			std::printf("\r  baking PRT transfer: %zu / %zu vertices", p_done, p_total);
+			if (p_done == p_total) {
+				std::printf("\n");
+			}
+			std::fflush(stdout);
+		};
+	}
+	const String key = key_text(transfer_cache_key(triangles, nullptr, options));
+	if (transfer.is_valid() && key == cache_key) {
+		return true; // unchanged mesh and settings: the cached transfer stands
+	}
+	const TransferResult baked = bake_transfer(triangles, nullptr, options);
+	if (!baked.error.empty()) {
+		last_error = String(("PRTTransfer: " + baked.error).c_str());
+		ERR_FAIL_COND_V_MSG(true, false, last_error);
+	}
+	const int vertices = int(triangles.vertex_count());
+	const int width = VERTICES_PER_ROW * TEXELS_PER_VERTEX;
+	const int height = (vertices + VERTICES_PER_ROW - 1) / VERTICES_PER_ROW;
+	std::vector<float> texels(size_t(width) * size_t(height) * 4, 0.0f);
+	for (int v = 0; v < vertices; v++) {
+		float *out = texels.data() + (size_t(v / VERTICES_PER_ROW) * width + size_t(v % VERTICES_PER_ROW) * TEXELS_PER_VERTEX) * 4;
+		std::memcpy(out, baked.transfer[size_t(v)].data(), sizeof(float) * SH_COEFFICIENTS);
+	}
+	PackedByteArray bytes;
+	bytes.resize(int64_t(texels.size() * sizeof(float)));
+	std::memcpy(bytes.ptrw(), texels.data(), texels.size() * sizeof(float));
+	transfer = Image::create_from_data(width, height, false, Image::FORMAT_RGBAF, bytes);
+	cache_key = key;
+	last_seconds = baked.seconds;
+	last_rays = int64_t(baked.rays);
+	emit_changed();
+	return true;
+}
+
+Ref<ImageTexture> PRTTransfer::get_transfer_texture() const {
+	return transfer.is_valid() ? ImageTexture::create_from_image(transfer) : Ref<ImageTexture>();
+}
+
+int PRTTransfer::get_vertex_count() const {
+	PrtMesh triangles;
+	return prt_mesh_from_surface(mesh, surface, &triangles).empty() ? int(triangles.vertex_count()) : 0;
+}
+
+double PRTTransfer::get_last_bake_seconds() const {
+	return last_seconds;
+}
+
+int64_t PRTTransfer::get_last_bake_rays() const {
+	return last_rays;
+}
+
+String PRTTransfer::get_last_error() const {
+	return last_error;
+}
+
+void PRTTransfer::_bind_methods() {
+	ClassDB::bind_method(D_METHOD("set_mesh", "mesh"), &PRTTransfer::set_mesh);
+	ClassDB::bind_method(D_METHOD("get_mesh"), &PRTTransfer::get_mesh);
+	ClassDB::bind_method(D_METHOD("set_surface", "surface"), &PRTTransfer::set_surface);
+	ClassDB::bind_method(D_METHOD("get_surface"), &PRTTransfer::get_surface);
+	ClassDB::bind_method(D_METHOD("set_samples_per_vertex", "samples"), &PRTTransfer::set_samples_per_vertex);
+	ClassDB::bind_method(D_METHOD("get_samples_per_vertex"), &PRTTransfer::get_samples_per_vertex);
+	ClassDB::bind_method(D_METHOD("set_transfer", "transfer"), &PRTTransfer::set_transfer);
+	ClassDB::bind_method(D_METHOD("get_transfer"), &PRTTransfer::get_transfer);
+	ClassDB::bind_method(D_METHOD("set_cache_key", "key"), &PRTTransfer::set_cache_key);
+	ClassDB::bind_method(D_METHOD("get_cache_key"), &PRTTransfer::get_cache_key);
+	ClassDB::bind_method(D_METHOD("set_print_progress", "on"), &PRTTransfer::set_print_progress);
+	ClassDB::bind_method(D_METHOD("get_print_progress"), &PRTTransfer::get_print_progress);
+	ClassDB::bind_method(D_METHOD("bake"), &PRTTransfer::bake);
+	ClassDB::bind_method(D_METHOD("is_baked"), &PRTTransfer::is_baked);
+	ClassDB::bind_method(D_METHOD("get_transfer_texture"), &PRTTransfer::get_transfer_texture);
+	ClassDB::bind_method(D_METHOD("get_vertex_count"), &PRTTransfer::get_vertex_count);
+	ClassDB::bind_method(D_METHOD("get_last_bake_seconds"), &PRTTransfer::get_last_bake_seconds);
+	ClassDB::bind_method(D_METHOD("get_last_bake_rays"), &PRTTransfer::get_last_bake_rays);
+	ClassDB::bind_method(D_METHOD("get_last_error"), &PRTTransfer::get_last_error);
+	ADD_PROPERTY(PropertyInfo(Variant::OBJECT, "mesh", PROPERTY_HINT_RESOURCE_TYPE, "Mesh", PROPERTY_USAGE_DEFAULT, "Mesh"), "set_mesh", "get_mesh");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "surface", PROPERTY_HINT_RANGE, "0,255,1"), "set_surface", "get_surface");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "samples_per_vertex", PROPERTY_HINT_RANGE, "16,65536,1"), "set_samples_per_vertex", "get_samples_per_vertex");
+	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "print_progress"), "set_print_progress", "get_print_progress");
+	ADD_PROPERTY(PropertyInfo(Variant::OBJECT, "transfer", PROPERTY_HINT_RESOURCE_TYPE, "Image", PROPERTY_USAGE_STORAGE, "Image"), "set_transfer", "get_transfer");
+	ADD_PROPERTY(PropertyInfo(Variant::STRING, "cache_key", PROPERTY_HINT_NONE, "", PROPERTY_USAGE_STORAGE), "set_cache_key", "get_cache_key");
+}
+
+} // namespace roomprobe
