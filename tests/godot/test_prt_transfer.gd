@@ -105,3 +105,37 @@ func test_the_shader_takes_the_transfer_and_the_probe_sh() -> void:
 	var names := shader.get_shader_uniform_list().map(func(u): return u.name)
 	for name in ["transfer", "sh", "albedo"]:
 		assert_true(name in names, "uniform %s in %s" % [name, names])
+
+
+func test_an_occluder_shadows_a_plane_under_it_and_is_part_of_the_key() -> void:
+	var plane := PlaneMesh.new()
+	plane.size = Vector2(4, 4)
+	plane.subdivide_width = 15
+	plane.subdivide_depth = 15
+	var sphere := _sphere()
+	var prt = ClassDB.instantiate("PRTTransfer")
+	prt.mesh = plane
+	prt.samples_per_vertex = 1024
+	assert_true(prt.bake(), prt.get_last_error())
+	var free_key: String = prt.cache_key
+	prt.occluder = sphere
+	prt.occluder_transform = Transform3D(Basis(), Vector3(0, 0.5, 0))  # resting on the plane at its centre
+	assert_false(prt.is_baked(), "a new occluder needs a new bake")
+	assert_true(prt.bake(), prt.get_last_error())
+	assert_ne(prt.cache_key, free_key)
+	# Under a uniform sky band 0 is the irradiance: the vertex nearest the contact is darkened by
+	# about the analytic 1 - (R / D)^3, the plane's corners are not.
+	var arrays: Array = plane.surface_get_arrays(0)
+	var positions: PackedVector3Array = arrays[Mesh.ARRAY_VERTEX]
+	var nearest := 0
+	var corner := 0
+	for v in positions.size():
+		if Vector2(positions[v].x, positions[v].z).length() < Vector2(positions[nearest].x, positions[nearest].z).length():
+			nearest = v
+		if Vector2(positions[v].x, positions[v].z).length() > Vector2(positions[corner].x, positions[corner].z).length():
+			corner = v
+	var d := Vector2(positions[nearest].x, positions[nearest].z).length()
+	var expected := 1.0 - pow(0.5 / sqrt(d * d + 0.25), 3.0)
+	var image: Image = prt.transfer
+	assert_near(_band0(image, nearest) / (PI * Y00), expected, 0.03, "the contact's ratio at %.3f m" % d)
+	assert_near(_band0(image, corner) / (PI * Y00), 1.0, 0.01, "a corner 2.8 m away is unshadowed")

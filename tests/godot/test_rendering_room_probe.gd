@@ -311,3 +311,68 @@ func test_prt_sphere_matches_the_sh_diffuse_shading() -> void:
 	print("    PRT sphere against the SH-shaded sphere: worst relative difference %.3f" % worst)
 	# Per-vertex (PRT) against per-pixel (SH) shading of a 64-segment sphere, 8-bit output: a few %.
 	assert_true(worst < 0.05, "PRT and SH shading agree (%.3f)" % worst)
+
+
+## The table under a PRT object is darker than beside it: a grey "table" (standing in for the
+## camera image) under contact_shadow.gdshader's plane, the plane's transfer baked with a sphere
+## resting on it as the occluder, lit by a uniform sky; seen from above without the sphere.
+func test_contact_shadow_darkens_the_table_under_the_object() -> void:
+	if not rendering:
+		return skip("needs a renderer (rendering suite: --rendering under a display)")
+	var plane := PlaneMesh.new()
+	plane.size = Vector2(2, 2)
+	plane.subdivide_width = 31
+	plane.subdivide_depth = 31
+	var sphere := SphereMesh.new()
+	sphere.radius = 0.25
+	sphere.height = 0.5
+	var prt = ClassDB.instantiate("PRTTransfer")
+	prt.mesh = plane
+	prt.occluder = sphere
+	prt.occluder_transform = Transform3D(Basis(), Vector3(0, 0.25, 0))
+	prt.samples_per_vertex = 256
+	assert_true(prt.bake(), prt.get_last_error())
+	var sky := PackedVector3Array()
+	sky.resize(25)
+	sky[0] = Vector3.ONE * sqrt(4.0 * PI)  # radiance 1 from everywhere
+	var shadow := ShaderMaterial.new()
+	shadow.shader = load("res://shaders/contact_shadow.gdshader")
+	shadow.set_shader_parameter("transfer", prt.get_transfer_texture())
+	shadow.set_shader_parameter("sh", sky)
+	var table_material := StandardMaterial3D.new()
+	table_material.shading_mode = BaseMaterial3D.SHADING_MODE_UNSHADED
+	table_material.albedo_color = Color(0.7, 0.7, 0.7)
+	_viewport = SubViewport.new()
+	_viewport.size = SIZE
+	_viewport.own_world_3d = true
+	_viewport.render_target_update_mode = SubViewport.UPDATE_ALWAYS
+	var table := MeshInstance3D.new()
+	table.mesh = plane
+	table.material_override = table_material
+	_viewport.add_child(table)
+	var catcher := MeshInstance3D.new()
+	catcher.mesh = plane
+	catcher.material_override = shadow
+	catcher.position = Vector3(0, 0.001, 0)
+	catcher.sorting_offset = 1.0  # after the table
+	_viewport.add_child(catcher)
+	var cam := Camera3D.new()
+	cam.projection = Camera3D.PROJECTION_ORTHOGONAL
+	cam.size = 2.0
+	cam.position = Vector3(0, 3, 0)
+	cam.rotation_degrees = Vector3(-90, 0, 0)
+	cam.current = true
+	_viewport.add_child(cam)
+	add_to_tree(_viewport)
+	await wait_frames(4)
+	var img := _viewport.get_texture().get_image()
+	if not artifacts_dir.is_empty():
+		img.save_png(artifacts_dir.path_join("contact_shadow.png"))
+	var centre := img.get_pixel(SIZE.x / 2, SIZE.y / 2).srgb_to_linear().get_luminance()
+	var near := img.get_pixel(SIZE.x / 2 + 12, SIZE.y / 2).srgb_to_linear().get_luminance()  # 0.25 m: one radius out
+	var beside := img.get_pixel(4, 4).srgb_to_linear().get_luminance()
+	print("    table luminance: under the sphere %.3f, one radius out %.3f, beside %.3f" % [centre, near, beside])
+	assert_near(beside, Color(0.7, 0.7, 0.7).srgb_to_linear().get_luminance(), 0.03, "beside the object the table is as it was")
+	assert_true(centre < 0.5 * beside, "under the object the table is darker (%.3f against %.3f)" % [centre, beside])
+	# One radius out the analytic ratio is 1 - (1/sqrt(2))^3 = 0.65 (the mesh's vertices, 6.5 cm apart, interpolate it).
+	assert_near(near / beside, 0.65, 0.08, "one radius from the contact")

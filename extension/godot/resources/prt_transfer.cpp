@@ -82,12 +82,50 @@ bool PRTTransfer::get_print_progress() const {
 	return print_progress;
 }
 
+void PRTTransfer::set_occluder(const Ref<Mesh> &p_occluder) {
+	occluder = p_occluder;
+	emit_changed();
+}
+
+Ref<Mesh> PRTTransfer::get_occluder() const {
+	return occluder;
+}
+
+void PRTTransfer::set_occluder_transform(const Transform3D &p_transform) {
+	occluder_transform = p_transform;
+	emit_changed();
+}
+
+Transform3D PRTTransfer::get_occluder_transform() const {
+	return occluder_transform;
+}
+
+std::string PRTTransfer::bake_inputs(PrtMesh *r_mesh, PrtMesh *r_occluder, bool *r_has_occluder) const {
+	std::string problem = prt_mesh_from_surface(mesh, surface, r_mesh);
+	*r_has_occluder = occluder.is_valid();
+	if (!problem.empty() || !*r_has_occluder) {
+		return problem;
+	}
+	problem = prt_mesh_from_surface(occluder, 0, r_occluder);
+	if (!problem.empty()) {
+		return "occluder: " + problem;
+	}
+	// Placed in the mesh's frame; its normals do not matter to shadows, so they are recomputed.
+	for (glm::vec3 &p : r_occluder->positions) {
+		const Vector3 placed = occluder_transform.xform(Vector3(p.x, p.y, p.z));
+		p = glm::vec3(placed.x, placed.y, placed.z);
+	}
+	compute_vertex_normals(r_occluder);
+	return std::string();
+}
+
 String PRTTransfer::current_key() const {
-	PrtMesh triangles;
-	if (!prt_mesh_from_surface(mesh, surface, &triangles).empty()) {
+	PrtMesh triangles, blocker;
+	bool has_occluder = false;
+	if (!bake_inputs(&triangles, &blocker, &has_occluder).empty()) {
 		return String();
 	}
-	return key_text(transfer_cache_key(triangles, nullptr, options_with(samples_per_vertex)));
+	return key_text(transfer_cache_key(triangles, has_occluder ? &blocker : nullptr, options_with(samples_per_vertex)));
 }
 
 bool PRTTransfer::is_baked() const {
@@ -98,8 +136,9 @@ bool PRTTransfer::bake() {
 	last_seconds = 0.0;
 	last_rays = 0;
 	last_error = String();
-	PrtMesh triangles;
-	const std::string problem = prt_mesh_from_surface(mesh, surface, &triangles);
+	PrtMesh triangles, blocker;
+	bool has_occluder = false;
+	const std::string problem = bake_inputs(&triangles, &blocker, &has_occluder);
 	if (!problem.empty()) {
 		last_error = String(("PRTTransfer: " + problem).c_str());
 		ERR_FAIL_COND_V_MSG(true, false, last_error);
@@ -116,11 +155,12 @@ bool PRTTransfer::bake() {
 			std::fflush(stdout);
 		};
 	}
-	const String key = key_text(transfer_cache_key(triangles, nullptr, options));
+	const PrtMesh *occluders = has_occluder ? &blocker : nullptr;
+	const String key = key_text(transfer_cache_key(triangles, occluders, options));
 	if (transfer.is_valid() && key == cache_key) {
 		return true; // unchanged mesh and settings: the cached transfer stands
 	}
-	const TransferResult baked = bake_transfer(triangles, nullptr, options);
+	const TransferResult baked = bake_transfer(triangles, occluders, options);
 	if (!baked.error.empty()) {
 		last_error = String(("PRTTransfer: " + baked.error).c_str());
 		ERR_FAIL_COND_V_MSG(true, false, last_error);
@@ -178,6 +218,10 @@ void PRTTransfer::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_cache_key"), &PRTTransfer::get_cache_key);
 	ClassDB::bind_method(D_METHOD("set_print_progress", "on"), &PRTTransfer::set_print_progress);
 	ClassDB::bind_method(D_METHOD("get_print_progress"), &PRTTransfer::get_print_progress);
+	ClassDB::bind_method(D_METHOD("set_occluder", "occluder"), &PRTTransfer::set_occluder);
+	ClassDB::bind_method(D_METHOD("get_occluder"), &PRTTransfer::get_occluder);
+	ClassDB::bind_method(D_METHOD("set_occluder_transform", "transform"), &PRTTransfer::set_occluder_transform);
+	ClassDB::bind_method(D_METHOD("get_occluder_transform"), &PRTTransfer::get_occluder_transform);
 	ClassDB::bind_method(D_METHOD("bake"), &PRTTransfer::bake);
 	ClassDB::bind_method(D_METHOD("is_baked"), &PRTTransfer::is_baked);
 	ClassDB::bind_method(D_METHOD("get_transfer_texture"), &PRTTransfer::get_transfer_texture);
@@ -187,6 +231,8 @@ void PRTTransfer::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_last_error"), &PRTTransfer::get_last_error);
 	ADD_PROPERTY(PropertyInfo(Variant::OBJECT, "mesh", PROPERTY_HINT_RESOURCE_TYPE, "Mesh", PROPERTY_USAGE_DEFAULT, "Mesh"), "set_mesh", "get_mesh");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "surface", PROPERTY_HINT_RANGE, "0,255,1"), "set_surface", "get_surface");
+	ADD_PROPERTY(PropertyInfo(Variant::OBJECT, "occluder", PROPERTY_HINT_RESOURCE_TYPE, "Mesh", PROPERTY_USAGE_DEFAULT, "Mesh"), "set_occluder", "get_occluder");
+	ADD_PROPERTY(PropertyInfo(Variant::TRANSFORM3D, "occluder_transform"), "set_occluder_transform", "get_occluder_transform");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "samples_per_vertex", PROPERTY_HINT_RANGE, "16,65536,1"), "set_samples_per_vertex", "get_samples_per_vertex");
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "print_progress"), "set_print_progress", "get_print_progress");
 	ADD_PROPERTY(PropertyInfo(Variant::OBJECT, "transfer", PROPERTY_HINT_RESOURCE_TYPE, "Image", PROPERTY_USAGE_STORAGE, "Image"), "set_transfer", "get_transfer");

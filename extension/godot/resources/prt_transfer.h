@@ -4,10 +4,15 @@
 // 25 coefficients are in 7 texels (the last one padded) at row v / 256, columns (v % 256) * 7 ..
 // + 6, in the surface's own vertex order, so the shader reads them by VERTEX_ID. A cache key of
 // the mesh and the settings is kept with it: bake() does nothing while they are unchanged.
+// With an occluder, the mesh's vertices are shadowed by it too: a plane under an object gets the
+// object's contact shadow (shaders/contact_shadow.gdshader).
+
+#include <prt/prt_transfer.h>
 
 #include <rp_godot/godot.h>
 
 #include <cstdint>
+#include <string>
 
 namespace roomprobe {
 
@@ -30,6 +35,10 @@ public:
 	godot::String get_cache_key() const;
 	void set_print_progress(bool p_on);
 	bool get_print_progress() const;
+	void set_occluder(const godot::Ref<godot::Mesh> &p_occluder);
+	godot::Ref<godot::Mesh> get_occluder() const;
+	void set_occluder_transform(const godot::Transform3D &p_transform);
+	godot::Transform3D get_occluder_transform() const;
 
 	// Bakes the transfer of the mesh's surface unless the cached one still matches; true on
 	// success (also when nothing needed baking), false with get_last_error().
@@ -48,6 +57,8 @@ protected:
 
 private:
 	godot::String current_key() const; // "" when the mesh cannot be converted
+	// The mesh and the occluder (placed by occluder_transform) as the bake takes them; "" or why not.
+	std::string bake_inputs(PrtMesh *r_mesh, PrtMesh *r_occluder, bool *r_has_occluder) const;
 
 	godot::Ref<godot::Mesh> mesh;
 	int surface = 0;
@@ -55,6 +66,8 @@ private:
 	godot::Ref<godot::Image> transfer;
 	godot::String cache_key;
 	bool print_progress = false;
+	godot::Ref<godot::Mesh> occluder;
+	godot::Transform3D occluder_transform;
 	double last_seconds = 0.0;
 	int64_t last_rays = 0;
 	godot::String last_error;

@@ -109,6 +109,9 @@ func _init() -> void:
 		if mesh == null:
 			_fail("%s: not a Godot mesh resource" % mesh_path)
 			return
+	if not ClassDB.class_exists("PRTTransfer"):
+		_fail("the RoomProbe extension is not loaded (build it: ./roomprobe build; the project is imported on the first run)")
+		return
 	var prt = ClassDB.instantiate("PRTTransfer")
 	if FileAccess.file_exists(out):
 		var previous = ResourceLoader.load(out, "", ResourceLoader.CACHE_MODE_IGNORE)
