@@ -549,12 +549,9 @@ bool open_recording(const Arguments &p_args, int p_probe_size, RecordingSetup *r
 	}
 	RigPhotometry photometry;
 	std::string error;
-	if (!read_recording_photometry(p_args.recording, &photometry, &error)) {
+	if (!read_recording_photometry(p_args.recording, reader.get_rig().photometry, &photometry, &error)) {
 		std::fprintf(stderr, "roomprobe_bench: --recording %s: %s\n", p_args.recording.c_str(), error.c_str());
 		return false;
-	}
-	if (!photometry.known) {
-		photometry = reader.get_rig().photometry; // a calibrated rig's
 	}
 	const RoomInfo &room = reader.get_room();
 	LiveRoomConfig &config = r_setup->config;

@@ -1,6 +1,7 @@
 #include "clock_offset.h"
 
 #include "checkerboard.h"
+#include "rig_calibration.h"
 
 #include <camera/omni_camera.h>
 #include <camera/pinhole_camera.h>
@@ -250,9 +251,8 @@ ClockOffsetEstimate estimate_clock_offset(const RecordingReader &p_reader, const
 	std::vector<FisheyeStep> steps;
 	const OmniParams &lens = p_rig.fisheye;
 	cv::Mat mask(lens.height, lens.width, CV_8UC1, cv::Scalar(0));
-	const double radius = lens.circle_radius > 0.0 ? lens.circle_radius : 0.5 * std::min(lens.width, lens.height);
-	cv::circle(mask, cv::Point(int(lens.circle_radius > 0.0 ? lens.circle_cx : lens.cx), int(lens.circle_radius > 0.0 ? lens.circle_cy : lens.cy)),
-			int(radius * 0.95), cv::Scalar(255), cv::FILLED);
+	const ImageCircle circle = lens_circle(lens);
+	cv::circle(mask, cv::Point(int(circle.cx), int(circle.cy)), int(circle.radius * 0.95), cv::Scalar(255), cv::FILLED);
 	prev_gray.release();
 	for (size_t k = 0; k < p_reader.fisheye_count(); k++) {
 		const double t = p_reader.get_fisheye_ref(k).timestamp_s;

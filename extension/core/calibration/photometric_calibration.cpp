@@ -26,19 +26,6 @@ bool usable_code(const cv::Vec3b &p_code, int p_saturation) {
 	return true;
 }
 
-// The image circle (or the image's inscribed circle about the principal point without one).
-void circle_of(const OmniParams &p_fisheye, double *r_cx, double *r_cy, double *r_radius) {
-	if (p_fisheye.circle_radius > 0.0) {
-		*r_cx = p_fisheye.circle_cx;
-		*r_cy = p_fisheye.circle_cy;
-		*r_radius = p_fisheye.circle_radius;
-	} else {
-		*r_cx = p_fisheye.cx;
-		*r_cy = p_fisheye.cy;
-		*r_radius = 0.5 * std::min(p_fisheye.width, p_fisheye.height);
-	}
-}
-
 cv::Mat read_rgb(const fs::path &p_path, cv::Size p_size, std::string *r_error) {
 	const cv::Mat bgr = cv::imread(p_path.string(), cv::IMREAD_COLOR);
 	if (bgr.empty()) {
@@ -141,8 +128,7 @@ ResponseFit fit_response(const std::vector<cv::Mat> &p_sweep, const std::vector<
 		return fit;
 	}
 	// The square inside the image circle: every pixel there sees the scene.
-	double cx, cy, radius;
-	circle_of(p_fisheye, &cx, &cy, &radius);
+	const auto [cx, cy, radius] = lens_circle(p_fisheye);
 	const int half = int(radius * 0.69);
 	const cv::Rect crop = cv::Rect(int(cx) - half, int(cy) - half, 2 * half, 2 * half) & cv::Rect(0, 0, p_sweep[0].cols, p_sweep[0].rows);
 	if (crop.width < 16 || crop.height < 16) {
@@ -218,8 +204,7 @@ VignettingFit fit_vignetting(const cv::Mat &p_flat_field, const std::array<Respo
 		fit.error = "the flat field must be an 8-bit colour image";
 		return fit;
 	}
-	double cx, cy, radius;
-	circle_of(p_fisheye, &cx, &cy, &radius);
+	const auto [cx, cy, radius] = lens_circle(p_fisheye);
 	// Least squares of the table's piecewise-linear curve (hat functions at the nodes) through the
 	// linearised values: normal equations, tridiagonal.
 	cv::Mat normal(p_nodes, p_nodes, CV_64F, cv::Scalar(0.0)), rhs(p_nodes, 1, CV_64F, cv::Scalar(0.0));

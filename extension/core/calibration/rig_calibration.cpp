@@ -237,6 +237,13 @@ void keep_brightest(cv::Mat &r_brightest, const cv::Mat &p_gray) {
 	}
 }
 
+ImageCircle lens_circle(const OmniParams &p_lens) {
+	if (p_lens.circle_radius > 0.0) {
+		return { p_lens.circle_cx, p_lens.circle_cy, p_lens.circle_radius };
+	}
+	return { p_lens.cx, p_lens.cy, 0.5 * std::min(p_lens.width, p_lens.height) };
+}
+
 ImageCircle find_image_circle(const cv::Mat &p_brightest) {
 	ImageCircle circle;
 	if (p_brightest.empty()) {

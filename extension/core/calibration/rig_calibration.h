@@ -57,6 +57,9 @@ struct ImageCircle {
 	double cx = 0.0, cy = 0.0, radius = 0.0; // pixels
 };
 ImageCircle find_image_circle(const cv::Mat &p_brightest);
+// A calibrated lens's image circle, or, for a lens without one (radius 0), the image's inscribed
+// circle about the principal point: where the photometric and clock fits take their pixels.
+ImageCircle lens_circle(const OmniParams &p_lens);
 // r_brightest becomes the per-pixel maximum of itself and p_gray (CV_8UC1); empty: p_gray.
 void keep_brightest(cv::Mat &r_brightest, const cv::Mat &p_gray);
 

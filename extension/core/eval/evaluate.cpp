@@ -131,12 +131,9 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	RigPhotometry photometry;
 	if (p_options.linearise) {
 		std::string error;
-		if (!read_recording_photometry(p_options.recording, &photometry, &error)) {
+		if (!read_recording_photometry(p_options.recording, rig.photometry, &photometry, &error)) {
 			result.error = error;
 			return result;
-		}
-		if (!photometry.known) {
-			photometry = rig.photometry; // a calibrated rig's (none in a version 1 rig file)
 		}
 	}
 	result.linearised = photometry.known;

@@ -4,6 +4,28 @@
 
 namespace roomprobe {
 
+namespace {
+
+// One ray for Embree's queries: origin + t * direction, t in (t_near, t_far), every mask bit.
+RTCRay make_ray(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far) {
+	RTCRay ray;
+	ray.org_x = static_cast<float>(p_origin.x);
+	ray.org_y = static_cast<float>(p_origin.y);
+	ray.org_z = static_cast<float>(p_origin.z);
+	ray.dir_x = static_cast<float>(p_direction.x);
+	ray.dir_y = static_cast<float>(p_direction.y);
+	ray.dir_z = static_cast<float>(p_direction.z);
+	ray.tnear = static_cast<float>(p_t_near);
+	ray.tfar = static_cast<float>(std::min(p_t_far, 1e30));
+	ray.time = 0.0f;
+	ray.mask = 0xffffffffu;
+	ray.id = 0;
+	ray.flags = 0;
+	return ray;
+}
+
+} // namespace
+
 EmbreeTriangleScene::~EmbreeTriangleScene() {
 	if (scene) {
 		rtcReleaseScene(scene);
@@ -54,18 +76,7 @@ bool EmbreeTriangleScene::intersect(const glm::dvec3 &p_origin, const glm::dvec3
 		return false;
 	}
 	RTCRayHit rh;
-	rh.ray.org_x = static_cast<float>(p_origin.x);
-	rh.ray.org_y = static_cast<float>(p_origin.y);
-	rh.ray.org_z = static_cast<float>(p_origin.z);
-	rh.ray.dir_x = static_cast<float>(p_direction.x);
-	rh.ray.dir_y = static_cast<float>(p_direction.y);
-	rh.ray.dir_z = static_cast<float>(p_direction.z);
-	rh.ray.tnear = static_cast<float>(p_t_near);
-	rh.ray.tfar = static_cast<float>(std::min(p_t_far, 1e30));
-	rh.ray.time = 0.0f;
-	rh.ray.mask = 0xffffffffu;
-	rh.ray.id = 0;
-	rh.ray.flags = 0;
+	rh.ray = make_ray(p_origin, p_direction, p_t_near, p_t_far);
 	rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
 	rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
 	rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
@@ -83,19 +94,7 @@ bool EmbreeTriangleScene::occluded(const glm::dvec3 &p_origin, const glm::dvec3 
 	if (!scene) {
 		return false;
 	}
-	RTCRay ray;
-	ray.org_x = static_cast<float>(p_origin.x);
-	ray.org_y = static_cast<float>(p_origin.y);
-	ray.org_z = static_cast<float>(p_origin.z);
-	ray.dir_x = static_cast<float>(p_direction.x);
-	ray.dir_y = static_cast<float>(p_direction.y);
-	ray.dir_z = static_cast<float>(p_direction.z);
-	ray.tnear = static_cast<float>(p_t_near);
-	ray.tfar = static_cast<float>(std::min(p_t_far, 1e30));
-	ray.time = 0.0f;
-	ray.mask = 0xffffffffu;
-	ray.id = 0;
-	ray.flags = 0;
+	RTCRay ray = make_ray(p_origin, p_direction, p_t_near, p_t_far);
 	rtcOccluded1(scene, &ray, nullptr);
 	return ray.tfar < 0.0f; // Embree sets tfar to -inf on a hit
 }

@@ -1,6 +1,7 @@
 #include "prt_transfer.h"
 
 #include <io/embree_scene.h>
+#include <math/hash.h>
 
 #include <glm/geometric.hpp>
 
@@ -17,13 +18,6 @@
 namespace roomprobe {
 
 namespace {
-
-uint64_t mix(uint64_t p_x) {
-	p_x += 0x9e3779b97f4a7c15ULL;
-	p_x = (p_x ^ (p_x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-	p_x = (p_x ^ (p_x >> 27)) * 0x94d049bb133111ebULL;
-	return p_x ^ (p_x >> 31);
-}
 
 double unit_from_bits(uint64_t p_bits) {
 	return double(p_bits >> 11) * (1.0 / 9007199254740992.0); // [0, 1)
@@ -147,9 +141,9 @@ TransferResult bake_transfer(const PrtMesh &p_mesh, const PrtMesh *p_occluders, 
 			const glm::dvec3 origin = glm::dvec3(p_mesh.positions[v]) + n * offset;
 			std::array<double, SH_COEFFICIENTS> sum{};
 			for (int cell = 0; cell < samples; cell++) {
-				const uint64_t bits = mix(mix(p_options.seed ^ (uint64_t(v) << 20)) + uint64_t(cell));
+				const uint64_t bits = splitmix64(splitmix64(p_options.seed ^ (uint64_t(v) << 20)) + uint64_t(cell));
 				const double u1 = (double(cell / side) + unit_from_bits(bits)) / side;
-				const double u2 = (double(cell % side) + unit_from_bits(mix(bits))) / side;
+				const double u2 = (double(cell % side) + unit_from_bits(splitmix64(bits))) / side;
 				const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
 				const glm::dvec3 w = r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.0, 1.0 - u1)) * n;
 				if (scene.occluded(origin, w, 0.0, 1e30)) {

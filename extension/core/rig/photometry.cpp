@@ -179,13 +179,14 @@ double exposure_ratio(const CameraPhotometry &p_camera, double p_exposure_us, do
 	return p_exposure_us / p_camera.reference_exposure_us * std::pow(10.0, (gain_db - p_camera.reference_gain_db) / 20.0);
 }
 
-bool read_recording_photometry(const std::string &p_recording_folder, RigPhotometry *r_photometry, std::string *r_error) {
-	*r_photometry = RigPhotometry();
+bool read_recording_photometry(const std::string &p_recording_folder, const RigPhotometry &p_rig, RigPhotometry *r_photometry, std::string *r_error) {
+	*r_photometry = p_rig;
 	const std::filesystem::path path = std::filesystem::path(p_recording_folder) / "synth.yaml";
 	std::error_code ec;
 	if (!std::filesystem::exists(path, ec)) {
 		return true;
 	}
+	*r_photometry = RigPhotometry();
 	try {
 		cv::FileStorage info(path.string(), cv::FileStorage::READ);
 		if (!info.isOpened()) {

@@ -97,10 +97,11 @@ double vignetting_at(const std::vector<float> &p_table, double p_radius_fraction
 // 1 where either exposure is unknown (NaN), a NaN gain counting as the reference's.
 double exposure_ratio(const CameraPhotometry &p_camera, double p_exposure_us, double p_gain_db);
 
-// Reads the photometry that a synthetic recording states in its synth.yaml (its truth: tone
-// curves, exposures, vignetting, channel gains). False, with r_error naming the file, when it
-// cannot be read; true with known == false when the folder has no synth.yaml.
-bool read_recording_photometry(const std::string &p_recording_folder, RigPhotometry *r_photometry, std::string *r_error);
+// The photometry a recording's frames are linearised with: the truth a synthetic recording
+// states in its synth.yaml (tone curves, exposures, vignetting, channel gains), else p_rig, the
+// recording's rig file's (unknown for a version 1 file). False, with r_error naming the file, when
+// synth.yaml is there but cannot be read.
+bool read_recording_photometry(const std::string &p_recording_folder, const RigPhotometry &p_rig, RigPhotometry *r_photometry, std::string *r_error);
 
 // A linearised fisheye frame.
 struct LinearFrame {

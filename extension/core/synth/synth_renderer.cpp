@@ -1,6 +1,7 @@
 #include "synth_renderer.h"
 
 #include <io/embree_scene.h>
+#include <math/hash.h>
 
 #include <camera/omni_camera.h>
 #include <camera/pinhole_camera.h>
@@ -8,7 +9,6 @@
 #include <room/room_mesh.h>
 #include <slam/slam_types.h>
 
-#include <embree4/rtcore.h>
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <tbb/parallel_for.h>
@@ -32,13 +32,6 @@ glm::dvec3 to_dvec3(const Vec3 &p_v) {
 glm::dvec3 safe_normalize(const glm::dvec3 &p_v) {
 	const double length = glm::length(p_v);
 	return length > 0.0 ? p_v / length : glm::dvec3(0.0);
-}
-
-uint64_t splitmix64(uint64_t p_x) {
-	p_x += 0x9e3779b97f4a7c15ULL;
-	p_x = (p_x ^ (p_x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-	p_x = (p_x ^ (p_x >> 27)) * 0x94d049bb133111ebULL;
-	return p_x ^ (p_x >> 31);
 }
 
 double uniform01(uint64_t p_hash) {
@@ -313,21 +306,7 @@ bool SynthRenderer::occluded(const glm::dvec3 &p_origin, const glm::dvec3 &p_dir
 	if (!embree || !embree->get() || !(p_t_far > p_t_near)) {
 		return false;
 	}
-	RTCRay ray;
-	ray.org_x = static_cast<float>(p_origin.x);
-	ray.org_y = static_cast<float>(p_origin.y);
-	ray.org_z = static_cast<float>(p_origin.z);
-	ray.dir_x = static_cast<float>(p_direction.x);
-	ray.dir_y = static_cast<float>(p_direction.y);
-	ray.dir_z = static_cast<float>(p_direction.z);
-	ray.tnear = static_cast<float>(p_t_near);
-	ray.tfar = static_cast<float>(p_t_far);
-	ray.time = 0.0f;
-	ray.mask = 0xffffffffu;
-	ray.id = 0;
-	ray.flags = 0;
-	rtcOccluded1(embree->get(), &ray, nullptr);
-	return ray.tfar < 0.0f;
+	return embree->occluded(p_origin, p_direction, p_t_near, p_t_far);
 }
 
 Color SynthRenderer::emission(const Material &p_material, const Hit &p_hit, const glm::dvec3 &p_direction, double p_time_s) const {

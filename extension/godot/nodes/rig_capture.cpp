@@ -152,12 +152,9 @@ bool RigCapture::open() {
 	}
 	RigPhotometry photometry;
 	std::string error;
-	if (!read_recording_photometry(folder, &photometry, &error)) {
+	if (!read_recording_photometry(folder, opened->get_rig().photometry, &photometry, &error)) {
 		fail(error);
 		return false;
-	}
-	if (!photometry.known) {
-		photometry = opened->get_rig().photometry; // a calibrated rig's; synth.yaml states a synthetic one's truth
 	}
 	reader = opened;
 	engine->edit_config([&](LiveRoomConfig &p_config) {
