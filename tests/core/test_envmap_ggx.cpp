@@ -56,24 +56,42 @@ double relative_rms(const Cubemap &p_a, const Cubemap &p_b) {
 
 TEST_CASE("ggx prefilter: the sampled chain matches a brute-force GGX convolution at three roughnesses") {
 	const Cubemap source = test_map(64);
-	GgxPrefilterOptions options;
-	options.levels = 6;
-	options.samples = 1024;
-	const std::vector<Cubemap> chain = prefilter_ggx(source, options);
-	REQUIRE(chain.size() == 6);
-	CHECK(chain[0].size == 64);
-	CHECK(chain[5].size == 2);
-	CHECK(ggx_level_roughness(0, 6) == 0.0);
-	CHECK(ggx_level_roughness(5, 6) == 1.0);
-	for (int level : { 2, 3, 5 }) {
-		const double roughness = ggx_level_roughness(level, 6);
-		const Cubemap reference = ggx_reference(source, roughness, chain[size_t(level)].size);
-		const double error = relative_rms(chain[size_t(level)], reference);
-		CAPTURE(roughness);
-		MESSAGE("roughness " << roughness << " (" << chain[size_t(level)].size << " px faces): relative RMS against brute force " << 100.0 * error << " %");
-		// 1024 samples a texel: the sampled estimate's noise on the light's peak is a few %.
-		CHECK(error < 0.05);
+	// The default chain: faces 64 down to 4 (five levels), Godot's roughness per level.
+	CHECK(ggx_default_levels(64) == 5);
+	CHECK(ggx_default_levels(256) == 7);
+	CHECK(ggx_default_levels(4) == 1);
+	CHECK(ggx_level_roughness(0, 5) == 0.0);
+	CHECK(ggx_level_roughness(2, 5) == doctest::Approx(0.25));
+	CHECK(ggx_level_roughness(4, 5) == 1.0);
+	for (int samples : { 256, 1024 }) {
+		GgxPrefilterOptions options;
+		options.samples = samples;
+		const GgxFilter filter(64, options);
+		REQUIRE(filter.is_valid());
+		const std::vector<Cubemap> chain = filter.apply(source);
+		REQUIRE(chain.size() == 5);
+		CHECK(chain[0].size == 64);
+		CHECK(chain[4].size == 4);
+		MESSAGE(samples << " samples: " << filter.tap_count() << " taps, " << filter.memory_bytes() / 1024 << " KiB");
+		for (int level : { 2, 3, 4 }) {
+			const double roughness = ggx_level_roughness(level, 5);
+			const Cubemap reference = ggx_reference(source, roughness, chain[size_t(level)].size);
+			const double error = relative_rms(chain[size_t(level)], reference);
+			CAPTURE(samples);
+			CAPTURE(roughness);
+			MESSAGE(samples << " samples, roughness " << roughness << " (" << chain[size_t(level)].size << " px faces): relative RMS against brute force " << 100.0 * error << " %");
+			// The sampled estimate's noise on the light's peak (real rooms have no such peak):
+			// 1.5 to 5.4 % at 1024 samples (the finest level read is k - 1), up to 8 % at 256, the
+			// probe worker's default.
+			CHECK(error < (samples >= 1024 ? 0.06 : 0.10));
+		}
+		// The same filter again gives the same chain; a source of another size is refused.
+		const std::vector<Cubemap> again = filter.apply(source);
+		CHECK(cv::norm(again[3].faces[2], chain[3].faces[2], cv::NORM_INF) == 0.0);
+		CHECK(filter.apply(test_map(32)).empty());
 	}
+	GgxPrefilterOptions options;
+	options.levels = 5;
 	// Energy: a constant map stays constant at every level.
 	const std::vector<Cubemap> flat = prefilter_ggx(make_cubemap(16, cv::Vec3f(0.5f, 0.5f, 0.5f)), options);
 	for (const Cubemap &level : flat) {
@@ -85,4 +103,18 @@ TEST_CASE("ggx prefilter: the sampled chain matches a brute-force GGX convolutio
 		}
 	}
 	CHECK(prefilter_ggx(Cubemap(), options).empty());
+}
+
+TEST_CASE("ggx prefilter: one filter per size for the whole process, small ones at once, larger ones in the background") {
+	const std::shared_ptr<const GgxFilter> small = shared_ggx_filter(32);
+	REQUIRE(small != nullptr); // up to 64^2: built by the call
+	CHECK(small->face_size() == 32);
+	CHECK(small->level_count() == ggx_default_levels(32));
+	CHECK(shared_ggx_filter(32) == small);
+	CHECK(shared_ggx_filter(0) == nullptr);
+	// 128^2: the first call may return before it is built; waiting gives it, and then every call.
+	const std::shared_ptr<const GgxFilter> large = shared_ggx_filter(128, true);
+	REQUIRE(large != nullptr);
+	CHECK(large->face_size() == 128);
+	CHECK(shared_ggx_filter(128) == large);
 }

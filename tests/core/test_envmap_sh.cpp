@@ -187,3 +187,35 @@ TEST_CASE("the projection of large faces box-filtered to 64^2 matches the full p
 		CHECK(glm::length(a[size_t(i)] - b[size_t(i)]) == 0.0);
 	}
 }
+
+TEST_CASE("spherical harmonics: rotate_sh gives the function seen from a rotated frame, band by band") {
+	// A 5-band function with every coefficient set, and a rotation about a skew axis.
+	ShCoefficients c{};
+	for (int i = 0; i < SH_COEFFICIENTS; i++) {
+		c[size_t(i)] = glm::dvec3(std::sin(1.7 * i + 0.3), std::cos(0.9 * i), 0.5 - 0.04 * i);
+	}
+	const glm::dvec3 axis = glm::normalize(glm::dvec3(0.3, -0.8, 0.5));
+	const double angle = 1.1;
+	// Rodrigues' rotation matrix.
+	const glm::dmat3 k(0.0, axis.z, -axis.y, -axis.z, 0.0, axis.x, axis.y, -axis.x, 0.0);
+	const glm::dmat3 rotation = glm::dmat3(1.0) + std::sin(angle) * k + (1.0 - std::cos(angle)) * k * k;
+	const ShCoefficients rotated = rotate_sh(c, rotation);
+	double worst = 0.0;
+	for (int i = 0; i < 200; i++) {
+		const double z = 1.0 - (2.0 * i + 1.0) / 200.0, r = std::sqrt(1.0 - z * z), phi = 0.7 * i;
+		const glm::dvec3 d(r * std::cos(phi), r * std::sin(phi), z);
+		worst = std::max(worst, glm::length(evaluate_sh(rotated, d) - evaluate_sh(c, rotation * d)));
+	}
+	CHECK(worst < 1e-9);
+	// Energy stays in its band, and the identity changes nothing.
+	const ShCoefficients same = rotate_sh(c, glm::dmat3(1.0));
+	for (int i = 0; i < SH_COEFFICIENTS; i++) {
+		CHECK(glm::length(same[size_t(i)] - c[size_t(i)]) < 1e-12);
+	}
+	double band2_before = 0.0, band2_after = 0.0;
+	for (int m = -2; m <= 2; m++) {
+		band2_before += glm::dot(c[size_t(sh_index(2, m))], c[size_t(sh_index(2, m))]);
+		band2_after += glm::dot(rotated[size_t(sh_index(2, m))], rotated[size_t(sh_index(2, m))]);
+	}
+	CHECK(band2_after == doctest::Approx(band2_before).epsilon(1e-9));
+}

@@ -4,6 +4,8 @@
 // different estimator and a different query from the bake's). The contact shadow's ratio
 // (prt/contact_shadow.h) under a sphere against the analytic visible fraction of the sky.
 
+#include "prt_test_meshes.h"
+
 #include "io/embree_scene.h"
 #include "prt/contact_shadow.h"
 #include "prt/prt_transfer.h"
@@ -20,28 +22,6 @@
 using namespace roomprobe;
 
 namespace {
-
-// A UV sphere: rings x segments quads, poles shared.
-PrtMesh uv_sphere(const glm::vec3 &p_centre, float p_radius, int p_rings, int p_segments) {
-	PrtMesh mesh;
-	for (int r = 0; r <= p_rings; r++) {
-		const double theta = std::numbers::pi * r / p_rings;
-		for (int s = 0; s <= p_segments; s++) {
-			const double phi = 2.0 * std::numbers::pi * s / p_segments;
-			const glm::vec3 n(float(std::sin(theta) * std::cos(phi)), float(std::cos(theta)), float(std::sin(theta) * std::sin(phi)));
-			mesh.positions.push_back(p_centre + p_radius * n);
-			mesh.normals.push_back(glm::normalize(n));
-		}
-	}
-	const uint32_t stride = uint32_t(p_segments + 1);
-	for (int r = 0; r < p_rings; r++) {
-		for (int s = 0; s < p_segments; s++) {
-			const uint32_t a = uint32_t(r) * stride + uint32_t(s), b = a + 1, c = a + stride, d = c + 1;
-			mesh.indices.insert(mesh.indices.end(), { a, b, c, b, d, c }); // counter-clockwise from outside
-		}
-	}
-	return mesh;
-}
 
 // An n x n grid of quads in the plane y = p_y, over [x0, x1] x [z0, z1], normal p_up (+Y or -Y).
 void add_grid(PrtMesh *io_mesh, float p_x0, float p_x1, float p_z0, float p_z1, float p_y, int p_n, float p_up) {

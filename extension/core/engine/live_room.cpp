@@ -1,5 +1,6 @@
 #include "live_room.h"
 
+#include <envmap/ggx_prefilter.h>
 #include <envmap/spherical_harmonics.h>
 #include <rig/fisheye_pose.h>
 
@@ -30,31 +31,32 @@ constexpr std::chrono::milliseconds WORKER_POLL(50);
 // Arrival times kept for the latency figures (frames older than this many are forgotten).
 constexpr size_t ARRIVALS_KEPT = 256;
 
-// The faces as Godot's RGBAH image with mipmaps wants them: level 0, then each half-size level
-// (box filter) down to 1x1, RGBA half floats.
-std::vector<uint16_t> gpu_face(const cv::Mat &p_face) {
+// One face as Godot's RGBAH image with mipmaps wants it: level 0, then each half-size level down
+// to 1x1, RGBA half floats. The levels are the GGX chain's (ggx_prefilter.h), then box halvings
+// of its last level, which no shader reads for roughness.
+std::vector<uint16_t> gpu_face(const std::vector<Cubemap> &p_chain, int p_face) {
 	std::vector<uint16_t> out;
 	cv::Mat level;
-	cv::cvtColor(p_face, level, cv::COLOR_RGB2RGBA); // alpha 1
-	while (true) {
-		cv::Mat half;
-		level.convertTo(half, CV_16F);
+	for (size_t m = 0;; m++) {
+		if (m < p_chain.size()) {
+			level = p_chain[m].faces[size_t(p_face)];
+		} else {
+			cv::Mat next;
+			cv::resize(level, next, cv::Size(std::max(1, level.cols / 2), std::max(1, level.rows / 2)), 0.0, 0.0, cv::INTER_AREA);
+			level = next;
+		}
+		cv::Mat rgba, half;
+		cv::cvtColor(level, rgba, cv::COLOR_RGB2RGBA); // alpha 1
+		rgba.convertTo(half, CV_16F);
 		const size_t n = size_t(half.total()) * 4;
 		const size_t at = out.size();
 		out.resize(at + n);
-		if (half.isContinuous()) {
-			std::memcpy(out.data() + at, half.ptr(), n * sizeof(uint16_t));
-		} else {
-			for (int y = 0; y < half.rows; y++) {
-				std::memcpy(out.data() + at + size_t(y) * size_t(half.cols) * 4, half.ptr(y), size_t(half.cols) * 4 * sizeof(uint16_t));
-			}
+		for (int y = 0; y < half.rows; y++) {
+			std::memcpy(out.data() + at + size_t(y) * size_t(half.cols) * 4, half.ptr(y), size_t(half.cols) * 4 * sizeof(uint16_t));
 		}
 		if (level.cols == 1 && level.rows == 1) {
 			break;
 		}
-		cv::Mat next;
-		cv::resize(level, next, cv::Size(std::max(1, level.cols / 2), std::max(1, level.rows / 2)), 0.0, 0.0, cv::INTER_AREA);
-		level = next;
 	}
 	return out;
 }
@@ -86,6 +88,7 @@ struct LiveRoom::Probe {
 	uint64_t rendered_generation = 0; // the input_generation its newest map was rendered from
 	std::shared_ptr<const ProbeMap> map;
 	DenseFaceCache dense_faces; // its dense faces between maps
+	std::shared_ptr<const VirtualScene> objects; // drawn over the room (may be null)
 };
 
 struct LiveRoom::Frames {
@@ -644,6 +647,17 @@ void LiveRoom::set_probe(int p_probe, const glm::dvec3 &p_position, int p_size) 
 	}
 }
 
+void LiveRoom::set_probe_objects(int p_probe, std::shared_ptr<const VirtualScene> p_objects) {
+	const std::lock_guard<std::mutex> lock(probe_mutex);
+	const auto it = probes.find(p_probe);
+	if (it == probes.end() || it->second->objects == p_objects) {
+		return;
+	}
+	it->second->objects = std::move(p_objects);
+	it->second->dirty = true;
+	probes_dirty.notify_all();
+}
+
 void LiveRoom::remove_probe(int p_probe) {
 	const std::lock_guard<std::mutex> lock(probe_mutex);
 	probes.erase(p_probe);
@@ -745,11 +759,28 @@ std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dve
 		map->fisheye_sequence = snapshot ? snapshot->fisheye_sequence : 0;
 		map->cubemap = render_map(p_position, p_size, snapshot.get(), true, &map->dense, &map->coarse_ms, &map->dense_ms, probe ? &probe->dense_faces : nullptr);
 		double t = now_s();
+		std::shared_ptr<const VirtualScene> objects;
+		std::shared_ptr<const ProbeMap> previous;
+		if (probe) {
+			const std::lock_guard<std::mutex> lock(probe_mutex);
+			objects = probe->objects;
+			previous = probe->map;
+		}
+		if (objects && objects->object_count() > 0) {
+			// Lit by the probe's previous map when it has one (it holds the objects too), else by
+			// this map's room alone.
+			const bool reuse = previous && previous->cubemap.size == p_size;
+			const ShCoefficients light = reuse ? previous->sh : project_sh(map->cubemap);
+			map->objects = objects->draw(p_position, light, reuse ? &previous->cubemap : nullptr, &map->cubemap);
+		}
 		map->sh = project_sh(map->cubemap);
-		map->sh_ms = ms_since(t);
+		map->sh_ms = ms_since(t) - map->objects.milliseconds;
 		t = now_s();
+		const std::shared_ptr<const GgxFilter> filter = shared_ggx_filter(p_size, cfg.wait_for_ggx_filter);
+		const std::vector<Cubemap> chain = filter ? filter->apply(map->cubemap) : std::vector<Cubemap>{ map->cubemap };
+		map->ggx_mips = filter != nullptr;
 		for (int f = 0; f < 6; f++) {
-			map->gpu_faces[size_t(f)] = gpu_face(map->cubemap.faces[size_t(f)]);
+			map->gpu_faces[size_t(f)] = gpu_face(chain, f);
 		}
 		map->mips_ms = ms_since(t);
 		map->total_ms = ms_since(start);

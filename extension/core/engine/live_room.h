@@ -26,6 +26,8 @@
 #include "mailbox.h"
 
 #include <envmap/dense_render.h>
+#include <envmap/ggx_prefilter.h>
+#include <envmap/virtual_objects.h>
 #include <pipeline/coarse_pipeline.h>
 #include <placement/surface_placement.h>
 #include <rig/photometry.h>
@@ -85,6 +87,10 @@ struct LiveRoomConfig {
 	// dense layer is at most two maps older than the map. 6: every face every map. render_at()
 	// (the evaluation) always raycasts all six.
 	int dense_faces_per_render = 2;
+	// The maps' mips are GGX-prefiltered (envmap/ggx_prefilter.h) once the filter for their size is
+	// built: at once up to 64^2 faces, otherwise in the background (about 3 s at 256^2, once per
+	// process), box-filtered meanwhile. True: wait for it instead (the benchmark, the evaluation).
+	bool wait_for_ggx_filter = false;
 };
 
 // One RGB-D frame as the engine saw it: the image the AR view shows behind the virtual objects
@@ -131,8 +137,9 @@ struct DenseMeshSnapshot {
 };
 
 // One environment map at one probe (§4.7): the float faces, 25 SH coefficients, and the faces
-// as Godot uploads them (RGBA half floats with the whole mip chain, level 0 first, box-filtered),
-// built on the worker so the main thread only copies bytes.
+// as Godot uploads them (RGBA half floats with the whole mip chain, level 0 first: the GGX
+// prefiltered chain of envmap/ggx_prefilter.h, Godot's roughness convention), built on the worker
+// so the main thread only copies bytes.
 struct ProbeMap {
 	int probe = 0;
 	uint64_t version = 0; // per probe: 1, 2, ...
@@ -140,9 +147,11 @@ struct ProbeMap {
 	Cubemap cubemap;
 	ShCoefficients sh{};
 	std::array<std::vector<uint16_t>, 6> gpu_faces;
+	bool ggx_mips = false; // false: box-filtered while the GGX filter is built (see LiveRoomConfig)
 	uint64_t rgbd_sequence = 0, fisheye_sequence = 0; // the newest frames it includes (0: none)
 	DenseRenderStats dense;
-	double coarse_ms = 0.0, dense_ms = 0.0, sh_ms = 0.0, mips_ms = 0.0, total_ms = 0.0;
+	VirtualDrawStats objects; // the other virtual objects drawn into it
+	double coarse_ms = 0.0, dense_ms = 0.0, sh_ms = 0.0, mips_ms = 0.0 /* GGX chain and half floats */, total_ms = 0.0;
 };
 
 // Nearest-rank percentiles of a latency series, milliseconds.
@@ -210,6 +219,9 @@ public:
 	// Probes (ids from add_probe). p_size: cubemap face size in texels (1..4096).
 	int add_probe(const glm::dvec3 &p_position, int p_size);
 	void set_probe(int p_probe, const glm::dvec3 &p_position, int p_size);
+	// The virtual objects drawn into this probe's maps (envmap/virtual_objects.h; null: none).
+	// The probe's own object must not be among them. A new scene marks the probe for a new map.
+	void set_probe_objects(int p_probe, std::shared_ptr<const VirtualScene> p_objects);
 	void remove_probe(int p_probe);
 	// Step mode, or any time: renders every probe (or one) now on the calling thread.
 	void render_probes();

@@ -1,5 +1,6 @@
 #include "cubemap.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace roomprobe {
@@ -51,6 +52,33 @@ double cubemap_texel_solid_angle(int p_u, int p_v, int p_size) {
 	const double t0 = 2.0 * p_v / n - 1.0;
 	const double t1 = 2.0 * (p_v + 1) / n - 1.0;
 	return corner_area(s0, t0) - corner_area(s0, t1) - corner_area(s1, t0) + corner_area(s1, t1);
+}
+
+CubemapBilinear cubemap_bilinear(const glm::dvec3 &p_direction, int p_size) {
+	CubemapBilinear read;
+	double u = 0.0, v = 0.0;
+	cubemap_face_pixel(p_direction, p_size, &read.face, &u, &v);
+	const int n = p_size;
+	u = std::clamp(u, 0.0, double(n - 1));
+	v = std::clamp(v, 0.0, double(n - 1));
+	const int x0 = std::min(int(u), n - 1), y0 = std::min(int(v), n - 1);
+	const int x1 = std::min(x0 + 1, n - 1), y1 = std::min(y0 + 1, n - 1);
+	const double fx = u - x0, fy = v - y0;
+	read.x = { x0, x1, x0, x1 };
+	read.y = { y0, y0, y1, y1 };
+	read.weight = { (1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy };
+	return read;
+}
+
+glm::dvec3 sample_cubemap(const Cubemap &p_cubemap, const glm::dvec3 &p_direction) {
+	const CubemapBilinear read = cubemap_bilinear(p_direction, p_cubemap.size);
+	const cv::Mat &image = p_cubemap.faces[size_t(read.face)];
+	glm::dvec3 sum(0.0);
+	for (int k = 0; k < 4; k++) {
+		const cv::Vec3f &c = image.at<cv::Vec3f>(read.y[size_t(k)], read.x[size_t(k)]);
+		sum += read.weight[size_t(k)] * glm::dvec3(c[0], c[1], c[2]);
+	}
+	return sum;
 }
 
 } // namespace roomprobe

@@ -5,6 +5,8 @@
 
 #include <io/opencv.h>
 
+#include <array>
+
 #include <recording/cubemap_layout.h>
 #include <recording/recording_types.h>
 
@@ -27,5 +29,17 @@ bool is_valid_cubemap(const Cubemap &p_cubemap);
 // The exact solid angle (steradians) that face pixel (p_u, p_v) of a p_size face subtends;
 // the same for every face. The 6 p_size^2 pixels sum to 4 pi.
 double cubemap_texel_solid_angle(int p_u, int p_v, int p_size);
+
+// The four texels and weights of a bilinear read along p_direction (non-zero) on p_size faces,
+// within the face the direction lands on (clamped at its edges, not across them).
+struct CubemapBilinear {
+	int face = 0;
+	std::array<int, 4> x{}, y{};
+	std::array<double, 4> weight{};
+};
+CubemapBilinear cubemap_bilinear(const glm::dvec3 &p_direction, int p_size);
+
+// The map along p_direction (non-zero): cubemap_bilinear's read.
+glm::dvec3 sample_cubemap(const Cubemap &p_cubemap, const glm::dvec3 &p_direction);
 
 } // namespace roomprobe

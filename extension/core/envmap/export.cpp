@@ -1,5 +1,7 @@
 #include "export.h"
 
+#include <math/srgb.h>
+
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -86,7 +88,7 @@ std::string read_cubemap_exr(const std::string &p_path, Cubemap *r_cubemap) {
 
 uint8_t tone_map_srgb8(float p_linear) {
 	const double c = std::isfinite(p_linear) ? std::clamp(double(p_linear), 0.0, 1.0) : 0.0;
-	const double encoded = c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
+	const double encoded = srgb_encode(c);
 	return uint8_t(std::lround(std::clamp(encoded, 0.0, 1.0) * 255.0));
 }
 

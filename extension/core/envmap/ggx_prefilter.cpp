@@ -7,8 +7,13 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <future>
+#include <map>
+#include <mutex>
 #include <numbers>
+#include <utility>
 
 namespace roomprobe {
 
@@ -23,42 +28,6 @@ double ggx_d(double p_cos_h, double p_alpha) {
 	return a2 / (PI * d * d);
 }
 
-// A face texel's value, bilinear, clamped at the face's edges.
-glm::dvec3 sample_face(const cv::Mat &p_face, double p_u, double p_v) {
-	const int n = p_face.cols;
-	const double u = std::clamp(p_u, 0.0, double(n - 1)), v = std::clamp(p_v, 0.0, double(n - 1));
-	const int x0 = std::min(int(u), n - 1), y0 = std::min(int(v), n - 1);
-	const int x1 = std::min(x0 + 1, n - 1), y1 = std::min(y0 + 1, n - 1);
-	const double fx = u - x0, fy = v - y0;
-	const auto at = [&](int p_x, int p_y) {
-		const cv::Vec3f &c = p_face.at<cv::Vec3f>(p_y, p_x);
-		return glm::dvec3(c[0], c[1], c[2]);
-	};
-	return (at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx) * (1.0 - fy) + (at(x0, y1) * (1.0 - fx) + at(x1, y1) * fx) * fy;
-}
-
-glm::dvec3 sample_cubemap(const Cubemap &p_map, const glm::dvec3 &p_direction) {
-	int face = 0;
-	double u = 0.0, v = 0.0;
-	cubemap_face_pixel(p_direction, p_map.size, &face, &u, &v);
-	return sample_face(p_map.faces[size_t(face)], u, v);
-}
-
-// The source and its box-filtered halvings down to 1 texel a face.
-std::vector<Cubemap> box_pyramid(const Cubemap &p_source) {
-	std::vector<Cubemap> pyramid{ p_source };
-	while (pyramid.back().size > 1) {
-		const Cubemap &above = pyramid.back();
-		Cubemap next;
-		next.size = std::max(1, above.size / 2);
-		for (int f = 0; f < 6; f++) {
-			cv::resize(above.faces[size_t(f)], next.faces[size_t(f)], cv::Size(next.size, next.size), 0.0, 0.0, cv::INTER_AREA);
-		}
-		pyramid.push_back(next);
-	}
-	return pyramid;
-}
-
 double radical_inverse(uint32_t p_bits) {
 	p_bits = (p_bits << 16u) | (p_bits >> 16u);
 	p_bits = ((p_bits & 0x55555555u) << 1u) | ((p_bits & 0xAAAAAAAAu) >> 1u);
@@ -68,68 +37,259 @@ double radical_inverse(uint32_t p_bits) {
 	return double(p_bits) * 2.3283064365386963e-10;
 }
 
+using Tap = std::pair<uint32_t, double>; // flattened pyramid texel, weight
+
+// The bilinear taps of p_direction on a face of p_size texels whose first texel is p_offset in the
+// flattened pyramid, clamped at the face's edges, scaled by p_scale.
+void bilinear_taps(const glm::dvec3 &p_direction, int p_size, size_t p_offset, double p_scale, std::vector<Tap> *r_taps) {
+	const CubemapBilinear read = cubemap_bilinear(p_direction, p_size);
+	const size_t n = size_t(p_size);
+	for (size_t k = 0; k < 4; k++) {
+		r_taps->emplace_back(uint32_t(p_offset + (size_t(read.face) * n + size_t(read.y[k])) * n + size_t(read.x[k])), p_scale * read.weight[k]);
+	}
+}
+
+// One output texel's taps: GGX samples around p_r, each read at the box level of its share of
+// the lobe (filtered importance sampling), blended between the two nearest levels, and never
+// finer than p_finest_level: an output texel of level k spans 2^k source texels already, so
+// reading much finer adds taps (memory, time) and no detail.
+std::vector<Tap> texel_taps(const glm::dvec3 &p_r, double p_alpha, int p_samples, double p_finest_level, const std::vector<int> &p_sizes,
+		const std::vector<size_t> &p_offsets) {
+	std::vector<Tap> taps;
+	taps.reserve(size_t(p_samples) * 8);
+	// The source texel's solid angle at level 0 (about; the cube's texels vary by 5x).
+	const double texel_solid_angle = 4.0 * PI / (6.0 * double(p_sizes[0]) * double(p_sizes[0]));
+	const double top = double(p_sizes.size() - 1);
+	// A frame around R.
+	const glm::dvec3 helper = std::abs(p_r.z) < 0.999 ? glm::dvec3(0.0, 0.0, 1.0) : glm::dvec3(1.0, 0.0, 0.0);
+	const glm::dvec3 t = glm::normalize(glm::cross(helper, p_r));
+	const glm::dvec3 b = glm::cross(p_r, t);
+	for (int s = 0; s < p_samples; s++) {
+		const double u1 = (s + 0.5) / p_samples, u2 = radical_inverse(uint32_t(s));
+		// h from D(h) (n . h): cos^2 = (1 - u) / (1 + (a^2 - 1) u).
+		const double cos_h = std::sqrt((1.0 - u1) / (1.0 + (p_alpha * p_alpha - 1.0) * u1));
+		const double sin_h = std::sqrt(std::max(0.0, 1.0 - cos_h * cos_h));
+		const double phi = 2.0 * PI * u2;
+		const glm::dvec3 h = sin_h * std::cos(phi) * t + sin_h * std::sin(phi) * b + cos_h * p_r;
+		const glm::dvec3 l = 2.0 * glm::dot(p_r, h) * h - p_r;
+		const double r_dot_l = glm::dot(p_r, l);
+		if (r_dot_l <= 0.0) {
+			continue;
+		}
+		// pdf of l: D(h) (n . h) / (4 (l . h)) = D(h) / 4 with n = v = R.
+		const double pdf = ggx_d(cos_h, p_alpha) / 4.0;
+		const double sample_solid_angle = 1.0 / (double(p_samples) * pdf);
+		const double lod = std::clamp(0.5 * std::log2(sample_solid_angle / texel_solid_angle) + 1.0, p_finest_level, top);
+		const int l0 = int(lod);
+		const int l1 = std::min(l0 + 1, int(top));
+		const double f = lod - l0;
+		bilinear_taps(l, p_sizes[size_t(l0)], p_offsets[size_t(l0)], r_dot_l * (1.0 - f), &taps);
+		if (f > 0.0) {
+			bilinear_taps(l, p_sizes[size_t(l1)], p_offsets[size_t(l1)], r_dot_l * f, &taps);
+		}
+	}
+	if (taps.empty()) { // no sample above the horizon: the source along R
+		const size_t level = size_t(p_finest_level);
+		bilinear_taps(p_r, p_sizes[level], p_offsets[level], 1.0, &taps);
+	}
+	// Merge repeated texels and normalise.
+	std::sort(taps.begin(), taps.end(), [](const Tap &p_a, const Tap &p_b) { return p_a.first < p_b.first; });
+	std::vector<Tap> merged;
+	double total = 0.0;
+	for (const Tap &tap : taps) {
+		if (tap.second <= 0.0) {
+			continue;
+		}
+		total += tap.second;
+		if (!merged.empty() && merged.back().first == tap.first) {
+			merged.back().second += tap.second;
+		} else {
+			merged.push_back(tap);
+		}
+	}
+	// The smallest taps that together hold under TAIL of the weight are dropped: they are most
+	// of the memory (the lobe's tail spread thin over many texels). A bound on the weight lost,
+	// whatever the sample count.
+	constexpr double TAIL = 0.005;
+	std::vector<Tap> by_weight = merged;
+	std::sort(by_weight.begin(), by_weight.end(), [](const Tap &p_a, const Tap &p_b) { return p_a.second < p_b.second; });
+	double dropped = 0.0, threshold = 0.0;
+	for (const Tap &tap : by_weight) {
+		if (dropped + tap.second > TAIL * total) {
+			break;
+		}
+		dropped += tap.second;
+		threshold = tap.second;
+	}
+	if (dropped > 0.0) {
+		std::erase_if(merged, [&](const Tap &p_tap) { return p_tap.second <= threshold; });
+	}
+	double kept = 0.0;
+	for (const Tap &tap : merged) {
+		kept += tap.second;
+	}
+	for (Tap &tap : merged) {
+		tap.second /= kept;
+	}
+	return merged;
+}
+
 } // namespace
 
 double ggx_level_roughness(int p_level, int p_levels) {
-	return p_levels <= 1 ? 0.0 : double(p_level) / double(p_levels - 1);
+	if (p_levels <= 1) {
+		return 0.0;
+	}
+	const double t = double(p_level) / double(p_levels - 1);
+	return t * t;
+}
+
+int ggx_default_levels(int p_size) {
+	int levels = 0;
+	for (int n = p_size; n >= 4; n /= 2) {
+		levels++;
+	}
+	return std::max(1, levels);
+}
+
+GgxFilter::GgxFilter(int p_size, const GgxPrefilterOptions &p_options) {
+	const int level_count = p_options.levels == 0 ? ggx_default_levels(p_size) : p_options.levels;
+	if (p_size < 1 || level_count < 1 || p_options.samples < 1 || (p_size >> (level_count - 1)) < 1) {
+		return;
+	}
+	std::vector<int> sizes;
+	size_t texels = 0;
+	for (int n = p_size;; n = std::max(1, n / 2)) {
+		sizes.push_back(n);
+		pyramid_offset.push_back(texels);
+		texels += size_t(6) * size_t(n) * size_t(n);
+		if (n == 1) {
+			break;
+		}
+	}
+	if (texels > size_t(UINT32_MAX)) {
+		pyramid_offset.clear();
+		return;
+	}
+	size = p_size;
+	samples = p_options.samples;
+	for (int k = 1; k < level_count; k++) {
+		const double roughness = ggx_level_roughness(k, level_count);
+		const double alpha = std::max(roughness * roughness, 1e-6);
+		Level level;
+		level.size = p_size >> k;
+		const int n = level.size;
+		std::vector<std::vector<Tap>> per_texel(size_t(6) * size_t(n) * size_t(n));
+		tbb::parallel_for(0, 6 * n, [&](int p_row) {
+			const int face = p_row / n, y = p_row % n;
+			for (int x = 0; x < n; x++) {
+				per_texel[size_t(p_row) * size_t(n) + size_t(x)] = texel_taps(cubemap_direction(face, x, y, n), alpha, samples, double(k - 1), sizes, pyramid_offset);
+			}
+		});
+		level.first.reserve(per_texel.size() + 1);
+		for (const std::vector<Tap> &taps : per_texel) {
+			level.first.push_back(uint32_t(level.texel.size()));
+			for (const Tap &tap : taps) {
+				level.texel.push_back(tap.first);
+				level.weight.push_back(float(tap.second));
+			}
+		}
+		level.first.push_back(uint32_t(level.texel.size()));
+		levels.push_back(std::move(level));
+	}
+}
+
+size_t GgxFilter::tap_count() const {
+	size_t n = 0;
+	for (const Level &level : levels) {
+		n += level.weight.size();
+	}
+	return n;
+}
+
+size_t GgxFilter::memory_bytes() const {
+	size_t bytes = 0;
+	for (const Level &level : levels) {
+		bytes += level.first.size() * sizeof(uint32_t) + level.texel.size() * sizeof(uint32_t) + level.weight.size() * sizeof(float);
+	}
+	return bytes;
+}
+
+std::vector<Cubemap> GgxFilter::apply(const Cubemap &p_source) const {
+	std::vector<Cubemap> chain;
+	if (!is_valid() || !is_valid_cubemap(p_source) || p_source.size != size) {
+		return chain;
+	}
+	// The box pyramid, flattened in the order the taps index it.
+	std::vector<cv::Vec3f> pyramid(pyramid_offset.empty() ? 0 : pyramid_offset.back() + 6);
+	Cubemap level = p_source;
+	for (size_t l = 0; l < pyramid_offset.size(); l++) {
+		const int n = level.size;
+		for (int f = 0; f < 6; f++) {
+			const cv::Mat &face = level.faces[size_t(f)];
+			for (int y = 0; y < n; y++) {
+				std::copy_n(face.ptr<cv::Vec3f>(y), n, pyramid.begin() + std::ptrdiff_t(pyramid_offset[l] + (size_t(f) * size_t(n) + size_t(y)) * size_t(n)));
+			}
+		}
+		if (n > 1) {
+			Cubemap next;
+			next.size = n / 2;
+			for (int f = 0; f < 6; f++) {
+				cv::resize(level.faces[size_t(f)], next.faces[size_t(f)], cv::Size(next.size, next.size), 0.0, 0.0, cv::INTER_AREA);
+			}
+			level = std::move(next);
+		}
+	}
+	chain.push_back(clone_cubemap(p_source));
+	for (const Level &filter : levels) {
+		Cubemap out = make_cubemap(filter.size);
+		const int n = filter.size;
+		tbb::parallel_for(0, 6 * n, [&](int p_row) {
+			const int face = p_row / n, y = p_row % n;
+			cv::Vec3f *row = out.faces[size_t(face)].ptr<cv::Vec3f>(y);
+			for (int x = 0; x < n; x++) {
+				const size_t texel = size_t(p_row) * size_t(n) + size_t(x);
+				cv::Vec3f sum(0.0f, 0.0f, 0.0f);
+				for (uint32_t i = filter.first[texel]; i < filter.first[texel + 1]; i++) {
+					sum += pyramid[filter.texel[i]] * filter.weight[i];
+				}
+				row[x] = sum;
+			}
+		});
+		chain.push_back(std::move(out));
+	}
+	return chain;
+}
+
+std::shared_ptr<const GgxFilter> shared_ggx_filter(int p_size, bool p_wait) {
+	using Build = std::shared_future<std::shared_ptr<const GgxFilter>>;
+	static std::mutex mutex;
+	static std::map<int, Build> builds;
+	constexpr int AT_ONCE_SIZE = 64;
+	if (p_size < 1) {
+		return nullptr;
+	}
+	Build build;
+	{
+		const std::lock_guard<std::mutex> lock(mutex);
+		auto it = builds.find(p_size);
+		if (it == builds.end()) {
+			const auto make = [p_size] { return std::shared_ptr<const GgxFilter>(std::make_shared<const GgxFilter>(p_size)); };
+			it = builds.emplace(p_size, std::async(p_size <= AT_ONCE_SIZE ? std::launch::deferred : std::launch::async, make).share()).first;
+		}
+		build = it->second;
+	}
+	if (p_wait || build.wait_for(std::chrono::seconds(0)) != std::future_status::timeout) {
+		return build.get(); // a deferred build runs here, once
+	}
+	return nullptr;
 }
 
 std::vector<Cubemap> prefilter_ggx(const Cubemap &p_source, const GgxPrefilterOptions &p_options) {
-	std::vector<Cubemap> chain;
-	if (!is_valid_cubemap(p_source) || p_options.levels < 1 || p_options.samples < 1) {
-		return chain;
+	if (!is_valid_cubemap(p_source)) {
+		return {};
 	}
-	const std::vector<Cubemap> pyramid = box_pyramid(p_source);
-	chain.push_back(clone_cubemap(p_source));
-	const int samples = p_options.samples;
-	// The source texel's solid angle at level 0 (about; the cube's texels vary by 5x).
-	const double texel_solid_angle = 4.0 * PI / (6.0 * double(p_source.size) * double(p_source.size));
-	for (int level = 1; level < p_options.levels; level++) {
-		const double roughness = ggx_level_roughness(level, p_options.levels);
-		const double alpha = roughness * roughness;
-		const int size = std::max(1, p_source.size >> level);
-		Cubemap out = make_cubemap(size);
-		tbb::parallel_for(0, 6 * size, [&](int p_row) {
-			const int face = p_row / size, y = p_row % size;
-			cv::Vec3f *row = out.faces[size_t(face)].ptr<cv::Vec3f>(y);
-			for (int x = 0; x < size; x++) {
-				const glm::dvec3 r = cubemap_direction(face, x, y, size);
-				// A frame around R.
-				const glm::dvec3 helper = std::abs(r.z) < 0.999 ? glm::dvec3(0.0, 0.0, 1.0) : glm::dvec3(1.0, 0.0, 0.0);
-				const glm::dvec3 t = glm::normalize(glm::cross(helper, r));
-				const glm::dvec3 b = glm::cross(r, t);
-				glm::dvec3 sum(0.0);
-				double weight = 0.0;
-				for (int s = 0; s < samples; s++) {
-					const double u1 = (s + 0.5) / samples, u2 = radical_inverse(uint32_t(s));
-					// h from D(h) (n . h): cos^2 = (1 - u) / (1 + (a^2 - 1) u).
-					const double cos_h = std::sqrt((1.0 - u1) / (1.0 + (alpha * alpha - 1.0) * u1));
-					const double sin_h = std::sqrt(std::max(0.0, 1.0 - cos_h * cos_h));
-					const double phi = 2.0 * PI * u2;
-					const glm::dvec3 h = sin_h * std::cos(phi) * t + sin_h * std::sin(phi) * b + cos_h * r;
-					const glm::dvec3 l = 2.0 * glm::dot(r, h) * h - r;
-					const double r_dot_l = glm::dot(r, l);
-					if (r_dot_l <= 0.0) {
-						continue;
-					}
-					// pdf of l: D(h) (n . h) / (4 (l . h)) = D(h) / 4 with n = v = R.
-					const double pdf = ggx_d(cos_h, alpha) / 4.0;
-					const double sample_solid_angle = 1.0 / (double(samples) * pdf);
-					const double lod = std::clamp(0.5 * std::log2(sample_solid_angle / texel_solid_angle) + 1.0, 0.0, double(pyramid.size() - 1));
-					const int l0 = int(lod);
-					const int l1 = std::min(l0 + 1, int(pyramid.size()) - 1);
-					const double f = lod - l0;
-					const glm::dvec3 value = sample_cubemap(pyramid[size_t(l0)], l) * (1.0 - f) + sample_cubemap(pyramid[size_t(l1)], l) * f;
-					sum += value * r_dot_l;
-					weight += r_dot_l;
-				}
-				const glm::dvec3 c = weight > 0.0 ? sum / weight : sample_cubemap(p_source, r);
-				row[x] = cv::Vec3f(float(c.x), float(c.y), float(c.z));
-			}
-		});
-		chain.push_back(out);
-	}
-	return chain;
+	return GgxFilter(p_source.size, p_options).apply(p_source);
 }
 
 Cubemap ggx_reference(const Cubemap &p_source, double p_roughness, int p_size) {

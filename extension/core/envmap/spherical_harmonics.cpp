@@ -205,4 +205,63 @@ ShCoefficients convolve_cosine_lobe(const ShCoefficients &p_radiance) {
 	return irradiance;
 }
 
+namespace {
+
+// Per band l: 2 (2l + 1) fixed directions spread over the sphere (a Fibonacci spiral), and the
+// least-squares inverse of the band's basis at them, computed once.
+struct ShRotationTables {
+	std::array<std::vector<glm::dvec3>, SH_BANDS> directions;
+	std::array<cv::Mat, SH_BANDS> inverse; // (2l + 1) x directions
+};
+
+const ShRotationTables &rotation_tables() {
+	static const ShRotationTables tables = [] {
+		ShRotationTables t;
+		for (int l = 0; l < SH_BANDS; l++) {
+			const int count = 2 * (2 * l + 1);
+			cv::Mat basis(count, 2 * l + 1, CV_64F);
+			for (int i = 0; i < count; i++) {
+				const double z = 1.0 - (2.0 * i + 1.0) / count;
+				const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+				const double phi = 2.39996322972865332 * (i + 0.5 * l); // the golden angle, offset per band
+				t.directions[size_t(l)].emplace_back(r * std::cos(phi), r * std::sin(phi), z);
+				const auto y = sh_basis(t.directions[size_t(l)].back());
+				for (int m = -l; m <= l; m++) {
+					basis.at<double>(i, m + l) = y[size_t(sh_index(l, m))];
+				}
+			}
+			cv::invert(basis, t.inverse[size_t(l)], cv::DECOMP_SVD);
+		}
+		return t;
+	}();
+	return tables;
+}
+
+} // namespace
+
+ShCoefficients rotate_sh(const ShCoefficients &p_coefficients, const glm::dmat3 &p_rotation) {
+	const ShRotationTables &tables = rotation_tables();
+	ShCoefficients out{};
+	for (int l = 0; l < SH_BANDS; l++) {
+		const std::vector<glm::dvec3> &directions = tables.directions[size_t(l)];
+		const cv::Mat &inverse = tables.inverse[size_t(l)];
+		// The band's part of f at the rotated directions, then back to coefficients.
+		std::vector<glm::dvec3> values(directions.size(), glm::dvec3(0.0));
+		for (size_t i = 0; i < directions.size(); i++) {
+			const auto y = sh_basis(p_rotation * directions[i]);
+			for (int m = -l; m <= l; m++) {
+				values[i] += p_coefficients[size_t(sh_index(l, m))] * y[size_t(sh_index(l, m))];
+			}
+		}
+		for (int m = -l; m <= l; m++) {
+			glm::dvec3 c(0.0);
+			for (size_t i = 0; i < directions.size(); i++) {
+				c += inverse.at<double>(m + l, int(i)) * values[i];
+			}
+			out[size_t(sh_index(l, m))] = c;
+		}
+	}
+	return out;
+}
+
 } // namespace roomprobe

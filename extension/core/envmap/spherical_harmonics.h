@@ -19,6 +19,7 @@
 
 #include "cubemap.h"
 
+#include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
 
 #include <array>
@@ -60,5 +61,12 @@ double sh_cosine_lobe_factor(int p_l);
 // band-limited to 5 bands; band 4 of the clamped cosine truncated beyond). Divide by pi for the
 // exit radiance of a white Lambertian surface.
 ShCoefficients convolve_cosine_lobe(const ShCoefficients &p_radiance);
+
+// The coefficients of the same function seen in a rotated frame: g(d) = f(p_rotation d). With
+// p_rotation a frame's basis in world coordinates (an object's rotation), g is the world
+// function written in that frame's directions: what a PRT transfer in the object's frame is
+// dotted with. Exact (each band is closed under rotation), band by band from the basis at
+// fixed directions.
+ShCoefficients rotate_sh(const ShCoefficients &p_coefficients, const glm::dmat3 &p_rotation);
 
 } // namespace roomprobe

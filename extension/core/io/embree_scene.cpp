@@ -87,6 +87,8 @@ bool EmbreeTriangleScene::intersect(const glm::dvec3 &p_origin, const glm::dvec3
 	r_hit->t = rh.ray.tfar;
 	r_hit->triangle = rh.hit.primID;
 	r_hit->geometric_normal = glm::vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+	r_hit->u = rh.hit.u;
+	r_hit->v = rh.hit.v;
 	return true;
 }
 

@@ -32,6 +32,7 @@ public:
 		float t = 0.0f;
 		uint32_t triangle = 0;
 		glm::vec3 geometric_normal = glm::vec3(0.0f);
+		float u = 0.0f, v = 0.0f; // barycentrics: the hit is (1 - u - v) v0 + u v1 + v v2
 	};
 	bool intersect(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far, RayHit *r_hit) const;
 	// Whether anything lies along origin + t * direction, t in (t_near, t_far) (Embree's any-hit

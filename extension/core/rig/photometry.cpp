@@ -1,5 +1,7 @@
 #include "photometry.h"
 
+#include <math/srgb.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -7,14 +9,6 @@
 namespace roomprobe {
 
 namespace {
-
-double srgb_decode(double p_v) {
-	return p_v <= 0.04045 ? p_v / 12.92 : std::pow((p_v + 0.055) / 1.055, 2.4);
-}
-
-double srgb_encode(double p_x) {
-	return p_x <= 0.0031308 ? 12.92 * p_x : 1.055 * std::pow(p_x, 1.0 / 2.4) - 0.055;
-}
 
 constexpr double LOG_CURVE_A = 30.0;
 

@@ -2,6 +2,7 @@
 
 #include <io/embree_scene.h>
 #include <math/hash.h>
+#include <math/srgb.h>
 
 #include <camera/omni_camera.h>
 #include <camera/pinhole_camera.h>
@@ -78,7 +79,7 @@ struct SrgbTable {
 	SrgbTable() {
 		for (int k = 0; k < 255; ++k) {
 			const double s = (k + 0.5) / 255.0;
-			thresholds[k] = static_cast<float>(s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4));
+			thresholds[k] = static_cast<float>(srgb_decode(s));
 		}
 		for (int i = 0; i <= STEPS; ++i) {
 			const float v = static_cast<float>(i) / STEPS;
@@ -399,8 +400,7 @@ uint8_t linear_to_srgb8(float p_linear) {
 }
 
 float srgb8_to_linear(uint8_t p_code) {
-	const double s = p_code / 255.0;
-	return static_cast<float>(s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4));
+	return static_cast<float>(srgb_decode(p_code / 255.0));
 }
 
 cv::Mat to_srgb8(const cv::Mat &p_linear, double p_exposure) {

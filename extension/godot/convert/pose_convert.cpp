@@ -1,7 +1,10 @@
 #include "pose_convert.h"
 
 #include <glm/gtc/quaternion.hpp>
+#include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
+
+#include <cmath>
 
 using namespace godot;
 
@@ -38,6 +41,23 @@ Pose pose_from_camera_transform(const Transform3D &p_transform) {
 	pose.rotation = glm::normalize(glm::quat_cast(r));
 	pose.translation = to_glm(p_transform.origin);
 	return pose;
+}
+
+bool rotation_from_basis(const godot::Basis &p_basis, glm::dmat3 *r_rotation) {
+	glm::dvec3 axes[3];
+	for (int c = 0; c < 3; c++) {
+		const auto component = [c](const godot::Vector3 &p_row) { return double(c == 0 ? p_row.x : (c == 1 ? p_row.y : p_row.z)); };
+		axes[c] = glm::dvec3(component(p_basis.rows[0]), component(p_basis.rows[1]), component(p_basis.rows[2]));
+	}
+	const double volume = glm::dot(axes[0], glm::cross(axes[1], axes[2]));
+	if (!std::isfinite(volume) || std::abs(volume) < 1e-12) {
+		return false;
+	}
+	const glm::dvec3 x = glm::normalize(axes[0]);
+	const glm::dvec3 y = glm::normalize(axes[1] - glm::dot(axes[1], x) * x);
+	const glm::dvec3 z = glm::cross(x, y) * (volume > 0.0 ? 1.0 : -1.0);
+	*r_rotation = glm::dmat3(x, y, z);
+	return true;
 }
 
 } // namespace roomprobe

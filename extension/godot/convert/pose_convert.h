@@ -4,6 +4,8 @@
 
 #include <math/pose.h>
 
+#include <glm/mat3x3.hpp>
+
 #include <rp_godot/godot.h>
 
 namespace roomprobe {
@@ -15,5 +17,8 @@ Pose pose_from_camera_transform(const godot::Transform3D &p_transform);
 
 godot::Vector3 to_godot(const glm::dvec3 &p_v);
 glm::dvec3 to_glm(const godot::Vector3 &p_v);
+// The rotation of p_basis: its columns (the frame's axes in world coordinates) orthonormalised
+// (Gram-Schmidt), so scale and shear drop out. False for a degenerate or non-finite basis.
+bool rotation_from_basis(const godot::Basis &p_basis, glm::dmat3 *r_rotation);
 
 } // namespace roomprobe

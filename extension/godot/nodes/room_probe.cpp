@@ -2,8 +2,10 @@
 
 #include "../convert/image_convert.h"
 #include "../convert/pose_convert.h"
+#include "../convert/virtual_object_convert.h"
 
 #include <envmap/export.h>
+#include <envmap/spherical_harmonics.h>
 
 #include <algorithm>
 #include <chrono>
@@ -133,6 +135,7 @@ void RoomProbe::_process(double p_delta) {
 	if (engine->is_running()) {
 		// The probe worker renders; this only says where the probe is and takes finished maps.
 		engine->set_probe(probe_id, to_glm(get_global_position()), std::clamp(resolution, 1, 4096));
+		refresh_virtual_objects();
 		if (take_map()) {
 			emit_signal("environment_map_updated");
 		}
@@ -175,6 +178,7 @@ bool RoomProbe::update_now() {
 	}
 	ERR_FAIL_COND_V_MSG(engine->room_mesh() == nullptr, false, "The CoarseRoomModel has no valid room.");
 	engine->set_probe(probe_id, to_glm(get_global_position()), resolution);
+	refresh_virtual_objects();
 	ERR_FAIL_COND_V_MSG(!engine->render_probe(probe_id), false, "Rendering the probe's map failed.");
 	take_map();
 	emit_signal("environment_map_updated");
@@ -317,8 +321,89 @@ void RoomProbe::apply_to_material() {
 		target_material->set_shader_parameter(material_parameter, cubemap);
 	}
 	if (!String(sh_parameter).is_empty()) {
-		target_material->set_shader_parameter(sh_parameter, get_sh_coefficients());
+		Node3D *frame = sh_frame_path.is_empty() || !is_inside_tree() ? nullptr : cast_to<Node3D>(get_node_or_null(sh_frame_path));
+		target_material->set_shader_parameter(sh_parameter, frame ? get_sh_coefficients_in(frame->get_global_basis()) : get_sh_coefficients());
 	}
+}
+
+void RoomProbe::set_sh_frame_path(const NodePath &p_path) {
+	sh_frame_path = p_path;
+	apply_to_material();
+	update_configuration_warnings();
+}
+
+NodePath RoomProbe::get_sh_frame_path() const { return sh_frame_path; }
+
+void RoomProbe::set_virtual_objects_mask(uint32_t p_mask) {
+	virtual_objects_mask = p_mask;
+	virtual_objects_signature.clear();
+	if (virtual_objects_mask == 0 && engine && probe_id != 0) {
+		engine->set_probe_objects(probe_id, nullptr);
+		virtual_object_count = 0;
+	}
+}
+
+uint32_t RoomProbe::get_virtual_objects_mask() const { return virtual_objects_mask; }
+
+int RoomProbe::get_virtual_object_count() const { return virtual_object_count; }
+
+namespace {
+
+void collect_instances(Node *p_node, const Viewport *p_viewport, uint32_t p_mask, std::vector<MeshInstance3D *> *r_found) {
+	MeshInstance3D *instance = cast_to<MeshInstance3D>(p_node);
+	if (instance != nullptr && (instance->get_layer_mask() & p_mask) != 0 && instance->is_visible_in_tree() && instance->get_viewport() == p_viewport) {
+		r_found->push_back(instance);
+	}
+	for (int i = 0; i < p_node->get_child_count(); i++) {
+		collect_instances(p_node->get_child(i), p_viewport, p_mask, r_found);
+	}
+}
+
+} // namespace
+
+void RoomProbe::refresh_virtual_objects() {
+	if (virtual_objects_mask == 0 || !engine || probe_id == 0 || !is_inside_tree()) {
+		return;
+	}
+	Viewport *viewport = get_viewport();
+	std::vector<MeshInstance3D *> found;
+	collect_instances(viewport, viewport, virtual_objects_mask, &found);
+	// The probe's own object is never drawn: its parent, its sh_frame, whatever wears target_material.
+	const Node *own_frame = sh_frame_path.is_empty() ? nullptr : get_node_or_null(sh_frame_path);
+	std::erase_if(found, [&](MeshInstance3D *p_instance) {
+		return p_instance == get_parent() || p_instance == own_frame ||
+				(target_material.is_valid() && p_instance->get_material_override() == Ref<Material>(target_material));
+	});
+	// Only a change (an object, its mesh, material or transform) rebuilds the scene.
+	std::vector<double> signature;
+	for (MeshInstance3D *instance : found) {
+		const Transform3D t = instance->get_global_transform();
+		signature.insert(signature.end(), { double(instance->get_instance_id()), double(uintptr_t(instance->get_mesh().ptr())),
+												  double(uintptr_t(instance->get_material_override().ptr())) });
+		for (const Vector3 &row : t.basis.rows) {
+			signature.insert(signature.end(), { row.x, row.y, row.z });
+		}
+		signature.insert(signature.end(), { t.origin.x, t.origin.y, t.origin.z });
+	}
+	if (signature == virtual_objects_signature) {
+		return;
+	}
+	virtual_objects_signature = signature;
+	std::vector<VirtualObject> objects;
+	for (MeshInstance3D *instance : found) {
+		VirtualObject object;
+		const std::string error = virtual_object_from_instance(instance, &object);
+		if (!error.empty()) {
+			WARN_PRINT(String(("RoomProbe: virtual object " + std::string(String(instance->get_name()).utf8_string()) + " left out: " + error).c_str()));
+			continue;
+		}
+		objects.push_back(std::move(object));
+	}
+	std::shared_ptr<const VirtualScene> scene;
+	const std::string error = VirtualScene::make(std::move(objects), &scene);
+	ERR_FAIL_COND_MSG(!error.empty(), String(("RoomProbe: " + error).c_str()));
+	virtual_object_count = int(scene->object_count());
+	engine->set_probe_objects(probe_id, scene);
 }
 
 Ref<godot::Cubemap> RoomProbe::get_cubemap() const { return cubemap; }
@@ -339,6 +424,21 @@ PackedVector3Array RoomProbe::get_sh_coefficients() const {
 	out.resize(SH_COEFFICIENTS);
 	for (int i = 0; i < SH_COEFFICIENTS; i++) {
 		out[i] = Vector3(real_t(map->sh[size_t(i)].x), real_t(map->sh[size_t(i)].y), real_t(map->sh[size_t(i)].z));
+	}
+	return out;
+}
+
+PackedVector3Array RoomProbe::get_sh_coefficients_in(const Basis &p_basis) const {
+	PackedVector3Array out;
+	if (!map) {
+		return out;
+	}
+	glm::dmat3 rotation;
+	ERR_FAIL_COND_V_MSG(!rotation_from_basis(p_basis, &rotation), out, "get_sh_coefficients_in: the basis is degenerate or not finite.");
+	const ShCoefficients rotated = rotate_sh(map->sh, rotation);
+	out.resize(SH_COEFFICIENTS);
+	for (int i = 0; i < SH_COEFFICIENTS; i++) {
+		out[i] = Vector3(real_t(rotated[size_t(i)].x), real_t(rotated[size_t(i)].y), real_t(rotated[size_t(i)].z));
 	}
 	return out;
 }
@@ -393,6 +493,12 @@ void RoomProbe::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_cubemap"), &RoomProbe::get_cubemap);
 	ClassDB::bind_method(D_METHOD("get_face_image", "layer"), &RoomProbe::get_face_image);
 	ClassDB::bind_method(D_METHOD("get_sh_coefficients"), &RoomProbe::get_sh_coefficients);
+	ClassDB::bind_method(D_METHOD("get_sh_coefficients_in", "basis"), &RoomProbe::get_sh_coefficients_in);
+	ClassDB::bind_method(D_METHOD("set_virtual_objects_mask", "mask"), &RoomProbe::set_virtual_objects_mask);
+	ClassDB::bind_method(D_METHOD("get_virtual_objects_mask"), &RoomProbe::get_virtual_objects_mask);
+	ClassDB::bind_method(D_METHOD("get_virtual_object_count"), &RoomProbe::get_virtual_object_count);
+	ClassDB::bind_method(D_METHOD("set_sh_frame", "path"), &RoomProbe::set_sh_frame_path);
+	ClassDB::bind_method(D_METHOD("get_sh_frame"), &RoomProbe::get_sh_frame_path);
 	ClassDB::bind_method(D_METHOD("get_last_update_stats"), &RoomProbe::get_last_update_stats);
 	ClassDB::bind_method(D_METHOD("save_exr", "path"), &RoomProbe::save_exr);
 	ClassDB::bind_method(D_METHOD("save_png_net", "path"), &RoomProbe::save_png_net);
@@ -406,10 +512,12 @@ void RoomProbe::_bind_methods() {
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "coarse_model", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "CoarseRoomModel"), "set_coarse_model", "get_coarse_model");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "dense_slam", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "DenseSLAM"), "set_dense_slam", "get_dense_slam");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "update_mode", PROPERTY_HINT_ENUM, "Once,Always"), "set_update_mode", "get_update_mode");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "virtual_objects_mask", PROPERTY_HINT_LAYERS_3D_RENDER), "set_virtual_objects_mask", "get_virtual_objects_mask");
 	ADD_GROUP("Output", "");
 	ADD_PROPERTY(PropertyInfo(Variant::OBJECT, "target_material", PROPERTY_HINT_RESOURCE_TYPE, "ShaderMaterial", PROPERTY_USAGE_DEFAULT, "ShaderMaterial"), "set_target_material", "get_target_material");
 	ADD_PROPERTY(PropertyInfo(Variant::STRING_NAME, "material_parameter"), "set_material_parameter", "get_material_parameter");
 	ADD_PROPERTY(PropertyInfo(Variant::STRING_NAME, "sh_parameter"), "set_sh_parameter", "get_sh_parameter");
+	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "sh_frame", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "Node3D"), "set_sh_frame", "get_sh_frame");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "reflection_probe", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "ReflectionProbe"), "set_reflection_probe", "get_reflection_probe");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "world_environment", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "WorldEnvironment"), "set_world_environment", "get_world_environment");
 

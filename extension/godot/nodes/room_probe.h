@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 namespace roomprobe {
 
@@ -53,6 +54,15 @@ public:
 	// Face p_layer (0..5: +X -X +Y -Y +Z -Z) of the latest map as RGBF, full precision, no mipmaps.
 	godot::Ref<godot::Image> get_face_image(int p_layer) const;
 	godot::PackedVector3Array get_sh_coefficients() const;
+	// The same coefficients in the frame of p_basis (an object's global basis, orthonormalised):
+	// what a PRTTransfer of a rotated object is dotted with (envmap/spherical_harmonics.h rotate_sh).
+	godot::PackedVector3Array get_sh_coefficients_in(const godot::Basis &p_basis) const;
+	void set_sh_frame_path(const godot::NodePath &p_path);
+	godot::NodePath get_sh_frame_path() const;
+	void set_virtual_objects_mask(uint32_t p_mask);
+	uint32_t get_virtual_objects_mask() const;
+	// How many virtual objects the last map drew (see virtual_objects_mask).
+	int get_virtual_object_count() const;
 	// What the last update_now() did: dense_texels (int), dense_ms, update_ms (float).
 	godot::Dictionary get_last_update_stats() const;
 	// The latest map as an EXR strip (32-bit float, recording/cubemap_layout.h) or as an 8-bit
@@ -85,6 +95,9 @@ private:
 	void drive_reflection_probe();
 	// Route (c): the map as the WorldEnvironment's sky (reflections and ambient light).
 	void drive_world_environment();
+	// The MeshInstance3Ds on virtual_objects_mask's layers, in this probe's viewport, less its own
+	// object, handed to the engine when any of them changed (envmap/virtual_objects.h).
+	void refresh_virtual_objects();
 
 	int resolution = 256;
 	godot::NodePath coarse_model_path;
@@ -93,6 +106,10 @@ private:
 	godot::Ref<godot::ShaderMaterial> target_material;
 	godot::StringName material_parameter = "environment";
 	godot::StringName sh_parameter = "sh";
+	godot::NodePath sh_frame_path; // a Node3D: the SH given to target_material are in its frame
+	uint32_t virtual_objects_mask = 0; // render layers of the virtual objects drawn into the map
+	std::vector<double> virtual_objects_signature; // what they were when last handed over
+	int virtual_object_count = 0;
 	godot::NodePath reflection_probe_path;
 	godot::NodePath world_environment_path;
 	godot::Ref<godot::ShaderMaterial> sky_material;

@@ -184,6 +184,26 @@ bool PRTTransfer::bake() {
 	return true;
 }
 
+std::string PRTTransfer::transfer_from_image(const Ref<Image> &p_image, int p_vertices, std::vector<TransferVector> *r_transfer) {
+	r_transfer->clear();
+	if (p_image.is_null() || p_image->get_format() != Image::FORMAT_RGBAF || p_image->get_width() != VERTICES_PER_ROW * TEXELS_PER_VERTEX) {
+		return "not a PRTTransfer image (RGBAF, " + std::to_string(VERTICES_PER_ROW * TEXELS_PER_VERTEX) + " texels wide)";
+	}
+	const int rows = (p_vertices + VERTICES_PER_ROW - 1) / VERTICES_PER_ROW;
+	if (p_vertices < 1 || p_image->get_height() < rows) {
+		return "the image holds fewer vertices than the mesh's " + std::to_string(p_vertices);
+	}
+	const PackedByteArray bytes = p_image->get_data();
+	const float *texels = reinterpret_cast<const float *>(bytes.ptr());
+	const size_t width = size_t(VERTICES_PER_ROW) * TEXELS_PER_VERTEX;
+	r_transfer->resize(size_t(p_vertices));
+	for (int v = 0; v < p_vertices; v++) {
+		const float *in = texels + (size_t(v / VERTICES_PER_ROW) * width + size_t(v % VERTICES_PER_ROW) * TEXELS_PER_VERTEX) * 4;
+		std::memcpy((*r_transfer)[size_t(v)].data(), in, sizeof(float) * SH_COEFFICIENTS);
+	}
+	return "";
+}
+
 Ref<ImageTexture> PRTTransfer::get_transfer_texture() const {
 	return transfer.is_valid() ? ImageTexture::create_from_image(transfer) : Ref<ImageTexture>();
 }

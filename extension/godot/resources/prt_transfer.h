@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace roomprobe {
 
@@ -22,6 +23,9 @@ class PRTTransfer : public godot::Resource {
 public:
 	static constexpr int VERTICES_PER_ROW = 256;
 	static constexpr int TEXELS_PER_VERTEX = 7;
+	// The transfer vectors of p_vertices vertices back from a transfer image (the layout above).
+	// "" or why the image cannot hold them.
+	static std::string transfer_from_image(const godot::Ref<godot::Image> &p_image, int p_vertices, std::vector<TransferVector> *r_transfer);
 
 	void set_mesh(const godot::Ref<godot::Mesh> &p_mesh);
 	godot::Ref<godot::Mesh> get_mesh() const;
