@@ -15,6 +15,9 @@ extends Node3D
 ##   --out DIR         where to write cubemap.exr and cubemap_net.png at the end (default: none)
 ##   --quit-at-end     quit when the recording has played (the Movie Maker run does)
 ##   --true-poses      the recording's ground-truth poses instead of SLAM (evaluation mode)
+##   --scene NAME      one of the paper's figures instead of the three objects
+##                     (demo_scenes/figures/figure_scenes.gd: mirror_teapot, water_bottle,
+##                     prt_mannequin, metal_teapots, chrome_sphere)
 
 @onready var _rig = $Rig
 @onready var _room = $Room
@@ -27,8 +30,12 @@ var _out_dir := ""
 var _quit_at_end := false
 var _true_poses := false
 var _placed := false
+var _objects: Array[MeshInstance3D] = []  # put down on the table once it is meshed
 var _main_usec_last := -1
 var _main_ms: Array[float] = []  # RoomProbe's main-thread time per rendered frame
+var _objects_ms: Array[float] = []  # the saved probe's maps: drawing the other virtual objects
+var _figure := ""  # the paper's figure shown (--scene), or "" for the three objects
+var _frames := 0
 
 
 func _ready() -> void:
@@ -43,6 +50,19 @@ func _ready() -> void:
 			_quit_at_end = true
 		elif args[i] == "--true-poses":
 			_true_poses = true
+		elif args[i] == "--scene" and i + 1 < args.size() and args[i + 1] != "main":
+			var figure := FigureScenes.build(self, args[i + 1])
+			if figure.is_empty():
+				printerr("demo: no scene %s (one of main, %s)" % [args[i + 1], ", ".join(FigureScenes.NAMES)])
+				get_tree().quit(2)
+				return
+			_objects.assign(figure.objects)
+			_probe = figure.probe
+			_figure = args[i + 1]
+			print("demo: scene %s" % args[i + 1])
+	if _objects.is_empty():
+		for path in [^"MirrorSphere", ^"GlassSphere", ^"MetalTorus"]:
+			_objects.append(get_node(path))
 	if recording.is_empty():
 		printerr("demo: no recording given (-- --recording DIR); ./roomprobe demo makes one")
 		get_tree().quit(2)
@@ -60,6 +80,7 @@ func _ready() -> void:
 	_slam.tracking_state_changed.connect(func(state: int, reason: String):
 		print("demo: tracking %s %s" % [["not started", "good", "poor", "lost"][state], reason]))
 	_slam.mesh_updated.connect(_place_objects)
+	_probe.environment_map_updated.connect(func(): _objects_ms.append(_probe.get_last_update_stats().get("objects_ms", 0.0)))
 	if _true_poses:
 		_slam.camera = NodePath()
 		_room.pose_source = 0  # POSE_SOURCE_GROUND_TRUTH
@@ -85,6 +106,12 @@ func _process(_delta: float) -> void:
 	if _main_usec_last >= 0:
 		_main_ms.append((usec - _main_usec_last) / 1000.0)
 	_main_usec_last = usec
+	_frames += 1
+	# Figure 7 (middle) shows the mannequin before the light is switched on, half-way through.
+	if _figure == "prt_mannequin" and _frames == FigureScenes.BEFORE_SWITCH_FRAME:
+		_save_picture("picture_before.png")
+	if not _figure.is_empty() and _frames == FigureScenes.PICTURE_FRAME:
+		_save_picture("picture.png")
 
 
 func _on_texture_updated(fisheye_frame: int) -> void:
@@ -100,15 +127,19 @@ func _on_texture_updated(fisheye_frame: int) -> void:
 func _place_objects() -> void:
 	if _placed:
 		return
-	for path in [^"MirrorSphere", ^"GlassSphere", ^"MetalTorus"]:
-		var object: MeshInstance3D = get_node(path)
+	for object in _objects:
 		var above := Vector3(object.position.x, 1.6, object.position.z)
 		var hit: Dictionary = _slam.place_on_ray(above, Vector3.DOWN)
 		if hit.get("surface", "") != "dense":
 			return  # the table is not meshed there yet: try again at the next mesh
-		var half_height: float = object.get_aabb().size.y * 0.5 * object.scale.y
-		object.position.y = hit.position.y + half_height
-		print("demo: %s put on the %s surface at y = %.3f m" % [path, hit.surface, hit.position.y])
+		# The object's lowest point on the surface.
+		object.position.y = hit.position.y - object.get_aabb().position.y * object.scale.y
+		# A contact shadow takes the surface's normal from the placement (its transfer was baked
+		# for a level table, as the demo's is).
+		var shadow := object.get_node_or_null("ContactShadow") as MeshInstance3D
+		if shadow != null:
+			(shadow.material_override as ShaderMaterial).set_shader_parameter("plane_normal", hit.normal)
+		print("demo: %s put on the %s surface at y = %.3f m" % [object.name, hit.surface, hit.position.y])
 	_placed = true
 
 
@@ -126,14 +157,33 @@ func _on_finished() -> void:
 		get_tree().quit(0)
 
 
+## The frame on screen, cropped to the figure's objects and doubled, into --out (README's pictures).
+func _save_picture(p_name: String) -> void:
+	if _out_dir.is_empty():
+		return
+	var frame := get_viewport().get_texture().get_image()
+	var centre := Vector3()
+	for object in _objects:
+		centre += object.global_transform * object.get_aabb().get_center()
+	var at := _camera.unproject_position(centre / _objects.size())
+	var size := Vector2i(240, 160)
+	var corner := Vector2i(clampi(int(at.x) - size.x / 2, 0, frame.get_width() - size.x), clampi(int(at.y) - size.y / 2, 0, frame.get_height() - size.y))
+	var picture := frame.get_region(Rect2i(corner, size))
+	picture.resize(size.x * 2, size.y * 2, Image.INTERPOLATE_NEAREST)
+	DirAccess.make_dir_recursive_absolute(_out_dir)
+	var path := _out_dir.path_join(p_name)
+	print("demo: %s %s" % ["wrote" if picture.save_png(path) == OK else "could not write", path])
+
+
 ## One line of key=value pairs: the main-thread time per rendered frame, and the engine's latency
-## and dropped frames (DenseSLAM.get_stats()).
+## and dropped frames (DenseSLAM.get_stats()), and the median time the saved probe spent drawing
+## the other virtual objects into its maps.
 func _print_summary() -> void:
-	var sorted := _main_ms.duplicate()
-	sorted.sort()
-	var rank := func(fraction: float) -> float:
+	var rank := func(values: Array[float], fraction: float) -> float:
+		var sorted := values.duplicate()
+		sorted.sort()
 		return sorted[clampi(ceili(fraction * sorted.size()) - 1, 0, sorted.size() - 1)] if not sorted.is_empty() else 0.0
 	var slam: Dictionary = _slam.get_stats()
-	print("demo: summary frames=%d main_thread_ms_p50=%.3f main_thread_ms_p95=%.3f main_thread_ms_max=%.3f latency_ms_p50=%.1f latency_ms_p95=%.1f dropped_rgbd=%d dropped_capture=%d" % [
-		sorted.size(), rank.call(0.5), rank.call(0.95), rank.call(1.0), slam.get("latency_ms_p50", 0.0), slam.get("latency_ms_p95", 0.0),
-		slam.get("dropped_frames", 0), _rig.get_dropped_frame_count()])
+	print("demo: summary frames=%d main_thread_ms_p50=%.3f main_thread_ms_p95=%.3f main_thread_ms_max=%.3f latency_ms_p50=%.1f latency_ms_p95=%.1f dropped_rgbd=%d dropped_capture=%d objects_ms_p50=%.2f" % [
+		_main_ms.size(), rank.call(_main_ms, 0.5), rank.call(_main_ms, 0.95), rank.call(_main_ms, 1.0), slam.get("latency_ms_p50", 0.0), slam.get("latency_ms_p95", 0.0),
+		slam.get("dropped_frames", 0), _rig.get_dropped_frame_count(), rank.call(_objects_ms, 0.5)])

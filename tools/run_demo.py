@@ -10,6 +10,13 @@
      Xvfb on Mesa's CPU Vulkan), cubemap.exr and cubemap_net.png of the mirror sphere's last map,
      and evaluation.txt (roomprobe_eval: the paper's baseline against the coarse variants).
 
+The paper's figures: --scene NAME plays the same recording with a figure's objects instead
+(demo_scenes/figures/figure_scenes.gd): mirror_teapot (Figure 1), water_bottle (Figure 7, top),
+prt_mannequin (Figure 7, middle; the ceiling light switches on half-way), metal_teapots
+(Figure 7, bottom), chrome_sphere (Figure 11). Its frames, cubemap and picture.png (the frame at
+3.7 s, cropped to the objects and doubled; prt_mannequin also picture_before.png, before the
+light switches on) go to out/demo/NAME/; no evaluation.
+
 Where it runs:
   default     Movie Maker under xvfb-run (no display needed), then quits
   --window    live in a window on $DISPLAY, until the window is closed (no frames written);
@@ -29,6 +36,8 @@ import rp_godot as rp  # noqa: E402
 OUT = os.path.join(rp.REPO, "out", "demo")
 RECORDING = os.path.join(OUT, "recording")
 FRAMES = os.path.join(OUT, "frames")
+SCENE_OUT = OUT  # the scene's outputs: OUT for main, OUT/NAME for a figure
+FIGURES = ["mirror_teapot", "water_bottle", "prt_mannequin", "metal_teapots", "chrome_sphere"]
 SCENE = "res://demo_scenes/main.tscn"
 FPS = 15
 SIZE = "640x480"  # the synthetic rig's RGB camera: the background and the AR camera line up
@@ -44,8 +53,16 @@ def main():
     ap.add_argument("--no-build", action="store_true", help="skip the build")
     ap.add_argument("--no-eval", action="store_true", help="skip the evaluation")
     ap.add_argument("--scons-args", metavar="ARGS", help="arguments for scons instead of '-j<nproc>' (also $ROOMPROBE_SCONS_ARGS)")
+    ap.add_argument("--scene", default="main", choices=["main"] + FIGURES,
+                    help="main (the three objects) or one of the paper's figures")
     opts = ap.parse_args()
     os.makedirs(OUT, exist_ok=True)
+    global SCENE_OUT, FRAMES
+    if opts.scene != "main":
+        SCENE_OUT = os.path.join(OUT, opts.scene)
+        FRAMES = os.path.join(SCENE_OUT, "frames")
+        opts.no_eval = True  # the evaluation is of the recording, the same for every scene
+    os.makedirs(SCENE_OUT, exist_ok=True)
     if opts.window and not os.environ.get("DISPLAY"):
         rp.die("--window needs a display ($DISPLAY is not set); without it the demo writes frames under Xvfb")
     if not opts.window and not rp.have("xvfb-run"):
@@ -56,7 +73,7 @@ def main():
     if not synthesise():
         return 1
     import_project()
-    if not play(opts.window, opts.once):
+    if not play(opts.window, opts.once, opts.scene):
         return 1
     if not opts.no_eval and not evaluate():
         return 1
@@ -64,8 +81,10 @@ def main():
     summary = getattr(play, "summary", "")
     frames = sorted(f for f in os.listdir(FRAMES) if f.endswith(".png")) if os.path.isdir(FRAMES) else []
     print(f"  AR frames:     {rp.relpath(FRAMES)}/ ({len(frames)} PNG at {FPS} fps)")
-    for name in ["cubemap.exr", "cubemap_net.png", "evaluation.txt"]:
-        path = os.path.join(OUT, name)
+    for name in ["cubemap.exr", "cubemap_net.png", "evaluation.txt", "picture.png", "picture_before.png"]:
+        path = os.path.join(SCENE_OUT, name)
+        if name.startswith("picture") and not os.path.exists(path):
+            continue
         print(f"  {name + ':':<14} {rp.relpath(path) if os.path.exists(path) else '(missing)'}")
     # The last line: the figures of the run, key=value (main-thread time per frame, latency, drops).
     print(summary.replace("demo: summary ", "summary: ") if summary else "summary: (the scene printed none)")
@@ -115,15 +134,15 @@ def import_project():
         print(f"ok ({rp.fmt_duration(r.seconds)})")
 
 
-def play(window, once=False):
+def play(window, once=False, scene="main"):
     cmd = rp.godot_base_args(rendering=True) + ["--resolution", SIZE]
     if not window:
         shutil.rmtree(FRAMES, ignore_errors=True)
         os.makedirs(FRAMES)
         cmd = rp.xvfb_prefix() + cmd + ["--write-movie", os.path.join(FRAMES, "frame.png"), "--fixed-fps", str(FPS)]
-    cmd += [SCENE, "--", "--recording", RECORDING, "--out", OUT] + ([] if window and not once else ["--quit-at-end"])
+    cmd += [SCENE, "--", "--recording", RECORDING, "--out", SCENE_OUT, "--scene", scene] + ([] if window and not once else ["--quit-at-end"])
     rp.header(f"play ({'window' if window else 'Movie Maker under Xvfb'}): {shlex.join(cmd)}")
-    log = os.path.join(OUT, "demo.log")
+    log = os.path.join(SCENE_OUT, "demo.log")
     noise = rp.NoiseFilter()
     r = rp.run(cmd, log, timeout=None if window else 1800,
                echo=lambda line: [print("    " + k, flush=True) for k in noise.feed(line)])

@@ -240,6 +240,14 @@ static func _capsule(parts: _Parts, a: Vector3, b: Vector3, radius_a: float, rad
 		var k := i - rows - 1 if on_b else i
 		var angle := lerpf(touch, PI / 2.0, float(k) / rows) if on_b else lerpf(-PI / 2.0, touch, float(k) / rows)
 		var normal := Vector2(cos(angle), sin(angle))
+		if on_b and k == 0:
+			# Rings along the cone too: per-vertex data (a PRT transfer) needs vertices there, as
+			# the end caps are mostly hidden inside the joints.
+			var cone_rows := maxi(segments / 2, 2)
+			for j in range(1, cone_rows):
+				var t := float(j) / cone_rows
+				profile.append(normal * lerpf(radius_a, radius_b, t) + Vector2(0.0, length * t))
+				normals.append(normal)
 		profile.append(normal * radius_b + Vector2(0.0, length) if on_b else normal * radius_a)
 		normals.append(normal)
 	_lathe(parts, profile, segments, _frame_along(a, b - a), normals)

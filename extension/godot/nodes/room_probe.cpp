@@ -233,6 +233,11 @@ Dictionary RoomProbe::get_last_update_stats() const {
 	d.set("render_ms", map->total_ms);
 	d.set("upload_ms", upload_ms);
 	d.set("update_ms", map->total_ms + upload_ms);
+	d.set("mips_ms", map->mips_ms);
+	d.set("ggx_mips", map->ggx_mips);
+	d.set("objects_ms", map->objects.milliseconds);
+	d.set("objects_texels_traced", int64_t(map->objects.texels_traced));
+	d.set("objects_texels_drawn", int64_t(map->objects.texels_drawn + map->objects.texels_shadowed));
 	return d;
 }
 
