@@ -369,11 +369,16 @@ def show_doctest_failures(lines, limit=120):
 
 
 def suite_editor(opts, judged=True):
-    """Three checks, one test each; each is `godot --headless --editor --quit` (see
+    """Four checks, one test each; each but the round trip is `godot --headless --editor --quit` (see
     rp_godot.import_command for the extension list written before a first import).
 
     fresh-import: a scratch copy of godot_project/ without .godot/, as on a fresh clone.
     fresh-reopen: the same copy opened again, now imported.
+    scene-roundtrip: in that copy, the editor opens a RoomProbe scene (tests/editor/roundtrip/),
+        lets the probe drive a material, a ReflectionProbe and a sky, saves it and quits; the
+        saved file must hold the user's values only (no maps, no sky, the probe's box as set),
+        and the probe must render no map while nothing changes, and one after a move; then tab
+        switches, a reload and closing the scene, with no error logged.
     import: the project itself; this also makes the .godot/ the Godot suites need.
     """
     s = Suite("editor")
@@ -390,7 +395,13 @@ def suite_editor(opts, judged=True):
         checks.insert(1, ("fresh-reopen", None, os.path.join(LOGS, "editor-fresh-reopen.log")))
         s.logs += [checks[0][2], checks[1][2]]
     checks.append(("import", None, s.logs[0]))
+    if judged:
+        checks.insert(2, ("scene-roundtrip", None, os.path.join(LOGS, "editor-scene-roundtrip.log")))
+        s.logs.append(checks[2][2])
     for name, _, log in checks:
+        if name == "scene-roundtrip":
+            scene_roundtrip(s, scratch, log)
+            continue
         # Chosen at run time: the command depends on whether the previous check imported it.
         cmd = rp.import_command(scratch if name.startswith("fresh") else rp.PROJECT)
         r = rp.run(cmd, log, IMPORT_TIMEOUT)
@@ -409,6 +420,65 @@ def suite_editor(opts, judged=True):
             print("    (no error line; the end of its output:)")
             rp.tail([line for line in kept if line.strip() and not line.startswith("[")], 8)
     return s
+
+
+ROUNDTRIP = os.path.join(rp.REPO, "tests", "editor", "roundtrip")
+# What a saved RoomProbe scene must not hold (the probe's own outputs), and what it must keep.
+ROUNDTRIP_FORBIDDEN = [("an image", re.compile(r'type="Image"|\bImage\b')), ("a sky", re.compile(r'type="Sky"|\bsky = ')),
+                       ("a cubemap", re.compile(r'Cubemap')), ("a driven box", re.compile(r'box_projection|interior = true|origin_offset'))]
+ROUNDTRIP_KEPT = ["size = Vector3(1, 2, 3)", "cull_mask = 5", "Transform3D(1, 0, 0, 0, 1, 0, 0, 0, 1, 0.5, 0.5, 0.5)"]
+
+
+def scene_roundtrip(s, scratch, log):
+    """editor::scene-roundtrip (see suite_editor)."""
+    for scene in ["roundtrip_probe.tscn", "empty.tscn"]:
+        shutil.copyfile(os.path.join(ROUNDTRIP, scene), os.path.join(scratch, "roundtrip_" + scene.replace("roundtrip_", "")))
+    plugin = os.path.join(scratch, "addons", "roomprobe_roundtrip")
+    shutil.rmtree(plugin, ignore_errors=True)
+    os.makedirs(plugin)
+    for f in ["plugin.cfg", "plugin.gd"]:
+        shutil.copyfile(os.path.join(ROUNDTRIP, f), os.path.join(plugin, f))
+    settings = os.path.join(scratch, "project.godot")
+    with open(settings) as f:
+        text = f.read()
+    text = re.sub(r'enabled=PackedStringArray\((.*)\)', r'enabled=PackedStringArray(\1, "res://addons/roomprobe_roundtrip/plugin.cfg")', text)
+    with open(settings, "w") as f:
+        f.write(text)
+    cmd = [rp.godot(), "--headless", "--editor", "--path", scratch]
+    r = rp.run(cmd, log, IMPORT_TIMEOUT)
+    s.seconds += r.seconds
+    with open(os.path.join(scratch, "roundtrip_probe.tscn")) as f:
+        saved = f.read()
+    problems = []
+    if r.rc != 0 or r.timed_out:
+        problems.append(rp.describe_exit(r))
+    for expected, problem in [("roundtrip: the probe made a map and drives its outputs", "the probe drove nothing (no map)"),
+                              ("roundtrip: saved res://roundtrip_probe.tscn (OK)", "the editor did not save the scene"),
+                              ("roundtrip: driven again after saving", "the probe did not drive its outputs again after saving"),
+                              ("roundtrip: switched tabs, reloaded and closed", "the tab switches, reload and close did not finish")]:
+        if not any(expected in line for line in r.lines):
+            problems.append(problem)
+    idle = next((line for line in r.lines if "roundtrip: idle maps" in line), "")
+    moved = next((line for line in r.lines if "roundtrip: maps after a move" in line), "")
+    if "idle maps 0 in" not in idle:
+        problems.append(f"the probe renders while the editor is idle ({idle.strip() or 'not measured'})")
+    if not moved or moved.strip().endswith(" 0"):
+        problems.append(f"the probe did not render after a move ({moved.strip() or 'not measured'})")
+    problems += [f"the saved scene holds {what}" for what, pattern in ROUNDTRIP_FORBIDDEN if pattern.search(saved)]
+    problems += [f"the saved scene lost '{kept}'" for kept in ROUNDTRIP_KEPT if kept not in saved]
+    kept, _ = rp.filter_noise(r.lines)
+    bad = [line for line in kept if EDITOR_BAD.search(line)]
+    if bad:
+        problems.append(f"{len(bad)} error line(s)")
+    if not problems:
+        s.passed += 1
+        print(f"ok scene-roundtrip ({rp.fmt_duration(r.seconds)}; saved {len(saved)} bytes)")
+        return
+    s.fail(f"editor::scene-roundtrip: {'; '.join(problems)}")
+    print(f"FAILED scene-roundtrip: {'; '.join(problems)}: {shlex.join(cmd)}")
+    show_with_context(kept, bad)
+    for line in saved.splitlines()[:60]:
+        print("    | " + line)
 
 
 def noise_note(dropped):

@@ -737,6 +737,17 @@ TEST_CASE("engine: probes are added, moved and removed; maps carry versions and 
 	CHECK(engine.probe_map(a)->gpu_faces[0].size() == 4u);
 	engine.set_probe(12345, centre, 8); // unknown: ignored
 	CHECK_FALSE(engine.render_probe(12345));
+	// probe_is_current (the editor renders only then): a rendered probe is, until it moves.
+	CHECK(engine.probe_is_current(a));
+	engine.set_probe(a, centre, 1); // the same place and size
+	CHECK(engine.probe_is_current(a));
+	engine.set_probe(a, centre + glm::dvec3(0.1, 0.0, 0.0), 1);
+	CHECK_FALSE(engine.probe_is_current(a));
+	engine.render_probe(a);
+	CHECK(engine.probe_is_current(a));
+	engine.set_probe(a, centre, 1);
+	engine.render_probe(a);
+	CHECK_FALSE(engine.probe_is_current(12345));
 
 	// remove_probe: gone, its map too; the other stays.
 	engine.remove_probe(a);

@@ -160,6 +160,66 @@ func test_target_material_receives_cubemap_and_sh() -> void:
 	assert_eq(sh.size() if sh != null else 0, 25, "sh uniform holds 25 coefficients")
 
 
+## The editor saves the scene with the user's own values: before saving
+## (NOTIFICATION_EDITOR_PRE_SAVE) the probe puts back everything it set on the user's material,
+## ReflectionProbe and Environment, so no cubemap, sky or probe placement is written into the
+## .tscn; after saving it drives them again. Leaving the tree puts them back too.
+func test_the_saved_scene_keeps_the_users_values() -> void:
+	_paint_atlas()
+	var mat := ShaderMaterial.new()
+	mat.shader = load("res://shaders/mirror.gdshader")
+	_probe.target_material = mat
+	var reflection := ReflectionProbe.new()
+	reflection.name = "Reflection"
+	reflection.size = Vector3(1, 2, 3)
+	reflection.cull_mask = 5
+	reflection.position = Vector3(0.5, 0.5, 0.5)
+	_root.add_child(reflection)
+	reflection.owner = _root
+	var world := WorldEnvironment.new()
+	world.name = "World"
+	var env := Environment.new()
+	env.reflected_light_source = Environment.REFLECTION_SOURCE_BG
+	world.environment = env
+	_root.add_child(world)
+	world.owner = _root
+	for n in [_room, _probe]:
+		n.owner = _root
+	add_to_tree(_root)
+	_probe.reflection_probe = NodePath("../Reflection")
+	_probe.world_environment = NodePath("../World")
+	assert_true(_probe.update_now())
+	assert_eq(mat.get_shader_parameter("environment"), _probe.get_cubemap(), "driven: the material")
+	assert_ne(reflection.size, Vector3(1, 2, 3), "driven: the ReflectionProbe's box")
+	assert_not_null(env.sky, "driven: the sky")
+	_probe.notification(Node.NOTIFICATION_EDITOR_PRE_SAVE)
+	assert_null(mat.get_shader_parameter("environment"), "saved without the cubemap")
+	assert_null(mat.get_shader_parameter("sh"))
+	assert_eq(reflection.size, Vector3(1, 2, 3), "saved with the user's box")
+	assert_eq(reflection.cull_mask, 5)
+	assert_eq(reflection.position, Vector3(0.5, 0.5, 0.5))
+	assert_false(reflection.box_projection)
+	assert_null(env.sky, "saved without the probe's sky")
+	assert_eq(env.reflected_light_source, Environment.REFLECTION_SOURCE_BG)
+	var packed := PackedScene.new()
+	assert_eq(packed.pack(_root), OK)
+	var path := "user://roomprobe_saved_scene_test.tscn"
+	assert_eq(ResourceSaver.save(packed, path), OK)
+	var text := FileAccess.get_file_as_string(path)
+	DirAccess.remove_absolute(ProjectSettings.globalize_path(path))
+	assert_false(text.contains("Image"), "no image in the saved scene")
+	assert_false(text.contains("Sky"), "no sky in the saved scene")
+	assert_true(text.length() < 20000, "the saved scene is small: %d bytes" % text.length())
+	_probe.notification(Node.NOTIFICATION_EDITOR_POST_SAVE)
+	assert_eq(mat.get_shader_parameter("environment"), _probe.get_cubemap(), "driven again after saving")
+	assert_not_null(env.sky)
+	assert_ne(reflection.size, Vector3(1, 2, 3))
+	_root.remove_child(_probe)
+	assert_null(env.sky, "a probe that leaves puts the sky back")
+	assert_eq(reflection.size, Vector3(1, 2, 3))
+	_root.add_child(_probe)
+
+
 func test_update_always_renders_every_frame() -> void:
 	_paint_atlas()
 	_probe.update_mode = 1  # UPDATE_ALWAYS

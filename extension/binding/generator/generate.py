@@ -448,6 +448,7 @@ public:
 """)
     write(f"{out}/utility_functions.gen.cpp", HEADER + """#include <rp_godot/gen/utility_functions.gen.h>
 #include <rp_godot/core/method_call.h>
+#include <rp_godot/gen/classes/object.gen.h>
 
 namespace godot {
 

@@ -703,6 +703,12 @@ bool LiveRoom::render_probe(int p_probe) {
 	return render_one(p_probe, position, size, generation) != nullptr;
 }
 
+bool LiveRoom::probe_is_current(int p_probe) const {
+	const std::lock_guard<std::mutex> lock(probe_mutex);
+	const auto it = probes.find(p_probe);
+	return it != probes.end() && it->second->map && !it->second->dirty && it->second->rendered_generation >= input_generation;
+}
+
 Cubemap LiveRoom::render_map(const glm::dvec3 &p_position, int p_size, const CoarseSnapshot *p_coarse, bool p_with_dense, DenseRenderStats *r_dense,
 		double *r_coarse_ms, double *r_dense_ms, DenseFaceCache *io_faces) {
 	double start = now_s();

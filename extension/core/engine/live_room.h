@@ -226,6 +226,9 @@ public:
 	// Step mode, or any time: renders every probe (or one) now on the calling thread.
 	void render_probes();
 	bool render_probe(int p_probe);
+	// Whether the probe's newest map is of its current position, size and objects and of the
+	// newest inputs (nothing to render; the editor's idle test).
+	bool probe_is_current(int p_probe) const;
 	// The newest map of a probe (null before the first).
 	std::shared_ptr<const ProbeMap> probe_map(int p_probe) const;
 	// A one-off map at any position and size (the evaluation): the completed or raw coarse

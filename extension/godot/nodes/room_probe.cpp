@@ -73,8 +73,9 @@ void RoomProbe::set_update_mode(UpdateMode p_mode) {
 RoomProbe::UpdateMode RoomProbe::get_update_mode() const { return update_mode; }
 
 void RoomProbe::set_target_material(const Ref<ShaderMaterial> &p_material) {
+	restore_driven(); // the old material (and the other outputs, driven again below) as they were
 	target_material = p_material;
-	apply_to_material();
+	drive_outputs();
 }
 
 Ref<ShaderMaterial> RoomProbe::get_target_material() const { return target_material; }
@@ -94,14 +95,22 @@ void RoomProbe::set_sh_parameter(const StringName &p_name) {
 StringName RoomProbe::get_sh_parameter() const { return sh_parameter; }
 
 void RoomProbe::set_reflection_probe_path(const NodePath &p_path) {
+	restore_driven();
 	reflection_probe_path = p_path;
+	if (is_inside_tree()) {
+		drive_outputs();
+	}
 	update_configuration_warnings();
 }
 
 NodePath RoomProbe::get_reflection_probe_path() const { return reflection_probe_path; }
 
 void RoomProbe::set_world_environment_path(const NodePath &p_path) {
+	restore_driven();
 	world_environment_path = p_path;
+	if (is_inside_tree()) {
+		drive_outputs();
+	}
 	update_configuration_warnings();
 }
 
@@ -116,8 +125,59 @@ void RoomProbe::_notification(int p_what) {
 		}
 		set_process(update_mode == UPDATE_ALWAYS);
 	} else if (p_what == NOTIFICATION_EXIT_TREE) {
+		restore_driven(); // the user's nodes as they were (a closed tab, a deleted probe)
 		disconnect_engine();
+	} else if (p_what == NOTIFICATION_EDITOR_PRE_SAVE) {
+		restore_driven(); // the scene is saved with the user's own values
+	} else if (p_what == NOTIFICATION_EDITOR_POST_SAVE) {
+		drive_outputs();
 	}
+}
+
+void RoomProbe::drive(Object *p_target, const StringName &p_property, const Variant &p_value) {
+	const uint64_t id = p_target->get_instance_id();
+	const bool known = std::any_of(driven.begin(), driven.end(), [&](const Driven &p_d) { return p_d.object == id && !p_d.shader_parameter && p_d.property == p_property; });
+	if (!known) {
+		driven.push_back({ id, p_property, false, p_target->get(p_property) });
+	}
+	p_target->set(p_property, p_value);
+}
+
+void RoomProbe::drive_shader_parameter(const Ref<ShaderMaterial> &p_material, const StringName &p_name, const Variant &p_value) {
+	const uint64_t id = p_material->get_instance_id();
+	const bool known = std::any_of(driven.begin(), driven.end(), [&](const Driven &p_d) { return p_d.object == id && p_d.shader_parameter && p_d.property == p_name; });
+	if (!known) {
+		driven.push_back({ id, p_name, true, p_material->get_shader_parameter(p_name) });
+	}
+	p_material->set_shader_parameter(p_name, p_value);
+}
+
+void RoomProbe::restore_driven() {
+	// Newest first, so a property driven twice ends at its first value.
+	for (auto it = driven.rbegin(); it != driven.rend(); ++it) {
+		Object *target = UtilityFunctions::instance_from_id(int64_t(it->object));
+		if (target == nullptr) {
+			continue;
+		}
+		if (it->shader_parameter) {
+			ShaderMaterial *material = cast_to<ShaderMaterial>(target);
+			if (material != nullptr) {
+				material->set_shader_parameter(it->property, it->original);
+			}
+		} else {
+			target->set(it->property, it->original);
+		}
+	}
+	driven.clear();
+}
+
+void RoomProbe::drive_outputs() {
+	if (!map) {
+		return;
+	}
+	apply_to_material();
+	drive_reflection_probe();
+	drive_world_environment();
 }
 
 void RoomProbe::_process(double p_delta) {
@@ -140,6 +200,15 @@ void RoomProbe::_process(double p_delta) {
 			emit_signal("environment_map_updated");
 		}
 	} else if (!engine->config_pending() && engine->room_mesh() != nullptr) {
+		if (Engine::get_singleton()->is_editor_hint()) {
+			// The editor: only when the probe moved, or its room, objects or size changed (an idle
+			// scene costs nothing).
+			engine->set_probe(probe_id, to_glm(get_global_position()), std::clamp(resolution, 1, 4096));
+			refresh_virtual_objects();
+			if (engine->probe_is_current(probe_id)) {
+				return;
+			}
+		}
 		update_now(); // step mode: rendered here, as the frames are
 	}
 }
@@ -261,14 +330,17 @@ void RoomProbe::drive_reflection_probe() {
 		hi = Vector3(std::max(hi.x, real_t(v.x)), std::max(hi.y, real_t(v.y)), std::max(hi.z, real_t(v.z)));
 	}
 	const Vector3 centre = room->get_global_position() + (lo + hi) * 0.5;
-	probe->set_global_position(centre);
-	probe->set_size(hi - lo);
-	probe->set_origin_offset(get_global_position() - centre);
-	probe->set_enable_box_projection(true);
-	probe->set_as_interior(true);
+	drive(probe, "global_position", centre);
+	drive(probe, "size", hi - lo);
+	drive(probe, "origin_offset", get_global_position() - centre);
+	drive(probe, "box_projection", true);
+	drive(probe, "interior", true);
 	// Only the textured room: not the virtual objects, nor the rest of the scene.
-	probe->set_cull_mask(uint32_t(int64_t(const_cast<Node3D *>(room)->get("room_layers"))));
-	probe->set_update_mode(update_mode == UPDATE_ALWAYS ? ReflectionProbe::UPDATE_ALWAYS : ReflectionProbe::UPDATE_ONCE);
+	drive(probe, "cull_mask", int64_t(const_cast<Node3D *>(room)->get("room_layers")));
+	// In the editor a map comes only when something changed: the ReflectionProbe need not re-render
+	// every frame either (an idle editor stays idle).
+	const bool every_frame = update_mode == UPDATE_ALWAYS && !Engine::get_singleton()->is_editor_hint();
+	drive(probe, "update_mode", int64_t(every_frame ? ReflectionProbe::UPDATE_ALWAYS : ReflectionProbe::UPDATE_ONCE));
 }
 
 void RoomProbe::drive_world_environment() {
@@ -279,8 +351,10 @@ void RoomProbe::drive_world_environment() {
 	ERR_FAIL_NULL_MSG(world, "world_environment does not lead to a WorldEnvironment.");
 	Ref<Environment> environment = world->get_environment();
 	if (environment.is_null()) {
-		environment.instantiate();
-		world->set_environment(environment);
+		Ref<Environment> made;
+		made.instantiate();
+		drive(world, "environment", made);
+		environment = made;
 	}
 	if (sky_material.is_null()) {
 		Ref<Shader> shader;
@@ -292,14 +366,14 @@ void RoomProbe::drive_world_environment() {
 		sky->set_material(sky_material);
 	}
 	// A live map changes every frame: only REALTIME re-filters the radiance every frame.
-	sky->set_process_mode(update_mode == UPDATE_ALWAYS ? Sky::PROCESS_MODE_REALTIME : Sky::PROCESS_MODE_AUTOMATIC);
+	sky->set_process_mode(update_mode == UPDATE_ALWAYS && !Engine::get_singleton()->is_editor_hint() ? Sky::PROCESS_MODE_REALTIME : Sky::PROCESS_MODE_AUTOMATIC);
 	sky_material->set_shader_parameter("environment", cubemap);
 	if (environment->get_sky() != sky) {
-		environment->set_sky(sky);
+		drive(environment.ptr(), "sky", sky);
 	}
 	// The background stays as the scene has it (an AR app shows the camera image there).
-	environment->set_reflection_source(Environment::REFLECTION_SOURCE_SKY);
-	environment->set_ambient_source(Environment::AMBIENT_SOURCE_SKY);
+	drive(environment.ptr(), "reflected_light_source", int64_t(Environment::REFLECTION_SOURCE_SKY));
+	drive(environment.ptr(), "ambient_light_source", int64_t(Environment::AMBIENT_SOURCE_SKY));
 }
 
 Ref<ShaderMaterial> RoomProbe::get_sky_material() const { return sky_material; }
@@ -323,11 +397,11 @@ void RoomProbe::apply_to_material() {
 		return;
 	}
 	if (!String(material_parameter).is_empty()) {
-		target_material->set_shader_parameter(material_parameter, cubemap);
+		drive_shader_parameter(target_material, material_parameter, cubemap);
 	}
 	if (!String(sh_parameter).is_empty()) {
 		Node3D *frame = sh_frame_path.is_empty() || !is_inside_tree() ? nullptr : cast_to<Node3D>(get_node_or_null(sh_frame_path));
-		target_material->set_shader_parameter(sh_parameter, frame ? get_sh_coefficients_in(frame->get_global_basis()) : get_sh_coefficients());
+		drive_shader_parameter(target_material, sh_parameter, frame ? get_sh_coefficients_in(frame->get_global_basis()) : get_sh_coefficients());
 	}
 }
 

@@ -95,6 +95,14 @@ private:
 	void drive_reflection_probe();
 	// Route (c): the map as the WorldEnvironment's sky (reflections and ambient light).
 	void drive_world_environment();
+	// Every property of a user's object (its material, ReflectionProbe, WorldEnvironment) the probe
+	// sets goes through drive(), which keeps the value it had before the first change, so that
+	// the scene saved in the editor holds the user's values, not the probe's maps
+	// (NOTIFICATION_EDITOR_PRE_SAVE restores them all, POST_SAVE drives them again).
+	void drive(godot::Object *p_target, const godot::StringName &p_property, const godot::Variant &p_value);
+	void drive_shader_parameter(const godot::Ref<godot::ShaderMaterial> &p_material, const godot::StringName &p_name, const godot::Variant &p_value);
+	void restore_driven();
+	void drive_outputs();
 	// The MeshInstance3Ds on virtual_objects_mask's layers, in this probe's viewport, less its own
 	// object, handed to the engine when any of them changed (envmap/virtual_objects.h).
 	void refresh_virtual_objects();
@@ -107,6 +115,13 @@ private:
 	godot::StringName material_parameter = "environment";
 	godot::StringName sh_parameter = "sh";
 	godot::NodePath sh_frame_path; // a Node3D: the SH given to target_material are in its frame
+	struct Driven {
+		uint64_t object = 0; // instance id (a freed object is skipped)
+		godot::StringName property; // a property, or a shader parameter with shader_parameter set
+		bool shader_parameter = false;
+		godot::Variant original;
+	};
+	std::vector<Driven> driven;
 	uint32_t virtual_objects_mask = 0; // render layers of the virtual objects drawn into the map
 	std::vector<double> virtual_objects_signature; // what they were when last handed over
 	int virtual_object_count = 0;

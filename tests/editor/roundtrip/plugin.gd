@@ -1,0 +1,69 @@
+@tool
+extends EditorPlugin
+## The editor suite's round trip (tools/run_tests.py, editor::scene-roundtrip): opens the scene,
+## waits while its RoomProbe renders and drives the material, ReflectionProbe and sky, counts the
+## maps it makes while nothing changes (none) and after a move (some), saves the scene as a user
+## would, switches tabs, reloads and closes it, then quits. The runner compares the saved file
+## with the original and fails on any error in the log.
+
+const SCENE := "res://roundtrip_probe.tscn"
+
+
+func _enter_tree() -> void:
+	_run.call_deferred()
+
+
+func _run() -> void:
+	# Let the editor finish starting (it restores its layout and last scene tabs) first.
+	for i in 100:
+		await get_tree().process_frame
+	EditorInterface.open_scene_from_path(SCENE)
+	var root: Node
+	for i in 300:
+		await get_tree().process_frame
+		root = EditorInterface.get_edited_scene_root()
+		if root != null and root.scene_file_path == SCENE and root.is_inside_tree():
+			break
+	if root == null or root.scene_file_path != SCENE:
+		print("roundtrip: the editor did not open %s" % SCENE)
+		get_tree().quit(1)
+		return
+	var probe := root.get_node("Ball/Probe")
+	for i in 60:
+		await get_tree().process_frame
+		if probe.get_cubemap() != null:
+			break
+	var material: ShaderMaterial = probe.target_material
+	if probe.get_cubemap() != null and material.get_shader_parameter("environment") == probe.get_cubemap():
+		print("roundtrip: the probe made a map and drives its outputs")
+	# Idle: nothing changes, so the probe (update_mode Always) renders nothing more.
+	var maps := [0]
+	probe.environment_map_updated.connect(func(): maps[0] += 1)
+	for i in 60:
+		await get_tree().process_frame
+	print("roundtrip: idle maps %d in 60 frames" % maps[0])
+	# A move is a change: one new map.
+	var at: Vector3 = probe.position
+	probe.position = at + Vector3(0.1, 0, 0)
+	for i in 5:
+		await get_tree().process_frame
+	print("roundtrip: maps after a move %d" % maps[0])
+	probe.position = at
+	var error := EditorInterface.save_scene()
+	print("roundtrip: saved %s (%s)" % [root.scene_file_path, error_string(error)])
+	# After saving, the probe drives them again.
+	if material.get_shader_parameter("environment") == probe.get_cubemap():
+		print("roundtrip: driven again after saving")
+	# Tab switches, a reload and closing: none may log an error (the runner reads the log).
+	for path in ["res://roundtrip_empty.tscn", SCENE, "res://roundtrip_empty.tscn", SCENE]:
+		EditorInterface.open_scene_from_path(path)
+		for i in 20:
+			await get_tree().process_frame
+	EditorInterface.reload_scene_from_path(SCENE)
+	for i in 20:
+		await get_tree().process_frame
+	EditorInterface.close_scene()
+	for i in 20:
+		await get_tree().process_frame
+	print("roundtrip: switched tabs, reloaded and closed")
+	get_tree().quit()
