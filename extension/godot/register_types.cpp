@@ -3,6 +3,7 @@
 #include "nodes/dense_slam.h"
 #include "nodes/rig_capture.h"
 #include "nodes/room_probe.h"
+#include "nodes/surface_anchor.h"
 #include "resources/prt_transfer.h"
 
 #include <rp_godot/godot.h>
@@ -23,6 +24,8 @@ void initialize_roomprobe(GDExtensionInitializationLevel p_level) {
 	godot::ClassDB::register_class<roomprobe::DenseSLAM>();
 	godot::ClassDB::register_class<roomprobe::CoarseRoomModel>();
 	godot::ClassDB::register_class<roomprobe::RoomProbe>();
+	// Placement of the virtual objects on the real surfaces.
+	godot::ClassDB::register_class<roomprobe::SurfaceAnchor>();
 	// Resources the materials read.
 	godot::ClassDB::register_class<roomprobe::PRTTransfer>();
 }

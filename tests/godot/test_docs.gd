@@ -10,7 +10,7 @@ extends RoomProbeTestCase
 ## The classes RoomProbe registers. Any other class that extension/godot/register_types.cpp
 ## registers must be documented too. (ClassDB cannot tell RoomProbe's classes from those of the
 ## test-only binding extension in tests/binding/, which need no reference.)
-const CLASSES: Array[StringName] = [&"RigCapture", &"DenseSLAM", &"CoarseRoomModel", &"RoomProbe", &"PRTTransfer"]
+const CLASSES: Array[StringName] = [&"RigCapture", &"DenseSLAM", &"CoarseRoomModel", &"RoomProbe", &"SurfaceAnchor", &"PRTTransfer"]
 const REGISTER_TYPES := "extension/godot/register_types.cpp"
 
 ## Tags whose text is code: references inside them are not links.

@@ -27,6 +27,7 @@ func _make_scene() -> Array:
 	var room = ClassDB.instantiate("CoarseRoomModel")
 	room.name = "Room"
 	room.texel_size = 0.04
+	room.pose_source = 0  # POSE_SOURCE_GROUND_TRUTH: the coarse model alone, no tracking
 	_scene.add_child(room)
 	var probe = ClassDB.instantiate("RoomProbe")
 	probe.name = "Probe"
@@ -214,3 +215,26 @@ func test_a_new_floorplan_starts_the_texture_again() -> void:
 	room.texel_size = 0.05
 	assert_eq(room.get_integrated_frame_count(), 0, "the observations belonged to the old atlas")
 	assert_false(room.has_texture_data())
+
+
+## floorplan_source = Recording: the room takes the recording's floorplan and ceiling by itself,
+## once the RigCapture has opened it (no floorplan typed in).
+func test_the_floorplan_can_come_from_the_recording() -> void:
+	if not need_fixture_recording():
+		return
+	_scene = Node3D.new()
+	var rig = fixture_rig()
+	_scene.add_child(rig)
+	var room = ClassDB.instantiate("CoarseRoomModel")
+	room.name = "Room"
+	room.texel_size = 0.05
+	room.floorplan_source = 1  # FLOORPLAN_RECORDING
+	room.rig_capture = NodePath("../Rig")
+	_scene.add_child(room)
+	add_to_tree(_scene)
+	assert_eq(room.floorplan.size(), 0, "nothing before the recording opens")
+	assert_true(rig.open(), rig.get_last_error())
+	await wait_frames(2)
+	assert_eq(room.floorplan, rig.get_room_floorplan(), "the recording's floorplan")
+	assert_eq(room.ceiling_height, rig.get_room_ceiling_height())
+	assert_true(room.get_warnings().is_empty() or not " ".join(room.get_warnings()).contains("floorplan"), str(room.get_warnings()))

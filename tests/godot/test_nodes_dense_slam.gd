@@ -74,6 +74,9 @@ func test_tracks_the_rgbd_camera_and_drives_the_ar_camera() -> void:
 	assert_eq(s.states, [1], "one change: not started -> good")
 	# The synthetic depth has Kinect-like noise; the issue's target is 1 cm ATE.
 	assert_true(s.worst < 0.01, "the AR camera is within 1 cm of the true pose (worst %.4f m)" % s.worst)
+	# Its field of view is the RGB camera's: 2 atan(h / 2 fy) from the rig file.
+	assert_near(s.camera.fov, s.rig.get_rgb_camera_fov(), 1e-3, "the AR camera's fov is the rig's")
+	assert_true(s.camera.fov > 20.0 and s.camera.fov < 90.0, "a plausible fov: %f" % s.camera.fov)
 	var stats: Dictionary = slam.get_stats()
 	assert_eq(stats.integrated_frames, FRAMES)
 	assert_true(stats.allocated_blocks > 0 and stats.allocated_blocks <= stats.capacity_blocks, str(stats))
@@ -101,6 +104,28 @@ func test_places_an_object_on_the_real_table() -> void:
 	# Through the AR camera's centre pixel: the same as a ray along its view direction.
 	var centre: Dictionary = slam.place_on_surface(Vector2(s.camera.get_viewport().get_visible_rect().size / 2.0))
 	assert_false(centre.is_empty(), "the camera looks at something")
+	# A SurfaceAnchor above the table puts itself and its child down on it by itself; one over
+	# the bare floor (only the coarse room there) waits.
+	var anchor = ClassDB.instantiate("SurfaceAnchor")
+	anchor.position = Vector3(2.5, 1.2, 2.0)
+	var child := Node3D.new()
+	child.position = Vector3(0, 0.1, 0)
+	anchor.add_child(child)
+	var placed := []
+	anchor.placed.connect(func(at: Vector3, normal: Vector3): placed.append([at, normal]))
+	var waiting = ClassDB.instantiate("SurfaceAnchor")
+	waiting.position = Vector3(0.4, 1.0, 0.4)
+	_scene.add_child(anchor)
+	_scene.add_child(waiting)
+	assert_eq(anchor.get_warnings().size(), 0, str(anchor.get_warnings()))
+	await wait_frames(3)
+	assert_true(anchor.is_placed(), "the anchor found the table")
+	assert_eq(placed.size(), 1, "placed once")
+	assert_near(anchor.global_position.y, 0.75, 0.02, "on the table top")
+	assert_near(child.global_position.y, 0.85, 0.02, "its child 0.1 m above it")
+	assert_true(placed[0][1].dot(Vector3.UP) > 0.95 if placed.size() == 1 else false, "the table's normal")
+	assert_false(waiting.is_placed(), "over the floor (the coarse room only) it waits")
+	assert_near(waiting.position, Vector3(0.4, 1.0, 0.4), 1e-6)
 
 
 func test_feeds_the_coarse_model_and_the_probe() -> void:

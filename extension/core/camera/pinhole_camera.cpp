@@ -2,6 +2,9 @@
 
 #include "radtan.h"
 
+#include <cmath>
+#include <numbers>
+
 namespace roomprobe {
 
 namespace {
@@ -37,6 +40,10 @@ PinholeIntrinsics pinhole_intrinsics(const PinholeParams &p_params) {
 
 bool has_pinhole_distortion(const PinholeParams &p_params) {
 	return p_params.k1 != 0.0 || p_params.k2 != 0.0 || p_params.p1 != 0.0 || p_params.p2 != 0.0 || p_params.k3 != 0.0;
+}
+
+double pinhole_vertical_fov_degrees(const PinholeParams &p_params) {
+	return p_params.fy > 0.0 && p_params.height > 0 ? 2.0 * std::atan(0.5 * p_params.height / p_params.fy) * 180.0 / std::numbers::pi : 0.0;
 }
 
 } // namespace roomprobe

@@ -46,4 +46,8 @@ PinholeIntrinsics pinhole_intrinsics(const PinholeParams &p_params);
 // Whether any distortion coefficient is non-zero.
 bool has_pinhole_distortion(const PinholeParams &p_params);
 
+// The vertical field of view in degrees, 2 atan(height / 2 / fy) (a Camera3D's fov with its
+// default keep_aspect, KEEP_HEIGHT); 0 for unknown intrinsics.
+double pinhole_vertical_fov_degrees(const PinholeParams &p_params);
+
 } // namespace roomprobe

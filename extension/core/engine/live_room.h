@@ -195,6 +195,8 @@ public:
 	// Whether the configured engine runs dense SLAM (a DenseSLAM node turned it on).
 	bool has_dense() const { return slam != nullptr; }
 	LiveRoomConfig config() const;
+	// The configured RGB camera's intrinsics (cheap, unlike a copy of config()).
+	PinholeParams rgb_camera() const { return cfg.rig.rgb; }
 	std::string configuration_error() const;
 
 	// Threads (see above). start() is a no-op when running; false when not configured.

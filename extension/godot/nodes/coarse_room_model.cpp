@@ -88,6 +88,34 @@ void CoarseRoomModel::set_ceiling_height(double p_metres) {
 
 double CoarseRoomModel::get_ceiling_height() const { return ceiling_height; }
 
+void CoarseRoomModel::set_floorplan_source(FloorplanSource p_source) {
+	floorplan_source = p_source;
+	take_recording_room();
+	update_configuration_warnings();
+}
+
+CoarseRoomModel::FloorplanSource CoarseRoomModel::get_floorplan_source() const { return floorplan_source; }
+
+void CoarseRoomModel::take_recording_room() {
+	if (floorplan_source != FLOORPLAN_RECORDING || !is_inside_tree()) {
+		return;
+	}
+	std::string unused;
+	Node *capture = find_collaborator(*this, rig_capture_path, "RigCapture", "rig_capture", &unused);
+	if (capture == nullptr) {
+		return;
+	}
+	// The RigCapture's public room (empty until it opens a recording with a room.yaml).
+	const PackedVector2Array plan = capture->call("get_room_floorplan");
+	const double ceiling = capture->call("get_room_ceiling_height");
+	if (plan.size() < 3 || !(ceiling > 0.0) || (plan == floorplan && ceiling == ceiling_height)) {
+		return;
+	}
+	floorplan = plan;
+	ceiling_height = ceiling;
+	rebuild();
+}
+
 void CoarseRoomModel::set_texel_size(double p_metres) {
 	texel_size = p_metres;
 	rebuild();
@@ -309,6 +337,7 @@ bool CoarseRoomModel::integrate_rig_frame() {
 	if (is_inside_tree() && (!engine || own_engine) && find_collaborator(*this, rig_capture_path, "RigCapture", "rig_capture", &unused) != nullptr) {
 		connect_engine(); // the RigCapture may have come later
 	}
+	take_recording_room();
 	const uint64_t before = shown ? shown->frames : 0;
 	if (!take_snapshot() || shown->frames == before || shown->frames == 0) {
 		return false;
@@ -442,6 +471,8 @@ void CoarseRoomModel::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_rig_capture"), &CoarseRoomModel::get_rig_capture_path);
 	ClassDB::bind_method(D_METHOD("set_dense_slam", "path"), &CoarseRoomModel::set_dense_slam_path);
 	ClassDB::bind_method(D_METHOD("get_dense_slam"), &CoarseRoomModel::get_dense_slam_path);
+	ClassDB::bind_method(D_METHOD("set_floorplan_source", "source"), &CoarseRoomModel::set_floorplan_source);
+	ClassDB::bind_method(D_METHOD("get_floorplan_source"), &CoarseRoomModel::get_floorplan_source);
 	ClassDB::bind_method(D_METHOD("set_pose_source", "source"), &CoarseRoomModel::set_pose_source);
 	ClassDB::bind_method(D_METHOD("get_pose_source"), &CoarseRoomModel::get_pose_source);
 	ClassDB::bind_method(D_METHOD("set_inpainting", "enabled"), &CoarseRoomModel::set_inpainting);
@@ -456,6 +487,7 @@ void CoarseRoomModel::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("reset_texture"), &CoarseRoomModel::reset_texture);
 	ClassDB::bind_method(D_METHOD("finish_inpainting"), &CoarseRoomModel::finish_inpainting);
 
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "floorplan_source", PROPERTY_HINT_ENUM, "Manual,Recording"), "set_floorplan_source", "get_floorplan_source");
 	ADD_PROPERTY(PropertyInfo(Variant::PACKED_VECTOR2_ARRAY, "floorplan"), "set_floorplan", "get_floorplan");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "ceiling_height", PROPERTY_HINT_RANGE, "0.5,10,0.01,or_greater,suffix:m"), "set_ceiling_height", "get_ceiling_height");
 	ADD_GROUP("Texture", "");
@@ -473,6 +505,8 @@ void CoarseRoomModel::_bind_methods() {
 	BIND_ENUM_CONSTANT(LIGHTING_OFF);
 	BIND_ENUM_CONSTANT(LIGHTING_ADDITIVE);
 	BIND_ENUM_CONSTANT(LIGHTING_GAIN);
+	BIND_ENUM_CONSTANT(FLOORPLAN_MANUAL);
+	BIND_ENUM_CONSTANT(FLOORPLAN_RECORDING);
 
 	ADD_SIGNAL(MethodInfo("mesh_changed"));
 	ADD_SIGNAL(MethodInfo("texture_updated", PropertyInfo(Variant::INT, "fisheye_frame")));

@@ -26,6 +26,10 @@ public:
 		POSE_SOURCE_GROUND_TRUTH, // the recording's ground-truth RGB-D trajectory (evaluation mode)
 		POSE_SOURCE_DENSE_SLAM, // DenseSLAM's tracked trajectory (the live mode)
 	};
+	enum FloorplanSource {
+		FLOORPLAN_MANUAL, // floorplan and ceiling_height as set
+		FLOORPLAN_RECORDING, // the recording's room.yaml, through the RigCapture (when it has one)
+	};
 	enum LightingCompensation {
 		LIGHTING_OFF,
 		LIGHTING_ADDITIVE, // the paper's §4.6: one offset per channel
@@ -39,6 +43,8 @@ public:
 	godot::PackedVector2Array get_floorplan() const;
 	void set_ceiling_height(double p_metres);
 	double get_ceiling_height() const;
+	void set_floorplan_source(FloorplanSource p_source);
+	FloorplanSource get_floorplan_source() const;
 	void set_texel_size(double p_metres);
 	double get_texel_size() const;
 
@@ -116,9 +122,12 @@ private:
 
 	godot::NodePath rig_capture_path;
 	godot::NodePath dense_slam_path;
-	PoseSource pose_source = POSE_SOURCE_GROUND_TRUTH;
+	PoseSource pose_source = POSE_SOURCE_DENSE_SLAM;
 	bool inpainting = true;
 	LightingCompensation lighting_compensation = LIGHTING_GAIN;
+	FloorplanSource floorplan_source = FLOORPLAN_MANUAL;
+	// FLOORPLAN_RECORDING: takes the rig's room when it differs from the one shown.
+	void take_recording_room();
 	uint32_t room_layers = 1;
 
 	std::shared_ptr<LiveRoom> engine;
@@ -134,3 +143,4 @@ private:
 
 VARIANT_ENUM_CAST(roomprobe::CoarseRoomModel::PoseSource)
 VARIANT_ENUM_CAST(roomprobe::CoarseRoomModel::LightingCompensation)
+VARIANT_ENUM_CAST(roomprobe::CoarseRoomModel::FloorplanSource)

@@ -1,5 +1,7 @@
 #include "dense_slam.h"
 
+#include <camera/pinhole_camera.h>
+
 #include <cstring>
 
 #include "../convert/image_convert.h"
@@ -55,6 +57,24 @@ DenseSLAM::DenseSLAM() {
 	set_process_priority(-20);
 }
 
+namespace {
+
+// The AR background: a full-screen quad just in front of the far plane (Godot's reverse Z: 0 is
+// far), so every virtual object draws over it, with the camera image (8-bit sRGB, decoded here and
+// encoded again on output: the same pixels under the default linear tone mapping).
+const char *const BACKGROUND_SHADER_CODE = R"(shader_type spatial;
+render_mode unshaded, cull_disabled, shadows_disabled, depth_draw_never;
+uniform sampler2D image : source_color, filter_linear;
+void vertex() {
+	POSITION = vec4(VERTEX.xy, 1e-6, 1.0);
+}
+void fragment() {
+	ALBEDO = texture(image, UV).rgb;
+}
+)";
+
+} // namespace
+
 DenseSLAM::~DenseSLAM() {
 	disconnect_engine();
 }
@@ -74,6 +94,7 @@ void DenseSLAM::_notification(int p_what) {
 		set_process(!Engine::get_singleton()->is_editor_hint());
 	}
 	if (p_what == NOTIFICATION_READY) {
+		update_background();
 		connect_engine();
 	} else if (p_what == NOTIFICATION_EXIT_TREE) {
 		disconnect_engine();
@@ -243,12 +264,76 @@ bool DenseSLAM::process_rig_frame() {
 		Node3D *camera = cast_to<Node3D>(get_node_or_null(camera_path));
 		ERR_FAIL_NULL_V_MSG(camera, true, "camera does not lead to a Node3D.");
 		camera->set_global_transform(camera_transform_from_pose(frame->world_from_camera));
+		// The AR camera sees what the RGB camera saw: its field of view from the rig.
+		Camera3D *ar_camera = cast_to<Camera3D>(camera);
+		const double fov = pinhole_vertical_fov_degrees(engine->rgb_camera());
+		if (ar_camera != nullptr && fov > 0.0 && std::abs(ar_camera->get_fov() - fov) > 1e-4) {
+			ar_camera->set_fov(fov);
+		}
 	}
 	if (camera_image_wanted && !frame->rgb.empty()) {
 		show_in_texture(image_from_mat(frame->rgb), camera_image);
+		const Ref<ShaderMaterial> shown = background != nullptr ? Ref<ShaderMaterial>(background->get_material_override()) : Ref<ShaderMaterial>();
+		if (shown.is_valid() && shown->get_shader_parameter("image") != Variant(camera_image)) {
+			shown->set_shader_parameter("image", camera_image); // the texture is made with the first image
+		}
 	}
 	emit_signal("frame_processed", int64_t(frame->sequence));
 	return true;
+}
+
+void DenseSLAM::set_camera_background(bool p_enabled) {
+	camera_background = p_enabled;
+	if (is_inside_tree()) {
+		update_background();
+	}
+}
+
+bool DenseSLAM::get_camera_background() const { return camera_background; }
+
+void DenseSLAM::update_background() {
+	if (!camera_background || Engine::get_singleton()->is_editor_hint()) {
+		if (background != nullptr) {
+			background->queue_free();
+			background = nullptr;
+		}
+		return;
+	}
+	if (background != nullptr) {
+		return;
+	}
+	PackedVector3Array corners;
+	PackedVector2Array uvs;
+	for (const auto &[x, y] : { std::pair{ -1.0f, -1.0f }, { 1.0f, -1.0f }, { 1.0f, 1.0f }, { -1.0f, 1.0f } }) {
+		corners.push_back(Vector3(x, y, 0.0f));
+		uvs.push_back(Vector2(0.5f * (x + 1.0f), 0.5f * (1.0f + y))); // POSITION's y grows down the screen (Vulkan)
+	}
+	PackedInt32Array indices;
+	for (int i : { 0, 2, 1, 0, 3, 2 }) {
+		indices.push_back(i);
+	}
+	Array arrays;
+	arrays.resize(Mesh::ARRAY_MAX);
+	arrays[Mesh::ARRAY_VERTEX] = corners;
+	arrays[Mesh::ARRAY_TEX_UV] = uvs;
+	arrays[Mesh::ARRAY_INDEX] = indices;
+	Ref<ArrayMesh> quad;
+	quad.instantiate();
+	quad->add_surface_from_arrays(Mesh::PRIMITIVE_TRIANGLES, arrays);
+	Ref<Shader> shader;
+	shader.instantiate();
+	shader->set_code(BACKGROUND_SHADER_CODE);
+	Ref<ShaderMaterial> background_material;
+	background_material.instantiate();
+	background_material->set_shader(shader);
+	background_material->set_shader_parameter("image", get_camera_image_texture());
+	background = memnew(MeshInstance3D);
+	background->set_mesh(quad);
+	background->set_material_override(background_material);
+	background->set_cast_shadows_setting(GeometryInstance3D::SHADOW_CASTING_SETTING_OFF);
+	// Never culled: its vertices are placed in clip space, not where its box says.
+	background->set_custom_aabb(AABB{ Vector3(-1e5f, -1e5f, -1e5f), Vector3(2e5f, 2e5f, 2e5f) });
+	add_child(background, false, Node::INTERNAL_MODE_FRONT);
 }
 
 Ref<ImageTexture> DenseSLAM::get_camera_image_texture() const {
@@ -472,6 +557,8 @@ void DenseSLAM::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_mesh_upload_budget"), &DenseSLAM::get_mesh_upload_budget);
 	ClassDB::bind_method(D_METHOD("process_rig_frame"), &DenseSLAM::process_rig_frame);
 	ClassDB::bind_method(D_METHOD("get_camera_image_texture"), &DenseSLAM::get_camera_image_texture);
+	ClassDB::bind_method(D_METHOD("set_camera_background", "enabled"), &DenseSLAM::set_camera_background);
+	ClassDB::bind_method(D_METHOD("get_camera_background"), &DenseSLAM::get_camera_background);
 	ClassDB::bind_method(D_METHOD("get_tracking_state"), &DenseSLAM::get_tracking_state);
 	ClassDB::bind_method(D_METHOD("get_tracking_reason"), &DenseSLAM::get_tracking_reason);
 	ClassDB::bind_method(D_METHOD("get_camera_transform"), &DenseSLAM::get_camera_transform);
@@ -485,6 +572,7 @@ void DenseSLAM::_bind_methods() {
 
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "capture", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "RigCapture"), "set_capture", "get_capture");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "camera", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "Camera3D"), "set_camera", "get_camera");
+	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "camera_background"), "set_camera_background", "get_camera_background");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "coarse_model", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "CoarseRoomModel"), "set_coarse_model", "get_coarse_model");
 	ADD_GROUP("Volume", "");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "voxel_size", PROPERTY_HINT_RANGE, "0.002,0.1,0.001,suffix:m"), "set_voxel_size", "get_voxel_size");

@@ -60,6 +60,10 @@ public:
 	bool process_rig_frame();
 	// The RGB image of the frame whose pose the camera has now: the AR view's background.
 	godot::Ref<godot::ImageTexture> get_camera_image_texture() const;
+	// Draws that image behind everything in 3D (an internal full-screen quad at the far plane):
+	// an AR background with no script and no Environment change.
+	void set_camera_background(bool p_enabled);
+	bool get_camera_background() const;
 	TrackingState get_tracking_state() const;
 	godot::String get_tracking_reason() const;
 	godot::Transform3D get_camera_transform() const;
@@ -126,6 +130,9 @@ private:
 	godot::Ref<godot::StandardMaterial3D> material;
 	mutable godot::Ref<godot::ImageTexture> camera_image;
 	mutable bool camera_image_wanted = false;
+	bool camera_background = false;
+	godot::MeshInstance3D *background = nullptr; // internal, while camera_background is on
+	void update_background();
 };
 
 } // namespace roomprobe

@@ -1,5 +1,7 @@
 #include "rig_capture.h"
 
+#include <camera/pinhole_camera.h>
+
 #include "../convert/image_convert.h"
 #include "../convert/pose_convert.h"
 
@@ -791,8 +793,7 @@ double RigCapture::get_rgb_camera_fov() const {
 	if (!rig) {
 		return 0.0;
 	}
-	const PinholeParams &rgb = rig->rgb;
-	return rgb.fy > 0.0 ? 2.0 * std::atan(0.5 * rgb.height / rgb.fy) * 180.0 / 3.14159265358979323846 : 0.0;
+	return pinhole_vertical_fov_degrees(rig->rgb);
 }
 
 PackedStringArray RigCapture::get_warnings() const {
