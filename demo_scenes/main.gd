@@ -5,8 +5,8 @@ extends Node3D
 ## background; DenseSLAM tracks the RGB-D camera, drives the AR camera and fuses the dense model
 ## of the table; CoarseRoomModel textures the room from the fisheye at the poses SLAM gives; each
 ## sphere's RoomProbe synthesises the environment map at the sphere's centre every frame, the
-## dense table over the coarse room. Once the table is meshed, the objects are put down on it by
-## DenseSLAM.place_on_ray (Embree). The mirror and the glass use RoomProbe's shaders (route a);
+## dense table over the coarse room. Once the table is meshed, each object's SurfaceAnchor puts it
+## down on it (Embree). The mirror and the glass use RoomProbe's shaders (route a);
 ## the torus is a plain StandardMaterial3D lit by the ReflectionProbe the mirror's probe drives
 ## (route b) and by the sky it feeds (route c).
 ##
@@ -23,14 +23,13 @@ extends Node3D
 @onready var _room = $Room
 @onready var _camera: Camera3D = $Camera3D
 @onready var _video: TextureRect = $Background/Video
-@onready var _probe = $MirrorSphere/Probe
+@onready var _probe = $MirrorAnchor/MirrorSphere/Probe
 @onready var _slam = $SLAM
 
 var _out_dir := ""
 var _quit_at_end := false
 var _true_poses := false
-var _placed := false
-var _objects: Array[MeshInstance3D] = []  # put down on the table once it is meshed
+var _objects: Array[MeshInstance3D] = []  # each under a SurfaceAnchor, which puts it on the table
 var _main_usec_last := -1
 var _main_ms: Array[float] = []  # RoomProbe's main-thread time per rendered frame
 var _objects_ms: Array[float] = []  # the saved probe's maps: drawing the other virtual objects
@@ -61,7 +60,7 @@ func _ready() -> void:
 			_figure = args[i + 1]
 			print("demo: scene %s" % args[i + 1])
 	if _objects.is_empty():
-		for path in [^"MirrorSphere", ^"GlassSphere", ^"MetalTorus"]:
+		for path in [^"MirrorAnchor/MirrorSphere", ^"GlassAnchor/GlassSphere", ^"TorusAnchor/MetalTorus"]:
 			_objects.append(get_node(path))
 	if recording.is_empty():
 		printerr("demo: no recording given (-- --recording DIR); ./roomprobe demo makes one")
@@ -79,7 +78,9 @@ func _ready() -> void:
 	_room.texture_updated.connect(_on_texture_updated)
 	_slam.tracking_state_changed.connect(func(state: int, reason: String):
 		print("demo: tracking %s %s" % [["not started", "good", "poor", "lost"][state], reason]))
-	_slam.mesh_updated.connect(_place_objects)
+	for object in _objects:
+		var anchor := object.get_parent()
+		anchor.placed.connect(func(at: Vector3, _normal: Vector3): print("demo: %s put on the table at y = %.3f m" % [object.name, at.y]))
 	_probe.environment_map_updated.connect(func(): _objects_ms.append(_probe.get_last_update_stats().get("objects_ms", 0.0)))
 	if _true_poses:
 		_slam.camera = NodePath()
@@ -121,26 +122,6 @@ func _on_texture_updated(fisheye_frame: int) -> void:
 		print("demo: fisheye frame %d: %d texels updated, coarse %.1f ms; SLAM frame %.1f ms (track %.1f, integrate %.1f, raycast %.1f), %d blocks" % [
 			fisheye_frame, stats.texels_updated, stats.frame_ms, slam.get("frame_ms", 0.0), slam.get("track_ms", 0.0),
 			slam.get("integrate_ms", 0.0), slam.get("raycast_ms", 0.0), slam.get("allocated_blocks", 0)])
-
-
-## Puts each object down on the real surface below it, once the table is in the dense mesh.
-func _place_objects() -> void:
-	if _placed:
-		return
-	for object in _objects:
-		var above := Vector3(object.position.x, 1.6, object.position.z)
-		var hit: Dictionary = _slam.place_on_ray(above, Vector3.DOWN)
-		if hit.get("surface", "") != "dense":
-			return  # the table is not meshed there yet: try again at the next mesh
-		# The object's lowest point on the surface.
-		object.position.y = hit.position.y - object.get_aabb().position.y * object.scale.y
-		# A contact shadow takes the surface's normal from the placement (its transfer was baked
-		# for a level table, as the demo's is).
-		var shadow := object.get_node_or_null("ContactShadow") as MeshInstance3D
-		if shadow != null:
-			(shadow.material_override as ShaderMaterial).set_shader_parameter("plane_normal", hit.normal)
-		print("demo: %s put on the %s surface at y = %.3f m" % [object.name, hit.surface, hit.position.y])
-	_placed = true
 
 
 func _on_finished() -> void:

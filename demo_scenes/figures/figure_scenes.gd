@@ -26,13 +26,13 @@ const BEFORE_SWITCH_FRAME := 37
 const Meshes := preload("res://demo_scenes/figures/figure_meshes.gd")
 
 
-## Builds scene p_name under p_main (main.gd's root) in place of its three objects. Returns the
-## objects to put down on the table (each with the height of its lowest point under its origin)
-## and the probe whose map the demo saves; empty when p_name is unknown.
+## Builds scene p_name under p_main (main.gd's root) in place of its three objects, each object
+## under a SurfaceAnchor that puts it down on the table. Returns the objects and the probe whose
+## map the demo saves; empty when p_name is unknown.
 static func build(p_main: Node3D, p_name: String) -> Dictionary:
 	if not p_name in NAMES:
 		return {}
-	for path in [^"MirrorSphere", ^"GlassSphere", ^"MetalTorus"]:
+	for path in [^"MirrorAnchor", ^"GlassAnchor", ^"TorusAnchor"]:
 		var old := p_main.get_node(path)
 		p_main.remove_child(old)
 		old.free()
@@ -68,7 +68,11 @@ static func build(p_main: Node3D, p_name: String) -> Dictionary:
 			sphere_mesh.radial_segments = 96
 			sphere_mesh.rings = 48
 			var sphere := _object(p_main, "ChromeSphere", sphere_mesh, _shader_material("mirror", {"tint": Vector3(0.9, 0.9, 0.9)}), Vector3(2.5, 0.9, 2.0), 0.0)
-			sphere.add_child(_contact_shadow(sphere_mesh, 0.1, sphere.get_node("Probe")))
+			var shadow := _contact_shadow(sphere_mesh, 0.1, sphere.get_node("Probe"))
+			sphere.add_child(shadow)
+			# The surface's normal from the placement (the transfer is baked for a level table).
+			sphere.get_parent().placed.connect(func(_at: Vector3, normal: Vector3):
+				(shadow.material_override as ShaderMaterial).set_shader_parameter("plane_normal", normal))
 			objects.append(sphere)
 	return {"objects": objects, "probe": objects[0].get_node("Probe")}
 
@@ -81,16 +85,21 @@ static func _shader_material(p_shader: String, p_parameters: Dictionary) -> Shad
 	return material
 
 
-## A MeshInstance3D on the objects' layer with a RoomProbe child that feeds its material.
+## A MeshInstance3D on the objects' layer with a RoomProbe child that feeds its material, under a
+## SurfaceAnchor at p_position (its lowest point at the anchor: the anchor puts it on the table).
 static func _object(p_main: Node3D, p_name: String, p_mesh: Mesh, p_material: ShaderMaterial, p_position: Vector3, p_turn_degrees: float) -> MeshInstance3D:
+	var anchor = ClassDB.instantiate("SurfaceAnchor")
+	anchor.name = p_name + "Anchor"
+	anchor.position = Vector3(p_position.x, 0.75, p_position.z)  # about the table's height until it is found
+	p_main.add_child(anchor)
 	var object := MeshInstance3D.new()
 	object.name = p_name
 	object.mesh = p_mesh
 	object.material_override = p_material
 	object.layers = OBJECT_LAYER
-	object.position = p_position
+	object.position = Vector3(0, -p_mesh.get_aabb().position.y, 0)
 	object.rotation_degrees = Vector3(0, p_turn_degrees, 0)
-	p_main.add_child(object)
+	anchor.add_child(object)
 	var probe = ClassDB.instantiate("RoomProbe")
 	probe.name = "Probe"
 	probe.resolution = 128

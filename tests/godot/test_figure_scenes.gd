@@ -18,10 +18,10 @@ func after_each() -> void:
 ## What main.tscn gives the builder: the three objects, the room and the SLAM node.
 func _fake_main() -> Node3D:
 	var main := Node3D.new()
-	for name in ["MirrorSphere", "GlassSphere", "MetalTorus"]:
-		var object := MeshInstance3D.new()
-		object.name = name
-		main.add_child(object)
+	for name in ["MirrorAnchor", "GlassAnchor", "TorusAnchor"]:
+		var anchor = ClassDB.instantiate("SurfaceAnchor")
+		anchor.name = name
+		main.add_child(anchor)
 	var room = ClassDB.instantiate("CoarseRoomModel")
 	room.name = "Room"
 	main.add_child(room)
@@ -40,7 +40,7 @@ func test_every_figure_builds_its_objects_with_their_probes() -> void:
 		_main = _fake_main()
 		var figure: Dictionary = Figures.build(_main, name)
 		assert_false(figure.is_empty(), name)
-		assert_null(_main.get_node_or_null("MirrorSphere"), "%s: the demo's objects are gone" % name)
+		assert_null(_main.get_node_or_null("MirrorAnchor"), "%s: the demo's objects are gone" % name)
 		var objects: Array = figure.objects
 		assert_eq(objects.size(), expected[name].size(), name)
 		for i in objects.size():
@@ -52,6 +52,8 @@ func test_every_figure_builds_its_objects_with_their_probes() -> void:
 			assert_eq(probe.virtual_objects_mask, Figures.OBJECT_LAYER, "%s: the probe draws the other objects" % name)
 			assert_eq(object.layers, Figures.OBJECT_LAYER)
 			assert_eq(probe.get_node(probe.coarse_model), _main.get_node("Room"))
+			assert_eq(object.get_parent().get_class(), "SurfaceAnchor", "%s: put on the table by an anchor" % name)
+			assert_near(object.position.y + object.get_aabb().position.y, 0.0, 1e-4, "%s: its lowest point at the anchor" % name)
 		assert_eq(figure.probe, objects[0].get_node("Probe"))
 		if name == "prt_mannequin":
 			assert_not_null(objects[0].material_override.get_shader_parameter("transfer"), "the mannequin's transfer was baked")
@@ -63,4 +65,4 @@ func test_every_figure_builds_its_objects_with_their_probes() -> void:
 		_main.free()
 	_main = _fake_main()
 	assert_true(Figures.build(_main, "no_such_figure").is_empty())
-	assert_not_null(_main.get_node_or_null("MirrorSphere"), "an unknown name changes nothing")
+	assert_not_null(_main.get_node_or_null("MirrorAnchor"), "an unknown name changes nothing")

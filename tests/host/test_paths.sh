@@ -213,8 +213,19 @@ test_bake_prt_bakes_and_caches() {
 	cd "$repo" || return
 }
 
+# An unknown verb is named, with the list of verbs, and exit status 2; help lists them with 0.
+test_unknown_verb_is_named() {
+	rp frobnicate
+	check "an unknown verb exited with status $rc, not 2" test "$rc" -eq 2
+	check "the message does not name the verb 'frobnicate'" says "unknown verb 'frobnicate'"
+	check "the message does not list the verbs" says "usage: ./roomprobe VERB"
+	rp help
+	check "help exited with status $rc" test "$rc" -eq 0
+	check "help does not list demo --scene" says "--scene NAME"
+}
+
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
-	calibrate_refuses_and_never_overwrites synth_photometric_options_refused bake_prt_bakes_and_caches)
+	calibrate_refuses_and_never_overwrites synth_photometric_options_refused bake_prt_bakes_and_caches unknown_verb_is_named)
 passed=0 failed=0 start=$(date +%s.%N)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.
 echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench and roomprobe_calibrate"

@@ -330,7 +330,9 @@ void RoomProbe::drive_reflection_probe() {
 		hi = Vector3(std::max(hi.x, real_t(v.x)), std::max(hi.y, real_t(v.y)), std::max(hi.z, real_t(v.z)));
 	}
 	const Vector3 centre = room->get_global_position() + (lo + hi) * 0.5;
-	drive(probe, "global_position", centre);
+	// Its local position (a global one cannot be put back once the probe has left the tree).
+	const Node3D *parent = cast_to<Node3D>(probe->get_parent());
+	drive(probe, "position", parent != nullptr ? parent->to_local(centre) : centre);
 	drive(probe, "size", hi - lo);
 	drive(probe, "origin_offset", get_global_position() - centre);
 	drive(probe, "box_projection", true);
