@@ -77,6 +77,11 @@ func test_tracks_the_rgbd_camera_and_drives_the_ar_camera() -> void:
 	# Its field of view is the RGB camera's: 2 atan(h / 2 fy) from the rig file.
 	assert_near(s.camera.fov, s.rig.get_rgb_camera_fov(), 1e-3, "the AR camera's fov is the rig's")
 	assert_true(s.camera.fov > 20.0 and s.camera.fov < 90.0, "a plausible fov: %f" % s.camera.fov)
+	# The models of the real room are on layer 20, which the AR camera no longer draws.
+	assert_eq(slam.mesh_layers, 1 << 19)
+	assert_eq(s.room.room_layers, 1 << 19)
+	assert_eq(s.camera.cull_mask & (1 << 19), 0, "the AR camera does not draw the room's models")
+	assert_eq(s.camera.cull_mask & 1, 1, "it still draws layer 1, the virtual objects'")
 	var stats: Dictionary = slam.get_stats()
 	assert_eq(stats.integrated_frames, FRAMES)
 	assert_true(stats.allocated_blocks > 0 and stats.allocated_blocks <= stats.capacity_blocks, str(stats))

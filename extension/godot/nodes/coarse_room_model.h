@@ -128,7 +128,7 @@ private:
 	FloorplanSource floorplan_source = FLOORPLAN_MANUAL;
 	// FLOORPLAN_RECORDING: takes the rig's room when it differs from the one shown.
 	void take_recording_room();
-	uint32_t room_layers = 1;
+	uint32_t room_layers = 1u << 19; // layer 20: probes see it, the AR camera (DenseSLAM) not
 
 	std::shared_ptr<LiveRoom> engine;
 	bool own_engine = false; // no RigCapture: a room-only engine

@@ -270,6 +270,16 @@ bool DenseSLAM::process_rig_frame() {
 		if (ar_camera != nullptr && fov > 0.0 && std::abs(ar_camera->get_fov() - fov) > 1e-4) {
 			ar_camera->set_fov(fov);
 		}
+		// It shows the video, not the models of the real room: their layers are off its mask
+		// (the probes and a driven ReflectionProbe still see them).
+		if (ar_camera != nullptr) {
+			std::string unused;
+			Node *room = find_collaborator(*this, coarse_model_path, "CoarseRoomModel", "coarse_model", &unused);
+			const uint32_t hidden = mesh_layers | (room != nullptr ? uint32_t(int64_t(room->get("room_layers"))) : 0u);
+			if ((ar_camera->get_cull_mask() & hidden) != 0) {
+				ar_camera->set_cull_mask(ar_camera->get_cull_mask() & ~hidden);
+			}
+		}
 	}
 	if (camera_image_wanted && !frame->rgb.empty()) {
 		show_in_texture(image_from_mat(frame->rgb), camera_image);

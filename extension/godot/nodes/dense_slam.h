@@ -105,7 +105,7 @@ private:
 	double colour_weight = 0.3;
 	double tracking_max_depth = 8.0;
 	double fusion_max_depth = 4.0;
-	uint32_t mesh_layers = 1;
+	uint32_t mesh_layers = 1u << 19; // layer 20, with the room
 	int mesh_update_interval = 15;
 
 	std::shared_ptr<LiveRoom> engine;
