@@ -102,3 +102,26 @@ func test_missing_recording_is_a_clear_error() -> void:
 	assert_true(_rig.get_last_error().contains("no_such_recording"), "the error names the folder: %s" % _rig.get_last_error())
 	assert_true(" ".join(_rig.get_warnings()).contains("cannot be played"), "and shows as a warning")
 	assert_false(_rig.step(), "nothing plays")
+
+
+## Before anything opens them (the editor), the warnings already say when recording_path or
+## rig_file cannot be used, naming the input, and say nothing for good ones.
+func test_unopened_inputs_are_checked_for_the_editor() -> void:
+	if not need_fixture_recording():
+		return
+	_rig.recording_path = _dir.path_join("no_such_recording")
+	var text := " ".join(_rig.get_warnings())
+	assert_true(text.contains("recording_path cannot be played") and text.contains("no_such_recording"), text)
+	_rig.recording_path = _dir
+	assert_false(" ".join(_rig.get_warnings()).contains("cannot be played"), " ".join(_rig.get_warnings()))
+	var bad := OS.get_user_data_dir().path_join("roomprobe_bad_rig.yaml")
+	var f := FileAccess.open(bad, FileAccess.WRITE)
+	f.store_string("schema_version: 2\nrgb: [not, a, camera\n")
+	f.close()
+	_rig.source = 1  # SOURCE_LIVE
+	_rig.rig_file = bad
+	text = " ".join(_rig.get_warnings())
+	DirAccess.remove_absolute(bad)
+	assert_true(text.contains("rig_file cannot be read") and text.contains("roomprobe_bad_rig.yaml"), text)
+	_rig.rig_file = _dir.path_join("rig.yaml")
+	assert_false(" ".join(_rig.get_warnings()).contains("cannot be read"), " ".join(_rig.get_warnings()))

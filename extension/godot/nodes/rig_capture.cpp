@@ -17,6 +17,7 @@ namespace roomprobe {
 void RigCapture::set_recording_path(const String &p_path) {
 	recording_path = p_path;
 	last_error.clear(); // the error was about the previous recording
+	checked_recording.clear();
 	close();
 	update_configuration_warnings();
 }
@@ -48,6 +49,7 @@ RigCapture::Source RigCapture::get_source() const { return source; }
 void RigCapture::set_rig_file(const String &p_path) {
 	rig_file = p_path;
 	last_error.clear();
+	checked_rig.clear();
 	if (source == SOURCE_LIVE) {
 		close();
 	}
@@ -806,6 +808,28 @@ PackedStringArray RigCapture::get_warnings() const {
 	}
 	if (!last_error.empty()) {
 		warnings.push_back(String(((source == SOURCE_LIVE ? "The live rig cannot run: " : "The recording cannot be played: ") + last_error).c_str()));
+	} else if (source == SOURCE_RECORDING && !recording_path.is_empty() && !reader) {
+		// Not opened yet (the editor): whether it would open, read once per path (indexes only).
+		const std::string folder = ProjectSettings::get_singleton()->globalize_path(recording_path).utf8_string();
+		if (folder != checked_recording) {
+			checked_recording = folder;
+			RecordingReader probe;
+			const RecordingStatus status = probe.open(folder);
+			recording_problem = status.ok ? "" : status.error;
+		}
+		if (!recording_problem.empty()) {
+			warnings.push_back(String(("recording_path cannot be played: " + recording_problem).c_str()));
+		}
+	} else if (source == SOURCE_LIVE && !rig_file.is_empty() && !live_open) {
+		const std::string file = ProjectSettings::get_singleton()->globalize_path(rig_file).utf8_string();
+		if (file != checked_rig) {
+			checked_rig = file;
+			const RigLoadResult loaded = load_rig(file);
+			rig_problem = loaded.ok ? "" : loaded.error;
+		}
+		if (!rig_problem.empty()) {
+			warnings.push_back(String(("rig_file cannot be read: " + rig_problem).c_str()));
+		}
 	}
 	if (live_open && playing) {
 		for (int s = 0; s < 2; s++) {

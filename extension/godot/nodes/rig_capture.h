@@ -185,6 +185,9 @@ private:
 	Pacing pacing = PACING_REAL_TIME;
 	bool loop = false;
 	bool autoplay = true;
+	// What get_warnings() found when it last checked an unopened recording_path / rig_file (so the
+	// editor does not read them again for every warning refresh).
+	mutable std::string checked_recording, recording_problem, checked_rig, rig_problem;
 
 	std::shared_ptr<LiveRoom> engine;
 	std::shared_ptr<const RecordingReader> reader; // read_* is const: the capture thread reads frames
