@@ -748,11 +748,15 @@ std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dve
 			frame = last_tracked;
 		}
 		std::shared_ptr<Probe> probe;
+		std::shared_ptr<const VirtualScene> objects; // the other virtual objects to draw
+		std::shared_ptr<const ProbeMap> previous; // the probe's last map: their light
 		{
 			const std::lock_guard<std::mutex> lock(probe_mutex);
 			const auto it = probes.find(p_probe);
 			if (it != probes.end()) {
 				probe = it->second;
+				objects = probe->objects;
+				previous = probe->map;
 				if (p_generation >= full_faces_generation) {
 					probe->dense_faces.refresh_all = true;
 				}
@@ -765,13 +769,6 @@ std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dve
 		map->fisheye_sequence = snapshot ? snapshot->fisheye_sequence : 0;
 		map->cubemap = render_map(p_position, p_size, snapshot.get(), true, &map->dense, &map->coarse_ms, &map->dense_ms, probe ? &probe->dense_faces : nullptr);
 		double t = now_s();
-		std::shared_ptr<const VirtualScene> objects;
-		std::shared_ptr<const ProbeMap> previous;
-		if (probe) {
-			const std::lock_guard<std::mutex> lock(probe_mutex);
-			objects = probe->objects;
-			previous = probe->map;
-		}
 		if (objects && objects->object_count() > 0) {
 			// Lit by the probe's previous map when it has one (it holds the objects too), else by
 			// this map's room alone.

@@ -18,6 +18,17 @@ glm::dvec3 to_glm(const Vector3 &p_v) {
 	return glm::dvec3(p_v.x, p_v.y, p_v.z);
 }
 
+glm::dmat3 to_glm(const Basis &p_basis) {
+	glm::dmat3 m;
+	for (int row = 0; row < 3; row++) {
+		const glm::dvec3 r = to_glm(p_basis.rows[row]);
+		for (int column = 0; column < 3; column++) {
+			m[column][row] = r[column];
+		}
+	}
+	return m;
+}
+
 Transform3D camera_transform_from_pose(const Pose &p_world_from_camera) {
 	// Godot's basis columns are the camera's axes in the world: x, -y, -z of OpenCV's.
 	const glm::dmat3 r = glm::mat3_cast(p_world_from_camera.rotation); // glm: r[column][row]
@@ -44,11 +55,8 @@ Pose pose_from_camera_transform(const Transform3D &p_transform) {
 }
 
 bool rotation_from_basis(const godot::Basis &p_basis, glm::dmat3 *r_rotation) {
-	glm::dvec3 axes[3];
-	for (int c = 0; c < 3; c++) {
-		const auto component = [c](const godot::Vector3 &p_row) { return double(c == 0 ? p_row.x : (c == 1 ? p_row.y : p_row.z)); };
-		axes[c] = glm::dvec3(component(p_basis.rows[0]), component(p_basis.rows[1]), component(p_basis.rows[2]));
-	}
+	const glm::dmat3 m = to_glm(p_basis);
+	const glm::dvec3 axes[3] = { m[0], m[1], m[2] };
 	const double volume = glm::dot(axes[0], glm::cross(axes[1], axes[2]));
 	if (!std::isfinite(volume) || std::abs(volume) < 1e-12) {
 		return false;

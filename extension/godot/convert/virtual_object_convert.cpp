@@ -115,13 +115,7 @@ std::string virtual_object_from_instance(MeshInstance3D *p_instance, VirtualObje
 	}
 	// Into the world: positions by the transform, normals by its inverse transpose.
 	const Transform3D transform = p_instance->get_global_transform();
-	glm::dmat3 linear;
-	for (int r = 0; r < 3; r++) {
-		const glm::dvec3 row = to_glm(transform.basis.rows[r]);
-		for (int c = 0; c < 3; c++) {
-			linear[c][r] = row[c];
-		}
-	}
+	const glm::dmat3 linear = to_glm(transform.basis);
 	if (!(std::abs(glm::determinant(linear)) > 1e-12)) {
 		return "its transform is degenerate";
 	}

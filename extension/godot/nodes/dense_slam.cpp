@@ -216,6 +216,7 @@ int DenseSLAM::get_max_blocks() const { return max_blocks; }
 
 void DenseSLAM::set_mesh_layers(uint32_t p_layers) {
 	mesh_layers = p_layers;
+	masked_camera = 0; // the AR camera's mask is looked at again
 	for (auto &[region, view] : chunk_views) {
 		view.instance->set_layer_mask(mesh_layers);
 	}
@@ -271,14 +272,15 @@ bool DenseSLAM::process_rig_frame() {
 			ar_camera->set_fov(fov);
 		}
 		// It shows the video, not the models of the real room: their layers are off its mask
-		// (the probes and a driven ReflectionProbe still see them).
-		if (ar_camera != nullptr) {
+		// (the probes and a driven ReflectionProbe still see them). Looked at again only when the
+		// camera or its mask is not what it was left as (finding the room may walk the scene).
+		if (ar_camera != nullptr && (ar_camera->get_instance_id() != masked_camera || ar_camera->get_cull_mask() != masked_camera_mask)) {
 			std::string unused;
 			Node *room = find_collaborator(*this, coarse_model_path, "CoarseRoomModel", "coarse_model", &unused);
 			const uint32_t hidden = mesh_layers | (room != nullptr ? uint32_t(int64_t(room->get("room_layers"))) : 0u);
-			if ((ar_camera->get_cull_mask() & hidden) != 0) {
-				ar_camera->set_cull_mask(ar_camera->get_cull_mask() & ~hidden);
-			}
+			ar_camera->set_cull_mask(ar_camera->get_cull_mask() & ~hidden);
+			masked_camera = ar_camera->get_instance_id();
+			masked_camera_mask = ar_camera->get_cull_mask();
 		}
 	}
 	if (camera_image_wanted && !frame->rgb.empty()) {

@@ -131,6 +131,8 @@ private:
 	mutable godot::Ref<godot::ImageTexture> camera_image;
 	mutable bool camera_image_wanted = false;
 	bool camera_background = false;
+	uint64_t masked_camera = 0; // the AR camera whose cull mask was last cleared of the room's layers
+	uint32_t masked_camera_mask = 0; // and the mask it was left with
 	godot::MeshInstance3D *background = nullptr; // internal, while camera_background is on
 	void update_background();
 };

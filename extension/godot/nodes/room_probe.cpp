@@ -134,21 +134,22 @@ void RoomProbe::_notification(int p_what) {
 	}
 }
 
-void RoomProbe::drive(Object *p_target, const StringName &p_property, const Variant &p_value) {
+void RoomProbe::remember_original(const Object *p_target, const StringName &p_property, bool p_shader_parameter, const Variant &p_current) {
 	const uint64_t id = p_target->get_instance_id();
-	const bool known = std::any_of(driven.begin(), driven.end(), [&](const Driven &p_d) { return p_d.object == id && !p_d.shader_parameter && p_d.property == p_property; });
+	const bool known = std::any_of(driven.begin(), driven.end(),
+			[&](const Driven &p_d) { return p_d.object == id && p_d.shader_parameter == p_shader_parameter && p_d.property == p_property; });
 	if (!known) {
-		driven.push_back({ id, p_property, false, p_target->get(p_property) });
+		driven.push_back({ id, p_property, p_shader_parameter, p_current });
 	}
+}
+
+void RoomProbe::drive(Object *p_target, const StringName &p_property, const Variant &p_value) {
+	remember_original(p_target, p_property, false, p_target->get(p_property));
 	p_target->set(p_property, p_value);
 }
 
 void RoomProbe::drive_shader_parameter(const Ref<ShaderMaterial> &p_material, const StringName &p_name, const Variant &p_value) {
-	const uint64_t id = p_material->get_instance_id();
-	const bool known = std::any_of(driven.begin(), driven.end(), [&](const Driven &p_d) { return p_d.object == id && p_d.shader_parameter && p_d.property == p_name; });
-	if (!known) {
-		driven.push_back({ id, p_name, true, p_material->get_shader_parameter(p_name) });
-	}
+	remember_original(p_material.ptr(), p_name, true, p_material->get_shader_parameter(p_name));
 	p_material->set_shader_parameter(p_name, p_value);
 }
 
@@ -456,15 +457,9 @@ void RoomProbe::refresh_virtual_objects() {
 				(target_material.is_valid() && p_instance->get_material_override() == Ref<Material>(target_material));
 	});
 	// Only a change (an object, its mesh, material or transform) rebuilds the scene.
-	std::vector<double> signature;
+	std::vector<VirtualObjectKey> signature;
 	for (MeshInstance3D *instance : found) {
-		const Transform3D t = instance->get_global_transform();
-		signature.insert(signature.end(), { double(instance->get_instance_id()), double(uintptr_t(instance->get_mesh().ptr())),
-												  double(uintptr_t(instance->get_material_override().ptr())) });
-		for (const Vector3 &row : t.basis.rows) {
-			signature.insert(signature.end(), { row.x, row.y, row.z });
-		}
-		signature.insert(signature.end(), { t.origin.x, t.origin.y, t.origin.z });
+		signature.push_back({ instance->get_instance_id(), instance->get_mesh().ptr(), instance->get_material_override().ptr(), instance->get_global_transform() });
 	}
 	if (signature == virtual_objects_signature) {
 		return;
@@ -497,31 +492,30 @@ Ref<Image> RoomProbe::get_face_image(int p_layer) const {
 	return faces[p_layer];
 }
 
-PackedVector3Array RoomProbe::get_sh_coefficients() const {
+namespace {
+
+PackedVector3Array packed_sh(const ShCoefficients &p_sh) {
 	PackedVector3Array out;
-	if (!map) {
-		return out;
-	}
 	out.resize(SH_COEFFICIENTS);
 	for (int i = 0; i < SH_COEFFICIENTS; i++) {
-		out[i] = Vector3(real_t(map->sh[size_t(i)].x), real_t(map->sh[size_t(i)].y), real_t(map->sh[size_t(i)].z));
+		out[i] = to_godot(p_sh[size_t(i)]);
 	}
 	return out;
 }
 
+} // namespace
+
+PackedVector3Array RoomProbe::get_sh_coefficients() const {
+	return map ? packed_sh(map->sh) : PackedVector3Array();
+}
+
 PackedVector3Array RoomProbe::get_sh_coefficients_in(const Basis &p_basis) const {
-	PackedVector3Array out;
 	if (!map) {
-		return out;
+		return PackedVector3Array();
 	}
 	glm::dmat3 rotation;
-	ERR_FAIL_COND_V_MSG(!rotation_from_basis(p_basis, &rotation), out, "get_sh_coefficients_in: the basis is degenerate or not finite.");
-	const ShCoefficients rotated = rotate_sh(map->sh, rotation);
-	out.resize(SH_COEFFICIENTS);
-	for (int i = 0; i < SH_COEFFICIENTS; i++) {
-		out[i] = Vector3(real_t(rotated[size_t(i)].x), real_t(rotated[size_t(i)].y), real_t(rotated[size_t(i)].z));
-	}
-	return out;
+	ERR_FAIL_COND_V_MSG(!rotation_from_basis(p_basis, &rotation), PackedVector3Array(), "get_sh_coefficients_in: the basis is degenerate or not finite.");
+	return packed_sh(rotate_sh(map->sh, rotation));
 }
 
 PackedStringArray RoomProbe::get_warnings() const {

@@ -99,6 +99,7 @@ private:
 	// sets goes through drive(), which keeps the value it had before the first change, so that
 	// the scene saved in the editor holds the user's values, not the probe's maps
 	// (NOTIFICATION_EDITOR_PRE_SAVE restores them all, POST_SAVE drives them again).
+	void remember_original(const godot::Object *p_target, const godot::StringName &p_property, bool p_shader_parameter, const godot::Variant &p_current);
 	void drive(godot::Object *p_target, const godot::StringName &p_property, const godot::Variant &p_value);
 	void drive_shader_parameter(const godot::Ref<godot::ShaderMaterial> &p_material, const godot::StringName &p_name, const godot::Variant &p_value);
 	void restore_driven();
@@ -123,7 +124,14 @@ private:
 	};
 	std::vector<Driven> driven;
 	uint32_t virtual_objects_mask = 0; // render layers of the virtual objects drawn into the map
-	std::vector<double> virtual_objects_signature; // what they were when last handed over
+	// What the objects were when last handed over: which instance, its mesh, material and transform.
+	struct VirtualObjectKey {
+		uint64_t instance = 0;
+		const void *mesh = nullptr, *material = nullptr;
+		godot::Transform3D transform;
+		bool operator==(const VirtualObjectKey &p_other) const = default;
+	};
+	std::vector<VirtualObjectKey> virtual_objects_signature;
 	int virtual_object_count = 0;
 	godot::NodePath reflection_probe_path;
 	godot::NodePath world_environment_path;
