@@ -11,13 +11,16 @@ extends Node3D
 ## (route b) and by the sky it feeds (route c).
 ##
 ## User arguments (after --):
-##   --recording DIR   the recording to play (required)
+##   --recording DIR   the recording to play (a folder, or a .zip of one; default: the one an
+##                     exported app carries, res://recordings/demo.zip, when there is one)
 ##   --out DIR         where to write cubemap.exr and cubemap_net.png at the end (default: none)
 ##   --quit-at-end     quit when the recording has played (the Movie Maker run does)
 ##   --true-poses      the recording's ground-truth poses instead of SLAM (evaluation mode)
 ##   --scene NAME      one of the paper's figures instead of the three objects
 ##                     (demo_scenes/figures/figure_scenes.gd: mirror_teapot, water_bottle,
 ##                     prt_mannequin, metal_teapots, chrome_sphere)
+
+const BUNDLED_RECORDING := "res://recordings/demo.zip"  # ./roomprobe export puts one in the pack
 
 @onready var _rig = $Rig
 @onready var _room = $Room
@@ -62,6 +65,8 @@ func _ready() -> void:
 	if _objects.is_empty():
 		for path in [^"MirrorAnchor/MirrorSphere", ^"GlassAnchor/GlassSphere", ^"TorusAnchor/MetalTorus"]:
 			_objects.append(get_node(path))
+	if recording.is_empty() and FileAccess.file_exists(BUNDLED_RECORDING):
+		recording = BUNDLED_RECORDING
 	if recording.is_empty():
 		printerr("demo: no recording given (-- --recording DIR); ./roomprobe demo makes one")
 		get_tree().quit(2)

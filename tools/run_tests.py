@@ -30,7 +30,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import rp_godot as rp  # noqa: E402
 
-SUITES = ["host", "build", "core", "editor", "godot", "rendering"]
+SUITES = ["host", "package", "build", "core", "editor", "godot", "rendering"]
 LOGS = os.path.join(rp.BUILD, "test-logs")
 
 BUILD_TIMEOUT = 3600
@@ -47,7 +47,7 @@ GODOT_BAD = re.compile(r"ERROR:|SCRIPT ERROR|leaked|Leaked|ObjectDB instances le
 RUNNER_LINE = re.compile(r"^\[(PASS|FAIL|SKIP|EXPECTED-ERROR|KNOWN-ENGINE-LEAK)\] ")
 RESULT = re.compile(r"^\[(PASS|FAIL|SKIP)\] (\S+)(?:: (.*))?$")
 SUMMARY = re.compile(r"^GODOT_TESTS (\d+) passed, (\d+) failed, (\d+) skipped$")
-HOST_SUMMARY = re.compile(r"^HOST_TESTS (\d+) passed, (\d+) failed in ([\d.]+) s$")
+HOST_SUMMARY = re.compile(r"^(?:HOST|PACKAGE)_TESTS (\d+) passed, (\d+) failed in ([\d.]+) s$")
 EXPECTED_ERROR = re.compile(r"^\[EXPECTED-ERROR\] (.*)$")
 KNOWN_LEAK = re.compile(r"^\[KNOWN-ENGINE-LEAK\] (\d+) (\S+): (.*)$")
 RD_LEAK = re.compile(r'^WARNING: (\d+) RIDs of type "([^"]+)" were leaked\.')
@@ -101,6 +101,8 @@ def main():
                     help="build the core test program with -fsanitize=thread (or address,undefined) into "
                          "build/<target>-tsan|asan/ and run only the core suite under it")
     ap.add_argument("-v", "--verbose", action="store_true", help="show every output line of every step")
+    ap.add_argument("--package-results", metavar="FILE",
+                    help="the package suite's results, written by tests/host/test_package.sh (./roomprobe test passes it)")
     ap.add_argument("--host-results", metavar="FILE",
                     help="the host suite's results, written by tests/host/test_paths.sh (./roomprobe test passes it)")
     opts = ap.parse_args()
@@ -116,12 +118,13 @@ def main():
         return name in selected
 
     # host: already run by ./roomprobe test, outside the toolchain
-    if counted("host"):
-        results.append(suite_host(opts))
-        start -= results[-1].seconds  # the total time includes it
+    for name in ("host", "package"):
+        if counted(name):
+            results.append(suite_host(opts, name))
+            start -= results[-1].seconds  # the total time includes it
 
-    # build, unless only the host suite was asked for
-    if not opts.no_build and set(selected) != {"host"}:
+    # build, unless only the host and package suites were asked for
+    if not opts.no_build and not set(selected) <= {"host", "package"}:
         s = suite_build(opts)
         if counted("build") or s.failed:
             results.append(s)
@@ -141,7 +144,7 @@ def main():
 
     # With --filter and more than one suite that it filters, a suite with no matching test is not
     # a failure; no match in any of them is (checked below).
-    filtered = [n for n in ("godot", "rendering", "host") if counted(n)]
+    filtered = [n for n in ("godot", "rendering", "host", "package") if counted(n)]
     allow_empty = bool(opts.filter) and len(filtered) > 1
     ran_godot = []
     if counted("godot"):
@@ -158,21 +161,23 @@ def main():
 # ---------------------------------------------------------------------------------- host
 
 
-def suite_host(opts):
+def suite_host(opts, name="host"):
     """The results tests/host/test_paths.sh wrote ('[PASS] host::test', '[FAIL] host::test: why', then
     'HOST_TESTS N passed, N failed in S s'). ./roomprobe test runs it on the host first, since the
     paths it tests are not visible in here; its output has been printed already."""
-    s = Suite("host")
-    s.logs.append(os.path.join(LOGS, "host.log"))
-    if not opts.host_results:
-        s.notes.append("the host suite runs only from ./roomprobe test, outside the toolchain")
+    s = Suite(name)
+    s.logs.append(os.path.join(LOGS, f"{name}.log"))
+    results_file = opts.host_results if name == "host" else opts.package_results
+    script = "tests/host/test_paths.sh" if name == "host" else "tests/host/test_package.sh"
+    if not results_file:
+        s.notes.append(f"the {name} suite runs only from ./roomprobe test, outside the toolchain")
         return s
     s.ran = True
     try:
-        with open(opts.host_results) as f:
+        with open(results_file) as f:
             lines = f.read().splitlines()
     except OSError as e:
-        s.fail(f"host: no results ({e.strerror}: {rp.relpath(opts.host_results)})")
+        s.fail(f"{name}: no results ({e.strerror}: {rp.relpath(results_file)})")
         return s
     summary = None
     for line in lines:
@@ -189,9 +194,9 @@ def suite_host(opts):
             summary = (int(m.group(1)), int(m.group(2)))
             s.seconds = float(m.group(3))
     if summary is None:
-        s.fail("host: tests/host/test_paths.sh ended without its HOST_TESTS line")
+        s.fail(f"{name}: {script} ended without its {name.upper()}_TESTS line")
     elif summary != (s.passed, len(s.failures)):
-        s.fail(f"host: HOST_TESTS says {summary}, the result lines say {(s.passed, len(s.failures))}")
+        s.fail(f"{name}: {name.upper()}_TESTS says {summary}, the result lines say {(s.passed, len(s.failures))}")
     return s
 
 
@@ -455,7 +460,10 @@ def scene_roundtrip(s, scratch, log):
     for expected, problem in [("roundtrip: the probe made a map and drives its outputs", "the probe drove nothing (no map)"),
                               ("roundtrip: saved res://roundtrip_probe.tscn (OK)", "the editor did not save the scene"),
                               ("roundtrip: driven again after saving", "the probe did not drive its outputs again after saving"),
-                              ("roundtrip: switched tabs, reloaded and closed", "the tab switches, reload and close did not finish")]:
+                              ("roundtrip: switched tabs, reloaded and closed", "the tab switches, reload and close did not finish"),
+                              ("roundtrip: the inspector previews the map", "the inspector shows no preview of the map"),
+                              ("roundtrip: gizmos on the probe and the room", "the probe or the room has no gizmo"),
+                              ("roundtrip: a corner moves on the floor and back", "the floorplan gizmo's corner drag or its undo failed")]:
         if not any(expected in line for line in r.lines):
             problems.append(problem)
     idle = next((line for line in r.lines if "roundtrip: idle maps" in line), "")

@@ -79,7 +79,7 @@ static func build(p_main: Node3D, p_name: String) -> Dictionary:
 
 static func _shader_material(p_shader: String, p_parameters: Dictionary) -> ShaderMaterial:
 	var material := ShaderMaterial.new()
-	material.shader = load("res://shaders/%s.gdshader" % p_shader)
+	material.shader = load("res://addons/roomprobe/shaders/%s.gdshader" % p_shader)
 	for key in p_parameters:
 		material.set_shader_parameter(key, p_parameters[key])
 	return material

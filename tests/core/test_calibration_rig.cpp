@@ -336,7 +336,7 @@ TEST_CASE("calibration: photometric views that cannot be fitted are refused with
 	write("%YAML:1.0\nexposure_sweep: []\n");
 	CHECK(contains(load_photometric_views(folder.string(), size).error, "reference_exposure_us: missing"));
 	write("%YAML:1.0\nreference_exposure_us: 100\nexposure_sweep:\n  - { image: exposure/000.png, exposure_us: 100 }\n");
-	CHECK(contains(load_photometric_views(folder.string(), size).error, "exposure/000.png: cannot read the image"));
+	CHECK(contains(load_photometric_views(folder.string(), size).error, "exposure/000.png: cannot be opened for reading"));
 	cv::imwrite((folder / "exposure/000.png").string(), cv::Mat(16, 16, CV_8UC3, cv::Scalar::all(100)));
 	CHECK(contains(load_photometric_views(folder.string(), size).error, "16x16, the fisheye's images are"));
 	// Too few exposures, or too narrow a sweep.

@@ -300,9 +300,15 @@ TEST_CASE("synth: checkerboard views: the corners are where boards.yaml says") {
 	const Rig rig = test_rig();
 	TempFolder folder;
 	const CheckerboardSpec board;
-	const CalibrationResult result = write_calibration_views(folder.path.string(), rig, board, 3);
+	std::vector<std::string> progress;
+	const CalibrationResult result =
+			write_calibration_views(folder.path.string(), rig, board, 3, FisheyeOptions(), [&](const std::string &p_line) { progress.push_back(p_line); });
 	REQUIRE_MESSAGE(result.ok, result.error);
 	CHECK(result.views == pinhole_board_poses(board).size() + fisheye_board_poses(board).size() + 2 * pair_board_poses(board).size());
+	// The long phase says how far it is: from 0 of N, about every tenth.
+	REQUIRE(progress.size() >= 5);
+	CHECK(progress.size() <= 12);
+	CHECK(progress.front() == "calibration views: 0 of " + std::to_string(result.views) + " rendered");
 	cv::FileStorage yaml((folder.path / "calibration/boards.yaml").string(), cv::FileStorage::READ);
 	REQUIRE(yaml.isOpened());
 	CHECK(int(yaml["board"]["squares_x"]) == board.squares_x);

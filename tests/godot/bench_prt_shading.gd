@@ -28,11 +28,11 @@ func _init() -> void:
 	sh[0] = Vector3.ONE * sqrt(4.0 * PI)
 	sh[2] = Vector3(0.5, 0.5, 0.5)
 	var prt_material := ShaderMaterial.new()
-	prt_material.shader = load("res://shaders/prt_diffuse.gdshader")
+	prt_material.shader = load("res://addons/roomprobe/shaders/prt_diffuse.gdshader")
 	prt_material.set_shader_parameter("transfer", prt.get_transfer_texture())
 	prt_material.set_shader_parameter("sh", sh)
 	var sh_material := ShaderMaterial.new()
-	sh_material.shader = load("res://shaders/sh_diffuse.gdshader")
+	sh_material.shader = load("res://addons/roomprobe/shaders/sh_diffuse.gdshader")
 	sh_material.set_shader_parameter("sh", sh)
 	# Alternated, so that a slow spell of this shared machine hits both; the median of each.
 	var runs := {"sh_diffuse": [], "prt_diffuse": []}

@@ -31,10 +31,10 @@ func test_project_is_roomprobe() -> void:
 
 func test_symlinked_folders_resolve() -> void:
 	# godot_project/{demo_scenes,shaders,tests} are symlinks to folders at the repository root.
-	for dir in ["res://demo_scenes", "res://shaders", "res://tests", "res://tests/lib"]:
+	for dir in ["res://demo_scenes", "res://addons/roomprobe/shaders", "res://tests", "res://tests/lib"]:
 		assert_true(DirAccess.dir_exists_absolute(dir), "%s should exist" % dir)
 	assert_true(FileAccess.file_exists("res://demo_scenes/main.tscn"), "main scene file")
-	assert_true(FileAccess.file_exists("res://shaders/README.md"), "shaders/README.md")
+	assert_true(FileAccess.file_exists("res://addons/roomprobe/shaders/README.md"), "shaders/README.md")
 	assert_true(ResourceLoader.exists("res://demo_scenes/main.tscn"), "main scene resource")
 	var scene := load("res://demo_scenes/main.tscn") as PackedScene
 	assert_not_null(scene, "main scene loads through the symlink")

@@ -125,3 +125,53 @@ func test_unopened_inputs_are_checked_for_the_editor() -> void:
 	assert_true(text.contains("rig_file cannot be read") and text.contains("roomprobe_bad_rig.yaml"), text)
 	_rig.rig_file = _dir.path_join("rig.yaml")
 	assert_false(" ".join(_rig.get_warnings()).contains("cannot be read"), " ".join(_rig.get_warnings()))
+
+
+# The recording folder zipped with ZIPPacker under one top-level folder, as ./roomprobe export does.
+func _zip_recording(zip_path: String, top: String) -> void:
+	var packer := ZIPPacker.new()
+	assert_eq(packer.open(zip_path), OK, "writes the test zip")
+	var stack := [""]
+	while not stack.is_empty():
+		var rel: String = stack.pop_back()
+		var dir := DirAccess.open(_dir.path_join(rel))
+		for sub in dir.get_directories():
+			stack.append(rel.path_join(sub))
+		for file in dir.get_files():
+			packer.start_file(top.path_join(rel.path_join(file)).simplify_path())
+			packer.write_file(FileAccess.get_file_as_bytes(_dir.path_join(rel.path_join(file))))
+			packer.close_file()
+	packer.close()
+
+
+## A zipped recording plays like its folder (an exported app carries one in its pack: res://...zip);
+## it is unpacked once into user://roomprobe/unpacked/, and a zip whose entries would land outside
+## that folder is refused, naming the entry.
+func test_zipped_recording_plays_and_zip_slip_is_refused() -> void:
+	if not need_fixture_recording():
+		return
+	var zip_path := OS.get_user_data_dir().path_join("roomprobe_test_recording.zip")
+	_zip_recording(zip_path, "living")
+	_rig.recording_path = zip_path
+	assert_true(_rig.open(), "opens the zip: %s" % _rig.get_last_error())
+	assert_eq(_rig.get_frame_count(0), _index("rgb.txt").size(), "every RGB-D frame of the folder")
+	assert_eq(_rig.get_frame_count(1), _index("fisheye.txt").size(), "every fisheye frame of the folder")
+	var frames := 0
+	while _rig.step():
+		frames += 1
+	assert_eq(frames, _index("rgb.txt").size() + _index("fisheye.txt").size(), "plays every frame")
+	DirAccess.remove_absolute(zip_path)
+
+	var evil := OS.get_user_data_dir().path_join("roomprobe_test_evil.zip")
+	var packer := ZIPPacker.new()
+	packer.open(evil)
+	packer.start_file("living/../../escaped.txt")
+	packer.write_file("x".to_utf8_buffer())
+	packer.close_file()
+	packer.close()
+	expect_error("would land outside")
+	_rig.recording_path = evil
+	assert_false(_rig.open(), "refused")
+	assert_true(_rig.get_last_error().contains("living/../../escaped.txt"), "names the entry: %s" % _rig.get_last_error())
+	assert_false(FileAccess.file_exists(OS.get_user_data_dir().path_join("roomprobe/escaped.txt")), "nothing written outside")
+	DirAccess.remove_absolute(evil)

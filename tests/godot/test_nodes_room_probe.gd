@@ -152,7 +152,7 @@ func test_sh_dc_term_is_mean_colour_times_sqrt_4pi() -> void:
 func test_target_material_receives_cubemap_and_sh() -> void:
 	_paint_atlas()
 	var mat := ShaderMaterial.new()
-	mat.shader = load("res://shaders/mirror.gdshader")
+	mat.shader = load("res://addons/roomprobe/shaders/mirror.gdshader")
 	_probe.target_material = mat
 	add_to_tree(_root)  # ready renders once (UPDATE_ONCE)
 	assert_eq(mat.get_shader_parameter("environment"), _probe.get_cubemap(), "environment uniform is the cubemap")
@@ -167,7 +167,7 @@ func test_target_material_receives_cubemap_and_sh() -> void:
 func test_the_saved_scene_keeps_the_users_values() -> void:
 	_paint_atlas()
 	var mat := ShaderMaterial.new()
-	mat.shader = load("res://shaders/mirror.gdshader")
+	mat.shader = load("res://addons/roomprobe/shaders/mirror.gdshader")
 	_probe.target_material = mat
 	var reflection := ReflectionProbe.new()
 	reflection.name = "Reflection"

@@ -100,7 +100,7 @@ func test_what_cannot_be_baked_says_why() -> void:
 
 
 func test_the_shader_takes_the_transfer_and_the_probe_sh() -> void:
-	var shader: Shader = load("res://shaders/prt_diffuse.gdshader")
+	var shader: Shader = load("res://addons/roomprobe/shaders/prt_diffuse.gdshader")
 	assert_not_null(shader)
 	var names := shader.get_shader_uniform_list().map(func(u): return u.name)
 	for name in ["transfer", "sh", "albedo"]:

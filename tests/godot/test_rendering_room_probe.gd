@@ -53,7 +53,7 @@ func test_mirror_sphere_reflects_the_right_surfaces() -> void:
 		by_normal[Vector3i((-c.normal as Vector3).round())] = color
 	assert_true(room.set_atlas_image(atlas))
 	var material := ShaderMaterial.new()
-	material.shader = load("res://shaders/mirror.gdshader")
+	material.shader = load("res://addons/roomprobe/shaders/mirror.gdshader")
 	var probe = ClassDB.instantiate("RoomProbe")
 	probe.resolution = 64
 	probe.position = CENTRE
@@ -77,7 +77,7 @@ func test_mirror_sphere_reflects_the_right_surfaces() -> void:
 		shots.append(vp)
 	# The other two shaders compile and show the room too (fed by hand: one target_material).
 	var others: Array[SubViewport] = []
-	for path in ["res://shaders/rough_metal.gdshader", "res://shaders/glass.gdshader", "res://shaders/sh_diffuse.gdshader"]:
+	for path in ["res://addons/roomprobe/shaders/rough_metal.gdshader", "res://addons/roomprobe/shaders/glass.gdshader", "res://addons/roomprobe/shaders/sh_diffuse.gdshader"]:
 		var m := ShaderMaterial.new()
 		m.shader = load(path)
 		m.set_shader_parameter("environment", probe.get_cubemap())
@@ -247,7 +247,7 @@ func test_rough_metal_matches_a_standard_material_at_the_same_roughness() -> voi
 		standard_views.append(vp)
 	for r in ROUGHNESS + [0.55, 0.2, 0.5]:  # then each at a roughness 0.3 off
 		var m := ShaderMaterial.new()
-		m.shader = load("res://shaders/rough_metal.gdshader")
+		m.shader = load("res://addons/roomprobe/shaders/rough_metal.gdshader")
 		m.set_shader_parameter("tint", Vector3.ONE)
 		m.set_shader_parameter("roughness", r)
 		var vp := _make_view(m, Vector3(0, 0, 3), Vector3(0, 0, 0))
@@ -322,7 +322,7 @@ func test_mirror_sphere_shows_a_second_virtual_object() -> void:
 	assert_true(probe.update_now())
 	assert_eq(probe.get_virtual_object_count(), 1, "the panel is handed to the probe")
 	var mirror := ShaderMaterial.new()
-	mirror.shader = load("res://shaders/mirror.gdshader")
+	mirror.shader = load("res://addons/roomprobe/shaders/mirror.gdshader")
 	mirror.set_shader_parameter("environment", probe.get_cubemap())
 	_viewport = _make_view(mirror, Vector3(0, 0, 3), Vector3(0, 0, 0))
 	add_to_tree(_viewport)
@@ -404,12 +404,12 @@ func test_prt_sphere_matches_the_sh_diffuse_shading() -> void:
 	prt.samples_per_vertex = 1024
 	assert_true(prt.bake(), prt.get_last_error())
 	var prt_material := ShaderMaterial.new()
-	prt_material.shader = load("res://shaders/prt_diffuse.gdshader")
+	prt_material.shader = load("res://addons/roomprobe/shaders/prt_diffuse.gdshader")
 	prt_material.set_shader_parameter("transfer", prt.get_transfer_texture())
 	prt_material.set_shader_parameter("sh", probe.get_sh_coefficients())
 	prt_material.set_shader_parameter("albedo", Color(0.95, 0.64, 0.54))
 	var sh_material := ShaderMaterial.new()
-	sh_material.shader = load("res://shaders/sh_diffuse.gdshader")
+	sh_material.shader = load("res://addons/roomprobe/shaders/sh_diffuse.gdshader")
 	sh_material.set_shader_parameter("sh", probe.get_sh_coefficients())
 	sh_material.set_shader_parameter("albedo", Color(0.95, 0.64, 0.54))
 	# The same sphere turned: its transfer is in the mesh's frame, so it needs the light in that
@@ -476,7 +476,7 @@ func test_contact_shadow_darkens_the_table_under_the_object() -> void:
 	sky.resize(25)
 	sky[0] = Vector3.ONE * sqrt(4.0 * PI)  # radiance 1 from everywhere
 	var shadow := ShaderMaterial.new()
-	shadow.shader = load("res://shaders/contact_shadow.gdshader")
+	shadow.shader = load("res://addons/roomprobe/shaders/contact_shadow.gdshader")
 	shadow.set_shader_parameter("transfer", prt.get_transfer_texture())
 	shadow.set_shader_parameter("sh", sky)
 	var table_material := StandardMaterial3D.new()

@@ -44,11 +44,8 @@ rp() {
 	printf '%s\n[exit status %d]\n' "$out" "$rc" >>"$log"
 }
 
-# check WHAT COMMAND...: WHAT is one of the test's failures unless COMMAND succeeds.
-check() {
-	"${@:2}" || failures+=("$1")
-}
-says() { grep -qF -- "$1" <<<"$out"; }
+# shellcheck source=tests/host/harness.sh
+source "$repo/tests/host/harness.sh"
 no_files_in_root() { # nothing was written inside the toolchain root at the host path $1
 	[[ $kind == host ]] || [[ -z $(find "$RP_ROOT$1" ! -type d 2>/dev/null | head -n1) ]]
 }
@@ -224,36 +221,32 @@ test_unknown_verb_is_named() {
 	check "help does not list demo --scene" says "--scene NAME"
 }
 
+# ./roomprobe editor's binds (rp_editor_binds): the caller's folder outside the clone is shown in the
+# toolchain at its own path, and no bind hides a system folder or holds the toolchain root.
+test_editor_sees_the_callers_files() {
+	mkdir -p "$scratch/editor-files"
+	echo rig >"$scratch/editor-files/rig.yaml"
+	local binds
+	binds=$(cd "$scratch/editor-files" && RP_CALLER_PWD=$PWD HOME=$RP_CACHE bash -c 'source "$0/tools/toolchain/toolchain.sh" && rp_editor_binds && printf "%s\n" "${RP_BINDS[@]}"' "$repo")
+	printf '%s\n' "$binds" >>"$log"
+	if [[ $kind == host ]]; then
+		check "with the host's toolchain there is nothing to bind" test -z "$binds"
+		return
+	fi
+	check "the caller's folder is not bound" grep -qx "$scratch/editor-files" <<<"$binds"
+	check "a bind holds the toolchain root (HOME was its cache)" bash -c '! grep -qx "$0" <<<"$1"' "$RP_CACHE" "$binds"
+	local seen
+	seen=$(cd "$scratch/editor-files" && RP_CALLER_PWD=$PWD bash -c 'source "$0/tools/toolchain/toolchain.sh" && rp_editor_binds && rp_toolchain_run cat "$1/rig.yaml"' "$repo" "$scratch/editor-files" 2>>"$log")
+	check "the toolchain does not see the caller's file at its own path" test "$seen" = rig
+}
+
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
-	calibrate_refuses_and_never_overwrites synth_photometric_options_refused bake_prt_bakes_and_caches unknown_verb_is_named)
-passed=0 failed=0 start=$(date +%s.%N)
+	calibrate_refuses_and_never_overwrites synth_photometric_options_refused bake_prt_bakes_and_caches unknown_verb_is_named
+	editor_sees_the_callers_files)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.
 echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench and roomprobe_calibrate"
 cd "$repo" || exit 1
 rp build -Q build/bin/roomprobe_synth build/bin/roomprobe_eval build/bin/roomprobe_bench build/bin/roomprobe_calibrate
-built=$rc
-for t in "${tests[@]}"; do
-	name=host::$t
-	[[ $name == *"$filter"* ]] || continue
-	printf '\n### %s\n' "$name" >>"$log"
-	failures=()
-	cd "$repo" || exit 1
-	if ((built == 0)); then
-		"test_$t"
-	else
-		failures=("the tools did not build (see $log)")
-	fi
-	if ((${#failures[@]} == 0)); then
-		line="[PASS] $name"
-		passed=$((passed + 1))
-	else
-		line="[FAIL] $name: $(printf '%s; ' "${failures[@]}")"
-		line=${line%; }
-		failed=$((failed + 1))
-	fi
-	echo "$line" >>"$results"
-	echo "    $line"
-done
-seconds=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
-echo "HOST_TESTS $passed passed, $failed failed in $seconds s" >>"$results"
-((failed == 0))
+blocked=
+((rc == 0)) || blocked="the tools did not build (see $log)"
+run_host_tests host "$blocked" "${tests[@]}"

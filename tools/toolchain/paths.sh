@@ -121,3 +121,24 @@ rp_resolve_paths() {
 		shift 2
 	done
 }
+
+# rp_editor_binds: RP_BINDS for ./roomprobe editor, so that the editor's file dialogs reach the
+# user's files: /home, /media, /mnt, /srv, $HOME and the caller's folder, where they exist. A
+# folder that the root has its own of (/usr, /etc...), or that holds the toolchain root itself
+# (binding it would show the root inside itself), is left out.
+rp_editor_binds() {
+	local dir have
+	RP_BINDS=()
+	[[ $(rp_toolchain_kind) == sysroot ]] || return 0
+	for dir in /home /media /mnt /srv "${HOME:-}" "$RP_CALLER_PWD"; do
+		[[ -n $dir && -d $dir ]] || continue
+		dir=$(realpath -- "$dir")
+		rp_system_folder "$dir" >/dev/null && continue
+		rp_path_within "$RP_ROOT" "$dir" && continue
+		rp_path_within "$dir" "$RP_ROOT" && continue
+		for have in "${RP_BINDS[@]}"; do
+			rp_path_within "$dir" "$have" && continue 2
+		done
+		RP_BINDS+=("$dir")
+	done
+}

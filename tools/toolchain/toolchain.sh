@@ -27,8 +27,6 @@ RP_APT_OPTS=(-o Acquire::Check-Valid-Until=false -o Dpkg::Use-Pty=0 -o APT::Inst
 rp_log() { printf 'roomprobe: %s\n' "$*" >&2; }
 rp_die() { printf 'roomprobe: error: %s\n' "$*" >&2; exit 1; }
 
-rp_packages() { sed -e 's/#.*//' -e 's/[[:space:]]//g' "$RP_PACKAGES_FILE" | grep -v '^$'; }
-rp_packages_hash() { rp_packages | sha256sum | cut -d' ' -f1; }
 
 # True when the host itself has Godot >= 4.4, scons and the development packages.
 rp_host_has_toolchain() {
@@ -92,54 +90,90 @@ rp_binds_sorted() {
 		awk '{ for (i = 1; i <= n; i++) if ($0 == kept[i] || index($0, kept[i] "/") == 1) next; kept[++n] = $0; print }'
 }
 
-# Creates or updates the cached root so that it holds every package in packages.txt.
-rp_ensure_root() {
-	local want have
-	want=$(rp_packages_hash)
-	have=$(cat "$RP_ROOT/$RP_STAMP_NAME" 2>/dev/null || true)
+# Creates or updates the cached sid root so that it holds every package in packages.txt.
+rp_ensure_root() { rp_ensure_named_root sid "$RP_ROOT" "$RP_PACKAGES_FILE"; }
+
+# The Debian 12 (bookworm) root that builds the shipped library (./roomprobe package, export):
+# built there against bookworm's libraries, the library and the ones bundled with it need
+# nothing newer than glibc 2.36 (tools/package/, docs/addon.md).
+RP_SHIP_ROOT="$RP_CACHE/bookworm-root"
+rp_ensure_ship_root() { rp_ensure_named_root bookworm "$RP_SHIP_ROOT" "$RP_TOOLCHAIN_DIR/packages-ship.txt"; }
+
+# A bare Debian root (minbase plus PACKAGES, space-separated), for tests that must not see the
+# toolchain's libraries: the shipped addon loading on bare Debian 12, the exported app on a machine
+# with only its engine template.
+rp_ensure_bare_root() { # SUITE NAME PACKAGES
+	local list="$RP_CACHE/$2.packages"
+	mkdir -p "$RP_CACHE"
+	printf '%s\n' $3 >"$list.new"
+	rp_ensure_named_root "$1" "$RP_CACHE/$2" "$list.new"
+}
+
+# Creates or updates root $2, of Debian suite $1, so that it holds every package in file $3
+# (one a line, '#' comments). The root is keyed by the list's hash.
+rp_ensure_named_root() {
+	local suite=$1 root=$2 packages_file=$3 want have list
+	list=$(sed -e 's/#.*//' -e 's/[[:space:]]//g' "$packages_file" | grep -v '^$' || true)
+	want=$(printf '%s\n' "$suite" "$list" | sha256sum | cut -d' ' -f1)
+	[[ $suite == sid ]] && want=$(printf '%s\n' "$list" | sha256sum | cut -d' ' -f1) # as before: keeps existing caches
+	have=$(cat "$root/$RP_STAMP_NAME" 2>/dev/null || true)
 	[[ $want == "$have" ]] && return 0
-	[[ $EUID -eq 0 ]] || rp_die "the toolchain root at $RP_ROOT is missing or out of date, and building it needs root (or install Godot >= 4.4 and the packages in $RP_PACKAGES_FILE on the host)"
+	[[ $EUID -eq 0 ]] || rp_die "the $suite root at $root is missing or out of date, and building it needs root (or install Godot >= 4.4 and the packages in $packages_file on the host)"
 
 	mkdir -p "$RP_CACHE"
 	exec 9>"$RP_CACHE/lock"
 	flock 9
-	have=$(cat "$RP_ROOT/$RP_STAMP_NAME" 2>/dev/null || true)
+	have=$(cat "$root/$RP_STAMP_NAME" 2>/dev/null || true)
 	if [[ $want == "$have" ]]; then
 		exec 9>&-
 		return 0
 	fi
 
-	local start=$SECONDS target=$RP_ROOT
-	if [[ ! -x $RP_ROOT/usr/bin/apt-get ]]; then
+	local start=$SECONDS target=$root name
+	name=$(basename "$root")
+	if [[ ! -x $root/usr/bin/apt-get ]]; then
 		command -v debootstrap >/dev/null 2>&1 || {
 			rp_log "installing debootstrap on the host"
 			apt-get update -qq >&2 && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq debootstrap >&2
 		} || rp_die "could not install debootstrap on the host"
-		target="$RP_CACHE/sid-root.partial"
+		target="$root.partial"
 		rm -rf "$target"
 		local mirror
 		mirror=$(rp_mirror)
-		rp_log "creating a Debian sid root in $target (debootstrap, about 30 s)"
-		debootstrap --variant=minbase --include=ca-certificates sid "$target" "$mirror" >"$RP_CACHE/debootstrap.log" 2>&1 ||
-			rp_die "debootstrap failed; see $RP_CACHE/debootstrap.log"
+		rp_log "creating a Debian $suite root in $target (debootstrap, about 30 s)"
+		debootstrap --variant=minbase --include=ca-certificates "$suite" "$target" "$mirror" >"$RP_CACHE/$name-debootstrap.log" 2>&1 ||
+			rp_die "debootstrap failed; see $RP_CACHE/$name-debootstrap.log"
 		printf 'Acquire::Check-Valid-Until "false";\nAPT::Install-Recommends "false";\n' >"$target/etc/apt/apt.conf.d/90roomprobe"
 	fi
 	cp /etc/resolv.conf "$target/etc/resolv.conf" 2>/dev/null || true
-	rp_log "installing $(rp_packages | wc -l) packages into the root (about 2 minutes the first time)"
-	local RP_BINDS=() # the set-up needs none of the caller's folders
-	# The list reaches the root as a file: the root sees the clone only once enter.sh binds it.
-	rp_packages >"$target/tmp/roomprobe-packages"
-	rp_enter_root "$target" env DEBIAN_FRONTEND=noninteractive sh -c \
-		'apt-get "$@" update -qq && apt-get "$@" install -y -qq $(cat /tmp/roomprobe-packages)' \
-		sh "${RP_APT_OPTS[@]}" >"$RP_CACHE/apt.log" 2>&1 ||
-		rp_die "installing packages into the root failed; see $RP_CACHE/apt.log"
-	echo "$want" >"$target/$RP_STAMP_NAME"
-	if [[ $target != "$RP_ROOT" ]]; then
-		rm -rf "$RP_ROOT"
-		mv "$target" "$RP_ROOT"
+	if [[ -n $list ]]; then
+		rp_log "installing $(wc -l <<<"$list") packages into the $suite root $name (a minute or two the first time)"
+		local RP_BINDS=() # the set-up needs none of the caller's folders
+		# The list reaches the root as a file: the root sees the clone only once enter.sh binds it.
+		printf '%s\n' "$list" >"$target/tmp/roomprobe-packages"
+		rp_enter_root "$target" env DEBIAN_FRONTEND=noninteractive sh -c \
+			'apt-get "$@" update -qq && apt-get "$@" install -y -qq $(cat /tmp/roomprobe-packages)' \
+			sh "${RP_APT_OPTS[@]}" >"$RP_CACHE/$name-apt.log" 2>&1 ||
+			rp_die "installing packages into the root $name failed; see $RP_CACHE/$name-apt.log"
 	fi
-	rp_log "toolchain root ready in $((SECONDS - start)) s: $RP_ROOT"
+	echo "$want" >"$target/$RP_STAMP_NAME"
+	if [[ $target != "$root" ]]; then
+		rm -rf "$root"
+		mv "$target" "$root"
+	fi
+	rp_log "$suite root ready in $((SECONDS - start)) s: $root"
 	exec 9>&-
+}
+
+# Runs CMD inside root $1 (with root rights or by bubblewrap), from the current directory.
+rp_run_in_root() {
+	local root=$1
+	shift
+	if [[ $EUID -eq 0 ]]; then
+		rp_enter_root "$root" "$@"
+	else
+		rp_bwrap_root "$root" "$@"
+	fi
 }
 
 # Which toolchain to use: prints 'host' or 'sysroot'.
@@ -159,11 +193,7 @@ rp_toolchain_run() {
 		return
 	fi
 	rp_ensure_root
-	if [[ $EUID -eq 0 ]]; then
-		rp_enter_root "$RP_ROOT" "$@"
-	else
-		rp_bwrap_root "$RP_ROOT" "$@"
-	fi
+	rp_run_in_root "$RP_ROOT" "$@"
 }
 
 # shellcheck source=tools/toolchain/paths.sh

@@ -1,4 +1,5 @@
 #include "calibration_views.h"
+#include <io/image_codec.h>
 
 #include <recording/recording_reader.h>
 #include <recording/recording_types.h>
@@ -243,9 +244,10 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 			p_options.progress(result.images, total, d.view.name);
 		}
 		result.images++;
-		d.image = cv::imread(p_file.string(), cv::IMREAD_GRAYSCALE);
-		if (d.image.empty()) {
-			result.missed.push_back(d.view.name + ": cannot read the image");
+		const std::string error = image_read(p_file.string(), ImageReadMode::Gray8, &d.image);
+		if (!error.empty()) {
+			d.image = cv::Mat();
+			result.missed.push_back(d.view.name + ": cannot read the image (" + error + ")");
 			return d;
 		}
 		cv::Size &size = p_is_rgb ? result.rgb_size : result.fisheye_size;
@@ -304,14 +306,15 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 		pair.rgb = std::move(rgb.view);
 		pair.fisheye = std::move(fisheye.view);
 		for (const auto &[path, image] : { std::pair(file, &pair.rgb_image), std::pair(fisheye_file, &pair.fisheye_image) }) {
-			const cv::Mat bgr = cv::imread(path.string(), cv::IMREAD_COLOR);
-			if (!bgr.empty()) {
+			cv::Mat bgr;
+			if (image_read(path.string(), ImageReadMode::Bgr8, &bgr).empty()) {
 				cv::cvtColor(bgr, *image, cv::COLOR_BGR2RGB);
 			}
 		}
 		const fs::path depth_file = file.parent_path() / (name + "_depth.png");
 		if (fs::exists(depth_file, ec)) {
-			const cv::Mat raw = cv::imread(depth_file.string(), cv::IMREAD_UNCHANGED);
+			cv::Mat raw;
+			image_read(depth_file.string(), ImageReadMode::Unchanged, &raw);
 			if (raw.type() != CV_16UC1 || raw.size() != rgb.image.size()) {
 				result.missed.push_back(fs::relative(depth_file, root, ec).string() + ": not a 16-bit depth image of the RGB image's size; depth not checked on it");
 			} else {

@@ -1,4 +1,5 @@
 #include "photometric_calibration.h"
+#include <io/image_codec.h>
 
 #include <camera/omni_camera.h>
 
@@ -27,9 +28,10 @@ bool usable_code(const cv::Vec3b &p_code, int p_saturation) {
 }
 
 cv::Mat read_rgb(const fs::path &p_path, cv::Size p_size, std::string *r_error) {
-	const cv::Mat bgr = cv::imread(p_path.string(), cv::IMREAD_COLOR);
-	if (bgr.empty()) {
-		*r_error = p_path.string() + ": cannot read the image";
+	cv::Mat bgr;
+	const std::string error = image_read(p_path.string(), ImageReadMode::Bgr8, &bgr);
+	if (!error.empty()) {
+		*r_error = error;
 		return cv::Mat();
 	}
 	if (p_size.area() > 0 && bgr.size() != p_size) {

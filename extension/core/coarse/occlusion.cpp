@@ -9,7 +9,6 @@
 #include <CGAL/Polygon_2.h>
 #include <CGAL/Triangular_expansion_visibility_2.h>
 
-#include <embree4/rtcore.h>
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -231,7 +230,6 @@ cv::Mat EmbreeOcclusion::mask(const TexelGeometry &p_geometry, const glm::dvec3 
 	if (!ok()) {
 		return mask;
 	}
-	RTCScene scene = embree->get();
 	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {
 		for (int y = p_rows.begin(); y < p_rows.end(); ++y) {
 			uint8_t *row = mask.ptr<uint8_t>(y);
@@ -246,21 +244,7 @@ cv::Mat EmbreeOcclusion::mask(const TexelGeometry &p_geometry, const glm::dvec3 
 					row[x] = 255;
 					continue;
 				}
-				RTCRay ray;
-				ray.org_x = float(p_fisheye_position.x);
-				ray.org_y = float(p_fisheye_position.y);
-				ray.org_z = float(p_fisheye_position.z);
-				ray.dir_x = float(direction.x / distance);
-				ray.dir_y = float(direction.y / distance);
-				ray.dir_z = float(direction.z / distance);
-				ray.tnear = 0.0f;
-				ray.tfar = float(distance - p_epsilon_m);
-				ray.time = 0.0f;
-				ray.mask = 0xffffffffu;
-				ray.id = 0;
-				ray.flags = 0;
-				rtcOccluded1(scene, &ray, nullptr);
-				row[x] = ray.tfar < 0.0f ? 0 : 255;
+				row[x] = embree->occluded(p_fisheye_position, direction / distance, 0.0, distance - p_epsilon_m) ? 0 : 255;
 			}
 		}
 	});

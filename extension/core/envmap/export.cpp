@@ -1,4 +1,5 @@
 #include "export.h"
+#include <io/image_codec.h>
 
 #include <math/srgb.h>
 
@@ -129,14 +130,7 @@ std::string write_cubemap_png_net(const std::string &p_path, const Cubemap &p_cu
 	}
 	cv::Mat bgr;
 	cv::cvtColor(net, bgr, cv::COLOR_RGB2BGR);
-	try {
-		if (!cv::imwrite(p_path, bgr)) {
-			return p_path + ": could not be written";
-		}
-	} catch (const std::exception &e) {
-		return p_path + ": " + e.what();
-	}
-	return std::string();
+	return png_write(p_path, bgr);
 }
 
 } // namespace roomprobe

@@ -1,10 +1,48 @@
 #include "embree_scene.h"
 
+#if __has_include(<embree4/rtcore.h>)
+#include <embree4/rtcore.h>
+#else
+#include <embree3/rtcore.h>
+#endif
+
 #include <algorithm>
 
 namespace roomprobe {
 
 namespace {
+
+RTCDevice as_device(void *p) { return static_cast<RTCDevice>(p); }
+RTCScene as_scene(void *p) { return static_cast<RTCScene>(p); }
+
+// Embree 4 dropped the intersect context argument (its optional arguments come last instead).
+void intersect1(RTCScene p_scene, RTCRayHit *r_ray_hit) {
+#if RTC_VERSION_MAJOR >= 4
+	rtcIntersect1(p_scene, r_ray_hit, nullptr);
+#else
+	RTCIntersectContext context;
+	rtcInitIntersectContext(&context);
+	rtcIntersect1(p_scene, &context, r_ray_hit);
+#endif
+}
+
+std::string error_name(RTCError p_error) {
+#if RTC_VERSION_MAJOR >= 4
+	return rtcGetErrorString(p_error);
+#else
+	return "error " + std::to_string(static_cast<int>(p_error));
+#endif
+}
+
+void occluded1(RTCScene p_scene, RTCRay *r_ray) {
+#if RTC_VERSION_MAJOR >= 4
+	rtcOccluded1(p_scene, r_ray, nullptr);
+#else
+	RTCIntersectContext context;
+	rtcInitIntersectContext(&context);
+	rtcOccluded1(p_scene, &context, r_ray);
+#endif
+}
 
 // One ray for Embree's queries: origin + t * direction, t in (t_near, t_far), every mask bit.
 RTCRay make_ray(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far) {
@@ -28,10 +66,10 @@ RTCRay make_ray(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, doubl
 
 EmbreeTriangleScene::~EmbreeTriangleScene() {
 	if (scene) {
-		rtcReleaseScene(scene);
+		rtcReleaseScene(as_scene(scene));
 	}
 	if (device) {
-		rtcReleaseDevice(device);
+		rtcReleaseDevice(as_device(device));
 	}
 }
 
@@ -43,30 +81,31 @@ std::string EmbreeTriangleScene::build(const std::vector<float> &p_xyz, const st
 		}
 	}
 	if (scene) {
-		rtcReleaseScene(scene);
+		rtcReleaseScene(as_scene(scene));
 	}
-	scene = rtcNewScene(device);
+	RTCScene new_scene = rtcNewScene(as_device(device));
+	scene = new_scene;
 	if (p_high_quality) {
-		rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+		rtcSetSceneBuildQuality(new_scene, RTC_BUILD_QUALITY_HIGH);
 	}
-	RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+	RTCGeometry geometry = rtcNewGeometry(as_device(device), RTC_GEOMETRY_TYPE_TRIANGLE);
 	float *vb = static_cast<float *>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), p_xyz.size() / 3));
 	uint32_t *ib = static_cast<uint32_t *>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), p_indices.size() / 3));
 	if (!vb || !ib) {
 		rtcReleaseGeometry(geometry);
-		rtcReleaseScene(scene);
+		rtcReleaseScene(new_scene);
 		scene = nullptr;
 		return "Embree: cannot allocate the geometry buffers";
 	}
 	std::copy(p_xyz.begin(), p_xyz.end(), vb);
 	std::copy(p_indices.begin(), p_indices.end(), ib);
 	rtcCommitGeometry(geometry);
-	rtcAttachGeometry(scene, geometry);
+	rtcAttachGeometry(new_scene, geometry);
 	rtcReleaseGeometry(geometry);
-	rtcCommitScene(scene);
-	const RTCError status = rtcGetDeviceError(device);
+	rtcCommitScene(new_scene);
+	const RTCError status = rtcGetDeviceError(as_device(device));
 	if (status != RTC_ERROR_NONE) {
-		return std::string("Embree: ") + rtcGetErrorString(status);
+		return "Embree: " + error_name(status);
 	}
 	return "";
 }
@@ -80,7 +119,7 @@ bool EmbreeTriangleScene::intersect(const glm::dvec3 &p_origin, const glm::dvec3
 	rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
 	rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
 	rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-	rtcIntersect1(scene, &rh, nullptr);
+	intersect1(as_scene(scene), &rh);
 	if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
 		return false;
 	}
@@ -97,7 +136,7 @@ bool EmbreeTriangleScene::occluded(const glm::dvec3 &p_origin, const glm::dvec3 
 		return false;
 	}
 	RTCRay ray = make_ray(p_origin, p_direction, p_t_near, p_t_far);
-	rtcOccluded1(scene, &ray, nullptr);
+	occluded1(as_scene(scene), &ray);
 	return ray.tfar < 0.0f; // Embree sets tfar to -inf on a hit
 }
 

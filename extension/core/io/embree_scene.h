@@ -1,8 +1,9 @@
 #pragma once
 // One triangle mesh in an Embree scene, for the core's ray queries (occlusion checks, the
 // synthetic rig). RAII: the device and the scene are released with the object.
-
-#include <embree4/rtcore.h>
+//
+// Embree's own types stay in embree_scene.cpp, the one file that talks to Embree: it builds
+// against Embree 4 (the toolchain) and Embree 3 (Debian 12, the shipped library's baseline).
 
 #include <glm/vec3.hpp>
 
@@ -23,7 +24,7 @@ public:
 	// p_high_quality trades build time for faster rays. Returns "" or what went wrong; on
 	// failure get() is null.
 	std::string build(const std::vector<float> &p_xyz, const std::vector<uint32_t> &p_indices, bool p_high_quality);
-	RTCScene get() const { return scene; }
+	bool built() const { return scene != nullptr; }
 
 	// The nearest triangle along origin + t * direction, t in (t_near, t_far): r_t, r_triangle and
 	// the unnormalised geometric normal (Embree's Ng, on the side the winding gives). False on a
@@ -40,8 +41,9 @@ public:
 	bool occluded(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far) const;
 
 private:
-	RTCDevice device = nullptr;
-	RTCScene scene = nullptr;
+	// Embree's RTCDevice and RTCScene (opaque pointers in both versions).
+	void *device = nullptr;
+	void *scene = nullptr;
 };
 
 } // namespace roomprobe

@@ -1,4 +1,5 @@
 #include "recording_io.h"
+#include <io/image_codec.h>
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
@@ -317,9 +318,10 @@ std::string decode_png(const std::string &p_path, cv::Mat *r_image) {
 		return p_path + ": " + error;
 	}
 	return catch_all(p_path, [&]() -> std::string {
-		cv::Mat image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
-		if (image.empty()) {
-			return p_path + ": corrupt PNG (OpenCV could not decode it)";
+		cv::Mat image;
+		const std::string problem = png_decode(bytes.data(), bytes.size(), &image);
+		if (!problem.empty()) {
+			return p_path + ": " + problem;
 		}
 		*r_image = image;
 		return std::string();
@@ -436,9 +438,10 @@ std::string decode_jpeg(const std::string &p_path, cv::Mat *r_image) {
 		return p_path + ": " + problem;
 	}
 	return catch_all(p_path, [&]() -> std::string {
-		cv::Mat image = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
-		if (image.empty()) {
-			return p_path + ": corrupt JPEG (OpenCV could not decode it)";
+		cv::Mat image;
+		const std::string problem = jpeg_decode(bytes.data(), bytes.size(), &image);
+		if (!problem.empty()) {
+			return p_path + ": " + problem;
 		}
 		*r_image = image;
 		return std::string();
@@ -446,12 +449,7 @@ std::string decode_jpeg(const std::string &p_path, cv::Mat *r_image) {
 }
 
 std::string write_png(const std::string &p_path, const cv::Mat &p_image) {
-	return catch_all(p_path, [&]() -> std::string {
-		if (!cv::imwrite(p_path, p_image)) {
-			return p_path + ": could not be written";
-		}
-		return std::string();
-	});
+	return png_write(p_path, p_image);
 }
 
 std::string write_exr_rgb(const std::string &p_path, const cv::Mat &p_rgb, bool p_full_float) {

@@ -5,7 +5,6 @@
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/Unique_hash_map.h>
-#include <CGAL/mark_domain_in_triangulation.h>
 #include <boost/property_map/property_map.hpp>
 
 #include <algorithm>
@@ -185,13 +184,26 @@ bool triangulate_polygon(const std::vector<Vec2> &p_points, std::vector<std::siz
 			return false;
 		}
 
-		CGAL::Unique_hash_map<Cdt::Face_handle, bool> in_domain_map(false);
-		boost::associative_property_map<CGAL::Unique_hash_map<Cdt::Face_handle, bool>> in_domain(in_domain_map);
-		CGAL::mark_domain_in_triangulation(cdt, in_domain);
+		// Outside is what the infinite face reaches without crossing a wall (a simple polygon has
+		// no holes). CGAL's mark_domain_in_triangulation does this from 5.6 on; Debian 12 has 5.5.
+		CGAL::Unique_hash_map<Cdt::Face_handle, bool> outside(false);
+		std::vector<Cdt::Face_handle> stack = { cdt.infinite_face() };
+		outside[cdt.infinite_face()] = true;
+		while (!stack.empty()) {
+			const Cdt::Face_handle face = stack.back();
+			stack.pop_back();
+			for (int edge = 0; edge < 3; ++edge) {
+				const Cdt::Face_handle next = face->neighbor(edge);
+				if (!outside[next] && !cdt.is_constrained(Cdt::Edge(face, edge))) {
+					outside[next] = true;
+					stack.push_back(next);
+				}
+			}
+		}
 
 		r_triangles->clear();
 		for (Cdt::Face_handle face : cdt.finite_face_handles()) {
-			if (get(in_domain, face)) {
+			if (!outside[face]) {
 				for (int corner = 0; corner < 3; ++corner) {
 					r_triangles->push_back(face->vertex(corner)->info());
 				}

@@ -272,7 +272,7 @@ SynthRenderer::~SynthRenderer() = default;
 
 Hit SynthRenderer::intersect(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far) const {
 	Hit hit;
-	if (!embree || !embree->get()) {
+	if (!embree || !embree->built()) {
 		return hit;
 	}
 	EmbreeTriangleScene::RayHit rh;
@@ -304,7 +304,7 @@ Hit SynthRenderer::intersect(const glm::dvec3 &p_origin, const glm::dvec3 &p_dir
 }
 
 bool SynthRenderer::occluded(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_t_near, double p_t_far) const {
-	if (!embree || !embree->get() || !(p_t_far > p_t_near)) {
+	if (!embree || !embree->built() || !(p_t_far > p_t_near)) {
 		return false;
 	}
 	return embree->occluded(p_origin, p_direction, p_t_near, p_t_far);

@@ -1,4 +1,5 @@
 #include <io/opencv.h>
+#include <io/image_codec.h>
 
 #include "synth_sequence.h"
 
@@ -160,14 +161,7 @@ std::array<cv::Mat, 6> to_srgb8_faces(const std::array<cv::Mat, 6> &p_faces, dou
 std::string write_png_rgb(const std::string &p_path, const cv::Mat &p_rgb) {
 	cv::Mat bgr;
 	cv::cvtColor(p_rgb, bgr, cv::COLOR_RGB2BGR);
-	try {
-		if (!cv::imwrite(p_path, bgr)) {
-			return p_path + ": cannot write the image";
-		}
-	} catch (const cv::Exception &e) {
-		return p_path + ": cannot write the image (" + e.what() + ")";
-	}
-	return "";
+	return png_write(p_path, bgr);
 }
 
 void write_pose(cv::FileStorage &p_fs, const std::string &p_name, const Pose &p_pose) {
@@ -448,7 +442,7 @@ CalibrationResult write_photometric_views(const std::string &p_folder, const Syn
 }
 
 CalibrationResult write_calibration_views(const std::string &p_folder, const Rig &p_rig, const CheckerboardSpec &p_board, int p_samples_per_axis,
-		const FisheyeOptions &p_fisheye) {
+		const FisheyeOptions &p_fisheye, const std::function<void(const std::string &)> &p_progress) {
 	CalibrationResult result;
 	namespace fs = std::filesystem;
 	const fs::path root = fs::path(p_folder) / "calibration";
@@ -510,7 +504,12 @@ CalibrationResult write_calibration_views(const std::string &p_folder, const Rig
 			shots.push_back({ false, compose(fisheye_from_rgb, pairs[v]), name, "", int(v) });
 		}
 	}
+	size_t done = 0;
 	for (const Shot &shot : shots) {
+		if (p_progress && (done * 10 / shots.size() != (done + 1) * 10 / shots.size() || done == 0)) {
+			p_progress("calibration views: " + std::to_string(done) + " of " + std::to_string(shots.size()) + " rendered");
+		}
+		++done;
 		const Scene scene = make_checkerboard_scene(p_board, shot.camera_from_board);
 		const SynthRenderer renderer(scene);
 		if (!renderer.ok()) {
@@ -533,9 +532,7 @@ CalibrationResult write_calibration_views(const std::string &p_folder, const Rig
 		std::string error = write_png_rgb((fs::path(p_folder) / shot.image).string(), image);
 		if (error.empty() && !shot.depth.empty()) {
 			const std::string path = (fs::path(p_folder) / shot.depth).string();
-			if (!cv::imwrite(path, depth)) {
-				error = path + ": cannot write the image";
-			}
+			error = png_write(path, depth);
 		}
 		if (!error.empty()) {
 			result.error = error;
@@ -812,7 +809,7 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 	if (p_options.calibration_views) {
 		const auto t0 = std::chrono::steady_clock::now();
 		const CalibrationResult calibration =
-				write_calibration_views(p_folder, p_rig, CheckerboardSpec(), p_options.calibration_samples_per_axis, p_options.fisheye);
+				write_calibration_views(p_folder, p_rig, CheckerboardSpec(), p_options.calibration_samples_per_axis, p_options.fisheye, progress);
 		if (!calibration.ok) {
 			result.error = calibration.error;
 			return result;
@@ -820,6 +817,7 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 		timings.calibration_views = calibration.views;
 		if (p_options.photometric_views && p_rig.has_fisheye()) {
 			const Pose world_from_fisheye = compose(trajectory.world_from_rgb(rgbd_times.front()), p_rig.rgb_from_fisheye);
+			progress("calibration views: the exposure sweep and the flat field (photometric calibration)");
 			const CalibrationResult photometric = write_photometric_views(p_folder, renderer, p_rig.fisheye, world_from_fisheye, p_options.fisheye);
 			if (!photometric.ok) {
 				result.error = photometric.error;

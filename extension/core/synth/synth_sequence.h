@@ -154,8 +154,9 @@ struct CalibrationResult {
 };
 // The fisheye's views are taken with p_fisheye's photometry (tone curve, gains, vignetting, its
 // exposure: the reference).
+// p_progress, when set, gets a line about every tenth of the views (the phase takes minutes).
 CalibrationResult write_calibration_views(const std::string &p_folder, const Rig &p_rig, const CheckerboardSpec &p_board, int p_samples_per_axis,
-		const FisheyeOptions &p_fisheye = FisheyeOptions());
+		const FisheyeOptions &p_fisheye = FisheyeOptions(), const std::function<void(const std::string &)> &p_progress = {});
 
 // The fisheye's photometric calibration views in p_folder/calibration/: an exposure sweep of the
 // static scene from p_world_from_fisheye at time 0 (exposure/NNN.png, half stops from -4 to +4 about

@@ -92,8 +92,10 @@ const char *buffer_status_name(ArvBufferStatus p_status) {
 			return "still filling";
 		case ARV_BUFFER_STATUS_ABORTED:
 			return "aborted";
+#if ARAVIS_CHECK_VERSION(0, 8, 27) // not in 0.8.26 (Debian 12)
 		case ARV_BUFFER_STATUS_PAYLOAD_NOT_SUPPORTED:
 			return "payload not supported";
+#endif
 		default:
 			return "unknown status";
 	}

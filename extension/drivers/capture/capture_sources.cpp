@@ -5,7 +5,11 @@
 #include "openni2/openni2_device.h"
 
 #include <opencv2/imgproc.hpp>
+// The shipped addon is built without OpenCV's videoio (ROOMPROBE_NO_VIDEOIO, SConstruct's ship=yes):
+// in Debian it links FFmpeg and GStreamer, over a hundred libraries to bundle for one backend.
+#ifndef ROOMPROBE_NO_VIDEOIO
 #include <opencv2/videoio.hpp>
+#endif
 
 #include <chrono>
 #include <cmath>
@@ -232,6 +236,7 @@ private:
 
 // ---------------------------------------------------------------- fisheye: UVC (V4L2)
 
+#ifndef ROOMPROBE_NO_VIDEOIO
 class UvcFisheyeSource : public CaptureSource {
 public:
 	explicit UvcFisheyeSource(const FisheyeSourceSettings &p_settings) :
@@ -335,6 +340,23 @@ private:
 	int64_t frame_count = 0;
 };
 
+#else
+// The addon's build: a source that says what this build lacks, and what to use instead.
+class UnavailableSource : public CaptureSource {
+public:
+	UnavailableSource(std::string p_name, std::string p_why) :
+			source_name(std::move(p_name)), why(std::move(p_why)) {}
+	std::string name() const override { return source_name; }
+	DriverStatus open() override { return { source_name + ": " + why }; }
+	GrabOutcome grab(int) override { return outcome(GrabOutcome::Lost, source_name + ": not open"); }
+	void close() override {}
+
+private:
+	std::string source_name;
+	std::string why;
+};
+#endif
+
 } // namespace
 
 std::unique_ptr<CaptureSource> make_openni2_rgbd_source(const RgbdSourceSettings &p_settings) {
@@ -346,7 +368,13 @@ std::unique_ptr<CaptureSource> make_aravis_fisheye_source(const FisheyeSourceSet
 }
 
 std::unique_ptr<CaptureSource> make_uvc_fisheye_source(const FisheyeSourceSettings &p_settings) {
+#ifndef ROOMPROBE_NO_VIDEOIO
 	return std::make_unique<UvcFisheyeSource>(p_settings);
+#else
+	return std::make_unique<UnavailableSource>("UVC camera '" + (p_settings.device.empty() ? std::string("/dev/video0") : p_settings.device) + "'",
+			"this build of RoomProbe has no UVC backend (the packaged addon leaves out OpenCV's videoio and its FFmpeg and "
+			"GStreamer libraries); use an Aravis (GigE or USB3 Vision) fisheye, or build RoomProbe from source with ./roomprobe build");
+#endif
 }
 
 } // namespace roomprobe::drivers

@@ -582,10 +582,12 @@ void DenseSLAM::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("place_on_ray", "origin", "direction"), &DenseSLAM::place_on_ray);
 	ClassDB::bind_method(D_METHOD("place_on_surface", "screen_position"), &DenseSLAM::place_on_surface);
 
+	ADD_GROUP("Sources", "");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "capture", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "RigCapture"), "set_capture", "get_capture");
+	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "coarse_model", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "CoarseRoomModel"), "set_coarse_model", "get_coarse_model");
+	ADD_GROUP("AR Camera", "");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "camera", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "Camera3D"), "set_camera", "get_camera");
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "camera_background"), "set_camera_background", "get_camera_background");
-	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "coarse_model", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "CoarseRoomModel"), "set_coarse_model", "get_coarse_model");
 	ADD_GROUP("Volume", "");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "voxel_size", PROPERTY_HINT_RANGE, "0.002,0.1,0.001,suffix:m"), "set_voxel_size", "get_voxel_size");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "truncation_distance", PROPERTY_HINT_RANGE, "0.005,0.5,0.001,suffix:m"), "set_truncation_distance", "get_truncation_distance");

@@ -4,6 +4,7 @@
 
 #include "../convert/image_convert.h"
 #include "../convert/pose_convert.h"
+#include "../convert/project_paths.h"
 
 #include <recording/room_file.h>
 #include <rig/photometry.h>
@@ -146,8 +147,13 @@ bool RigCapture::open() {
 		fail("recording_path is empty");
 		return false;
 	}
-	// res:// and user:// paths work as well as absolute ones.
-	const std::string folder = ProjectSettings::get_singleton()->globalize_path(recording_path).utf8_string();
+	// res:// and user:// paths work as well as absolute ones, and a zipped recording (in a pack too).
+	std::string path_error;
+	const std::string folder = disk_path_for(recording_path, &path_error);
+	if (!path_error.empty()) {
+		fail("recording_path " + path_error);
+		return false;
+	}
 	auto opened = std::make_shared<RecordingReader>();
 	const RecordingStatus status = opened->open(folder);
 	if (!status.ok) {
@@ -181,15 +187,25 @@ bool RigCapture::open_live() {
 		fail("rig_file is empty: with source Live, set it to the rig's calibration file (calib/README.md)");
 		return false;
 	}
-	ProjectSettings *settings = ProjectSettings::get_singleton();
-	const RigLoadResult loaded = load_rig(settings->globalize_path(rig_file).utf8_string());
+	std::string path_error;
+	const std::string rig_path = disk_path_for(rig_file, &path_error);
+	if (!path_error.empty()) {
+		fail("rig_file " + path_error);
+		return false;
+	}
+	const RigLoadResult loaded = load_rig(rig_path);
 	if (!loaded.ok) {
 		fail(loaded.error);
 		return false;
 	}
 	RoomInfo room;
 	if (!room_file.is_empty()) {
-		const RoomLoadResult room_loaded = load_room_file(settings->globalize_path(room_file).utf8_string());
+		const std::string room_path = disk_path_for(room_file, &path_error);
+		if (!path_error.empty()) {
+			fail("room_file " + path_error);
+			return false;
+		}
+		const RoomLoadResult room_loaded = load_room_file(room_path);
 		if (!room_loaded.ok) {
 			fail(room_loaded.error);
 			return false;
@@ -260,10 +276,12 @@ void RigCapture::start_live() {
 	if (!live) {
 		live = std::make_unique<drivers::LiveRig>();
 	}
-	ProjectSettings *project = ProjectSettings::get_singleton();
-	// A device may be a file played as if live (an .oni, a video): res:// and user:// work.
-	const auto device_text = [project](const String &p_value) {
-		return (p_value.begins_with("res://") || p_value.begins_with("user://") ? project->globalize_path(p_value) : p_value).utf8_string();
+	// A device may be a file played as if live (an .oni, a video): res:// and user:// work (a file in
+	// an exported pack is copied out first); a path that cannot be is passed on, for the driver to name.
+	const auto device_text = [](const String &p_value) {
+		std::string error;
+		const std::string path = disk_path_for(p_value, &error);
+		return error.empty() ? path : p_value.utf8_string();
 	};
 	drivers::LiveRigSettings settings;
 	settings.rgbd.uri = device_text(rgbd_device);
@@ -810,22 +828,26 @@ PackedStringArray RigCapture::get_warnings() const {
 		warnings.push_back(String(((source == SOURCE_LIVE ? "The live rig cannot run: " : "The recording cannot be played: ") + last_error).c_str()));
 	} else if (source == SOURCE_RECORDING && !recording_path.is_empty() && !reader) {
 		// Not opened yet (the editor): whether it would open, read once per path (indexes only).
-		const std::string folder = ProjectSettings::get_singleton()->globalize_path(recording_path).utf8_string();
-		if (folder != checked_recording) {
-			checked_recording = folder;
+		const std::string key = recording_path.utf8_string();
+		if (key != checked_recording) {
+			checked_recording = key;
+			std::string path_error;
+			const std::string folder = disk_path_for(recording_path, &path_error);
 			RecordingReader probe;
-			const RecordingStatus status = probe.open(folder);
+			const RecordingStatus status = path_error.empty() ? probe.open(folder) : RecordingStatus{ false, path_error };
 			recording_problem = status.ok ? "" : status.error;
 		}
 		if (!recording_problem.empty()) {
 			warnings.push_back(String(("recording_path cannot be played: " + recording_problem).c_str()));
 		}
 	} else if (source == SOURCE_LIVE && !rig_file.is_empty() && !live_open) {
-		const std::string file = ProjectSettings::get_singleton()->globalize_path(rig_file).utf8_string();
-		if (file != checked_rig) {
-			checked_rig = file;
-			const RigLoadResult loaded = load_rig(file);
-			rig_problem = loaded.ok ? "" : loaded.error;
+		const std::string key = rig_file.utf8_string();
+		if (key != checked_rig) {
+			checked_rig = key;
+			std::string path_error;
+			const std::string file = disk_path_for(rig_file, &path_error);
+			const RigLoadResult loaded = path_error.empty() ? load_rig(file) : RigLoadResult{};
+			rig_problem = path_error.empty() ? (loaded.ok ? "" : loaded.error) : path_error;
 		}
 		if (!rig_problem.empty()) {
 			warnings.push_back(String(("rig_file cannot be read: " + rig_problem).c_str()));
@@ -915,6 +937,7 @@ void RigCapture::_bind_methods() {
 	ClassDB::bind_static_method("RigCapture", D_METHOD("get_main_thread_usec"), &RigCapture::get_main_thread_usec);
 
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "source", PROPERTY_HINT_ENUM, "Recording,Live"), "set_source", "get_source");
+	ADD_GROUP("Recording", "");
 	ADD_PROPERTY(PropertyInfo(Variant::STRING, "recording_path", PROPERTY_HINT_GLOBAL_DIR), "set_recording_path", "get_recording_path");
 	ADD_GROUP("Live", "");
 	ADD_PROPERTY(PropertyInfo(Variant::STRING, "rig_file", PROPERTY_HINT_FILE, "*.yaml"), "set_rig_file", "get_rig_file");
@@ -926,7 +949,7 @@ void RigCapture::_bind_methods() {
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "auto_exposure"), "set_auto_exposure", "get_auto_exposure");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "exposure_us", PROPERTY_HINT_RANGE, "1,1000000,1,or_greater,suffix:us"), "set_exposure_us", "get_exposure_us");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "gain", PROPERTY_HINT_RANGE, "0,48,0.1,or_greater"), "set_gain", "get_gain");
-	ADD_GROUP("", "");
+	ADD_GROUP("Playback", "");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "pacing", PROPERTY_HINT_ENUM, "Real Time,Step"), "set_pacing", "get_pacing");
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "loop"), "set_loop", "get_loop");
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "autoplay"), "set_autoplay", "get_autoplay");

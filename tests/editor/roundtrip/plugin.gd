@@ -33,6 +33,7 @@ func _run() -> void:
 		await get_tree().process_frame
 		if probe.get_cubemap() != null:
 			break
+	await _check_affordances(root, probe)
 	var material: ShaderMaterial = probe.target_material
 	if probe.get_cubemap() != null and material.get_shader_parameter("environment") == probe.get_cubemap():
 		print("roundtrip: the probe made a map and drives its outputs")
@@ -67,3 +68,34 @@ func _run() -> void:
 		await get_tree().process_frame
 	print("roundtrip: switched tabs, reloaded and closed")
 	get_tree().quit()
+
+
+# The gizmos and the inspector's preview (addons/roomprobe): loaded, drawn, and the corner drag's
+# geometry and undo work.
+func _check_affordances(root: Node, probe: Node) -> void:
+	var room: Node3D = root.get_node("Room")
+	EditorInterface.edit_node(probe)
+	for i in 10:
+		await get_tree().process_frame
+	var preview := EditorInterface.get_inspector().find_child("RoomProbeCubemapPreview", true, false)
+	var cross: TextureRect = preview.get_node("Cross") if preview else null
+	if cross and cross.texture and cross.texture.get_width() == 4 * probe.resolution:
+		print("roundtrip: the inspector previews the map")
+	if probe.get_gizmos().size() > 0 and room.get_gizmos().size() > 0:
+		print("roundtrip: gizmos on the probe and the room")
+	var gizmo_script := load("res://addons/roomprobe/floorplan_gizmo.gd")
+	var hit = gizmo_script.floor_point(room, Vector3(1.5, 5.0, 2.0), Vector3(0.0, -1.0, 0.0))
+	var before: PackedVector2Array = room.floorplan
+	gizmo_script.move_corner(room, 2, Vector2(4.5, 3.5))
+	var moved: bool = room.floorplan[2] == Vector2(4.5, 3.5) and room.is_valid()
+	var undo := EditorInterface.get_editor_undo_redo()
+	undo.create_action("test corner")
+	undo.add_do_property(room, "floorplan", room.floorplan)
+	undo.add_undo_property(room, "floorplan", before)
+	undo.commit_action(false)
+	undo.get_history_undo_redo(undo.get_object_history_id(room)).undo()
+	if hit == Vector2(1.5, 2.0) and moved and room.floorplan == before:
+		print("roundtrip: a corner moves on the floor and back")
+	# The probe renders the restored room once; the idle count starts after that.
+	for i in 30:
+		await get_tree().process_frame

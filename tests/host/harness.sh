@@ -1,0 +1,46 @@
+# shellcheck shell=bash
+# What the suites that run on the host share (test_paths.sh: 'host', test_package.sh: 'package'):
+# the checks, and the result lines and summary that tools/run_tests.py reads.
+# The caller sets $results, $filter and $log, and defines test_NAME for each test.
+
+# check WHAT COMMAND...: WHAT is one of the test's failures unless COMMAND succeeds.
+check() {
+	"${@:2}" || failures+=("$1")
+}
+says() { grep -qF -- "$1" <<<"$out"; }
+
+# run_host_tests SUITE BLOCKED TEST...: runs test_TEST for each TEST whose 'SUITE::TEST' contains
+# $filter, from the clone's folder, and writes '[PASS] SUITE::TEST' or '[FAIL] SUITE::TEST: why'
+# to $results and the screen, then 'SUITE_TESTS N passed, N failed in S s' (SUITE in capitals).
+# A non-empty BLOCKED fails every test with that reason instead of running it. Status: 0 when
+# none failed.
+run_host_tests() {
+	local suite=$1 blocked=$2 t name line passed=0 failed=0 start seconds
+	shift 2
+	start=$(date +%s.%N)
+	for t in "$@"; do
+		name=$suite::$t
+		[[ $name == *"$filter"* ]] || continue
+		printf '\n### %s\n' "$name" >>"$log"
+		failures=()
+		cd "$repo" || exit 1
+		if [[ -z $blocked ]]; then
+			"test_$t"
+		else
+			failures=("$blocked")
+		fi
+		if ((${#failures[@]} == 0)); then
+			line="[PASS] $name"
+			passed=$((passed + 1))
+		else
+			line="[FAIL] $name: $(printf '%s; ' "${failures[@]}")"
+			line=${line%; }
+			failed=$((failed + 1))
+		fi
+		echo "$line" >>"$results"
+		echo "    $line"
+	done
+	seconds=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
+	echo "${suite^^}_TESTS $passed passed, $failed failed in $seconds s" >>"$results"
+	((failed == 0))
+}

@@ -1,0 +1,123 @@
+#!/usr/bin/env bash
+# The package suite: the self-contained addon and the exported app, each tried where nothing of
+# RoomProbe's is installed (docs/addon.md). Runs on the host, like the host suite, because it uses
+# three Debian roots besides the toolchain's: the Debian 12 one that builds the shipped library
+# (tools/toolchain/packages-ship.txt), a bare Debian 12 (minbase only) and a bare sid with only
+# Godot's export template. ./roomprobe test runs it after the host suite; tools/run_tests.py
+# reports its results as the 'package' suite.
+#
+# Usage: tests/host/test_package.sh [--filter SUBSTRING] RESULTS LOG
+# RESULTS gets '[PASS] package::name' or '[FAIL] package::name: why' a test, then
+# 'PACKAGE_TESTS N passed, N failed in S s'; LOG gets every command and its output.
+set -uo pipefail
+
+repo=$(cd "$(dirname "$(readlink -f "$0")")/../.." && pwd)
+filter=
+if [[ ${1:-} == --filter ]]; then
+	filter=$2
+	shift 2
+fi
+[[ $# -eq 2 ]] || { echo "usage: $0 [--filter SUBSTRING] RESULTS LOG" >&2; exit 2; }
+results=$(realpath -m -- "$1") log=$(realpath -m -- "$2")
+# shellcheck source=tools/toolchain/toolchain.sh
+source "$repo/tools/toolchain/toolchain.sh"
+cd "$repo" || exit 1
+: >"$results"
+: >"$log"
+# shellcheck source=tests/host/harness.sh
+source "$repo/tests/host/harness.sh"
+work=build/test-logs/package # inside the clone: every root sees it at the same path
+rm -rf "$work"
+mkdir -p "$work"
+
+# logged CMD...: runs CMD, output (both streams) in $out and the log, exit status in $rc.
+logged() {
+	printf '\n$ %s\n' "$(printf '%q ' "$@")" >>"$log"
+	out=$("$@" 2>&1)
+	rc=$?
+	printf '%s\n[exit status %d]\n' "$out" "$rc" >>"$log"
+}
+summary_value() { sed -n "s/.*summary:.* $1=\([^ ]*\).*/\1/p" <<<"$out" | tail -n1; }
+version_at_most() { [[ $(printf '%s\n%s\n' "$1" "$2" | sort -V | head -n1) == "$1" ]]; }
+
+zip=
+addon=$work/unzipped/addons/roomprobe
+bare12=
+player=
+
+test_zip() {
+	logged ./roomprobe package
+	check "./roomprobe package failed (exit $rc)" test "$rc" -eq 0
+	zip=$(sed -n 's/^package: \(.*\.zip\)$/\1/p' <<<"$out" | tail -n1)
+	check "no zip named in the output" test -n "$zip" -a -f "$zip"
+	[[ -f $zip ]] || return
+	local needed
+	needed=$(summary_value glibc_needed)
+	check "the summary names no glibc_needed" test -n "$needed"
+	check "the shipped files need glibc $needed, more than the 2.36 baseline" version_at_most "$needed" 2.36
+	logged python3 -m zipfile -l "$zip"
+	local f
+	for f in roomprobe.gdextension plugin.cfg README.md bin/libroomprobe.linux.release.x86_64.so bin/BUNDLED.txt \
+		bin/OpenNI2/Drivers/libOniFile.so shaders/mirror.gdshader shaders/sh_irradiance.gdshaderinc icons/RoomProbe.svg; do
+		check "the zip lacks addons/roomprobe/$f" says "addons/roomprobe/$f"
+	done
+	check "the zip carries a licence for OpenCV" says "licenses/libopencv-core406.txt"
+	check "the zip carries test files" bash -c "! grep -qE 'tests/|binding_test|\.debug\.' <<<\"\$0\"" "$out"
+	check "the zip has files outside addons/roomprobe/" bash -c "! awk 'NR > 1 && \$1 !~ /^addons\/roomprobe\// {bad = 1} END {exit !bad}' <<<\"\$0\"" "$out"
+	rm -rf "$work/unzipped"
+	python3 -m zipfile -e "$zip" "$work/unzipped"
+}
+
+# Every library in bin/ is in [dependencies], so an export carries it; the library's RUNPATH is $ORIGIN.
+test_gdextension_lists_dependencies() {
+	[[ -d $addon ]] || { failures+=("no unpacked addon (package::zip failed)"); return; }
+	local so rel
+	while IFS= read -r so; do
+		rel=${so#"$addon"/}
+		[[ $rel == bin/libroomprobe.linux.release.x86_64.so ]] && continue
+		grep -qF "\"res://addons/roomprobe/$rel\"" "$addon/roomprobe.gdextension" || failures+=("$rel is not in [dependencies]")
+	done < <(find "$addon/bin" -name '*.so*' -type f | sort)
+	logged rp_run_in_root "$RP_SHIP_ROOT" readelf -d "$addon/bin/libroomprobe.linux.release.x86_64.so"
+	check "the library's RUNPATH is not \$ORIGIN" says 'Library runpath: [$ORIGIN]'
+}
+
+# The addon on a bare Debian 12: dlopen binds every symbol and finds the entry, as Godot would.
+test_loads_on_bare_debian_12() {
+	[[ -d $addon ]] || { failures+=("no unpacked addon (package::zip failed)"); return; }
+	logged rp_run_in_root "$RP_SHIP_ROOT" gcc -O2 -Wall -o "$work/check_load" tools/package/check_load.c
+	check "check_load did not build" test "$rc" -eq 0
+	logged rp_ensure_bare_root bookworm bookworm-bare ""
+	bare12=$RP_CACHE/bookworm-bare
+	logged rp_run_in_root "$bare12" "$work/check_load" --entry roomprobe_library_init "$addon/bin/libroomprobe.linux.release.x86_64.so" \
+		"$addon"/bin/OpenNI2/Drivers/*.so
+	check "check_load failed on bare Debian 12 (exit $rc): $(tail -n1 <<<"$out")" test "$rc" -eq 0
+	check "the bare root is not glibc 2.36" says "glibc 2.36"
+	check "the entry symbol was not found" says "found roomprobe_library_init"
+	check "OpenNI2's file driver did not load" says "libOniFile.so"
+	# The control: the toolchain's own build (sid, unbundled) must not load there, or the root is not bare.
+	logged rp_run_in_root "$bare12" "$work/check_load" godot_project/addons/roomprobe/bin/libroomprobe.linux.debug.x86_64.so
+	check "the toolchain's own library loaded on bare Debian 12: the check proves nothing" test "$rc" -ne 0
+}
+
+# The demo exported with Debian's templates, played headless on a sid root with only the template.
+test_exported_app_runs_without_dependencies() {
+	logged ./roomprobe export
+	check "./roomprobe export failed (exit $rc)" test "$rc" -eq 0
+	local app=out/export/roomprobe_demo.x86_64
+	[[ -x $app ]] || { failures+=("no $app"); return; }
+	check "the app folder carries test files" bash -c '! ls out/export | grep -qE "binding_test|\.debug\."'
+	check "the pack carries the test scripts" bash -c '! grep -qa "res://tests/" out/export/roomprobe_demo.pck'
+	logged rp_ensure_bare_root sid sid-player "godot-template-release"
+	player=$RP_CACHE/sid-player
+	logged rp_run_in_root "$player" sh -c 'ls /usr/lib/x86_64-linux-gnu/ | grep -cE "^lib(opencv_core|embree3|OpenEXR|OpenNI2|aravis)" || true'
+	# (Godot itself needs Embree 4; RoomProbe bundles Embree 3, another soname.)
+	check "the player root has RoomProbe's libraries installed: the check proves nothing" test "${out##*$'\n'}" = 0
+	local maps=$repo/$work/exported
+	logged rp_run_in_root "$player" timeout 300 "$app" --headless -- --quit-at-end --out "$maps"
+	check "the exported app failed (exit $rc): $(grep -v ALSA <<<"$out" | tail -n1)" test "$rc" -eq 0
+	check "the app did not play its bundled recording" says "demo: playing res://recordings/demo.zip"
+	check "the app did not say the summary" says "demo: summary frames="
+	check "the app did not write the map" test -s "$maps/cubemap.exr" -a -s "$maps/cubemap_net.png"
+}
+
+run_host_tests package "" zip gdextension_lists_dependencies loads_on_bare_debian_12 exported_app_runs_without_dependencies

@@ -1,0 +1,162 @@
+#!/usr/bin/env python3
+"""The self-contained addon: ./roomprobe package (docs/addon.md).
+
+Runs inside the Debian 12 root (tools/toolchain/packages-ship.txt) after `scons ship=yes
+target=release` built the library there. It stages addons/roomprobe/ with:
+  - bin/: the library and every shared library it needs beyond the base system (glibc, libstdc++,
+    libgcc_s), each given RUNPATH $ORIGIN, plus OpenNI2's device drivers in bin/OpenNI2/Drivers/;
+  - roomprobe.gdextension listing them all in [dependencies], so that an export copies them too;
+  - the editor plugin's scripts, the icons, the shaders and a README;
+  - licenses/: the Debian copyright file of every package a bundled library comes from;
+then checks that nothing shipped needs a glibc newer than the baseline, and zips it.
+The last line is one key=value summary.
+"""
+
+import argparse
+import os
+import re
+import shutil
+import stat
+import subprocess
+import sys
+import zipfile
+
+# Present on every Linux that runs Godot 4 (apt itself needs libstdc++): never bundled.
+BASE_SYSTEM = re.compile(r"^(linux-vdso|ld-linux-x86-64|libc|libm|libdl|librt|libpthread|libresolv|libutil|libstdc\+\+|libgcc_s)\.so")
+GLIBC_BASELINE = (2, 36)
+LIBRARY_NAME = "libroomprobe.linux.release.x86_64.so"
+RES = "res://addons/roomprobe"
+
+
+def run(*args):
+    return subprocess.run(args, check=True, capture_output=True, text=True).stdout
+
+
+def needed_closure(paths):
+    """Every shared library the files in paths load, as {soname: resolved path}, base system left out."""
+    found = {}
+    for path in paths:
+        for line in run("ldd", path).splitlines():
+            m = re.match(r"\s*(\S+) => (\S+)", line)
+            if "not found" in line:
+                sys.exit(f"package: {path} needs {line.split()[0]}, which this root does not have")
+            if m and not BASE_SYSTEM.match(m.group(1)):
+                found[m.group(1)] = m.group(2)
+    return found
+
+
+def glibc_needs(path):
+    """The newest GLIBC_x.y version that an ELF file asks for."""
+    versions = [tuple(int(v) for v in m.split(".")) for m in re.findall(r"GLIBC_(\d+\.\d+(?:\.\d+)?)", run("objdump", "-T", path))]
+    return max(versions, default=(0, 0))
+
+
+def debian_package(path):
+    out = subprocess.run(["dpkg", "-S", os.path.realpath(path)], capture_output=True, text=True).stdout
+    return out.split(":")[0] if out else None
+
+
+def copy_tree_files(src, dst, keep):
+    """Copies the files under src (following symlinks) whose names keep() accepts."""
+    for root, _, files in os.walk(src, followlinks=True):
+        for name in sorted(files):
+            if keep(name):
+                rel = os.path.relpath(os.path.join(root, name), src)
+                os.makedirs(os.path.dirname(os.path.join(dst, rel)), exist_ok=True)
+                shutil.copyfile(os.path.join(root, name), os.path.join(dst, rel))
+
+
+def write_gdextension(src, dst, bundled):
+    """The addon's .gdextension: the release library for every build, and its dependencies."""
+    text = open(src).read()
+    text = re.sub(r"\[libraries\].*?(?=\n\[|\Z)", "[libraries]\n"
+                  f'linux.debug.x86_64 = "{RES}/bin/{LIBRARY_NAME}"\n'
+                  f'linux.release.x86_64 = "{RES}/bin/{LIBRARY_NAME}"\n', text, flags=re.S)
+    # The value is the folder, beside the exported executable, that each file is copied into.
+    entries = ",\n\t".join(f'"{RES}/bin/{rel}": "{os.path.dirname(rel)}"' for rel in sorted(bundled))
+    text = text.rstrip() + "\n\n[dependencies]\n" + f"linux.x86_64 = {{\n\t{entries}\n}}\n"
+    open(dst, "w").write(text)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--library", required=True, help="the library built with ship=yes target=release")
+    parser.add_argument("--addon", required=True, help="the source addon folder (godot_project/addons/roomprobe)")
+    parser.add_argument("--readme", required=True, help="the addon's README (docs/addon.md)")
+    parser.add_argument("--stage", required=True, help="folder to stage into (its addons/roomprobe is replaced)")
+    parser.add_argument("--zip", required=True, help="the zip to write")
+    parser.add_argument("--version", required=True)
+    args = parser.parse_args()
+
+    addon = os.path.join(args.stage, "addons", "roomprobe")
+    shutil.rmtree(addon, ignore_errors=True)
+    bin_dir = os.path.join(addon, "bin")
+    os.makedirs(bin_dir)
+
+    # The library, OpenNI2's drivers (it loads them from <its folder>/OpenNI2/Drivers) and what they need.
+    shutil.copyfile(args.library, os.path.join(bin_dir, LIBRARY_NAME))
+    drivers_src = "/usr/lib/x86_64-linux-gnu/OpenNI2/Drivers"
+    drivers = sorted(f for f in os.listdir(drivers_src) if f.endswith(".so") and f != "libDummyDevice.so")
+    bundled = {}  # path relative to bin/ -> source path
+    for soname, path in needed_closure([args.library] + [os.path.join(drivers_src, d) for d in drivers]).items():
+        bundled[soname] = path
+    for d in drivers:
+        bundled[f"OpenNI2/Drivers/{d}"] = os.path.join(drivers_src, d)
+    packages = set()
+    for rel, path in bundled.items():
+        dst = os.path.join(bin_dir, rel)
+        os.makedirs(os.path.dirname(dst), exist_ok=True)
+        shutil.copyfile(os.path.realpath(path), dst)
+        packages.add(debian_package(path))
+    for rel in list(bundled) + [LIBRARY_NAME]:
+        dst = os.path.join(bin_dir, rel)
+        os.chmod(dst, 0o755)
+        origin = "$ORIGIN" if "/" not in rel else "$ORIGIN/../.."
+        run("patchelf", "--set-rpath", origin, dst)
+
+    # The glibc baseline, checked on every file shipped.
+    newest = max(((glibc_needs(os.path.join(bin_dir, rel)), rel) for rel in list(bundled) + [LIBRARY_NAME]))
+    if newest[0] > GLIBC_BASELINE:
+        sys.exit(f"package: bin/{newest[1]} needs GLIBC_{'.'.join(map(str, newest[0]))}, newer than the baseline "
+                 f"{'.'.join(map(str, GLIBC_BASELINE))}: build it in the Debian 12 root")
+
+    # Scripts, icons, shaders, the README and the licences.
+    copy_tree_files(args.addon, addon, lambda n: n.endswith((".gd", ".gd.uid", ".cfg", ".svg", ".gdshader",
+                                                              ".gdshaderinc", ".uid")) and not n.endswith(".gdextension.uid"))
+    shutil.copyfile(args.readme, os.path.join(addon, "README.md"))
+    write_gdextension(os.path.join(args.addon, "roomprobe.gdextension"), os.path.join(addon, "roomprobe.gdextension"), bundled)
+    licenses = os.path.join(addon, "licenses")
+    os.makedirs(licenses)
+    for package in sorted(p for p in packages if p):
+        copyright_file = f"/usr/share/doc/{package}/copyright"
+        if os.path.exists(copyright_file):
+            shutil.copyfile(copyright_file, os.path.join(licenses, f"{package}.txt"))
+    with open(os.path.join(addon, "bin", "BUNDLED.txt"), "w") as f:
+        f.write(f"RoomProbe {args.version}: libraries bundled from Debian 12 (bookworm), each with RUNPATH $ORIGIN.\n"
+                f"glibc baseline: {'.'.join(map(str, GLIBC_BASELINE))} (newest needed: GLIBC_{'.'.join(map(str, newest[0]))}).\n\n")
+        for rel in sorted(bundled):
+            f.write(f"{rel}\t{debian_package(bundled[rel]) or '?'}\n")
+
+    # A deterministic zip: sorted names, one timestamp, executable bits kept.
+    os.makedirs(os.path.dirname(os.path.abspath(args.zip)), exist_ok=True)
+    size = 0
+    with zipfile.ZipFile(args.zip + ".partial", "w", zipfile.ZIP_DEFLATED, compresslevel=9) as z:
+        for root, _, files in sorted(os.walk(addon)):
+            for name in sorted(files):
+                path = os.path.join(root, name)
+                rel = os.path.relpath(path, args.stage)
+                info = zipfile.ZipInfo(rel, date_time=(2026, 1, 1, 0, 0, 0))
+                info.external_attr = (stat.S_IFREG | (0o755 if os.access(path, os.X_OK) else 0o644)) << 16
+                info.compress_type = zipfile.ZIP_DEFLATED
+                with open(path, "rb") as src:
+                    data = src.read()
+                size += len(data)
+                z.writestr(info, data)
+    os.replace(args.zip + ".partial", args.zip)
+    print(f"package: {args.zip}")
+    print(f"summary: zip_mb={os.path.getsize(args.zip) / 1e6:.1f} unpacked_mb={size / 1e6:.1f} bundled_libraries={len(bundled)} "
+          f"glibc_needed={'.'.join(map(str, newest[0]))} glibc_baseline={'.'.join(map(str, GLIBC_BASELINE))}")
+
+
+if __name__ == "__main__":
+    main()
