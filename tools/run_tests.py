@@ -428,6 +428,8 @@ def suite_editor(opts, judged=True):
 
 
 ROUNDTRIP = os.path.join(rp.REPO, "tests", "editor", "roundtrip")
+# The bound: an idle editor on a RoomProbe scene within a few points of one on an empty scene.
+IDLE_CPU_POINTS = 5.0
 # What a saved RoomProbe scene must not hold (the probe's own outputs), and what it must keep.
 ROUNDTRIP_FORBIDDEN = [("an image", re.compile(r'type="Image"|\bImage\b')), ("a sky", re.compile(r'type="Sky"|\bsky = ')),
                        ("a cubemap", re.compile(r'Cubemap')), ("a driven box", re.compile(r'box_projection|interior = true|origin_offset'))]
@@ -468,6 +470,13 @@ def scene_roundtrip(s, scratch, log):
             problems.append(problem)
     idle = next((line for line in r.lines if "roundtrip: idle maps" in line), "")
     moved = next((line for line in r.lines if "roundtrip: maps after a move" in line), "")
+    cpu = next((re.search(r"idle cpu scene ([\d.]+)% empty ([\d.]+)%", line) for line in r.lines if "roundtrip: idle cpu" in line), None)
+    if not cpu:
+        problems.append("the idle CPU was not measured")
+    elif float(cpu.group(1)) - float(cpu.group(2)) > IDLE_CPU_POINTS:
+        problems.append(f"idle CPU with the RoomProbe scene {cpu.group(1)}%, more than {IDLE_CPU_POINTS:g} points above an empty scene's {cpu.group(2)}%")
+    else:
+        print(f"    idle CPU of the editor: {cpu.group(1)}% with the RoomProbe scene, {cpu.group(2)}% with an empty scene")
     if "idle maps 0 in" not in idle:
         problems.append(f"the probe renders while the editor is idle ({idle.strip() or 'not measured'})")
     if not moved or moved.strip().endswith(" 0"):

@@ -81,7 +81,7 @@ TEST_CASE("coarse update: texel geometry, conversions, masks and the two policie
 	// A worse view (from a corner, further and more oblique) does not replace the best one...
 	const Pose corner = upward_fisheye(glm::dvec3(0.4, 0.3, 0.4));
 	cv::Mat grey1(params.height, params.width, CV_8UC1, cv::Scalar(10));
-	CoarseTexture last { texture.color.clone(), texture.observed.clone(), texture.quality.clone(), texture.updated.clone(), texture.saturated.clone() };
+	CoarseTexture last { texture.color.clone(), texture.observed.clone(), texture.quality.clone(), texture.updated.clone(), texture.saturated.clone(), texture.rgb_quality.clone() };
 	stats = update_coarse_texture(mesh, geometry, params, corner, grey1, nullptr, &texture);
 	CHECK(stats.texels_visible > stats.texels_updated);
 	CHECK(texture.updated.at<uint8_t>(above) == 0);
@@ -272,7 +272,7 @@ TEST_CASE("coarse update: from the frame's texel projection, the same as project
 		const cv::Mat *frame_mask = k % 2 ? &mask : nullptr;
 		project_texels(geometry, params, poses[k], &projection);
 		// The lighting pairs the update gathers: the plain samples of the texels observed before.
-		const CoarseTexture before { fast.color.clone(), fast.observed.clone(), fast.quality.clone(), fast.updated.clone(), fast.saturated.clone() };
+		const CoarseTexture before { fast.color.clone(), fast.observed.clone(), fast.quality.clone(), fast.updated.clone(), fast.saturated.clone(), fast.rgb_quality.clone() };
 		cv::Mat before_samples, before_visible;
 		sample_coarse_texels(geometry, params, poses[k], image, frame_mask, before.observed, pairs.step, TextureUpdateOptions(), &before_samples, &before_visible);
 		const TextureUpdateStats a = update_coarse_texture(mesh, geometry, params, poses[k], image, frame_mask, &plain);

@@ -29,6 +29,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <functional>
 #include <future>
 #include <limits>
@@ -326,6 +327,8 @@ TEST_CASE("engine: step mode is the old sequential path (DenseSlam, fisheye_pose
 	REQUIRE(coarse.configure(rec.rig, rec.floorplan) == "");
 	Trajectory trajectory;
 	size_t fisheye_used = 0;
+	std::optional<std::pair<RgbdFrame, Pose>> pending_rgb;
+	const ResponseCurve rgb_lut_for_coarse = rgb_radiance_lut(rec.photometry);
 	for (const Event &event : rec.events) {
 		if (!event.fisheye) {
 			const RgbdFrame &frame = rec.rgbd[event.index];
@@ -335,6 +338,7 @@ TEST_CASE("engine: step mode is the old sequential path (DenseSlam, fisheye_pose
 			if (out.tracking.state != TrackingState::Lost) {
 				std::string error;
 				CHECK(trajectory.append({ frame.timestamp_s, slam.pose() }, &error));
+				pending_rgb = std::make_pair(frame, slam.pose()); // the coarse model's RGB texturing, at its next frame
 			}
 			continue;
 		}
@@ -350,6 +354,10 @@ TEST_CASE("engine: step mode is the old sequential path (DenseSlam, fisheye_pose
 		linear.saturated = radiance.saturated;
 		linear.hdr = linear.image.type() == CV_32FC3;
 		CHECK(linear.hdr);
+		if (pending_rgb) {
+			coarse.add_rgb_frame(pending_rgb->first, rec.rig.rgb, pending_rgb->second, rec.photometry.known ? &rgb_lut_for_coarse : nullptr);
+			pending_rgb.reset();
+		}
 		coarse.add_fisheye_frame(linear, pose);
 		fisheye_used++;
 	}

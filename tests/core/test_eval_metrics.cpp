@@ -83,3 +83,33 @@ TEST_CASE("eval: SSIM falls with structure loss") {
 	CHECK(m.ssim < 0.1);
 	CHECK(m.psnr_db < 20.0);
 }
+
+TEST_CASE("eval: HDR PSNR on the mu-law with a fixed peak, and the worst 5 % of directions") {
+	const int size = 20; // 6 x 400 = 2400 pixels: 120 are the worst 5 %
+	// Truth: a lamp at 25 (above white) everywhere; the estimate clipped at 1, as an 8-bit capture.
+	const Cubemap lamp = make_cubemap(size, cv::Vec3f(25.0f, 25.0f, 25.0f));
+	const Cubemap clipped = make_cubemap(size, cv::Vec3f(1.0f, 1.0f, 1.0f));
+	const auto mu = [](double p_x) { return std::log1p(MU_LAW * std::min(p_x, HDR_PEAK) / HDR_PEAK) / std::log1p(MU_LAW); };
+	const CubemapMetrics m = compare_cubemaps(clipped, lamp);
+	REQUIRE(m.ok);
+	const double d = mu(25.0) - mu(1.0);
+	CHECK(m.psnr_mu_db == doctest::Approx(-10.0 * std::log10(d * d)).epsilon(1e-9));
+	CHECK(m.psnr_db == PSNR_CAP_DB); // tone-mapped, both are white: the HDR metric is what tells them apart
+	// The peak is fixed: a brighter truth does not flatter an estimate with the same error.
+	const CubemapMetrics dim = compare_cubemaps(make_cubemap(size, cv::Vec3f(0.6f, 0.6f, 0.6f)), make_cubemap(size, cv::Vec3f(0.5f, 0.5f, 0.5f)));
+	const double d_dim = mu(double(0.6f)) - mu(double(0.5f)); // the faces hold floats
+	CHECK(dim.psnr_mu_db == doctest::Approx(-10.0 * std::log10(d_dim * d_dim)).epsilon(1e-9));
+
+	// 120 pixels off by 40 tone-mapped levels, the rest exact: the worst 5 % is exactly those.
+	Cubemap truth = make_cubemap(size, cv::Vec3f(srgb8_to_linear(100), srgb8_to_linear(100), srgb8_to_linear(100)));
+	Cubemap estimate = truth;
+	for (int f = 0; f < 6; f++) {
+		estimate.faces[f] = truth.faces[f].clone();
+	}
+	for (int i = 0; i < 120; i++) {
+		estimate.faces[i % 6].at<cv::Vec3f>(i / 6, 0) = cv::Vec3f(srgb8_to_linear(140), srgb8_to_linear(140), srgb8_to_linear(140));
+	}
+	const CubemapMetrics w = compare_cubemaps(estimate, truth);
+	CHECK(w.psnr_worst5_db == doctest::Approx(10.0 * std::log10(255.0 * 255.0 / 1600.0)).epsilon(1e-9));
+	CHECK(w.psnr_db == doctest::Approx(10.0 * std::log10(255.0 * 255.0 / (1600.0 * 120.0 / 2400.0))).epsilon(1e-9));
+}

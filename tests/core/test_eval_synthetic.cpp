@@ -41,21 +41,27 @@ Rig half_fisheye_rig() {
 	return rig;
 }
 
-} // namespace
-
-TEST_CASE("eval: on living_room the full coarse pipeline beats the 5.3 baseline, and the dense model improves on it") {
+// A short synthetic living-room recording with 32-px ground-truth cubemaps, in p_folder.
+synth::SequenceResult write_living_room(const EvalTempFolder &p_folder, double p_seconds) {
 	synth::SceneOptions scene_options;
-	scene_options.duration_s = 1.5; // the ceiling light switches on at 0.75 s
+	scene_options.duration_s = p_seconds;
 	const synth::SceneResult scene = synth::make_scene("living_room", scene_options);
 	REQUIRE_MESSAGE(scene.ok, scene.error);
 	synth::SequenceOptions sequence;
-	sequence.duration_s = 1.5;
+	sequence.duration_s = p_seconds;
 	sequence.seed = 3;
 	sequence.cubemap_face_size = 32;
 	sequence.calibration_views = false;
-	EvalTempFolder folder;
-	const synth::SequenceResult written = synth::write_sequence(folder.path.string(), half_fisheye_rig(), scene.scene, sequence);
+	const synth::SequenceResult written = synth::write_sequence(p_folder.path.string(), half_fisheye_rig(), scene.scene, sequence);
 	REQUIRE_MESSAGE(written.ok, written.error);
+	return written;
+}
+
+} // namespace
+
+TEST_CASE("eval: on living_room the full coarse pipeline beats the 5.3 baseline, and the dense model improves on it") {
+	EvalTempFolder folder;
+	const synth::SequenceResult written = write_living_room(folder, 1.5); // the ceiling light switches on at 0.75 s
 
 	EvaluationOptions options;
 	options.recording = folder.path.string();
@@ -84,4 +90,40 @@ TEST_CASE("eval: on living_room the full coarse pipeline beats the 5.3 baseline,
 	for (const char *file : { "baseline.exr", "coarse_light_gain.png", "ground_truth.exr", "dense_slam.png" }) {
 		CHECK(fs::exists(folder.path / "eval" / file));
 	}
+}
+
+TEST_CASE("eval: the error budget has the live system and each oracle's row, scored at the sweep's moments") {
+	EvalTempFolder folder;
+	write_living_room(folder, 1.0);
+	EvaluationOptions options;
+	options.recording = folder.path.string();
+	options.texel_size_m = 0.04;
+	options.max_cubemaps = 6;
+	const BudgetResult budget = error_budget(options);
+	REQUIRE_MESSAGE(budget.ok, budget.error);
+	const std::string table = format_budget(budget);
+	MESSAGE(table);
+	REQUIRE(budget.rows.size() == 9);
+	CHECK(budget.rows[0].what.find("the live system") == 0);
+	CHECK(budget.rows[1].what == "oracle: true poses");
+	for (const BudgetRow &row : budget.rows) {
+		CAPTURE(row.what);
+		REQUIRE(row.scores.frames.size() == 6);
+		CHECK(std::isfinite(row.scores.mean_psnr_mu_db));
+		CHECK(row.scores.mean_psnr_worst5_db < row.scores.mean_psnr_db); // the worst directions are worse than the mean
+		CHECK(row.scores.at_moment[2] == -1); // a 1-s recording has no 10-s moment
+	}
+	// The dense model's term: leaving it out costs PSNR (the table is only in the dense model).
+	CHECK(budget.rows[1].scores.mean_psnr_db > budget.rows[2].scores.mean_psnr_db);
+	CHECK(table.find("shorter than 10 s") != std::string::npos);
+	// The direction split covers the whole map; the fisheye saw most of the room in a second of the
+	// sweep, the table (RGB-D only) is in view, and what nobody saw is worse than what the fisheye saw.
+	REQUIRE(budget.shipped.directions_at_s >= 0.0);
+	double shares = 0.0;
+	for (const DirectionClassScores &c : budget.shipped.directions) {
+		shares += c.share;
+	}
+	CHECK(shares == doctest::Approx(1.0).epsilon(1e-9));
+	CHECK(budget.shipped.directions[DIRECTIONS_FISHEYE].share > 0.3);
+	CHECK(budget.shipped.directions[DIRECTIONS_RGBD_ONLY].share > 0.0);
 }

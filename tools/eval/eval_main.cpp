@@ -4,7 +4,7 @@
 // (eval/evaluate.h).
 //
 // roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame] [--texel-size M]
-//                [--max-cubemaps K] [--no-dense] [--quiet]
+//                [--max-cubemaps K] [--no-dense] [--quiet] [--budget] [--no-rgb-texture]
 
 #include <eval/evaluate.h>
 
@@ -17,11 +17,13 @@
 
 int main(int argc, char **argv) {
 	roomprobe::EvaluationOptions options;
-	bool per_frame = false, quiet = false;
+	bool per_frame = false, quiet = false, budget = false;
 	auto usage = [](const char *p_error) {
 		std::fprintf(stderr,
 				"%s%susage: roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame]\n"
-				"                      [--texel-size M] [--max-cubemaps K] [--no-dense] [--quiet]\n",
+				"                      [--texel-size M] [--max-cubemaps K] [--no-dense] [--quiet] [--budget]\n"
+				"                      [--no-rgb-texture]\n"
+				"  --budget: the error budget, the live system with one stage at a time replaced by its oracle\n",
 				p_error ? "roomprobe_eval: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
 		return 2;
 	};
@@ -53,6 +55,10 @@ int main(int argc, char **argv) {
 				return usage("--max-cubemaps needs a positive integer");
 			}
 			options.max_cubemaps = size_t(n);
+		} else if (arg == "--no-rgb-texture") {
+			options.rgb_texture = false;
+		} else if (arg == "--budget") {
+			budget = true;
 		} else if (arg == "--no-dense") {
 			options.dense = false;
 		} else if (arg == "--per-frame") {
@@ -71,6 +77,15 @@ int main(int argc, char **argv) {
 	}
 	if (!quiet) {
 		options.progress = [](const std::string &p_line) { std::cerr << p_line << "\n"; };
+	}
+	if (budget) {
+		const roomprobe::BudgetResult table = roomprobe::error_budget(options);
+		if (!table.ok) {
+			std::fprintf(stderr, "roomprobe_eval: %s\n", table.error.c_str());
+			return 1;
+		}
+		std::cout << roomprobe::format_budget(table);
+		return 0;
 	}
 	const roomprobe::EvaluationResult result = roomprobe::evaluate_recording(options);
 	if (!result.ok) {

@@ -13,6 +13,7 @@ CoarseTexture make_coarse_texture(const RoomMesh &p_mesh) {
 	texture.quality = cv::Mat(h, w, CV_32FC1, cv::Scalar(0.0));
 	texture.updated = cv::Mat(h, w, CV_8UC1, cv::Scalar(0));
 	texture.saturated = cv::Mat(h, w, CV_8UC1, cv::Scalar(0));
+	texture.rgb_quality = cv::Mat(h, w, CV_32FC1, cv::Scalar(0.0));
 	return texture;
 }
 

@@ -23,6 +23,9 @@ struct CoarseTexture {
 	// CV_8UC1: 255 where the value held was clipped in its frame (a lower bound of the radiance;
 	// coarse/texture_update.h lets any unclipped observation replace it).
 	cv::Mat saturated;
+	// CV_32FC1: where the texel holds a value from the RGB camera (never seen by the fisheye:
+	// quality == 0), the best RGB view's quality (coarse/rgb_texture_update.h); 0 elsewhere.
+	cv::Mat rgb_quality;
 };
 
 // An empty texture for p_mesh's atlas: black, nothing observed.

@@ -423,8 +423,9 @@ TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p
 				const bool clipped = p_saturated && sample_saturated(*p_saturated, pixel);
 				cv::Vec3f sample;
 				bool sampled = false;
-				if (pairs_row && x % pair_step == 0 && observed_row[x] != 0 && !clipped && saturated_row[x] == 0) {
-					// Observed before (this texel's own write comes below), neither value clipped: a
+				if (pairs_row && x % pair_step == 0 && observed_row[x] != 0 && quality_row[x] > 0.0f && !clipped && saturated_row[x] == 0) {
+					// Observed by the fisheye before (this texel's own write comes below; an RGB
+					// camera's value, quality 0, is another camera's), neither value clipped: a
 					// lighting pair.
 					sample = sample_image(p_fisheye_image, pixel);
 					sampled = true;

@@ -222,6 +222,10 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 			return fail("rig: " + rig_error);
 		}
 		linearizer.configure(cfg.photometry, cfg.rig.fisheye);
+		{
+			const std::lock_guard<std::mutex> lock(pending_rgb_mutex);
+			pending_rgb.reset(); // a frame of the old configuration
+		}
 		rgb_lut_active = cfg.photometry.known;
 		rgb_lut = rgb_radiance_lut(cfg.photometry);
 		if (cfg.dense) {
@@ -522,6 +526,24 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence) {
 			out->world_from_camera = truth;
 			out->state = TrackingState::Good;
 		}
+		// The coarse model takes the texels its fisheye never saw from this frame, on its own
+		// thread at its next fisheye frame (the newest RGB-D frame with a pose waits there).
+		if (coarse && cfg.coarse.rgb_texture) {
+			Pose world_from_rgb;
+			bool posed = false;
+			if (cfg.coarse_poses == PoseSource::GroundTruth) {
+				posed = has_truth;
+				world_from_rgb = truth;
+			} else {
+				posed = out->has_pose && out->state != TrackingState::Lost;
+				world_from_rgb = out->world_from_camera;
+			}
+			if (posed) {
+				world_from_rgb.translation -= cfg.room_origin_m; // into the room's frame
+				const std::lock_guard<std::mutex> lock(pending_rgb_mutex);
+				pending_rgb = PendingRgb{ p_frame, world_from_rgb };
+			}
+		}
 		// Read here, on the only thread that writes the volume: stats() never waits for a fusing.
 		const TsdfStats volume_stats = slam ? slam->volume().stats() : TsdfStats();
 		{
@@ -597,7 +619,15 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 		frame.saturated = linear.saturated;
 		frame.hdr = frame.image.type() == CV_32FC3;
 		auto snapshot = std::make_shared<CoarseSnapshot>();
+		std::optional<PendingRgb> rgb;
+		{
+			const std::lock_guard<std::mutex> lock(pending_rgb_mutex);
+			rgb.swap(pending_rgb);
+		}
 		const std::lock_guard<std::mutex> coarse_lock(coarse_mutex);
+		if (rgb) {
+			coarse->add_rgb_frame(rgb->frame, cfg.rig.rgb, rgb->world_from_rgb, rgb_lut_active ? &rgb_lut : nullptr);
+		}
 		snapshot->last = coarse->add_fisheye_frame(frame, pose);
 		snapshot->frames = coarse->frame_count();
 		snapshot->fisheye_sequence = p_sequence;

@@ -43,6 +43,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <shared_mutex>
 #include <string>
 #include <thread>
@@ -303,6 +304,14 @@ private:
 	FisheyeLinearizer linearizer;
 	std::array<float, 256> rgb_lut{};
 	bool rgb_lut_active = false;
+	// The newest RGB-D frame with its pose (room frame), for the coarse model's RGB texturing:
+	// written by the SLAM side, taken by the coarse side at its next fisheye frame.
+	struct PendingRgb {
+		RgbdFrame frame;
+		Pose world_from_rgb;
+	};
+	std::mutex pending_rgb_mutex;
+	std::optional<PendingRgb> pending_rgb;
 
 	// Pose history (SLAM thread writes, coarse thread reads).
 	mutable std::mutex pose_mutex;

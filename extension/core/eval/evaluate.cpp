@@ -2,6 +2,7 @@
 
 #include <engine/live_room.h>
 #include <envmap/baseline.h>
+#include <envmap/coarse_render.h>
 #include <envmap/export.h>
 #include <recording/recording_reader.h>
 #include <rig/fisheye_pose.h>
@@ -89,6 +90,53 @@ private:
 	size_t renders = 0;
 };
 
+// The live engine's map split by DirectionClass (see evaluate.h): the fisheye's observed and
+// saturated masks rendered as an atlas from the probe, and the pixels the dense pass changed.
+void split_by_direction(const LiveRoom &p_engine, const CoarseCubemapRenderer &p_renderer, const Cubemap &p_with_dense, const Cubemap &p_coarse_only,
+		const Cubemap &p_truth, const glm::dvec3 &p_probe, int p_render_size, DirectionClassScores r_scores[DIRECTION_CLASS_COUNT]) {
+	const CoarseTexture &texture = p_engine.coarse_model()->texture();
+	cv::Mat masks(texture.color.size(), CV_32FC3, cv::Scalar::all(0.0));
+	for (int y = 0; y < masks.rows; y++) {
+		const float *fisheye_quality = texture.quality.ptr<float>(y); // > 0: a fisheye observation (an RGB one has 0)
+		const uint8_t *saturated = texture.saturated.empty() ? nullptr : texture.saturated.ptr<uint8_t>(y);
+		cv::Vec3f *out = masks.ptr<cv::Vec3f>(y);
+		for (int x = 0; x < masks.cols; x++) {
+			const bool rgb = !texture.rgb_quality.empty() && texture.rgb_quality.at<float>(y, x) > 0.0f;
+			out[x] = cv::Vec3f(fisheye_quality[x] > 0.0f ? 1.0f : 0.0f, saturated && saturated[x] ? 1.0f : 0.0f, rgb ? 1.0f : 0.0f);
+		}
+	}
+	const int size = p_truth.size;
+	const Cubemap seen = to_cubemap(p_renderer.render(masks, p_probe, p_render_size).faces, size);
+	double squared[DIRECTION_CLASS_COUNT] = { 0.0 }, pixels[DIRECTION_CLASS_COUNT] = { 0.0 };
+	for (int f = 0; f < 6; f++) {
+		const cv::Mat estimate = tone_map_face(p_with_dense.faces[f]), truth = tone_map_face(p_truth.faces[f]);
+		for (int y = 0; y < size; y++) {
+			const cv::Vec3f *mask = seen.faces[f].ptr<cv::Vec3f>(y);
+			const cv::Vec3f *dense = p_with_dense.faces[f].ptr<cv::Vec3f>(y);
+			const cv::Vec3f *coarse = p_coarse_only.faces[f].ptr<cv::Vec3f>(y);
+			for (int x = 0; x < size; x++) {
+				int c = DIRECTIONS_NEVER_SEEN;
+				if (mask[x][0] > 0.5f) {
+					c = mask[x][1] > 0.5f ? DIRECTIONS_SATURATED : DIRECTIONS_FISHEYE;
+				} else if (dense[x] != coarse[x] || mask[x][2] > 0.5f) {
+					c = DIRECTIONS_RGBD_ONLY;
+				}
+				const cv::Vec3b e = estimate.at<cv::Vec3b>(y, x), t = truth.at<cv::Vec3b>(y, x);
+				for (int k = 0; k < 3; k++) {
+					squared[c] += (double(e[k]) - t[k]) * (double(e[k]) - t[k]);
+				}
+				pixels[c] += 1.0;
+			}
+		}
+	}
+	const double total = 6.0 * size * size;
+	for (int c = 0; c < DIRECTION_CLASS_COUNT; c++) {
+		r_scores[c].share = pixels[c] / total;
+		const double mse = pixels[c] > 0.0 ? squared[c] / (3.0 * pixels[c]) : 0.0;
+		r_scores[c].psnr_db = pixels[c] == 0.0 ? 0.0 : (mse > 0.0 ? std::min(PSNR_CAP_DB, 10.0 * std::log10(255.0 * 255.0 / mse)) : PSNR_CAP_DB);
+	}
+}
+
 } // namespace
 
 EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
@@ -158,6 +206,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	base.coarse.texel_size_m = p_options.texel_size_m;
 	base.coarse.inpaint = true;
 	base.coarse.inpaint_async = false; // the completed texture belongs to the latest frame
+	base.coarse.rgb_texture = p_options.rgb_texture;
 	LiveRoomConfig no_light = base, additive = base, gain = base, tracked = base;
 	no_light.coarse.lighting = false;
 	additive.coarse.lighting = true;
@@ -193,6 +242,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	}
 	const int size = p_options.cubemap_size > 0 ? p_options.cubemap_size : first.cubemap.faces[0].cols;
 	result.cubemap_size = size;
+	const int render_size = size * std::max(1, p_options.render_scale); // the maps, area-averaged down to size to be scored
 	BaselineEnvmap baseline(size);
 
 	const char *names[VARIANT_COUNT] = { "baseline (5.3)", "coarse", "coarse+inpaint", "+light (additive)", "+light (gain)", "+dense (true poses)",
@@ -202,7 +252,9 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		result.variants[v].name = names[v];
 	}
 
+	std::unique_ptr<CoarseCubemapRenderer> direction_renderer; // the direction split's, built at the first cubemap
 	const std::vector<PlaybackEvent> &events = reader.get_events();
+	result.start_s = events.empty() ? 0.0 : events.front().time_s;
 	size_t next_event = 0;
 	double baseline_total_ms = 0.0, metrics_total_ms = 0.0;
 	size_t comparisons = 0;
@@ -262,7 +314,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		// The coarse render's time, per engine (the render column of the timings table).
 		auto timed = [&](LiveRoom &p_engine, bool p_completed, double *io_ms) {
 			const Clock::time_point start = Clock::now();
-			Cubemap map = p_engine.render_at(probe, size, p_completed, false);
+			Cubemap map = to_cubemap(p_engine.render_at(probe, render_size, p_completed, false).faces, size);
 			*io_ms += ms_since(start);
 			return map;
 		};
@@ -272,10 +324,20 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		estimates[VARIANT_LIGHT_ADDITIVE] = timed(engine_additive, true, &render_ms[1]);
 		estimates[VARIANT_LIGHT_GAIN] = timed(engine_gain, true, &render_ms[2]);
 		if (dense) {
-			estimates[VARIANT_DENSE_TRUE_POSES] = engine_gain.render_at(probe, size, true, true);
+			estimates[VARIANT_DENSE_TRUE_POSES] = to_cubemap(engine_gain.render_at(probe, render_size, true, true).faces, size);
 			DenseRenderStats stats;
-			estimates[VARIANT_DENSE_SLAM] = engine_tracked.render_at(probe, size, true, true, &stats);
+			estimates[VARIANT_DENSE_SLAM] = to_cubemap(engine_tracked.render_at(probe, render_size, true, true, &stats).faces, size);
 			slam_figures.add_render(stats.milliseconds);
+			if (result.directions_at_s < 0.0 || ref.timestamp_s <= result.start_s + SWEEP_MOMENTS_S[2] + 1e-6) {
+				if (!direction_renderer && engine_tracked.room_mesh()) {
+					direction_renderer = std::make_unique<CoarseCubemapRenderer>(*engine_tracked.room_mesh());
+				}
+				if (direction_renderer) {
+					const Cubemap coarse_only = to_cubemap(engine_tracked.render_at(probe, render_size, true, false).faces, size);
+					split_by_direction(engine_tracked, *direction_renderer, estimates[VARIANT_DENSE_SLAM], coarse_only, gt, probe, render_size, result.directions);
+					result.directions_at_s = ref.timestamp_s;
+				}
+			}
 		}
 		for (int v = 0; v < variant_count; v++) {
 			const Clock::time_point start = Clock::now();
@@ -325,6 +387,13 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 			v.mean_psnr_linear_db += f.metrics.psnr_linear_db;
 			v.mean_ssim_linear += f.metrics.ssim_linear;
 			v.mean_irradiance_error += f.metrics.irradiance_error;
+			v.mean_psnr_mu_db += f.metrics.psnr_mu_db;
+			v.mean_psnr_worst5_db += f.metrics.psnr_worst5_db;
+			for (int m = 0; m < 3; m++) {
+				if (f.timestamp_s <= result.start_s + SWEEP_MOMENTS_S[m] + 1e-6) {
+					v.at_moment[m] = int(&f - v.frames.data());
+				}
+			}
 			if (result.light_switch_s >= 0.0 && f.timestamp_s > result.light_switch_s) {
 				v.after_switch_frames++;
 				after_psnr += f.metrics.psnr_db;
@@ -339,6 +408,15 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		v.mean_psnr_linear_db /= n;
 		v.mean_ssim_linear /= n;
 		v.mean_irradiance_error /= n;
+		v.mean_psnr_mu_db /= n;
+		v.mean_psnr_worst5_db /= n;
+		// A moment past the recording's end has no frame.
+		const double end_s = v.frames.empty() ? 0.0 : v.frames.back().timestamp_s;
+		for (int m = 0; m < 3; m++) {
+			if (result.start_s + SWEEP_MOMENTS_S[m] > end_s + 0.5) {
+				v.at_moment[m] = -1;
+			}
+		}
 		if (v.after_switch_frames > 0) {
 			const double after = double(v.after_switch_frames);
 			v.after_switch_psnr_db = after_psnr / after;
@@ -364,6 +442,108 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	return result;
 }
 
+// The live system's map split by DirectionClass, as lines (nothing when it was not measured).
+std::string format_directions(const EvaluationResult &p_result) {
+	if (p_result.directions_at_s < 0.0) {
+		return "";
+	}
+	std::ostringstream out;
+	char line[200];
+	std::snprintf(line, sizeof(line), "+dense (SLAM) by direction at t = %.2f s (%.1f s into the sweep): share of the map, tone-mapped PSNR\n",
+			p_result.directions_at_s, p_result.directions_at_s - p_result.start_s);
+	out << line;
+	const char *classes[DIRECTION_CLASS_COUNT] = { "seen by the fisheye", "saturated in the fisheye", "seen only by the RGB-D camera", "never seen (inpainted)" };
+	for (int c = 0; c < DIRECTION_CLASS_COUNT; c++) {
+		std::snprintf(line, sizeof(line), "  %-32s %6.1f %%  %6.2f dB\n", classes[c], 100.0 * p_result.directions[c].share, p_result.directions[c].psnr_db);
+		out << line;
+	}
+	return out.str();
+}
+
+BudgetResult error_budget(const EvaluationOptions &p_options) {
+	BudgetResult budget;
+	struct Run {
+		const char *label;
+		std::function<void(EvaluationOptions *)> change;
+		std::vector<std::pair<EvaluationVariant, const char *>> rows;
+	};
+	const Run runs[] = {
+		{ "as shipped", [](EvaluationOptions *) {},
+				{ { VARIANT_DENSE_SLAM, "the live system: SLAM poses, dense over the coarse model, inpainting, gain lighting" },
+						{ VARIANT_DENSE_TRUE_POSES, "oracle: true poses" }, { VARIANT_LIGHT_GAIN, "without the dense model (true poses)" },
+						{ VARIANT_COARSE, "without inpainting, lighting or dense (true poses)" } } },
+		{ "2x resolution",
+				[](EvaluationOptions *o) {
+					o->texel_size_m /= 2.0;
+					o->render_scale = 2;
+				},
+				{ { VARIANT_DENSE_SLAM, "oracle: texels and maps at twice the resolution (SLAM poses)" },
+						{ VARIANT_DENSE_TRUE_POSES, "oracle: twice the resolution and true poses" } } },
+		{ "no photometry", [](EvaluationOptions *o) { o->linearise = false; },
+				{ { VARIANT_DENSE_SLAM, "without photometric calibration (frames as recorded, SLAM poses)" } } },
+		{ "no RGB texturing", [](EvaluationOptions *o) { o->rgb_texture = false; },
+				{ { VARIANT_DENSE_SLAM, "without the RGB camera's texturing of the coarse model (SLAM poses)" },
+						{ VARIANT_LIGHT_GAIN, "without RGB texturing or the dense model (true poses)" } } },
+	};
+	for (const Run &run : runs) {
+		EvaluationOptions options = p_options;
+		options.dense = true;
+		options.out.clear();
+		run.change(&options);
+		if (p_options.progress) {
+			p_options.progress(std::string("budget: evaluating ") + run.label);
+		}
+		const EvaluationResult result = evaluate_recording(options);
+		if (!result.ok) {
+			budget.error = result.error;
+			return budget;
+		}
+		budget.start_s = result.start_s;
+		budget.cubemap_size = result.cubemap_size;
+		if (budget.rows.empty()) {
+			budget.shipped = result;
+			budget.shipped.variants.clear(); // the rows keep what the table needs
+		}
+		for (const auto &[variant, what] : run.rows) {
+			BudgetRow row;
+			row.what = what;
+			row.scores = result.variants[size_t(variant)];
+			budget.rows.push_back(row);
+		}
+	}
+	budget.ok = true;
+	return budget;
+}
+
+std::string format_budget(const BudgetResult &p_budget) {
+	if (!p_budget.ok) {
+		return "budget failed: " + p_budget.error + "\n";
+	}
+	std::ostringstream out;
+	char line[320];
+	std::snprintf(line, sizeof(line), "error budget (%d px faces): each row replaces one stage of the live system by its oracle, or leaves one out\n",
+			p_budget.cubemap_size);
+	out << line;
+	std::snprintf(line, sizeof(line), "%-86s %9s %9s %9s %9s %9s\n", "", "PSNR", "PSNR", "PSNRmu", "worst 5%", "Eirr");
+	out << line;
+	std::snprintf(line, sizeof(line), "%-86s %9s %9s %9s %9s %9s\n", "row", "mean[dB]", "10 s[dB]", "10 s[dB]", "10 s[dB]", "10 s[%]");
+	out << line;
+	for (const BudgetRow &row : p_budget.rows) {
+		const VariantScores &v = row.scores;
+		const int at = v.at_moment[2] >= 0 ? v.at_moment[2] : (v.frames.empty() ? -1 : int(v.frames.size()) - 1);
+		const CubemapMetrics m = at >= 0 ? v.frames[size_t(at)].metrics : CubemapMetrics();
+		std::snprintf(line, sizeof(line), "%-86s %9.2f %9.2f %9.2f %9.2f %9.2f\n", row.what.c_str(), v.mean_psnr_db, m.psnr_db, m.psnr_mu_db, m.psnr_worst5_db,
+				100.0 * m.irradiance_error);
+		out << line;
+	}
+	out << format_directions(p_budget.shipped);
+	const bool short_recording = !p_budget.rows.empty() && p_budget.rows[0].scores.at_moment[2] < 0;
+	if (short_recording) {
+		out << "(the recording is shorter than 10 s: the '10 s' columns are its last cubemap)\n";
+	}
+	return out.str();
+}
+
 std::string format_evaluation(const EvaluationResult &p_result, bool p_per_frame) {
 	std::ostringstream out;
 	char line[256];
@@ -386,12 +566,35 @@ std::string format_evaluation(const EvaluationResult &p_result, bool p_per_frame
 	std::snprintf(line, sizeof(line), "%zu cubemaps (%d px faces), %zu fisheye frames, poses: ground truth, frames %s\n", p_result.cubemaps,
 			p_result.cubemap_size, p_result.fisheye_frames_used, p_result.linearised ? "linearised" : "as recorded");
 	out << line;
-	std::snprintf(line, sizeof(line), "%-20s %10s %8s %12s %10s %9s\n", "variant", "PSNR[dB]", "SSIM", "PSNRlin[dB]", "SSIMlin", "Eirr[%]");
+	std::snprintf(line, sizeof(line), "%-20s %10s %8s %12s %10s %9s %10s %10s\n", "variant", "PSNR[dB]", "SSIM", "PSNRlin[dB]", "SSIMlin", "Eirr[%]",
+			"PSNRmu[dB]", "worst5[dB]");
 	out << line;
 	for (const VariantScores &v : p_result.variants) {
-		std::snprintf(line, sizeof(line), "%-20s %10.2f %8.4f %12.2f %10.4f %9.2f\n", v.name.c_str(), v.mean_psnr_db, v.mean_ssim, v.mean_psnr_linear_db,
-				v.mean_ssim_linear, 100.0 * v.mean_irradiance_error);
+		std::snprintf(line, sizeof(line), "%-20s %10.2f %8.4f %12.2f %10.4f %9.2f %10.2f %10.2f\n", v.name.c_str(), v.mean_psnr_db, v.mean_ssim,
+				v.mean_psnr_linear_db, v.mean_ssim_linear, 100.0 * v.mean_irradiance_error, v.mean_psnr_mu_db, v.mean_psnr_worst5_db);
 		out << line;
+	}
+	out << "into the sweep (the last cubemap at or before each moment): PSNR / PSNRmu / worst 5 % [dB], Eirr [%]\n";
+	std::snprintf(line, sizeof(line), "%-20s", "variant");
+	out << line;
+	for (double moment : SWEEP_MOMENTS_S) {
+		std::snprintf(line, sizeof(line), " %27s", ("at " + std::to_string(int(moment)) + " s").c_str());
+		out << line;
+	}
+	out << "\n";
+	for (const VariantScores &v : p_result.variants) {
+		std::snprintf(line, sizeof(line), "%-20s", v.name.c_str());
+		out << line;
+		for (int m = 0; m < 3; m++) {
+			if (v.at_moment[m] < 0) {
+				std::snprintf(line, sizeof(line), " %27s", "(recording too short)");
+			} else {
+				const CubemapMetrics &f = v.frames[size_t(v.at_moment[m])].metrics;
+				std::snprintf(line, sizeof(line), " %5.2f/%5.2f/%5.2f, %6.2f%%", f.psnr_db, f.psnr_mu_db, f.psnr_worst5_db, 100.0 * f.irradiance_error);
+			}
+			out << line;
+		}
+		out << "\n";
 	}
 	if (p_result.light_switch_s >= 0.0) {
 		std::snprintf(line, sizeof(line), "after the light switch (t > %.3f s, cubemap metrics, %zu frames):\n", p_result.light_switch_s,
@@ -415,6 +618,7 @@ std::string format_evaluation(const EvaluationResult &p_result, bool p_per_frame
 	}
 	std::snprintf(line, sizeof(line), "baseline add_frame %.2f ms per frame; metrics %.2f ms per comparison\n", p_result.baseline_ms, p_result.metrics_ms);
 	out << line;
+	out << format_directions(p_result);
 	const SlamScores &slam = p_result.slam;
 	if (slam.frames > 0) {
 		std::snprintf(line, sizeof(line),

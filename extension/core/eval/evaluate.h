@@ -46,6 +46,8 @@ struct EvaluationOptions {
 	bool linearise = true; // as described above, when synth.yaml is present
 	size_t max_cubemaps = 0; // 0: all
 	bool dense = true; // the two dense variants (they run SLAM on every RGB-D frame: slower)
+	int render_scale = 1; // maps rendered at render_scale x cubemap_size, area-averaged down to be scored
+	bool rgb_texture = true; // the coarse model also textured from the RGB camera (coarse/rgb_texture_update.h)
 	std::function<void(const std::string &)> progress; // optional
 };
 
@@ -54,9 +56,17 @@ struct FrameScore {
 	CubemapMetrics metrics;
 };
 
+// The moments of the sweep that the report gives besides the means: a user cares about the map
+// after a short sweep, not the average from the start.
+inline constexpr double SWEEP_MOMENTS_S[3] = { 2.0, 5.0, 10.0 };
+
 struct VariantScores {
 	std::string name;
 	std::vector<FrameScore> frames;
+	// The last frame at or before each of SWEEP_MOMENTS_S after the recording's first frame; -1
+	// when the recording is shorter.
+	int at_moment[3] = { -1, -1, -1 };
+	double mean_psnr_mu_db = 0.0, mean_psnr_worst5_db = 0.0;
 	double mean_psnr_db = 0.0, mean_ssim = 0.0, mean_psnr_linear_db = 0.0, mean_ssim_linear = 0.0;
 	double mean_irradiance_error = 0.0; // CubemapMetrics::irradiance_error's mean
 	size_t after_switch_frames = 0;
@@ -85,12 +95,34 @@ struct SlamScores {
 	double dense_render_ms = 0.0; // the dense pass of one cubemap, mean
 };
 
+// Where the live system's map comes from, direction by direction (the budget's split): the room
+// texel the direction sees was observed by the fisheye (and held a clipped value: saturated), or
+// only the RGB-D camera saw it (the dense model covers it, or the texel holds an RGB value), or
+// neither saw it (inpainted).
+enum DirectionClass {
+	DIRECTIONS_FISHEYE = 0,
+	DIRECTIONS_SATURATED,
+	DIRECTIONS_RGBD_ONLY,
+	DIRECTIONS_NEVER_SEEN,
+	DIRECTION_CLASS_COUNT
+};
+
+struct DirectionClassScores {
+	double share = 0.0; // of the map's pixels
+	double psnr_db = 0.0; // tone-mapped, over those pixels (PSNR_CAP_DB when none differ; 0 when there are none)
+};
+
 struct EvaluationResult {
 	bool ok = false;
 	std::string error;
 	std::vector<VariantScores> variants; // in EvaluationVariant order: VARIANT_COUNT, or up to LIGHT_GAIN without dense
 	SlamScores slam; // with the dense variants
+	// +dense (SLAM)'s map split by DirectionClass, at its last cubemap at or before 10 s into the
+	// sweep (the last one of a shorter recording); with the dense variants.
+	DirectionClassScores directions[DIRECTION_CLASS_COUNT];
+	double directions_at_s = -1.0; // that cubemap's time, RGB-D clock; < 0: not measured
 	double light_switch_s = -1.0; // RGB-D clock; < 0: none
+	double start_s = 0.0; // the recording's first frame (RGB-D clock): the sweep's moments count from it
 	bool linearised = false;
 	size_t fisheye_frames_used = 0;
 	size_t cubemaps = 0;
@@ -102,6 +134,28 @@ struct EvaluationResult {
 };
 
 EvaluationResult evaluate_recording(const EvaluationOptions &p_options);
+
+// The error budget (issue #16): the live system, then rows with one stage replaced by its oracle
+// (true poses; texels and maps at twice the resolution) or left out (the dense model; inpainting
+// and lighting; the RGB camera's texturing of the coarse model; the photometric calibration: the
+// evaluation's own photometry is the synthetic truth, a perfect calibration). Four evaluations of
+// the recording.
+struct BudgetRow {
+	std::string what;
+	VariantScores scores;
+};
+
+struct BudgetResult {
+	bool ok = false;
+	std::string error;
+	std::vector<BudgetRow> rows;
+	EvaluationResult shipped; // the first run's result (the live system as shipped): its direction split
+	double start_s = 0.0;
+	int cubemap_size = 0;
+};
+
+BudgetResult error_budget(const EvaluationOptions &p_options);
+std::string format_budget(const BudgetResult &p_budget);
 
 // The summary table (mean over the sequence, and after the switch when there is one), the
 // per-stage timings and, with p_per_frame, one line per frame and variant.

@@ -98,6 +98,12 @@ std::vector<double> irradiance_luminance(const Cubemap &p_cubemap) {
 	return values;
 }
 
+double mu_law(float p_x) {
+	static const double denominator = std::log1p(MU_LAW);
+	const double x = std::clamp(double(p_x), 0.0, HDR_PEAK);
+	return std::log1p(MU_LAW * x / HDR_PEAK) / denominator;
+}
+
 } // namespace
 
 CubemapMetrics compare_cubemaps(const Cubemap &p_estimate, const Cubemap &p_ground_truth) {
@@ -116,7 +122,8 @@ CubemapMetrics compare_cubemaps(const Cubemap &p_estimate, const Cubemap &p_grou
 	if (!(peak > 0.0)) {
 		peak = 1.0;
 	}
-	double linear_sum = 0.0, linear_count = 0.0, ssim_linear_sum = 0.0;
+	double linear_sum = 0.0, linear_count = 0.0, ssim_linear_sum = 0.0, mu_sum = 0.0;
+	std::vector<double> pixel_errors; // tone-mapped squared error a pixel, mean of its channels
 	for (int f = 0; f < 6; f++) {
 		est8.push_back(tone_map_face(p_estimate.faces[f]));
 		gt8.push_back(tone_map_face(p_ground_truth.faces[f]));
@@ -128,12 +135,36 @@ CubemapMetrics compare_cubemaps(const Cubemap &p_estimate, const Cubemap &p_grou
 		linear_sum += d.dot(d);
 		linear_count += double(d.total()) * 3.0;
 		ssim_linear_sum += ssim_gray(luminance(p_estimate.faces[f]), luminance(p_ground_truth.faces[f]), peak);
+		for (int y = 0; y < p_estimate.size; y++) {
+			const cv::Vec3f *e = p_estimate.faces[f].ptr<cv::Vec3f>(y);
+			const cv::Vec3f *g = p_ground_truth.faces[f].ptr<cv::Vec3f>(y);
+			const cv::Vec3b *e8 = est8.back().ptr<cv::Vec3b>(y);
+			const cv::Vec3b *g8 = gt8.back().ptr<cv::Vec3b>(y);
+			for (int x = 0; x < p_estimate.size; x++) {
+				double pixel = 0.0;
+				for (int c = 0; c < 3; c++) {
+					const double d = mu_law(e[x][c]) - mu_law(g[x][c]);
+					mu_sum += d * d;
+					const double d8 = double(e8[x][c]) - double(g8[x][c]);
+					pixel += d8 * d8;
+				}
+				pixel_errors.push_back(pixel / 3.0);
+			}
+		}
 	}
 	m.ok = true;
 	m.psnr_db = psnr_8bit(est8, gt8);
 	m.ssim = ssim_sum / 6.0;
 	m.psnr_linear_db = psnr_from_mse(linear_sum / linear_count, peak);
 	m.ssim_linear = ssim_linear_sum / 6.0;
+	m.psnr_mu_db = psnr_from_mse(mu_sum / linear_count, 1.0);
+	const size_t worst = std::max<size_t>(1, pixel_errors.size() / 20);
+	std::nth_element(pixel_errors.begin(), pixel_errors.begin() + (pixel_errors.size() - worst), pixel_errors.end());
+	double worst_sum = 0.0;
+	for (size_t i = pixel_errors.size() - worst; i < pixel_errors.size(); i++) {
+		worst_sum += pixel_errors[i];
+	}
+	m.psnr_worst5_db = psnr_from_mse(worst_sum / double(worst), 255.0);
 	const std::vector<double> estimate = irradiance_luminance(p_estimate), truth = irradiance_luminance(p_ground_truth);
 	double sum2 = 0.0, mean = 0.0;
 	for (size_t i = 0; i < truth.size(); i++) {

@@ -16,7 +16,17 @@
 // then the mean of the six faces.
 //
 // On the linear HDR values as well: PSNR with the ground truth's largest channel value as the
-// peak, and the SSIM of linear luminance with L = that peak.
+// peak, and the SSIM of linear luminance with L = that peak. That peak moves with the content: on
+// real HDR content every variant then scores alike, so it is kept for comparison only.
+//
+// HDR PSNR with a fixed peak (psnr_mu_db): each linear channel x, in the RGB camera's linear unit
+// (1 = its white at the reference exposure), is clamped to [0, HDR_PEAK] and compressed by the
+// mu-law T(x) = ln(1 + MU_LAW x / HDR_PEAK) / ln(1 + MU_LAW), MU_LAW = 5000 (as in HDR video
+// coding); PSNR = 10 log10(1 / MSE) over T in [0, 1]. HDR_PEAK = 64: six stops over white, above
+// the synthetic scenes' lamps (about 25) and a sunlit window seen indoors.
+//
+// The worst directions (psnr_worst5_db): the tone-mapped PSNR over the 5 % of pixels (directions)
+// whose error, averaged over the three channels, is largest.
 //
 // The irradiance error: what a diffuse (or PRT) object sees. Both maps are projected onto 5 bands
 // of SH (envmap/spherical_harmonics.h) and convolved with the clamped cosine; the irradiance's
@@ -28,6 +38,8 @@
 namespace roomprobe {
 
 inline constexpr double PSNR_CAP_DB = 100.0;
+inline constexpr double HDR_PEAK = 64.0;
+inline constexpr double MU_LAW = 5000.0;
 
 struct CubemapMetrics {
 	bool ok = false; // false: the cubemaps are invalid or of different sizes
@@ -36,6 +48,8 @@ struct CubemapMetrics {
 	double psnr_linear_db = 0.0; // linear HDR, peak = the ground truth's largest value
 	double ssim_linear = 0.0; // linear luminance, L = that peak
 	double irradiance_error = 0.0; // relative, SH irradiance over 64 normals (above)
+	double psnr_mu_db = 0.0; // HDR, mu-law over a fixed peak (above)
+	double psnr_worst5_db = 0.0; // tone-mapped, the worst 5 % of directions (above)
 };
 
 // The tone-mapped 8-bit view of a face (CV_8UC3 R, G, B), as in the PNG net.

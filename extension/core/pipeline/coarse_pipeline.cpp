@@ -54,6 +54,20 @@ std::string CoarsePipeline::configure(const OmniParams &p_fisheye, const Floorpl
 	return "";
 }
 
+RgbTextureStats CoarsePipeline::add_rgb_frame(const RgbdFrame &p_frame, const PinholeParams &p_camera, const Pose &p_world_from_rgb, const ResponseCurve *p_lut) {
+	if (!configured || !opts.rgb_texture) {
+		return RgbTextureStats();
+	}
+	const Clock::time_point start = Clock::now();
+	if (rgb_fresh.size() != coarse.color.size()) {
+		rgb_fresh = cv::Mat(coarse.color.size(), CV_8UC1, cv::Scalar(0));
+	}
+	const RgbTextureStats stats = update_coarse_texture_from_rgb(geometry, p_camera, p_world_from_rgb, p_frame.rgb, p_frame.depth_m, p_lut, &coarse, opts.rgb, &rgb_fresh);
+	last.rgb_ms = ms_since(start);
+	total.rgb_ms += last.rgb_ms;
+	return stats;
+}
+
 CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, const Pose &p_world_from_fisheye) {
 	CoarseFrameStats stats;
 	if (!configured) {
@@ -84,6 +98,11 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 	lighting_pairs.step = opts.lighting_options.sample_step;
 	stats.update = update_coarse_texture(room, geometry, projection, fisheye, p_world_from_fisheye, p_frame.image, mask_ptr, &coarse, opts.update,
 			estimate_lighting ? &lighting_pairs : nullptr, p_frame.saturated.empty() ? nullptr : &p_frame.saturated);
+	if (!rgb_fresh.empty()) {
+		// The RGB camera's values since the last frame are of the present lighting too.
+		cv::bitwise_or(coarse.updated, rgb_fresh, coarse.updated);
+		rgb_fresh.setTo(cv::Scalar(0));
+	}
 	t.update_ms += ms_since(start);
 
 	// 3. Lighting change (§4.6) from those pairs, applied to the observed texels this frame did not
@@ -113,6 +132,7 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 	t.frame_ms = ms_since(frame_start);
 	t.render_ms = last.render_ms;
 	t.sh_ms = last.sh_ms;
+	t.rgb_ms = last.rgb_ms; // add_rgb_frame's, kept
 	last = t;
 	total.occlusion_ms += t.occlusion_ms;
 	total.lighting_ms += t.lighting_ms;

@@ -26,6 +26,7 @@
 #include <coarse/inpainting.h>
 #include <coarse/lighting.h>
 #include <coarse/occlusion.h>
+#include <coarse/rgb_texture_update.h>
 #include <coarse/texture_update.h>
 #include <envmap/coarse_render.h>
 #include <envmap/spherical_harmonics.h>
@@ -55,6 +56,9 @@ struct CoarsePipelineOptions {
 	TextureUpdateOptions update; // §4.3 settings (policy forced to Best)
 	LightingOptions lighting_options; // §4.6 settings (model overridden by lighting_model)
 	InpaintingOptions inpainting; // §4.5 settings
+	// Texels the fisheye never saw taken from the RGB camera (add_rgb_frame; issue #16).
+	bool rgb_texture = true;
+	RgbTextureOptions rgb;
 	OcclusionOptions occlusion; // §4.4 settings
 };
 
@@ -67,6 +71,7 @@ struct CoarsePipelineTimings {
 	double render_ms = 0.0; // render_cubemap() (the last call / all calls)
 	double sh_ms = 0.0; // SH projection in sh()
 	double frame_ms = 0.0; // the whole add_fisheye_frame()
+	double rgb_ms = 0.0; // add_rgb_frame() (the last call / all calls)
 };
 
 struct CoarseFrameStats {
@@ -94,6 +99,11 @@ public:
 	// the texture HDR (coarse/texture_update.h). Returns what each stage did; zero stats before
 	// configure().
 	CoarseFrameStats add_fisheye_frame(const FisheyeFrame &p_frame, const Pose &p_world_from_fisheye);
+	// Takes the texels the fisheye has never observed from one RGB-D frame (the RGB image and its
+	// registered depth) taken at p_world_from_rgb (coarse/rgb_texture_update.h); p_lut: the RGB
+	// camera's value -> radiance (null: value / 255). No effect with rgb_texture off. The completed
+	// texture follows at the next fisheye frame.
+	RgbTextureStats add_rgb_frame(const RgbdFrame &p_frame, const PinholeParams &p_camera, const Pose &p_world_from_rgb, const ResponseCurve *p_lut);
 
 	// The environment map at p_position (world metres) of the completed texture (the raw one
 	// when inpainting is off or p_completed is false). Size 0: options.cubemap_size.
@@ -132,6 +142,7 @@ private:
 	cv::Mat inpainted; // inpaint_async: the worker's newest completion (of an older texture)
 	TexelProjection projection; // this frame's texel pixels (kept: no allocation a frame)
 	cv::Mat mask; // this frame's occlusion mask (kept)
+	cv::Mat rgb_fresh; // CV_8UC1: texels the RGB camera updated since the last fisheye frame
 	LightingPairs lighting_pairs; // the lighting estimate's pairs, kept between frames (no allocation a frame)
 	std::unique_ptr<CoarseCubemapRenderer> renderer;
 	std::unique_ptr<TextureInpainter> inpainter;

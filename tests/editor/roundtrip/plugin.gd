@@ -43,6 +43,14 @@ func _run() -> void:
 	for i in 60:
 		await get_tree().process_frame
 	print("roundtrip: idle maps %d in 60 frames" % maps[0])
+	# Idle CPU: this process's CPU time over 3 s with the scene open, then with an empty scene.
+	var scene_cpu := await _idle_cpu_percent(3.0)
+	EditorInterface.open_scene_from_path("res://roundtrip_empty.tscn")
+	var empty_cpu := await _idle_cpu_percent(3.0)
+	EditorInterface.open_scene_from_path(SCENE)
+	for i in 10:
+		await get_tree().process_frame
+	print("roundtrip: idle cpu scene %.1f%% empty %.1f%%" % [scene_cpu, empty_cpu])
 	# A move is a change: one new map.
 	var at: Vector3 = probe.position
 	probe.position = at + Vector3(0.1, 0, 0)
@@ -99,3 +107,24 @@ func _check_affordances(root: Node, probe: Node) -> void:
 	# The probe renders the restored room once; the idle count starts after that.
 	for i in 30:
 		await get_tree().process_frame
+
+
+# The editor process's CPU time (all threads) over p_seconds of wall time, as a percentage of one
+# core: utime + stime from /proc/self/stat, in clock ticks of 1/100 s (Linux's USER_HZ).
+func _idle_cpu_percent(p_seconds: float) -> float:
+	for i in 10:
+		await get_tree().process_frame  # let the tab switch settle first
+	var start_cpu := _cpu_ticks()
+	var start := Time.get_ticks_usec()
+	while Time.get_ticks_usec() - start < p_seconds * 1e6:
+		await get_tree().process_frame
+	var wall_s := (Time.get_ticks_usec() - start) / 1e6
+	return (_cpu_ticks() - start_cpu) / 100.0 / wall_s * 100.0
+
+
+func _cpu_ticks() -> int:
+	# (/proc files report a length of 0: read the line, not the "whole file".)
+	var file := FileAccess.open("/proc/self/stat", FileAccess.READ)
+	var stat := file.get_line() if file else ""
+	var fields := stat.substr(stat.rfind(")") + 2).split(" ")  # from field 3 (state) on
+	return int(fields[11]) + int(fields[12])  # fields 14 and 15: utime, stime
