@@ -162,6 +162,7 @@ TEST_CASE("coarse rgb texture: on a rendered sweep, RGB texels beat the inpainti
 	// One pipeline with both cameras, one with the fisheye alone (inpainted), no lighting change.
 	CoarsePipelineOptions options;
 	options.lighting = false;
+	options.rgb_texture = true;
 	CoarsePipeline both(options), fisheye_only(options);
 	REQUIRE(both.configure(reader.get_rig(), reader.get_room().floorplan) == "");
 	REQUIRE(fisheye_only.configure(reader.get_rig(), reader.get_room().floorplan) == "");

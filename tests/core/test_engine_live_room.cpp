@@ -166,6 +166,7 @@ LiveRoomConfig live_config(const Recording &p_rec) {
 	cfg.coarse_poses = PoseSource::Tracked;
 	cfg.dense_poses = PoseSource::Tracked;
 	cfg.coarse.texel_size_m = 0.05; // a small atlas keeps the debug build fast
+	cfg.coarse.rgb_texture = true; // the RGB camera's texturing, off by default, runs through the engine too
 	cfg.coarse.inpaint = true;
 	cfg.coarse.inpaint_async = false;
 	cfg.coarse.lighting = true;

@@ -4,7 +4,7 @@
 // (eval/evaluate.h).
 //
 // roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame] [--texel-size M]
-//                [--max-cubemaps K] [--no-dense] [--quiet] [--budget] [--no-rgb-texture]
+//                [--max-cubemaps K] [--no-dense] [--quiet] [--budget] [--rgb-texture]
 
 #include <eval/evaluate.h>
 
@@ -22,7 +22,7 @@ int main(int argc, char **argv) {
 		std::fprintf(stderr,
 				"%s%susage: roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame]\n"
 				"                      [--texel-size M] [--max-cubemaps K] [--no-dense] [--quiet] [--budget]\n"
-				"                      [--no-rgb-texture]\n"
+				"                      [--rgb-texture]\n"
 				"  --budget: the error budget, the live system with one stage at a time replaced by its oracle\n",
 				p_error ? "roomprobe_eval: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
 		return 2;
@@ -55,8 +55,8 @@ int main(int argc, char **argv) {
 				return usage("--max-cubemaps needs a positive integer");
 			}
 			options.max_cubemaps = size_t(n);
-		} else if (arg == "--no-rgb-texture") {
-			options.rgb_texture = false;
+		} else if (arg == "--rgb-texture") {
+			options.rgb_texture = true;
 		} else if (arg == "--budget") {
 			budget = true;
 		} else if (arg == "--no-dense") {

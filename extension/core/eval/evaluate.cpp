@@ -481,9 +481,9 @@ BudgetResult error_budget(const EvaluationOptions &p_options) {
 						{ VARIANT_DENSE_TRUE_POSES, "oracle: twice the resolution and true poses" } } },
 		{ "no photometry", [](EvaluationOptions *o) { o->linearise = false; },
 				{ { VARIANT_DENSE_SLAM, "without photometric calibration (frames as recorded, SLAM poses)" } } },
-		{ "no RGB texturing", [](EvaluationOptions *o) { o->rgb_texture = false; },
-				{ { VARIANT_DENSE_SLAM, "without the RGB camera's texturing of the coarse model (SLAM poses)" },
-						{ VARIANT_LIGHT_GAIN, "without RGB texturing or the dense model (true poses)" } } },
+		{ "RGB texturing", [](EvaluationOptions *o) { o->rgb_texture = true; },
+				{ { VARIANT_DENSE_SLAM, "with the RGB camera's texturing of the coarse model (SLAM poses)" },
+						{ VARIANT_LIGHT_GAIN, "with RGB texturing, without the dense model (true poses)" } } },
 	};
 	for (const Run &run : runs) {
 		EvaluationOptions options = p_options;

@@ -47,7 +47,7 @@ struct EvaluationOptions {
 	size_t max_cubemaps = 0; // 0: all
 	bool dense = true; // the two dense variants (they run SLAM on every RGB-D frame: slower)
 	int render_scale = 1; // maps rendered at render_scale x cubemap_size, area-averaged down to be scored
-	bool rgb_texture = true; // the coarse model also textured from the RGB camera (coarse/rgb_texture_update.h)
+	bool rgb_texture = false; // the coarse model also textured from the RGB camera (coarse/rgb_texture_update.h)
 	std::function<void(const std::string &)> progress; // optional
 };
 
@@ -137,9 +137,9 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options);
 
 // The error budget (issue #16): the live system, then rows with one stage replaced by its oracle
 // (true poses; texels and maps at twice the resolution) or left out (the dense model; inpainting
-// and lighting; the RGB camera's texturing of the coarse model; the photometric calibration: the
-// evaluation's own photometry is the synthetic truth, a perfect calibration). Four evaluations of
-// the recording.
+// and lighting; the photometric calibration: the evaluation's own photometry is the synthetic
+// truth, a perfect calibration), and with the RGB camera's texturing of the coarse model added.
+// Four evaluations of the recording.
 struct BudgetRow {
 	std::string what;
 	VariantScores scores;

@@ -56,8 +56,11 @@ struct CoarsePipelineOptions {
 	TextureUpdateOptions update; // §4.3 settings (policy forced to Best)
 	LightingOptions lighting_options; // §4.6 settings (model overridden by lighting_model)
 	InpaintingOptions inpainting; // §4.5 settings
-	// Texels the fisheye never saw taken from the RGB camera (add_rgb_frame; issue #16).
-	bool rgb_texture = true;
+	// Texels the fisheye never saw taken from the RGB camera (add_rgb_frame; issue #16). Off by
+	// default: the texels are right (README, the error budget), but the maps did not gain, since
+	// the dense model already shows what the RGB-D camera saw, and a map without the dense model
+	// then shows the real floor where furniture stands.
+	bool rgb_texture = false;
 	RgbTextureOptions rgb;
 	OcclusionOptions occlusion; // §4.4 settings
 };
