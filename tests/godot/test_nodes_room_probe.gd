@@ -119,6 +119,13 @@ func test_cubemap_faces_show_the_surfaces_in_their_directions() -> void:
 	# Spot checks with names, against the classic wrong-convention bugs.
 	assert_near(_probe.get_face_image(2).get_pixel(RES / 2, RES / 2), CEILING_COLOR, 1e-4, "+Y shows the ceiling")
 	assert_near(_probe.get_face_image(3).get_pixel(RES / 2, RES / 2), FLOOR_COLOR, 1e-4, "-Y shows the floor")
+	# The net (the inspector's preview, save_png_net's image): +Y in the top row's second cell,
+	# -Y below it, each face clamped and sRGB-encoded.
+	var net: Image = _probe.get_net_image()
+	if assert_not_null(net, "a net image"):
+		assert_eq(net.get_size(), Vector2i(4 * RES, 3 * RES), "4N x 3N")
+		assert_near(net.get_pixel(RES + RES / 2, RES / 2), CEILING_COLOR.linear_to_srgb(), 1.5 / 255.0, "+Y on top")
+		assert_near(net.get_pixel(RES + RES / 2, 2 * RES + RES / 2), FLOOR_COLOR.linear_to_srgb(), 1.5 / 255.0, "-Y below")
 	# Updating again with the same size updates the same Cubemap in place.
 	assert_true(_probe.update_now())
 	assert_eq(_probe.get_cubemap(), cube, "same Cubemap resource, updated in place")

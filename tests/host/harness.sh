@@ -1,7 +1,30 @@
 # shellcheck shell=bash
 # What the suites that run on the host share (test_paths.sh: 'host', test_package.sh: 'package'):
-# the checks, and the result lines and summary that tools/run_tests.py reads.
-# The caller sets $results, $filter and $log, and defines test_NAME for each test.
+# their arguments, the checks, and the result lines and summary that tools/run_tests.py reads.
+# The caller sets $repo, calls host_suite_arguments "$@", and defines test_NAME for each test.
+
+# host_suite_arguments [--filter SUBSTRING] RESULTS LOG: sets $filter, $results and $log (absolute)
+# and empties both files; exits with status 2 and the usage on anything else.
+host_suite_arguments() {
+	filter=
+	if [[ ${1:-} == --filter ]]; then
+		filter=$2
+		shift 2
+	fi
+	[[ $# -eq 2 ]] || { echo "usage: $0 [--filter SUBSTRING] RESULTS LOG" >&2; exit 2; }
+	results=$(realpath -m -- "$1") log=$(realpath -m -- "$2")
+	: >"$results"
+	: >"$log"
+}
+
+# logged CMD...: runs CMD from the current folder; its output (both streams) in $out and the log,
+# its exit status in $rc.
+logged() {
+	printf '\n$ (cd %q && %s)\n' "$PWD" "$(printf '%q ' "$@")" >>"$log"
+	out=$("$@" 2>&1)
+	rc=$?
+	printf '%s\n[exit status %d]\n' "$out" "$rc" >>"$log"
+}
 
 # check WHAT COMMAND...: WHAT is one of the test's failures unless COMMAND succeeds.
 check() {

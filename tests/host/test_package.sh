@@ -12,31 +12,16 @@
 set -uo pipefail
 
 repo=$(cd "$(dirname "$(readlink -f "$0")")/../.." && pwd)
-filter=
-if [[ ${1:-} == --filter ]]; then
-	filter=$2
-	shift 2
-fi
-[[ $# -eq 2 ]] || { echo "usage: $0 [--filter SUBSTRING] RESULTS LOG" >&2; exit 2; }
-results=$(realpath -m -- "$1") log=$(realpath -m -- "$2")
+# shellcheck source=tests/host/harness.sh
+source "$repo/tests/host/harness.sh"
+host_suite_arguments "$@"
 # shellcheck source=tools/toolchain/toolchain.sh
 source "$repo/tools/toolchain/toolchain.sh"
 cd "$repo" || exit 1
-: >"$results"
-: >"$log"
-# shellcheck source=tests/host/harness.sh
-source "$repo/tests/host/harness.sh"
 work=build/test-logs/package # inside the clone: every root sees it at the same path
 rm -rf "$work"
 mkdir -p "$work"
 
-# logged CMD...: runs CMD, output (both streams) in $out and the log, exit status in $rc.
-logged() {
-	printf '\n$ %s\n' "$(printf '%q ' "$@")" >>"$log"
-	out=$("$@" 2>&1)
-	rc=$?
-	printf '%s\n[exit status %d]\n' "$out" "$rc" >>"$log"
-}
 summary_value() { sed -n "s/.*summary:.* $1=\([^ ]*\).*/\1/p" <<<"$out" | tail -n1; }
 version_at_most() { [[ $(printf '%s\n%s\n' "$1" "$2" | sort -V | head -n1) == "$1" ]]; }
 

@@ -12,13 +12,9 @@
 set -uo pipefail
 
 repo=$(cd "$(dirname "$(readlink -f "$0")")/../.." && pwd)
-filter=
-if [[ ${1:-} == --filter ]]; then
-	filter=$2
-	shift 2
-fi
-[[ $# -eq 2 ]] || { echo "usage: $0 [--filter SUBSTRING] RESULTS LOG" >&2; exit 2; }
-results=$(realpath -m -- "$1") log=$(realpath -m -- "$2")
+# shellcheck source=tests/host/harness.sh
+source "$repo/tests/host/harness.sh"
+host_suite_arguments "$@"
 # shellcheck source=tools/toolchain/toolchain.sh
 source "$repo/tools/toolchain/toolchain.sh"
 kind=$(rp_toolchain_kind) || exit 1
@@ -32,20 +28,10 @@ cleanup() {
 	[[ $kind == host ]] || rm -rf -- "${RP_ROOT:?}$scratch"
 }
 trap cleanup EXIT
-: >"$results"
-: >"$log"
 
-# rp ARGS...: ./roomprobe ARGS from the current folder; its output (both streams) in $out and the
-# log, its exit status in $rc.
-rp() {
-	printf '\n$ (cd %q && ./roomprobe%s)\n' "$PWD" "$(printf ' %q' "$@")" >>"$log"
-	out=$("$repo/roomprobe" "$@" 2>&1)
-	rc=$?
-	printf '%s\n[exit status %d]\n' "$out" "$rc" >>"$log"
-}
+# rp ARGS...: ./roomprobe ARGS from the current folder (harness.sh's logged).
+rp() { logged "$repo/roomprobe" "$@"; }
 
-# shellcheck source=tests/host/harness.sh
-source "$repo/tests/host/harness.sh"
 no_files_in_root() { # nothing was written inside the toolchain root at the host path $1
 	[[ $kind == host ]] || [[ -z $(find "$RP_ROOT$1" ! -type d 2>/dev/null | head -n1) ]]
 }

@@ -102,12 +102,12 @@ def main():
         bundled[soname] = path
     for d in drivers:
         bundled[f"OpenNI2/Drivers/{d}"] = os.path.join(drivers_src, d)
-    packages = set()
+    package_of = {}  # path relative to bin/ -> its Debian package (dpkg -S, once each)
     for rel, path in bundled.items():
         dst = os.path.join(bin_dir, rel)
         os.makedirs(os.path.dirname(dst), exist_ok=True)
         shutil.copyfile(os.path.realpath(path), dst)
-        packages.add(debian_package(path))
+        package_of[rel] = debian_package(path)
     for rel in list(bundled) + [LIBRARY_NAME]:
         dst = os.path.join(bin_dir, rel)
         os.chmod(dst, 0o755)
@@ -127,7 +127,7 @@ def main():
     write_gdextension(os.path.join(args.addon, "roomprobe.gdextension"), os.path.join(addon, "roomprobe.gdextension"), bundled)
     licenses = os.path.join(addon, "licenses")
     os.makedirs(licenses)
-    for package in sorted(p for p in packages if p):
+    for package in sorted(set(p for p in package_of.values() if p)):
         copyright_file = f"/usr/share/doc/{package}/copyright"
         if os.path.exists(copyright_file):
             shutil.copyfile(copyright_file, os.path.join(licenses, f"{package}.txt"))
@@ -135,7 +135,7 @@ def main():
         f.write(f"RoomProbe {args.version}: libraries bundled from Debian 12 (bookworm), each with RUNPATH $ORIGIN.\n"
                 f"glibc baseline: {'.'.join(map(str, GLIBC_BASELINE))} (newest needed: GLIBC_{'.'.join(map(str, newest[0]))}).\n\n")
         for rel in sorted(bundled):
-            f.write(f"{rel}\t{debian_package(bundled[rel]) or '?'}\n")
+            f.write(f"{rel}\t{package_of[rel] or '?'}\n")
 
     # A deterministic zip: sorted names, one timestamp, executable bits kept.
     os.makedirs(os.path.dirname(os.path.abspath(args.zip)), exist_ok=True)

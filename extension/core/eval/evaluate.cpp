@@ -328,7 +328,11 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 			DenseRenderStats stats;
 			estimates[VARIANT_DENSE_SLAM] = to_cubemap(engine_tracked.render_at(probe, render_size, true, true, &stats).faces, size);
 			slam_figures.add_render(stats.milliseconds);
-			if (result.directions_at_s < 0.0 || ref.timestamp_s <= result.start_s + SWEEP_MOMENTS_S[2] + 1e-6) {
+			// Only at the cubemap the split is reported for: the last at or before 10 s into the sweep
+			// (the first, when none is; the last of a shorter recording).
+			const double moment_s = result.start_s + SWEEP_MOMENTS_S[2] + 1e-6;
+			const bool last_before = c + 1 == count || reader.get_ground_truth_cubemap_ref(c + 1).timestamp_s > moment_s;
+			if ((result.directions_at_s < 0.0 || ref.timestamp_s <= moment_s) && last_before) {
 				if (!direction_renderer && engine_tracked.room_mesh()) {
 					direction_renderer = std::make_unique<CoarseCubemapRenderer>(*engine_tracked.room_mesh());
 				}

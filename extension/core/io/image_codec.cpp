@@ -284,17 +284,25 @@ std::string png_encode(const cv::Mat &p_image, std::vector<uint8_t> *r_bytes) {
 	return "";
 }
 
-std::string image_read(const std::string &p_path, ImageReadMode p_mode, cv::Mat *r_image) {
+std::string read_file_bytes(const std::string &p_path, std::vector<uint8_t> *r_bytes) {
 	std::ifstream file(p_path, std::ios::binary);
 	if (!file) {
 		return p_path + ": cannot be opened for reading";
 	}
-	const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+	r_bytes->assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
 	if (file.bad()) {
 		return p_path + ": read error";
 	}
+	return "";
+}
+
+std::string image_read(const std::string &p_path, ImageReadMode p_mode, cv::Mat *r_image) {
+	std::vector<uint8_t> bytes;
+	std::string error = read_file_bytes(p_path, &bytes);
+	if (!error.empty()) {
+		return error;
+	}
 	cv::Mat image;
-	std::string error;
 	if (starts_with(bytes, { 0x89, 'P', 'N', 'G' })) {
 		error = png_decode(bytes.data(), bytes.size(), &image);
 	} else if (starts_with(bytes, { 0xFF, 0xD8, 0xFF })) {

@@ -27,6 +27,9 @@ std::string jpeg_decode(const uint8_t *p_bytes, size_t p_size, cv::Mat *r_image)
 // An 8- or 16-bit image of 1 (gray), 3 (B, G, R) or 4 (B, G, R, A) channels as PNG bytes.
 std::string png_encode(const cv::Mat &p_image, std::vector<uint8_t> *r_bytes);
 
+// The whole of a file's bytes. Errors name p_path ("cannot be opened for reading", "read error").
+std::string read_file_bytes(const std::string &p_path, std::vector<uint8_t> *r_bytes);
+
 // A PNG or JPEG file, told apart by its first bytes, read as stored or converted to 8 bits.
 enum class ImageReadMode {
 	Unchanged, // as png_decode / jpeg_decode give it

@@ -107,6 +107,13 @@ std::string catch_all(const std::string &p_path, Function p_function) {
 	}
 }
 
+std::string read_whole_file(const std::string &p_path, std::vector<uint8_t> *r_bytes) {
+	if (!file_exists(p_path)) {
+		return p_path + ": missing";
+	}
+	return read_file_bytes(p_path, r_bytes);
+}
+
 } // namespace
 
 std::string format_number(double p_value) {
@@ -302,16 +309,10 @@ std::string read_png_info(const std::string &p_path, PngInfo *r_info) {
 }
 
 std::string decode_png(const std::string &p_path, cv::Mat *r_image) {
-	if (!file_exists(p_path)) {
-		return p_path + ": missing";
-	}
-	std::ifstream file(p_path, std::ios::binary);
-	if (!file) {
-		return p_path + ": cannot be opened for reading";
-	}
-	std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-	if (file.bad()) {
-		return p_path + ": read error";
+	std::vector<uint8_t> bytes;
+	const std::string unreadable = read_whole_file(p_path, &bytes);
+	if (!unreadable.empty()) {
+		return unreadable;
 	}
 	const std::string error = check_png_bytes(bytes);
 	if (!error.empty()) {
@@ -390,21 +391,6 @@ std::string parse_jpeg(const std::vector<uint8_t> &p_bytes, JpegInfo *r_info) {
 		}
 		at += length;
 	}
-}
-
-std::string read_whole_file(const std::string &p_path, std::vector<uint8_t> *r_bytes) {
-	if (!file_exists(p_path)) {
-		return p_path + ": missing";
-	}
-	std::ifstream file(p_path, std::ios::binary);
-	if (!file) {
-		return p_path + ": cannot be opened for reading";
-	}
-	r_bytes->assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
-	if (file.bad()) {
-		return p_path + ": read error";
-	}
-	return std::string();
 }
 
 } // namespace

@@ -39,6 +39,14 @@ bool safe_entry(const std::string &p_name) {
 	return true;
 }
 
+// Writes p_bytes to p_path (replacing it); false when the file cannot be written.
+bool write_bytes(const fs::path &p_path, const PackedByteArray &p_bytes) {
+	std::ofstream file(p_path, std::ios::binary | std::ios::trunc);
+	file.write(reinterpret_cast<const char *>(p_bytes.ptr()), std::streamsize(p_bytes.size()));
+	file.close();
+	return bool(file);
+}
+
 std::string globalize(const std::string &p_path) {
 	return ProjectSettings::get_singleton()->globalize_path(String(p_path.c_str())).utf8_string();
 }
@@ -84,11 +92,7 @@ std::string unpack_zip(const String &p_path, std::string *r_error) {
 				continue;
 			}
 			fs::create_directories(out.parent_path(), ec);
-			const PackedByteArray bytes = zip->read_file(files[i]);
-			std::ofstream file(out, std::ios::binary | std::ios::trunc);
-			file.write(reinterpret_cast<const char *>(bytes.ptr()), std::streamsize(bytes.size()));
-			file.close();
-			if (!file) {
+			if (!write_bytes(out, zip->read_file(files[i]))) {
 				*r_error = path + ": cannot write " + out.string() + " while unpacking (disk full?)";
 				fs::remove_all(partial, ec);
 				return "";
@@ -138,13 +142,9 @@ std::string disk_path_for(const String &p_path, std::string *r_error) {
 	}
 	// res:// that is not on disk: inside an exported app's pack.
 	if (FileAccess::file_exists(p_path)) {
-		const PackedByteArray bytes = FileAccess::get_file_as_bytes(p_path);
 		const std::string copy = globalize(kUnpacked + std::string("files/") + path.substr(6));
 		fs::create_directories(fs::path(copy).parent_path(), ec);
-		std::ofstream file(copy, std::ios::binary | std::ios::trunc);
-		file.write(reinterpret_cast<const char *>(bytes.ptr()), std::streamsize(bytes.size()));
-		file.close();
-		if (!file) {
+		if (!write_bytes(copy, FileAccess::get_file_as_bytes(p_path))) {
 			*r_error = path + ": cannot copy it out of the pack to " + copy;
 			return "";
 		}

@@ -148,10 +148,8 @@ bool RigCapture::open() {
 		return false;
 	}
 	// res:// and user:// paths work as well as absolute ones, and a zipped recording (in a pack too).
-	std::string path_error;
-	const std::string folder = disk_path_for(recording_path, &path_error);
-	if (!path_error.empty()) {
-		fail("recording_path " + path_error);
+	std::string folder;
+	if (!path_on_disk("recording_path", recording_path, &folder)) {
 		return false;
 	}
 	auto opened = std::make_shared<RecordingReader>();
@@ -180,6 +178,18 @@ bool RigCapture::open() {
 	return true;
 }
 
+// p_value, the path property p_property, as a path on disk (convert/project_paths); false, having
+// failed with the property's name, when it cannot be.
+bool RigCapture::path_on_disk(const char *p_property, const String &p_value, std::string *r_path) {
+	std::string error;
+	*r_path = disk_path_for(p_value, &error);
+	if (!error.empty()) {
+		fail(std::string(p_property) + " " + error);
+		return false;
+	}
+	return true;
+}
+
 // Reads rig_file (and room_file) and gives the engine the rig; the devices start with play().
 bool RigCapture::open_live() {
 	close();
@@ -187,10 +197,8 @@ bool RigCapture::open_live() {
 		fail("rig_file is empty: with source Live, set it to the rig's calibration file (calib/README.md)");
 		return false;
 	}
-	std::string path_error;
-	const std::string rig_path = disk_path_for(rig_file, &path_error);
-	if (!path_error.empty()) {
-		fail("rig_file " + path_error);
+	std::string rig_path;
+	if (!path_on_disk("rig_file", rig_file, &rig_path)) {
 		return false;
 	}
 	const RigLoadResult loaded = load_rig(rig_path);
@@ -200,9 +208,8 @@ bool RigCapture::open_live() {
 	}
 	RoomInfo room;
 	if (!room_file.is_empty()) {
-		const std::string room_path = disk_path_for(room_file, &path_error);
-		if (!path_error.empty()) {
-			fail("room_file " + path_error);
+		std::string room_path;
+		if (!path_on_disk("room_file", room_file, &room_path)) {
 			return false;
 		}
 		const RoomLoadResult room_loaded = load_room_file(room_path);
@@ -831,11 +838,11 @@ PackedStringArray RigCapture::get_warnings() const {
 		const std::string key = recording_path.utf8_string();
 		if (key != checked_recording) {
 			checked_recording = key;
-			std::string path_error;
-			const std::string folder = disk_path_for(recording_path, &path_error);
-			RecordingReader probe;
-			const RecordingStatus status = path_error.empty() ? probe.open(folder) : RecordingStatus{ false, path_error };
-			recording_problem = status.ok ? "" : status.error;
+			const std::string folder = disk_path_for(recording_path, &recording_problem);
+			if (recording_problem.empty()) {
+				const RecordingStatus status = RecordingReader().open(folder);
+				recording_problem = status.ok ? "" : status.error;
+			}
 		}
 		if (!recording_problem.empty()) {
 			warnings.push_back(String(("recording_path cannot be played: " + recording_problem).c_str()));
@@ -844,10 +851,11 @@ PackedStringArray RigCapture::get_warnings() const {
 		const std::string key = rig_file.utf8_string();
 		if (key != checked_rig) {
 			checked_rig = key;
-			std::string path_error;
-			const std::string file = disk_path_for(rig_file, &path_error);
-			const RigLoadResult loaded = path_error.empty() ? load_rig(file) : RigLoadResult{};
-			rig_problem = path_error.empty() ? (loaded.ok ? "" : loaded.error) : path_error;
+			const std::string file = disk_path_for(rig_file, &rig_problem);
+			if (rig_problem.empty()) {
+				const RigLoadResult loaded = load_rig(file);
+				rig_problem = loaded.ok ? "" : loaded.error;
+			}
 		}
 		if (!rig_problem.empty()) {
 			warnings.push_back(String(("rig_file cannot be read: " + rig_problem).c_str()));

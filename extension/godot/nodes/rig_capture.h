@@ -168,6 +168,7 @@ private:
 	void configure_engine();
 	void fail(const std::string &p_message);
 	bool open_live();
+	bool path_on_disk(const char *p_property, const godot::String &p_value, std::string *r_path);
 	void start_live();
 	// Main thread: emits device_state_changed for the changes the capture threads queued.
 	void report_device_states();

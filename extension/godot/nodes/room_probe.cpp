@@ -395,6 +395,10 @@ Error RoomProbe::save_png_net(const String &p_path) const {
 	return OK;
 }
 
+Ref<Image> RoomProbe::get_net_image() const {
+	return map ? image_from_mat(cubemap_net_image(map->cubemap)) : Ref<Image>();
+}
+
 void RoomProbe::apply_to_material() {
 	if (target_material.is_null() || !map) {
 		return;
@@ -577,6 +581,7 @@ void RoomProbe::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_last_update_stats"), &RoomProbe::get_last_update_stats);
 	ClassDB::bind_method(D_METHOD("save_exr", "path"), &RoomProbe::save_exr);
 	ClassDB::bind_method(D_METHOD("save_png_net", "path"), &RoomProbe::save_png_net);
+	ClassDB::bind_method(D_METHOD("get_net_image"), &RoomProbe::get_net_image);
 	ClassDB::bind_method(D_METHOD("get_sky_material"), &RoomProbe::get_sky_material);
 	ClassDB::bind_method(D_METHOD("set_reflection_probe", "path"), &RoomProbe::set_reflection_probe_path);
 	ClassDB::bind_method(D_METHOD("get_reflection_probe"), &RoomProbe::get_reflection_probe_path);

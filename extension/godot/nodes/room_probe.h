@@ -70,6 +70,7 @@ public:
 	// Godot's; the message names the file.
 	godot::Error save_exr(const godot::String &p_path) const;
 	godot::Error save_png_net(const godot::String &p_path) const;
+	godot::Ref<godot::Image> get_net_image() const;
 	// The sky material of the WorldEnvironment route (null until first used).
 	godot::Ref<godot::ShaderMaterial> get_sky_material() const;
 
