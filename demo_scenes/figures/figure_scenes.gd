@@ -39,9 +39,9 @@ static func build(p_main: Node3D, p_name: String) -> Dictionary:
 	var objects: Array[MeshInstance3D] = []
 	match p_name:
 		"mirror_teapot":
-			objects.append(_object(p_main, "Teapot", Meshes.teapot(0.16), _shader_material("mirror", {"tint": Vector3.ONE}), Vector3(2.5, 0.9, 2.0), 30.0))
+			objects.append(_object(p_main, "Teapot", Meshes.teapot(0.16), _shader_material("mirror", {"tint": Vector3.ONE, "distance_aware": true}), Vector3(2.5, 0.9, 2.0), 30.0))
 		"water_bottle":
-			objects.append(_object(p_main, "Bottle", Meshes.water_bottle(0.24), _shader_material("glass", {"ior": 1.33, "tint": Vector3(0.96, 1.0, 0.98)}),
+			objects.append(_object(p_main, "Bottle", Meshes.water_bottle(0.24), _shader_material("glass", {"ior": 1.33, "tint": Vector3(0.96, 1.0, 0.98), "distance_aware": true}),
 					Vector3(2.5, 0.9, 2.0), 0.0))
 		"prt_mannequin":
 			var mesh := Meshes.mannequin(0.30)
@@ -67,7 +67,7 @@ static func build(p_main: Node3D, p_name: String) -> Dictionary:
 			sphere_mesh.height = 0.2
 			sphere_mesh.radial_segments = 96
 			sphere_mesh.rings = 48
-			var sphere := _object(p_main, "ChromeSphere", sphere_mesh, _shader_material("mirror", {"tint": Vector3(0.9, 0.9, 0.9)}), Vector3(2.5, 0.9, 2.0), 0.0)
+			var sphere := _object(p_main, "ChromeSphere", sphere_mesh, _shader_material("mirror", {"tint": Vector3(0.9, 0.9, 0.9), "distance_aware": true}), Vector3(2.5, 0.9, 2.0), 0.0)
 			var shadow := _contact_shadow(sphere_mesh, 0.1, sphere.get_node("Probe"))
 			sphere.add_child(shadow)
 			# The surface's normal from the placement (the transfer is baked for a level table).

@@ -370,6 +370,12 @@ TEST_CASE("engine: step mode is the old sequential path (DenseSlam, fisheye_pose
 	DenseRenderOptions dense_options;
 	dense_options.scale = cfg.dense_render_scale;
 	dense_options.lut = &rgb_lut;
+	// The shell first (dense_render.h): the texels the fisheye observed, rendered like the atlas.
+	cv::Mat observed_one, observed_atlas;
+	cv::Mat(coarse.texture().quality > 0.0f).convertTo(observed_one, CV_32F, 1.0 / 255.0);
+	cv::cvtColor(observed_one, observed_atlas, cv::COLOR_GRAY2RGB);
+	const Cubemap observed = renderer.render(observed_atlas, rec.probe, PROBE_SIZE);
+	dense_options.coarse_observed = &observed;
 	DenseLighting lighting;
 	const DenseRenderStats dense_stats =
 			lighting.render_over(slam.volume(), slam.integrated_count(), coarse.cumulative_lighting(), rec.probe, dense_options, &expected);
@@ -717,7 +723,8 @@ TEST_CASE("engine: probes are added, moved and removed; maps carry versions and 
 	CHECK(map_a->sh[0].y == doctest::Approx(0.5 * 2.0 * std::sqrt(std::numbers::pi)).epsilon(1e-5));
 	CHECK(std::abs(map_a->sh[1].y) < 1e-5); // no gradient in a constant (|Y_1| < 0.5, same bound)
 
-	// gpu_faces: level 0 first, then each half-size level down to 1x1, RGBA halves with alpha 1.
+	// gpu_faces: level 0 first, then each half-size level down to 1x1, RGBA halves; alpha is the
+	// distance to the surface (envmap/parallax.h), area-averaged down the chain.
 	for (const auto &map : { map_a, map_b }) {
 		for (int f = 0; f < 6; f++) {
 			CHECK(map->gpu_faces[size_t(f)].size() == mip_chain_uint16(map->cubemap.size));
@@ -729,8 +736,12 @@ TEST_CASE("engine: probes are added, moved and removed; maps carry versions and 
 		CHECK(half_to_float(face[size_t(c)]) == doctest::Approx(colour[c]).epsilon(1e-3));
 		CHECK(half_to_float(face[face.size() - 4 + size_t(c)]) == doctest::Approx(colour[c]).epsilon(1e-3)); // the 1x1 level
 	}
-	CHECK(half_to_float(face[3]) == 1.0f);
-	CHECK(half_to_float(face.back()) == 1.0f);
+	RoomRayHit corner_hit;
+	REQUIRE(intersect_room(*mesh, centre, cubemap_direction(0, 0.0, 0.0, 32), &corner_hit));
+	REQUIRE(has_distances(map_a->cubemap));
+	CHECK(map_a->cubemap.distance_m[0].at<float>(0, 0) == doctest::Approx(corner_hit.distance).epsilon(1e-6));
+	CHECK(half_to_float(face[3]) == doctest::Approx(corner_hit.distance).epsilon(1e-3));
+	CHECK(half_to_float(face.back()) == doctest::Approx(cv::mean(map_a->cubemap.distance_m[0])[0]).epsilon(1e-3));
 
 	// set_probe: a move or resize re-renders at the new place; the same values change nothing.
 	engine.set_probe(a, centre + glm::dvec3(0.0, 0.5, 0.0), 16);

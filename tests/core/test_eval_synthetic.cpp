@@ -103,9 +103,18 @@ TEST_CASE("eval: the error budget has the live system and each oracle's row, sco
 	REQUIRE_MESSAGE(budget.ok, budget.error);
 	const std::string table = format_budget(budget);
 	MESSAGE(table);
-	REQUIRE(budget.rows.size() == 9);
+	REQUIRE(budget.rows.size() == 11);
+	CHECK(budget.missing.empty());
 	CHECK(budget.rows[0].what.find("the live system") == 0);
 	CHECK(budget.rows[1].what == "oracle: true poses");
+	// The models' oracles put the truth into the live map where their model would show it: never
+	// worse, and better wherever the live map was wrong there (the coarse texture's ceiling light,
+	// the table's objects the dense model has not seen in a second).
+	CHECK(budget.rows[4].what.find("oracle: true coarse texture") == 0);
+	CHECK(budget.rows[5].what.find("oracle: true dense") == 0);
+	for (const size_t oracle : { size_t(4), size_t(5) }) {
+		CHECK(budget.rows[oracle].scores.mean_psnr_db > budget.rows[0].scores.mean_psnr_db + 0.1);
+	}
 	for (const BudgetRow &row : budget.rows) {
 		CAPTURE(row.what);
 		REQUIRE(row.scores.frames.size() == 6);
@@ -126,4 +135,15 @@ TEST_CASE("eval: the error budget has the live system and each oracle's row, sco
 	CHECK(shares == doctest::Approx(1.0).epsilon(1e-9));
 	CHECK(budget.shipped.directions[DIRECTIONS_FISHEYE].share > 0.3);
 	CHECK(budget.shipped.directions[DIRECTIONS_RGBD_ONLY].share > 0.0);
+	// The mirror spheres at the probe, against the ray-traced reference: reading the true map where
+	// the reflected ray meets the scene beats reading it along the ray (the table's objects are
+	// centimetres from the probe).
+	REQUIRE(!budget.shipped.mirrors.empty());
+	for (const EvaluationResult::MirrorRow &row : budget.shipped.mirrors) {
+		CAPTURE(row.radius_m);
+		CHECK(row.scores.views > 0);
+		if (row.true_map) {
+			CHECK(row.scores.psnr_parallax_db > row.scores.psnr_plain_db + 1.0);
+		}
+	}
 }

@@ -5,6 +5,7 @@
 
 #include "envmap/coarse_render.h"
 #include "envmap/dense_render.h"
+#include "room/room_mesh.h"
 #include "slam/dense_slam.h"
 #include "synth_test_frames.h"
 
@@ -227,4 +228,53 @@ TEST_CASE("dense SLAM: after a blackout the camera is found 15 cm and 8 deg from
 	MESSAGE("relocalised after a 15 cm / 8 deg move: error " << translation_difference_m(slam.pose(), found_at) * 1000.0 << " mm, "
 												 << rotation_difference_deg(slam.pose(), found_at) << " deg; " << slam.relocalisation_attempts()
 												 << " lost frames searched");
+}
+
+TEST_CASE("dense render: where the dense surface is the room's shell and the fisheye saw it, the coarse model stays") {
+	DenseSlam slam;
+	start_slam(&slam, 0.0);
+	for (int i = 0; i < 10; i++) {
+		REQUIRE(slam.process(rgbd_at(i * FRAME_S)).tracking.state == TrackingState::Good);
+	}
+	const RoomMeshResult mesh = build_room_mesh(living_room().scene.room.floorplan);
+	REQUIRE_MESSAGE(mesh.ok, mesh.error);
+	const CoarseCubemapRenderer renderer(mesh.mesh);
+	const glm::dvec3 probe(2.5, 0.9, 2.0);
+	const int size = 64;
+	const cv::Vec3f marker(-1.0f, -1.0f, -1.0f); // "coarse"
+	const cv::Mat atlas(mesh.mesh.atlas_height, mesh.mesh.atlas_width, CV_32FC3, cv::Scalar(marker[0], marker[1], marker[2]));
+	const Cubemap everywhere = renderer.render(cv::Mat(atlas.size(), CV_32FC3, cv::Scalar::all(1.0)), probe, size);
+	const Cubemap nowhere = renderer.render(cv::Mat(atlas.size(), CV_32FC3, cv::Scalar::all(0.0)), probe, size);
+	// Painted texels, and those painted with a surface on the prism (the tolerance's distance).
+	auto render = [&](const Cubemap *p_observed, int *r_painted, int *r_on_shell) {
+		Cubemap map = renderer.render(atlas, probe, size);
+		const Cubemap prism = clone_cubemap(map);
+		DenseRenderOptions options;
+		options.coarse_observed = p_observed;
+		render_dense_over(slam.volume(), probe, options, &map);
+		*r_painted = *r_on_shell = 0;
+		for (int f = 0; f < 6; f++) {
+			for (int v = 0; v < size; v++) {
+				for (int u = 0; u < size; u++) {
+					if (map.faces[size_t(f)].at<cv::Vec3f>(v, u) == marker) {
+						continue;
+					}
+					(*r_painted)++;
+					const float dense = map.distance_m[size_t(f)].at<float>(v, u), shell = prism.distance_m[size_t(f)].at<float>(v, u);
+					*r_on_shell += on_coarse_shell(dense, shell, options) ? 1 : 0;
+				}
+			}
+		}
+	};
+	int painted_all = 0, shell_all = 0, painted_none = 0, shell_none = 0, painted_first = 0, shell_first = 0;
+	render(nullptr, &painted_all, &shell_all);
+	render(&nowhere, &painted_none, &shell_none);
+	render(&everywhere, &painted_first, &shell_first);
+	// The paper's rule paints the floor the camera fused too; with nothing observed by the fisheye
+	// the same; with everything observed only what stands in the room (the table and its objects).
+	CHECK(shell_all > 50);
+	CHECK(painted_none == painted_all);
+	CHECK(shell_first == 0);
+	CHECK(painted_first == painted_all - shell_all);
+	CHECK(painted_first > 100);
 }

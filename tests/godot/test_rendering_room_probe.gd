@@ -3,7 +3,8 @@ extends RoomProbeTestCase
 ## checks that Godot samples the probe's Cubemap with the same direction convention as the
 ## core's cubemap_direction. Seen from above, the sphere's centre reflects straight up and must
 ## show the ceiling; seen from +Z it reflects towards +Z (the wall facing -Z); from +X, the
-## wall facing -X. Runs only in the "rendering" suite.
+## wall facing -X. Also: distance-aware reflections against rays traced by hand, the other
+## delivery routes and PRT. Runs only in the "rendering" suite.
 
 const SIZE := Vector2i(96, 96)
 const PLAN := [Vector2(0, 0), Vector2(4, 0), Vector2(4, 3), Vector2(0, 3)]
@@ -12,6 +13,12 @@ const CENTRE := Vector3(2.0, 1.25, 1.5)
 const FLOOR_COLOR := Color(0.8, 0.5, 0.1)
 const CEILING_COLOR := Color(0.2, 0.9, 0.6)
 const WALL_COLORS := [Color(0.9, 0.1, 0.1), Color(0.1, 0.7, 0.2), Color(0.1, 0.2, 0.9), Color(0.6, 0.6, 0.1)]
+# The distance-aware test's mirror: 1.1 m from CENTRE, 0.3 m from the +X wall; the room as a box.
+const SPHERE_CENTRE := Vector3(3.1, 1.25, 1.5)
+const SPHERE_RADIUS := 0.6
+const BOX_MAX := Vector3(4.0, HEIGHT, 3.0)
+# Hits this near another face of the box are left out: the map's texels there blend two surfaces.
+const EDGE_MARGIN_M := 0.1
 
 # rough_metal against a StandardMaterial3D (sky route): the mean relative colour difference
 # allowed. The sky route is not exact either: Godot renders the 64^2 map into its own 256^2
@@ -35,32 +42,10 @@ func after_each() -> void:
 func test_mirror_sphere_reflects_the_right_surfaces() -> void:
 	if not rendering:
 		return skip("needs a renderer (rendering suite: --rendering under a display)")
-	# The room and the probe, outside the viewport's world (hidden: only the map matters).
-	_holder = Node3D.new()
-	_holder.visible = false
-	var room = ClassDB.instantiate("CoarseRoomModel")
-	room.name = "Room"
-	room.floorplan = PackedVector2Array(PLAN)
-	room.ceiling_height = HEIGHT
-	room.texel_size = 0.05
-	_holder.add_child(room)
-	var size: Vector2i = room.get_atlas_size()
-	var atlas := Image.create_empty(size.x, size.y, false, Image.FORMAT_RGBF)
 	var by_normal := {}  # a surface's colour by the direction from which it is seen
-	for c in room.get_charts():
-		var color: Color = FLOOR_COLOR if c.kind == "floor" else CEILING_COLOR if c.kind == "ceiling" else WALL_COLORS[c.wall_index]
-		atlas.fill_rect(c.rect, color)
-		by_normal[Vector3i((-c.normal as Vector3).round())] = color
-	assert_true(room.set_atlas_image(atlas))
 	var material := ShaderMaterial.new()
 	material.shader = load("res://addons/roomprobe/shaders/mirror.gdshader")
-	var probe = ClassDB.instantiate("RoomProbe")
-	probe.resolution = 64
-	probe.position = CENTRE
-	probe.target_material = material
-	_holder.add_child(probe)
-	probe.coarse_model = NodePath("../Room")
-	add_to_tree(_holder)
+	var probe = _room_and_probe(material, by_normal)
 	assert_not_null(probe.get_cubemap(), "the probe rendered on ready")
 
 	# Camera position and rotation; the sphere's centre pixel reflects back towards the camera.
@@ -115,6 +100,129 @@ func test_mirror_sphere_reflects_the_right_surfaces() -> void:
 				best = c
 		assert_eq(best, by_normal[view[2]], "%s (pixel %s)" % [view[3], got])
 		assert_true(best_d < 0.1, "%s: pixel %s is close to %s" % [view[3], got, best])
+
+
+## Distance-aware reflections (mirror.gdshader's distance_aware, parallax.gdshaderinc): a mirror
+## sphere 1.1 m from the probe, 0.3 m from a wall of the coloured room. For each sphere pixel the
+## test traces the reflected ray itself: from the sphere's surface to the room's box (what
+## distance-aware reflection must show) and from the probe along the same direction (what the
+## plain lookup shows). Where the two surfaces differ, the distance-aware image must show the
+## first and the plain one the second. The probe sets probe_position itself (position_parameter).
+func test_distance_aware_mirror_shows_where_the_reflected_ray_meets_the_room() -> void:
+	if not rendering:
+		return skip("needs a renderer (rendering suite: --rendering under a display)")
+	var by_normal := {}
+	var shader: Shader = load("res://addons/roomprobe/shaders/mirror.gdshader")
+	var aware := ShaderMaterial.new()
+	aware.shader = shader
+	aware.set_shader_parameter("distance_aware", true)
+	var probe = _room_and_probe(aware, by_normal)
+	if not assert_not_null(probe.get_cubemap(), "the probe rendered on ready"):
+		return
+	assert_near(aware.get_shader_parameter("probe_position"), CENTRE, 1e-4, "the probe gives its position to the material")
+	var plain := ShaderMaterial.new()
+	plain.shader = shader
+	plain.set_shader_parameter("environment", probe.get_cubemap())
+	plain.set_shader_parameter("probe_position", CENTRE)
+
+	_viewport = SubViewport.new()
+	_viewport.size = Vector2i(4, 4)
+	var shots: Array[SubViewport] = []
+	for m in [aware, plain]:
+		shots.append(_make_view(m, SPHERE_CENTRE + Vector3(0, 0, 2.2), Vector3.ZERO, SPHERE_CENTRE, SPHERE_RADIUS))
+	for vp in shots:
+		_viewport.add_child(vp)
+	add_to_tree(_viewport)
+	await wait_frames(4)
+	var images: Array[Image] = []
+	for i in shots.size():
+		var img := shots[i].get_texture().get_image()
+		if not assert_not_null(img, "viewport image"):
+			return
+		if not artifacts_dir.is_empty():
+			DirAccess.make_dir_recursive_absolute(artifacts_dir)
+			img.save_png(artifacts_dir.path_join("parallax_%s.png" % ["distance_aware", "plain"][i]))
+		images.append(img)
+
+	var cam: Camera3D = shots[0].get_child(2)
+	var sphere_pixels := 0
+	var differing := 0
+	var aware_right := 0
+	var aware_right_differing := 0
+	var plain_right_differing := 0
+	for y in SIZE.y:
+		for x in SIZE.x:
+			var origin := cam.project_ray_origin(Vector2(x + 0.5, y + 0.5))
+			var ray := cam.project_ray_normal(Vector2(x + 0.5, y + 0.5))
+			var to_centre := origin - SPHERE_CENTRE
+			var b := to_centre.dot(ray)
+			var disc := b * b - (to_centre.length_squared() - SPHERE_RADIUS * SPHERE_RADIUS)
+			if disc <= 0.0:
+				continue
+			var point := origin + (-b - sqrt(disc)) * ray
+			var normal := (point - SPHERE_CENTRE).normalized()
+			if absf(normal.dot(ray)) < 0.3:
+				continue  # the rim: a pixel there covers a wide fan of reflections
+			var reflected := ray - 2.0 * ray.dot(normal) * normal
+			var expected = _box_surface(point, reflected)
+			var along = _box_surface(CENTRE, reflected)
+			if expected == null or along == null:
+				continue
+			sphere_pixels += 1
+			var got_aware: Color = _nearest_surface(by_normal, images[0].get_pixel(x, y).srgb_to_linear())[0]
+			var got_plain: Color = _nearest_surface(by_normal, images[1].get_pixel(x, y).srgb_to_linear())[0]
+			if got_aware == by_normal[expected]:
+				aware_right += 1
+			if expected != along:
+				differing += 1
+				if got_aware == by_normal[expected]:
+					aware_right_differing += 1
+				if got_plain == by_normal[along]:
+					plain_right_differing += 1
+	assert_true(sphere_pixels > 1000, "the sphere covers the image: %d pixels" % sphere_pixels)
+	assert_true(differing > 150, "parallax matters on this sphere: %d pixels see another surface than along the ray from the probe" % differing)
+	assert_true(aware_right >= 0.95 * sphere_pixels, "distance-aware: %d of %d pixels show the surface the reflected ray meets" % [aware_right, sphere_pixels])
+	assert_true(aware_right_differing >= 0.9 * differing,
+			"distance-aware, where parallax matters: %d of %d pixels right" % [aware_right_differing, differing])
+	assert_true(plain_right_differing >= 0.9 * differing,
+			"plain lookup, where parallax matters: %d of %d pixels show the surface along the ray from the probe" % [plain_right_differing, differing])
+
+
+## The surface of the room's box that the ray from p_origin (inside) along p_dir meets, as the
+## key of by_normal (the direction it is seen from); null when the hit is near an edge.
+func _box_surface(p_origin: Vector3, p_dir: Vector3) -> Variant:
+	var best_t := INF
+	var key := Vector3i()
+	for axis in 3:
+		if absf(p_dir[axis]) < 1e-9:
+			continue
+		var bound: float = BOX_MAX[axis] if p_dir[axis] > 0.0 else 0.0
+		var t := (bound - p_origin[axis]) / p_dir[axis]
+		if t > 0.0 and t < best_t:
+			best_t = t
+			key = Vector3i()
+			key[axis] = 1 if p_dir[axis] > 0.0 else -1
+	var hit := p_origin + best_t * p_dir
+	for axis in 3:
+		if key[axis] == 0 and (hit[axis] < EDGE_MARGIN_M or hit[axis] > BOX_MAX[axis] - EDGE_MARGIN_M):
+			return null
+	return key
+
+
+## The coloured room and a 64² RoomProbe at CENTRE feeding p_material, under _holder (hidden,
+## outside the views' worlds: only the map matters), in the tree; fills by_normal. Returns the probe.
+func _room_and_probe(p_material: ShaderMaterial, by_normal: Dictionary) -> Node:
+	_holder = Node3D.new()
+	_holder.visible = false
+	_holder.add_child(_coloured_room(by_normal))
+	var probe = ClassDB.instantiate("RoomProbe")
+	probe.resolution = 64
+	probe.position = CENTRE
+	probe.target_material = p_material
+	_holder.add_child(probe)
+	probe.coarse_model = NodePath("../Room")
+	add_to_tree(_holder)
+	return probe
 
 
 ## A CoarseRoomModel of PLAN with one flat colour per surface; fills by_normal (colour by the
@@ -360,7 +468,7 @@ func _probe_in_coloured_room(p_resolution: int, p_by_normal: Dictionary, p_visib
 	return probe
 
 
-func _make_view(material: Material, cam_position: Vector3, cam_rotation: Vector3) -> SubViewport:
+func _make_view(material: Material, cam_position: Vector3, cam_rotation: Vector3, sphere_position := Vector3.ZERO, sphere_radius := 0.8) -> SubViewport:
 	var vp := SubViewport.new()
 	vp.size = SIZE
 	vp.own_world_3d = true
@@ -372,11 +480,14 @@ func _make_view(material: Material, cam_position: Vector3, cam_rotation: Vector3
 	world_env.environment = env
 	vp.add_child(world_env)
 	var sphere_mesh := SphereMesh.new()
-	sphere_mesh.radius = 0.8
-	sphere_mesh.height = 1.6
+	sphere_mesh.radius = sphere_radius
+	sphere_mesh.height = 2.0 * sphere_radius
+	sphere_mesh.radial_segments = 128
+	sphere_mesh.rings = 64
 	var sphere := MeshInstance3D.new()
 	sphere.mesh = sphere_mesh
 	sphere.material_override = material
+	sphere.position = sphere_position
 	vp.add_child(sphere)
 	var cam := Camera3D.new()
 	cam.fov = 40

@@ -5,6 +5,7 @@
 //
 // roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame] [--texel-size M]
 //                [--max-cubemaps K] [--no-dense] [--quiet] [--budget] [--rgb-texture]
+//                [--dense-range M]
 
 #include <eval/evaluate.h>
 
@@ -22,8 +23,9 @@ int main(int argc, char **argv) {
 		std::fprintf(stderr,
 				"%s%susage: roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame]\n"
 				"                      [--texel-size M] [--max-cubemaps K] [--no-dense] [--quiet] [--budget]\n"
-				"                      [--rgb-texture]\n"
-				"  --budget: the error budget, the live system with one stage at a time replaced by its oracle\n",
+				"                      [--rgb-texture] [--dense-range M]\n"
+				"  --budget: the error budget, the live system with one stage at a time replaced by its oracle\n"
+				"  --dense-range M: fuse depth and draw the dense model up to M metres (default 4)\n",
 				p_error ? "roomprobe_eval: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
 		return 2;
 	};
@@ -55,6 +57,11 @@ int main(int argc, char **argv) {
 				return usage("--max-cubemaps needs a positive integer");
 			}
 			options.max_cubemaps = size_t(n);
+		} else if (arg == "--dense-range") {
+			if (!cursor.positive_number(&x) || x > 20.0) {
+				return usage("--dense-range needs a distance in metres, at most 20");
+			}
+			options.dense_range_m = x;
 		} else if (arg == "--rgb-texture") {
 			options.rgb_texture = true;
 		} else if (arg == "--budget") {

@@ -249,6 +249,9 @@ int main(int argc, char **argv) {
 		thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
 	}
 	const auto start = std::chrono::steady_clock::now();
+	if (!scene_options.panorama_path.empty()) {
+		options.scene_panorama_path = fs::absolute(scene_options.panorama_path, ec).lexically_normal().string();
+	}
 	const synth::SceneResult scene = synth::make_scene(scene_name, scene_options);
 	if (!scene.ok) {
 		return fail(scene.error);

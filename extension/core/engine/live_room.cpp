@@ -34,9 +34,9 @@ constexpr size_t ARRIVALS_KEPT = 256;
 // One face as Godot's RGBAH image with mipmaps wants it: level 0, then each half-size level down
 // to 1x1, RGBA half floats. The levels are the GGX chain's (ggx_prefilter.h), then box halvings
 // of its last level, which no shader reads for roughness.
-std::vector<uint16_t> gpu_face(const std::vector<Cubemap> &p_chain, int p_face) {
+std::vector<uint16_t> gpu_face(const std::vector<Cubemap> &p_chain, const cv::Mat &p_distance_m, int p_face) {
 	std::vector<uint16_t> out;
-	cv::Mat level;
+	cv::Mat level, distance = p_distance_m;
 	for (size_t m = 0;; m++) {
 		if (m < p_chain.size()) {
 			level = p_chain[m].faces[size_t(p_face)];
@@ -45,8 +45,21 @@ std::vector<uint16_t> gpu_face(const std::vector<Cubemap> &p_chain, int p_face) 
 			cv::resize(level, next, cv::Size(std::max(1, level.cols / 2), std::max(1, level.rows / 2)), 0.0, 0.0, cv::INTER_AREA);
 			level = next;
 		}
+		const cv::Size size = level.size();
+		// Alpha: the distance to the surface each texel shows (envmap/parallax.h), area-averaged
+		// down the chain; 0 where the map has none.
+		if (distance.empty()) {
+			distance = cv::Mat(size, CV_32FC1, cv::Scalar(0.0f));
+		} else if (distance.size() != size) {
+			cv::Mat next;
+			cv::resize(distance, next, size, 0.0, 0.0, cv::INTER_AREA);
+			distance = next;
+		}
 		cv::Mat rgba, half;
-		cv::cvtColor(level, rgba, cv::COLOR_RGB2RGBA); // alpha 1
+		const cv::Mat channels[2] = { level, distance };
+		rgba.create(level.size(), CV_32FC4);
+		const int pairs[8] = { 0, 0, 1, 1, 2, 2, 3, 3 };
+		cv::mixChannels(channels, 2, &rgba, 1, pairs, 4);
 		rgba.convertTo(half, CV_16F);
 		const size_t n = size_t(half.total()) * 4;
 		const size_t at = out.size();
@@ -59,6 +72,19 @@ std::vector<uint16_t> gpu_face(const std::vector<Cubemap> &p_chain, int p_face) 
 		}
 	}
 	return out;
+}
+
+// CoarseSnapshot::observed of a texture: where the fisheye observed each texel.
+cv::Mat observed_mask(const CoarseTexture &p_texture) {
+	cv::Mat observed;
+	if (p_texture.quality.empty()) {
+		return observed;
+	}
+	cv::Mat one_channel = cv::Mat(p_texture.quality > 0.0f) / 255; // CV_8U 0 or 1
+	cv::Mat as_float;
+	one_channel.convertTo(as_float, CV_32F);
+	cv::cvtColor(as_float, observed, cv::COLOR_GRAY2RGB);
+	return observed;
 }
 
 } // namespace
@@ -633,6 +659,9 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 		snapshot->fisheye_sequence = p_sequence;
 		// A copy the pipeline will never write: probes read it while the next frame goes in.
 		snapshot->atlas = coarse->completed_color().clone();
+		if (cfg.coarse_shell_first) {
+			snapshot->observed = observed_mask(coarse->texture());
+		}
 		snapshot->cumulative = coarse->cumulative_lighting();
 		snapshot->timings = coarse->last_timings();
 		{
@@ -745,18 +774,28 @@ Cubemap LiveRoom::render_map(const glm::dvec3 &p_position, int p_size, const Coa
 	Cubemap map;
 	LightingChange cumulative;
 	cumulative.valid = true;
+	Cubemap observed; // which texels the coarse model's fisheye observations show
 	if (renderer && p_coarse != nullptr && !p_coarse->atlas.empty()) {
 		map = renderer->render(p_coarse->atlas, p_position - cfg.room_origin_m, p_size);
+		if (p_with_dense && slam && cfg.coarse_shell_first && !p_coarse->observed.empty()) {
+			observed = renderer->render(p_coarse->observed, p_position - cfg.room_origin_m, p_size);
+		}
 		cumulative = p_coarse->cumulative;
 	} else {
-		// No observation yet (or no room): black, with the dense model over it.
+		// No observation yet (or no room): black, with the dense model over it, and no distances
+		// but the dense model's.
 		map = make_cubemap(p_size);
+		for (cv::Mat &face : map.distance_m) {
+			face = cv::Mat(p_size, p_size, CV_32FC1, cv::Scalar(0.0f));
+		}
 	}
 	*r_coarse_ms = ms_since(start);
 	start = now_s();
 	if (p_with_dense && slam) {
 		DenseRenderOptions options;
 		options.scale = cfg.dense_render_scale;
+		options.far_m = cfg.dense_render_far_m;
+		options.coarse_observed = is_valid_cubemap(observed) ? &observed : nullptr;
 		options.lut = rgb_lut_active ? &rgb_lut : nullptr;
 		options.faces_per_render = cfg.dense_faces_per_render;
 		const auto reading = slam->read_lock(); // no frame half-fused
@@ -813,7 +852,7 @@ std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dve
 		const std::vector<Cubemap> chain = filter ? filter->apply(map->cubemap) : std::vector<Cubemap>{ map->cubemap };
 		map->ggx_mips = filter != nullptr;
 		for (int f = 0; f < 6; f++) {
-			map->gpu_faces[size_t(f)] = gpu_face(chain, f);
+			map->gpu_faces[size_t(f)] = gpu_face(chain, map->cubemap.distance_m[size_t(f)], f);
 		}
 		map->mips_ms = ms_since(t);
 		map->total_ms = ms_since(start);
@@ -869,6 +908,7 @@ Cubemap LiveRoom::render_at(const glm::dvec3 &p_position, int p_size, bool p_com
 	if (!p_completed && coarse && !running) {
 		// The observations alone (no inpainting), straight from the pipeline: nothing writes it now.
 		raw.atlas = coarse->texture().color;
+		raw.observed = cfg.coarse_shell_first ? observed_mask(coarse->texture()) : cv::Mat();
 		raw.cumulative = coarse->cumulative_lighting();
 		source = &raw;
 	}

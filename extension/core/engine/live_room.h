@@ -83,6 +83,10 @@ struct LiveRoomConfig {
 	double fisheye_pose_wait_s = 1.0;
 	int render_threads = 1; // threaded: worker threads for probe rendering (cores left to Godot)
 	int dense_render_scale = DenseRenderOptions().scale; // the dense pass at 1 / scale (dense_render.h)
+	float dense_render_far_m = DenseRenderOptions().far_m; // the dense pass's reach from the probe (dense_render.h)
+	// Where the dense model shows the room's shell and the fisheye observed it, the map keeps the
+	// coarse model (DenseRenderOptions::coarse_observed). False: the paper's dense-over-all.
+	bool coarse_shell_first = true;
 	// A probe's map raycasts this many of its six dense faces (round robin) and reuses the others
 	// from its earlier maps while it stays put (dense_render.h DenseFaceCache): with 2, a face's
 	// dense layer is at most two maps older than the map. 6: every face every map. render_at()
@@ -115,6 +119,10 @@ struct CoarseSnapshot {
 	uint64_t frames = 0; // fisheye frames integrated
 	uint64_t fisheye_sequence = 0; // the last one
 	cv::Mat atlas; // completed colour (CV_32FC3), never written after publishing
+	// CV_32FC3, the atlas's size: 1 where the fisheye observed the texel (quality > 0), else 0; the
+	// dense pass leaves those texels of the room's shell to the coarse model (dense_render.h).
+	// Empty: none (set_atlas).
+	cv::Mat observed;
 	LightingChange cumulative; // the coarse model's lighting changes so far (§4.6)
 	CoarseFrameStats last; // of the last frame
 	CoarsePipelineTimings timings; // of the last frame

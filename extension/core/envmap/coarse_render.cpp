@@ -207,15 +207,18 @@ std::shared_ptr<const CoarseCubemapRenderer::Lookup> CoarseCubemapRenderer::look
 	built->position = p_position;
 	built->size = p_size;
 	built->taps.resize(size_t(6) * size_t(p_size) * size_t(p_size));
+	built->distance_m.assign(built->taps.size(), 0.0f);
 	tbb::parallel_for(tbb::blocked_range<int>(0, 6 * p_size), [&](const tbb::blocked_range<int> &p_rows) {
 		for (int row = p_rows.begin(); row != p_rows.end(); row++) {
 			const int face = row / p_size;
 			const int v = row % p_size;
 			Taps *out = &built->taps[size_t(row) * size_t(p_size)];
+			float *distance = &built->distance_m[size_t(row) * size_t(p_size)];
 			for (int u = 0; u < p_size; u++) {
 				RoomRayHit hit;
 				if (intersect_room(mesh, p_position, cubemap_direction(face, u, v, p_size), &hit)) {
 					out[u] = texel_taps(hit.chart, hit.atlas);
+					distance[u] = float(hit.distance);
 				}
 			}
 		}
@@ -235,6 +238,11 @@ Cubemap CoarseCubemapRenderer::render(const cv::Mat &p_atlas_color, const glm::d
 	const std::shared_ptr<const Lookup> taps = lookup(p_position, p_size);
 	const cv::Mat atlas = continuous(p_atlas_color);
 	Cubemap cubemap = make_cubemap(p_size);
+	for (int f = 0; f < 6; f++) {
+		// A copy: the lookup is shared between maps, and the dense pass writes into the distances.
+		cubemap.distance_m[size_t(f)] =
+				cv::Mat(p_size, p_size, CV_32FC1, const_cast<float *>(taps->distance_m.data()) + size_t(f) * size_t(p_size) * size_t(p_size)).clone();
+	}
 	tbb::parallel_for(tbb::blocked_range<int>(0, 6 * p_size), [&](const tbb::blocked_range<int> &p_rows) {
 		for (int row = p_rows.begin(); row != p_rows.end(); row++) {
 			const int face = row / p_size;

@@ -48,9 +48,10 @@ public:
 	// The cubemap seen from p_position (world metres, inside the room) through the atlas
 	// p_atlas_color (CV_32FC3, the mesh's atlas size; CoarseTexture::color). Directions that hit
 	// nothing (a position outside the room) are black. Returns an invalid (size 0) cubemap when
-	// the atlas has the wrong size or type. Parallel over face rows (TBB).
+	// the atlas has the wrong size or type. The map's distance_m holds each ray's hit distance.
+	// Parallel over face rows (TBB).
 	// The rays and taps depend only on the position and size, not on the atlas: they are kept for
-	// the last MAX_CACHED_LOOKUPS (position, size) pairs (24 bytes a texel: 9 MiB at 256^2), so a
+	// the last MAX_CACHED_LOOKUPS (position, size) pairs (28 bytes a texel: 11 MiB at 256^2), so a
 	// probe that does not move costs a gather of four taps a texel. Safe to call from any thread.
 	Cubemap render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size = 256) const;
 	Cubemap render(const CoarseTexture &p_texture, const glm::dvec3 &p_position, int p_size = 256) const {
@@ -74,6 +75,7 @@ private:
 		glm::dvec3 position = glm::dvec3(0.0);
 		int size = 0;
 		std::vector<Taps> taps; // face-major, then rows, then columns
+		std::vector<float> distance_m; // the same order: the ray's hit distance (0: none)
 	};
 	Taps texel_taps(int p_chart, const glm::dvec2 &p_atlas) const;
 	static cv::Vec3f gather(const cv::Vec3f *p_atlas, const Taps &p_taps);

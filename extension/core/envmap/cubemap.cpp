@@ -19,8 +19,18 @@ Cubemap clone_cubemap(const Cubemap &p_cubemap) {
 	out.size = p_cubemap.size;
 	for (size_t f = 0; f < 6; f++) {
 		out.faces[f] = p_cubemap.faces[f].clone();
+		out.distance_m[f] = p_cubemap.distance_m[f].clone();
 	}
 	return out;
+}
+
+bool has_distances(const Cubemap &p_cubemap) {
+	for (const cv::Mat &face : p_cubemap.distance_m) {
+		if (face.type() != CV_32FC1 || face.rows != p_cubemap.size || face.cols != p_cubemap.size) {
+			return false;
+		}
+	}
+	return p_cubemap.size > 0;
 }
 
 bool is_valid_cubemap(const Cubemap &p_cubemap) {

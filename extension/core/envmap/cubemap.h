@@ -15,7 +15,14 @@ namespace roomprobe {
 struct Cubemap {
 	int size = 0; // face width and height, pixels
 	CubemapFaces faces; // each size x size, CV_32FC3, linear R, G, B
+	// Optional (empty when unknown): for each face pixel, the distance in metres from the map's
+	// centre to the surface it shows (CV_32FC1, size x size; 0: nothing there). The coarse and
+	// dense renders fill it; distance-aware reflections (envmap/parallax.h) read it.
+	std::array<cv::Mat, 6> distance_m;
 };
+
+// Whether p_cubemap carries distances (six size-square CV_32FC1 faces).
+bool has_distances(const Cubemap &p_cubemap);
 
 // A p_size x p_size cubemap filled with p_fill.
 Cubemap make_cubemap(int p_size, const cv::Vec3f &p_fill = cv::Vec3f(0.0f, 0.0f, 0.0f));

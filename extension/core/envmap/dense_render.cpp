@@ -64,6 +64,9 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 		identity[size_t(i)] = float(i) / 255.0f;
 	}
 	const std::array<float, 256> &lut = p_options.lut != nullptr ? *p_options.lut : identity;
+	const bool has_distances = roomprobe::has_distances(*io_cubemap);
+	const Cubemap *observed_faces =
+			has_distances && p_options.coarse_observed != nullptr && p_options.coarse_observed->size == size ? p_options.coarse_observed : nullptr;
 	// Which faces are raycast now: all without a cache (or after a move); else the next ones.
 	std::unique_lock<std::mutex> cache_lock;
 	std::array<bool, 6> raycast_now;
@@ -102,11 +105,16 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 			maps.colors = io_cache->colors[size_t(f)];
 		}
 		cv::Mat &face = io_cubemap->faces[size_t(f)];
+		// The map's distances where it has them: depth (z along the face's axis) over the cosine
+		// of the texel's own direction to the axis (the prism's distance is the texel centre's).
+		float *distances = has_distances ? io_cubemap->distance_m[size_t(f)].ptr<float>() : nullptr;
 		for (int v = 0; v < size; v++) {
 			const int lv = std::min(low - 1, v * low / size);
 			const float *depth = maps.depth.ptr<float>(lv);
 			const cv::Vec3b *color = maps.colors.ptr<cv::Vec3b>(lv);
 			cv::Vec3f *out = face.ptr<cv::Vec3f>(v);
+			const cv::Vec3f *observed = observed_faces != nullptr ? observed_faces->faces[size_t(f)].ptr<cv::Vec3f>(v) : nullptr;
+			const float dy = (float(v) - 0.5f * float(size - 1)) / (0.5f * float(size));
 			for (int u = 0; u < size; u++) {
 				const int lu = low - 1 - std::min(low - 1, u * low / size); // mirrored
 				const cv::Vec3b c = color[lu];
@@ -114,6 +122,15 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 				// edge of the colour band only): the coarse model shows here.
 				if (!std::isfinite(depth[lu]) || (c[0] == 0 && c[1] == 0 && c[2] == 0)) {
 					continue;
+				}
+				if (distances != nullptr) {
+					const float dx = (float(u) - 0.5f * float(size - 1)) / (0.5f * float(size)); // mirrored: the sign does not matter
+					const float distance = depth[lu] * std::sqrt(1.0f + dx * dx + dy * dy);
+					float &prism = distances[size_t(v) * size_t(size) + size_t(u)];
+					if (observed != nullptr && observed[u][0] >= 0.5f && on_coarse_shell(distance, prism, p_options)) {
+						continue; // the shell the fisheye saw: the coarse model's texel stays
+					}
+					prism = distance;
 				}
 				for (int k = 0; k < 3; k++) {
 					out[u][k] = std::max(0.0f, p_options.gain[k] * lut[c[k]] + p_options.offset[k]);

@@ -2,7 +2,8 @@
 // The dense part of an environment map (paper §4.7, second pass): the dense model (the colour
 // TSDF of slam/tsdf_volume.h) raycast from the probe into each cubemap face and painted over the
 // coarse model's render, with no depth test between the two: near the probe the dense surfaces
-// are the truth, and the coarse prism behind them must not show through.
+// are the truth, and the coarse prism behind them must not show through. One exception, where the
+// dense surface is the prism itself and the fisheye saw it (coarse_observed below).
 //
 // Each face is a 90-degree pinhole camera (fx = N / 2) at the probe, so the TSDF's own raycast
 // (with its empty-space skipping) does the work. A cubemap face's (u right, v down, forward) axes
@@ -18,6 +19,7 @@
 #include <slam/tsdf_volume.h>
 
 #include <array>
+#include <cmath>
 #include <atomic>
 #include <mutex>
 
@@ -34,10 +36,27 @@ struct DenseRenderOptions {
 	const std::array<float, 256> *lut = nullptr; // 8-bit value -> radiance; null: value / 255
 	cv::Vec3f gain = cv::Vec3f(1.0f, 1.0f, 1.0f); // lighting change applied after the lut
 	cv::Vec3f offset = cv::Vec3f(0.0f, 0.0f, 0.0f);
+	// The room's shell first (issue #16's error budget): where the coarse render's texel was
+	// observed by the fisheye (this map's channel 0 >= 0.5: CoarseSnapshot::observed rendered
+	// like the atlas) and the dense surface lies on the coarse prism (its distance within
+	// shell_tolerance_m + shell_tolerance_relative x the prism's, io_cubemap's distance_m), the
+	// coarse model's texel stays. On the living room's 10-s sweep the dense model showed those
+	// directions at 14.9 dB and the coarse model the rest of the shell at 22.1 dB: its colours of
+	// walls and floor are fused from 8-bit RGB over a few frames and keep older light. Null: the
+	// paper's dense-over-all.
+	const Cubemap *coarse_observed = nullptr;
+	float shell_tolerance_m = 0.05f;
+	float shell_tolerance_relative = 0.02f;
 	// With a DenseFaceCache: faces raycast per render (1..6, round robin); the others are the
 	// cache's, of an older model (at most ceil(6 / faces_per_render) - 1 renders old). 6: all.
 	int faces_per_render = 6;
 };
+
+// Whether a dense surface p_distance_m from the probe is the coarse prism p_prism_m away along the
+// same direction, within DenseRenderOptions' shell tolerance.
+inline bool on_coarse_shell(float p_distance_m, float p_prism_m, const DenseRenderOptions &p_options) {
+	return p_prism_m > 0.0f && std::abs(p_distance_m - p_prism_m) <= p_options.shell_tolerance_m + p_options.shell_tolerance_relative * p_prism_m;
+}
 
 // One probe's low-resolution dense faces, kept between its maps (render_dense_over). Reused only
 // while the position, size and scale stay the same. Its own lock: one render at a time uses it.

@@ -1,4 +1,5 @@
 #include "evaluate.h"
+#include "truth_scene.h"
 
 #include <engine/live_room.h>
 #include <envmap/baseline.h>
@@ -13,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -34,6 +36,21 @@ Cubemap to_cubemap(const CubemapFaces &p_faces, int p_size) {
 			map.faces[f] = p_faces[f];
 		} else {
 			cv::resize(p_faces[f], map.faces[f], cv::Size(p_size, p_size), 0, 0, p_faces[f].cols > p_size ? cv::INTER_AREA : cv::INTER_LINEAR);
+		}
+	}
+	return map;
+}
+
+// The same for a rendered map, its distances kept (nearest: no distance between two surfaces).
+Cubemap to_cubemap(const Cubemap &p_map, int p_size) {
+	Cubemap map = to_cubemap(p_map.faces, p_size);
+	if (has_distances(p_map)) {
+		for (int f = 0; f < 6; f++) {
+			if (p_map.size == p_size) {
+				map.distance_m[size_t(f)] = p_map.distance_m[size_t(f)];
+			} else {
+				cv::resize(p_map.distance_m[size_t(f)], map.distance_m[size_t(f)], cv::Size(p_size, p_size), 0, 0, cv::INTER_NEAREST);
+			}
 		}
 	}
 	return map;
@@ -90,9 +107,50 @@ private:
 	size_t renders = 0;
 };
 
+// Where the dense pass painted the live map: the pixels it changed from the coarse render
+// (CV_8UC1 faces, 255 there).
+using FaceMasks = std::array<cv::Mat, 6>;
+FaceMasks dense_coverage(const Cubemap &p_live, const Cubemap &p_coarse_only) {
+	FaceMasks covered;
+	for (int f = 0; f < 6; f++) {
+		cv::Mat differs;
+		cv::compare(p_live.faces[size_t(f)].reshape(1), p_coarse_only.faces[size_t(f)].reshape(1), differs, cv::CMP_NE);
+		cv::reduce(differs.reshape(3, p_live.size).reshape(1, p_live.size * p_live.size), covered[size_t(f)], 1, cv::REDUCE_MAX);
+		covered[size_t(f)] = covered[size_t(f)].reshape(1, p_live.size);
+	}
+	return covered;
+}
+
+// The tone-mapped PSNR of p_estimate over each class of pixels that p_class(face, y, x) returns
+// (0 .. p_count - 1), and each class's share of the map.
+template <typename ClassOf>
+void score_classes(const Cubemap &p_estimate, const Cubemap &p_truth, int p_count, DirectionClassScores *r_scores, ClassOf p_class) {
+	std::vector<double> squared(size_t(p_count), 0.0), pixels(size_t(p_count), 0.0);
+	const int size = p_truth.size;
+	for (int f = 0; f < 6; f++) {
+		const cv::Mat estimate = tone_map_face(p_estimate.faces[f]), truth = tone_map_face(p_truth.faces[f]);
+		for (int y = 0; y < size; y++) {
+			for (int x = 0; x < size; x++) {
+				const size_t c = size_t(p_class(f, y, x));
+				const cv::Vec3b e = estimate.at<cv::Vec3b>(y, x), t = truth.at<cv::Vec3b>(y, x);
+				for (int k = 0; k < 3; k++) {
+					squared[c] += (double(e[k]) - t[k]) * (double(e[k]) - t[k]);
+				}
+				pixels[c] += 1.0;
+			}
+		}
+	}
+	const double total = 6.0 * size * size;
+	for (size_t c = 0; c < size_t(p_count); c++) {
+		r_scores[c].share = pixels[c] / total;
+		const double mse = pixels[c] > 0.0 ? squared[c] / (3.0 * pixels[c]) : 0.0;
+		r_scores[c].psnr_db = pixels[c] == 0.0 ? 0.0 : (mse > 0.0 ? std::min(PSNR_CAP_DB, 10.0 * std::log10(255.0 * 255.0 / mse)) : PSNR_CAP_DB);
+	}
+}
+
 // The live engine's map split by DirectionClass (see evaluate.h): the fisheye's observed and
 // saturated masks rendered as an atlas from the probe, and the pixels the dense pass changed.
-void split_by_direction(const LiveRoom &p_engine, const CoarseCubemapRenderer &p_renderer, const Cubemap &p_with_dense, const Cubemap &p_coarse_only,
+void split_by_direction(const LiveRoom &p_engine, const CoarseCubemapRenderer &p_renderer, const Cubemap &p_with_dense, const FaceMasks &p_dense,
 		const Cubemap &p_truth, const glm::dvec3 &p_probe, int p_render_size, DirectionClassScores r_scores[DIRECTION_CLASS_COUNT]) {
 	const CoarseTexture &texture = p_engine.coarse_model()->texture();
 	cv::Mat masks(texture.color.size(), CV_32FC3, cv::Scalar::all(0.0));
@@ -107,33 +165,51 @@ void split_by_direction(const LiveRoom &p_engine, const CoarseCubemapRenderer &p
 	}
 	const int size = p_truth.size;
 	const Cubemap seen = to_cubemap(p_renderer.render(masks, p_probe, p_render_size).faces, size);
-	double squared[DIRECTION_CLASS_COUNT] = { 0.0 }, pixels[DIRECTION_CLASS_COUNT] = { 0.0 };
+	score_classes(p_with_dense, p_truth, DIRECTION_CLASS_COUNT, r_scores, [&](int p_face, int p_y, int p_x) {
+		const cv::Vec3f mask = seen.faces[p_face].at<cv::Vec3f>(p_y, p_x);
+		if (mask[0] > 0.5f) {
+			return mask[1] > 0.5f ? int(DIRECTIONS_SATURATED) : int(DIRECTIONS_FISHEYE);
+		}
+		const bool dense = p_dense[size_t(p_face)].at<uint8_t>(p_y, p_x) != 0;
+		return dense || mask[2] > 0.5f ? int(DIRECTIONS_RGBD_ONLY) : int(DIRECTIONS_NEVER_SEEN);
+	});
+}
+
+// The live map split by GeometryClass (see evaluate.h): p_prism from prism_directions, p_dense
+// from dense_coverage.
+void split_by_geometry(const Cubemap &p_with_dense, const FaceMasks &p_dense, const Cubemap &p_truth, const FaceMasks &p_prism,
+		DirectionClassScores r_scores[GEOMETRY_CLASS_COUNT]) {
+	score_classes(p_with_dense, p_truth, GEOMETRY_CLASS_COUNT, r_scores, [&](int p_face, int p_y, int p_x) {
+		const bool dense = p_dense[size_t(p_face)].at<uint8_t>(p_y, p_x) != 0;
+		if (p_prism[size_t(p_face)].at<uint8_t>(p_y, p_x)) {
+			return dense ? int(GEOMETRY_PRISM_DENSE) : int(GEOMETRY_PRISM_COARSE);
+		}
+		return dense ? int(GEOMETRY_CONTENTS_DENSE) : int(GEOMETRY_CONTENTS_COARSE);
+	});
+}
+
+// The oracles of the two models (see EvaluationVariant): the live map with the truth put in where
+// the oracle's model would have shown it. p_prism: prism_directions at the scored size.
+void compose_oracles(const Cubemap &p_live, const FaceMasks &p_dense, const Cubemap &p_truth, const FaceMasks &p_prism, Cubemap *r_coarse_oracle,
+		Cubemap *r_dense_oracle) {
+	*r_coarse_oracle = clone_cubemap(p_live);
+	*r_dense_oracle = clone_cubemap(p_live);
 	for (int f = 0; f < 6; f++) {
-		const cv::Mat estimate = tone_map_face(p_with_dense.faces[f]), truth = tone_map_face(p_truth.faces[f]);
-		for (int y = 0; y < size; y++) {
-			const cv::Vec3f *mask = seen.faces[f].ptr<cv::Vec3f>(y);
-			const cv::Vec3f *dense = p_with_dense.faces[f].ptr<cv::Vec3f>(y);
-			const cv::Vec3f *coarse = p_coarse_only.faces[f].ptr<cv::Vec3f>(y);
-			for (int x = 0; x < size; x++) {
-				int c = DIRECTIONS_NEVER_SEEN;
-				if (mask[x][0] > 0.5f) {
-					c = mask[x][1] > 0.5f ? DIRECTIONS_SATURATED : DIRECTIONS_FISHEYE;
-				} else if (dense[x] != coarse[x] || mask[x][2] > 0.5f) {
-					c = DIRECTIONS_RGBD_ONLY;
+		for (int y = 0; y < p_truth.size; y++) {
+			const uint8_t *prism = p_prism[size_t(f)].ptr<uint8_t>(y);
+			const uint8_t *dense = p_dense[size_t(f)].ptr<uint8_t>(y);
+			const cv::Vec3f *truth = p_truth.faces[f].ptr<cv::Vec3f>(y);
+			cv::Vec3f *coarse_oracle = r_coarse_oracle->faces[f].ptr<cv::Vec3f>(y);
+			cv::Vec3f *dense_oracle = r_dense_oracle->faces[f].ptr<cv::Vec3f>(y);
+			for (int x = 0; x < p_truth.size; x++) {
+				if (prism[x] && !dense[x]) {
+					coarse_oracle[x] = truth[x];
 				}
-				const cv::Vec3b e = estimate.at<cv::Vec3b>(y, x), t = truth.at<cv::Vec3b>(y, x);
-				for (int k = 0; k < 3; k++) {
-					squared[c] += (double(e[k]) - t[k]) * (double(e[k]) - t[k]);
+				if (!prism[x]) {
+					dense_oracle[x] = truth[x];
 				}
-				pixels[c] += 1.0;
 			}
 		}
-	}
-	const double total = 6.0 * size * size;
-	for (int c = 0; c < DIRECTION_CLASS_COUNT; c++) {
-		r_scores[c].share = pixels[c] / total;
-		const double mse = pixels[c] > 0.0 ? squared[c] / (3.0 * pixels[c]) : 0.0;
-		r_scores[c].psnr_db = pixels[c] == 0.0 ? 0.0 : (mse > 0.0 ? std::min(PSNR_CAP_DB, 10.0 * std::log10(255.0 * 255.0 / mse)) : PSNR_CAP_DB);
 	}
 }
 
@@ -207,6 +283,10 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	base.coarse.inpaint = true;
 	base.coarse.inpaint_async = false; // the completed texture belongs to the latest frame
 	base.coarse.rgb_texture = p_options.rgb_texture;
+	if (p_options.dense_range_m > 0.0) {
+		base.slam.tsdf.max_depth_m = float(p_options.dense_range_m);
+		base.dense_render_far_m = float(p_options.dense_range_m);
+	}
 	LiveRoomConfig no_light = base, additive = base, gain = base, tracked = base;
 	no_light.coarse.lighting = false;
 	additive.coarse.lighting = true;
@@ -231,7 +311,22 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		}
 	}
 	const bool dense = p_options.dense;
-	const int variant_count = dense ? VARIANT_COUNT : VARIANT_DENSE_TRUE_POSES;
+	// The oracles need the true scene (and the dense variants they start from).
+	std::unique_ptr<synth::SynthRenderer> truth_scene;
+	if (dense && p_options.oracles) {
+		TruthSceneResult loaded = load_truth_scene(p_options.recording);
+		if (loaded.ok) {
+			truth_scene = std::move(loaded.renderer);
+		} else {
+			result.no_oracles = loaded.error;
+			say("no oracle variants: " + loaded.error);
+		}
+	} else {
+		result.no_oracles = dense ? "not asked for" : "they need the dense variants";
+	}
+	const int variant_count = dense ? (truth_scene ? VARIANT_COUNT : VARIANT_ORACLE_COARSE_TEXTURE) : VARIANT_DENSE_TRUE_POSES;
+	FaceMasks prism_mask; // prism_directions at the scored size, for prism_mask_at
+	glm::dvec3 prism_mask_at(std::numeric_limits<double>::quiet_NaN());
 	SlamFigures slam_figures;
 	double render_ms[3] = { 0.0, 0.0, 0.0 }; // coarse renders of (c), (d), (e), summed
 
@@ -246,7 +341,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	BaselineEnvmap baseline(size);
 
 	const char *names[VARIANT_COUNT] = { "baseline (5.3)", "coarse", "coarse+inpaint", "+light (additive)", "+light (gain)", "+dense (true poses)",
-		"+dense (SLAM)" };
+		"+dense (SLAM)", "oracle: true coarse texture", "oracle: true dense model" };
 	result.variants.resize(size_t(variant_count));
 	for (int v = 0; v < variant_count; v++) {
 		result.variants[v].name = names[v];
@@ -326,8 +421,24 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		if (dense) {
 			estimates[VARIANT_DENSE_TRUE_POSES] = to_cubemap(engine_gain.render_at(probe, render_size, true, true).faces, size);
 			DenseRenderStats stats;
-			estimates[VARIANT_DENSE_SLAM] = to_cubemap(engine_tracked.render_at(probe, render_size, true, true, &stats).faces, size);
+			estimates[VARIANT_DENSE_SLAM] = to_cubemap(engine_tracked.render_at(probe, render_size, true, true, &stats), size);
 			slam_figures.add_render(stats.milliseconds);
+			// Which directions the dense model covers: where the live map differs from its render
+			// without the dense pass.
+			FaceMasks dense_covers;
+			auto covers = [&]() -> const FaceMasks & {
+				if (dense_covers[0].empty()) {
+					dense_covers = dense_coverage(estimates[VARIANT_DENSE_SLAM], to_cubemap(engine_tracked.render_at(probe, render_size, true, false).faces, size));
+				}
+				return dense_covers;
+			};
+			if (truth_scene) {
+				if (!(probe == prism_mask_at)) {
+					prism_mask = prism_directions(*truth_scene, room.floorplan, probe, size);
+					prism_mask_at = probe;
+				}
+				compose_oracles(estimates[VARIANT_DENSE_SLAM], covers(), gt, prism_mask, &estimates[VARIANT_ORACLE_COARSE_TEXTURE], &estimates[VARIANT_ORACLE_DENSE]);
+			}
 			// Only at the cubemap the split is reported for: the last at or before 10 s into the sweep
 			// (the first, when none is; the last of a shorter recording).
 			const double moment_s = result.start_s + SWEEP_MOMENTS_S[2] + 1e-6;
@@ -337,8 +448,30 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 					direction_renderer = std::make_unique<CoarseCubemapRenderer>(*engine_tracked.room_mesh());
 				}
 				if (direction_renderer) {
-					const Cubemap coarse_only = to_cubemap(engine_tracked.render_at(probe, render_size, true, false).faces, size);
-					split_by_direction(engine_tracked, *direction_renderer, estimates[VARIANT_DENSE_SLAM], coarse_only, gt, probe, render_size, result.directions);
+					split_by_direction(engine_tracked, *direction_renderer, estimates[VARIANT_DENSE_SLAM], covers(), gt, probe, render_size, result.directions);
+					if (truth_scene) {
+						split_by_geometry(estimates[VARIANT_DENSE_SLAM], covers(), gt, prism_mask, result.geometry);
+					}
+					if (truth_scene) {
+						Cubemap true_map = gt;
+						true_map.distance_m = true_distances(*truth_scene, probe, size);
+						result.mirrors.clear();
+						result.mirror_clearance_m = std::numeric_limits<double>::infinity();
+						for (const cv::Mat &face : true_map.distance_m) {
+							double lowest = std::numeric_limits<double>::infinity();
+							cv::minMaxLoc(face, &lowest, nullptr, nullptr, nullptr, face > 0.0f); // rays that hit nothing do not count
+							result.mirror_clearance_m = std::min(result.mirror_clearance_m, lowest);
+						}
+						for (const double radius : MIRROR_RADII_M) {
+							if (radius > 0.95 * result.mirror_clearance_m) {
+								continue; // the sphere would reach into the scene
+							}
+							for (const bool true_one : { true, false }) {
+								result.mirrors.push_back({ radius, true_one,
+										mirror_sphere_error(*truth_scene, true_one ? true_map : estimates[VARIANT_DENSE_SLAM], probe, radius, ref.timestamp_s) });
+							}
+						}
+					}
 					result.directions_at_s = ref.timestamp_s;
 				}
 			}
@@ -363,7 +496,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		if (c + 1 == count && !p_options.out.empty()) {
 			std::filesystem::create_directories(p_options.out);
 			const char *files[VARIANT_COUNT] = { "baseline", "coarse", "coarse_inpaint", "coarse_light_additive", "coarse_light_gain", "dense_true_poses",
-				"dense_slam" };
+				"dense_slam", "oracle_coarse_texture", "oracle_dense" };
 			for (int v = 0; v < variant_count; v++) {
 				const std::string stem = (std::filesystem::path(p_options.out) / files[v]).string();
 				std::string error = write_cubemap_exr(stem + ".exr", estimates[v]);
@@ -461,6 +594,24 @@ std::string format_directions(const EvaluationResult &p_result) {
 		std::snprintf(line, sizeof(line), "  %-32s %6.1f %%  %6.2f dB\n", classes[c], 100.0 * p_result.directions[c].share, p_result.directions[c].psnr_db);
 		out << line;
 	}
+	if (p_result.no_oracles.empty() && p_result.mirrors.size() < 2 * std::size(MIRROR_RADII_M)) {
+		std::snprintf(line, sizeof(line), "mirror spheres wider than %.3f m left out: the scene is that near the probe\n", 0.95 * p_result.mirror_clearance_m);
+		out << line;
+	}
+	if (p_result.no_oracles.empty()) {
+		out << "the same map by what the direction truly sees, and what shows it:\n";
+		const char *geometry[GEOMETRY_CLASS_COUNT] = { "the room's prism, coarse model", "the room's prism, dense model", "what stands in it, dense model",
+			"what stands in it, coarse model" };
+		for (int c = 0; c < GEOMETRY_CLASS_COUNT; c++) {
+			std::snprintf(line, sizeof(line), "  %-32s %6.1f %%  %6.2f dB\n", geometry[c], 100.0 * p_result.geometry[c].share, p_result.geometry[c].psnr_db);
+			out << line;
+		}
+	}
+	for (const EvaluationResult::MirrorRow &row : p_result.mirrors) {
+		std::snprintf(line, sizeof(line), "mirror sphere r = %.2f m, %s map (%d views, %zu px): %6.2f dB read along the reflection, %6.2f dB distance-aware\n",
+				row.radius_m, row.true_map ? "true" : "live", row.scores.views, row.scores.pixels, row.scores.psnr_plain_db, row.scores.psnr_parallax_db);
+		out << line;
+	}
 	return out.str();
 }
 
@@ -475,17 +626,28 @@ BudgetResult error_budget(const EvaluationOptions &p_options) {
 		{ "as shipped", [](EvaluationOptions *) {},
 				{ { VARIANT_DENSE_SLAM, "the live system: SLAM poses, dense over the coarse model, inpainting, gain lighting" },
 						{ VARIANT_DENSE_TRUE_POSES, "oracle: true poses" }, { VARIANT_LIGHT_GAIN, "without the dense model (true poses)" },
-						{ VARIANT_COARSE, "without inpainting, lighting or dense (true poses)" } } },
+						{ VARIANT_COARSE, "without inpainting, lighting or dense (true poses)" },
+						{ VARIANT_ORACLE_COARSE_TEXTURE, "oracle: true coarse texture where the prism is the true geometry (SLAM poses)" },
+						{ VARIANT_ORACLE_DENSE, "oracle: true dense geometry and colours (SLAM poses)" } } },
 		{ "2x resolution",
 				[](EvaluationOptions *o) {
 					o->texel_size_m /= 2.0;
 					o->render_scale = 2;
+					o->oracles = false;
 				},
 				{ { VARIANT_DENSE_SLAM, "oracle: texels and maps at twice the resolution (SLAM poses)" },
 						{ VARIANT_DENSE_TRUE_POSES, "oracle: twice the resolution and true poses" } } },
-		{ "no photometry", [](EvaluationOptions *o) { o->linearise = false; },
+		{ "no photometry",
+				[](EvaluationOptions *o) {
+					o->linearise = false;
+					o->oracles = false;
+				},
 				{ { VARIANT_DENSE_SLAM, "without photometric calibration (frames as recorded, SLAM poses)" } } },
-		{ "RGB texturing", [](EvaluationOptions *o) { o->rgb_texture = true; },
+		{ "RGB texturing",
+				[](EvaluationOptions *o) {
+					o->rgb_texture = true;
+					o->oracles = false;
+				},
 				{ { VARIANT_DENSE_SLAM, "with the RGB camera's texturing of the coarse model (SLAM poses)" },
 						{ VARIANT_LIGHT_GAIN, "with RGB texturing, without the dense model (true poses)" } } },
 	};
@@ -509,6 +671,10 @@ BudgetResult error_budget(const EvaluationOptions &p_options) {
 			budget.shipped.variants.clear(); // the rows keep what the table needs
 		}
 		for (const auto &[variant, what] : run.rows) {
+			if (size_t(variant) >= result.variants.size()) {
+				budget.missing.push_back(std::string(what) + ": " + result.no_oracles);
+				continue;
+			}
 			BudgetRow row;
 			row.what = what;
 			row.scores = result.variants[size_t(variant)];
@@ -540,6 +706,9 @@ std::string format_budget(const BudgetResult &p_budget) {
 				100.0 * m.irradiance_error);
 		out << line;
 	}
+	for (const std::string &missing : p_budget.missing) {
+		out << "not measured: " << missing << "\n";
+	}
 	out << format_directions(p_budget.shipped);
 	const bool short_recording = !p_budget.rows.empty() && p_budget.rows[0].scores.at_moment[2] < 0;
 	if (short_recording) {
@@ -570,16 +739,16 @@ std::string format_evaluation(const EvaluationResult &p_result, bool p_per_frame
 	std::snprintf(line, sizeof(line), "%zu cubemaps (%d px faces), %zu fisheye frames, poses: ground truth, frames %s\n", p_result.cubemaps,
 			p_result.cubemap_size, p_result.fisheye_frames_used, p_result.linearised ? "linearised" : "as recorded");
 	out << line;
-	std::snprintf(line, sizeof(line), "%-20s %10s %8s %12s %10s %9s %10s %10s\n", "variant", "PSNR[dB]", "SSIM", "PSNRlin[dB]", "SSIMlin", "Eirr[%]",
+	std::snprintf(line, sizeof(line), "%-27s %10s %8s %12s %10s %9s %10s %10s\n", "variant", "PSNR[dB]", "SSIM", "PSNRlin[dB]", "SSIMlin", "Eirr[%]",
 			"PSNRmu[dB]", "worst5[dB]");
 	out << line;
 	for (const VariantScores &v : p_result.variants) {
-		std::snprintf(line, sizeof(line), "%-20s %10.2f %8.4f %12.2f %10.4f %9.2f %10.2f %10.2f\n", v.name.c_str(), v.mean_psnr_db, v.mean_ssim,
+		std::snprintf(line, sizeof(line), "%-27s %10.2f %8.4f %12.2f %10.4f %9.2f %10.2f %10.2f\n", v.name.c_str(), v.mean_psnr_db, v.mean_ssim,
 				v.mean_psnr_linear_db, v.mean_ssim_linear, 100.0 * v.mean_irradiance_error, v.mean_psnr_mu_db, v.mean_psnr_worst5_db);
 		out << line;
 	}
 	out << "into the sweep (the last cubemap at or before each moment): PSNR / PSNRmu / worst 5 % [dB], Eirr [%]\n";
-	std::snprintf(line, sizeof(line), "%-20s", "variant");
+	std::snprintf(line, sizeof(line), "%-27s", "variant");
 	out << line;
 	for (double moment : SWEEP_MOMENTS_S) {
 		std::snprintf(line, sizeof(line), " %27s", ("at " + std::to_string(int(moment)) + " s").c_str());
@@ -587,7 +756,7 @@ std::string format_evaluation(const EvaluationResult &p_result, bool p_per_frame
 	}
 	out << "\n";
 	for (const VariantScores &v : p_result.variants) {
-		std::snprintf(line, sizeof(line), "%-20s", v.name.c_str());
+		std::snprintf(line, sizeof(line), "%-27s", v.name.c_str());
 		out << line;
 		for (int m = 0; m < 3; m++) {
 			if (v.at_moment[m] < 0) {
@@ -605,18 +774,18 @@ std::string format_evaluation(const EvaluationResult &p_result, bool p_per_frame
 				p_result.variants[0].after_switch_frames);
 		out << line;
 		for (const VariantScores &v : p_result.variants) {
-			std::snprintf(line, sizeof(line), "%-20s %10.2f %8.4f %12.2f %10s %9.2f\n", v.name.c_str(), v.after_switch_psnr_db, v.after_switch_ssim,
+			std::snprintf(line, sizeof(line), "%-27s %10.2f %8.4f %12.2f %10s %9.2f\n", v.name.c_str(), v.after_switch_psnr_db, v.after_switch_ssim,
 					v.after_switch_psnr_linear_db, "", 100.0 * v.after_switch_irradiance_error);
 			out << line;
 		}
 	}
 	out << "per-stage timings, ms per fisheye frame (render: per cubemap):\n";
-	std::snprintf(line, sizeof(line), "%-20s %9s %9s %9s %9s %9s %9s\n", "pipeline", "occlusion", "lighting", "update", "inpaint", "frame", "render");
+	std::snprintf(line, sizeof(line), "%-27s %9s %9s %9s %9s %9s %9s\n", "pipeline", "occlusion", "lighting", "update", "inpaint", "frame", "render");
 	out << line;
 	const std::pair<const char *, const CoarsePipelineTimings *> rows[] = { { "inpaint, no light", &p_result.timings_inpaint },
 		{ "light (additive)", &p_result.timings_additive }, { "light (gain)", &p_result.timings_gain } };
 	for (const auto &[name, t] : rows) {
-		std::snprintf(line, sizeof(line), "%-20s %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f\n", name, t->occlusion_ms, t->lighting_ms, t->update_ms,
+		std::snprintf(line, sizeof(line), "%-27s %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f\n", name, t->occlusion_ms, t->lighting_ms, t->update_ms,
 				t->inpaint_ms, t->frame_ms, t->render_ms);
 		out << line;
 	}

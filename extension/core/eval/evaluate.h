@@ -14,6 +14,8 @@
 //   +dense (SLAM)   the live system: the RGB-D camera tracked from the room's initial pose, the
 //                   fisheye's poses from that tracked trajectory, the dense model over it; its
 //                   ATE is reported;
+//   oracle: true coarse texture, oracle: true dense model   the live map with the truth put in
+//                   where that model would show it (EvaluationVariant below; with the true scene);
 // each rendered at the cubemap's probe (LiveRoom::render_at) and compared with eval/metrics.h.
 //
 // Photometric units: the ground truth is linear radiance. A synthetic recording's synth.yaml gives
@@ -28,6 +30,7 @@
 // true texture of not-yet-re-observed texels is not available from a recording).
 
 #include "metrics.h"
+#include "mirror_error.h"
 
 #include <envmap/cubemap.h>
 #include <pipeline/coarse_pipeline.h>
@@ -48,6 +51,11 @@ struct EvaluationOptions {
 	bool dense = true; // the two dense variants (they run SLAM on every RGB-D frame: slower)
 	int render_scale = 1; // maps rendered at render_scale x cubemap_size, area-averaged down to be scored
 	bool rgb_texture = false; // the coarse model also textured from the RGB camera (coarse/rgb_texture_update.h)
+	// > 0: the dense model's reach, metres: depth readings fused up to this far (TsdfOptions'
+	// max_depth_m) and the dense pass drawn this far from the probe (LiveRoomConfig's
+	// dense_render_far_m); 0: their defaults (4 m).
+	double dense_range_m = 0.0;
+	bool oracles = true; // the oracle variants, when the recording's true scene can be rebuilt
 	std::function<void(const std::string &)> progress; // optional
 };
 
@@ -59,6 +67,10 @@ struct FrameScore {
 // The moments of the sweep that the report gives besides the means: a user cares about the map
 // after a short sweep, not the average from the start.
 inline constexpr double SWEEP_MOMENTS_S[3] = { 2.0, 5.0, 10.0 };
+
+// The mirror spheres' radii (EvaluationResult::mirrors): an ornament and a ball on the table (the
+// synthetic probes sit 15 cm over it). A radius that would reach the scene is left out.
+inline constexpr double MIRROR_RADII_M[2] = { 0.05, 0.12 };
 
 struct VariantScores {
 	std::string name;
@@ -83,6 +95,15 @@ enum EvaluationVariant {
 	VARIANT_LIGHT_GAIN,
 	VARIANT_DENSE_TRUE_POSES,
 	VARIANT_DENSE_SLAM,
+	// The budget's oracles of the two models (with the dense variants, on a recording whose true
+	// scene is known: eval/truth_scene.h), applied to +dense (SLAM)'s map direction by direction:
+	//   true coarse texture: every direction whose first true surface lies on the room's prism and
+	//     that the dense model does not cover shows the truth (a perfect texture seen from the
+	//     probe); the rest as the live map;
+	//   true dense model: every direction whose first true surface is not the prism (what stands
+	//     in the room) shows the truth; the rest as the live map.
+	VARIANT_ORACLE_COARSE_TEXTURE,
+	VARIANT_ORACLE_DENSE,
 	VARIANT_COUNT
 };
 
@@ -107,6 +128,17 @@ enum DirectionClass {
 	DIRECTION_CLASS_COUNT
 };
 
+// The same map split by what each direction truly sees (the true scene's first surface on the
+// room's prism or not, eval/truth_scene.h) and what the live map shows there (the dense model
+// painted it or not): where each model's error lies.
+enum GeometryClass {
+	GEOMETRY_PRISM_COARSE = 0, // the room's shell, shown by the coarse model
+	GEOMETRY_PRISM_DENSE, // the room's shell, shown by the dense model
+	GEOMETRY_CONTENTS_DENSE, // what stands in the room, shown by the dense model
+	GEOMETRY_CONTENTS_COARSE, // what stands in the room, shown by the coarse model (onto the prism)
+	GEOMETRY_CLASS_COUNT
+};
+
 struct DirectionClassScores {
 	double share = 0.0; // of the map's pixels
 	double psnr_db = 0.0; // tone-mapped, over those pixels (PSNR_CAP_DB when none differ; 0 when there are none)
@@ -115,12 +147,26 @@ struct DirectionClassScores {
 struct EvaluationResult {
 	bool ok = false;
 	std::string error;
-	std::vector<VariantScores> variants; // in EvaluationVariant order: VARIANT_COUNT, or up to LIGHT_GAIN without dense
+	// In EvaluationVariant order: all VARIANT_COUNT; up to DENSE_SLAM without the true scene;
+	// up to LIGHT_GAIN without dense.
+	std::vector<VariantScores> variants;
+	std::string no_oracles; // why the oracle variants are missing (with dense); empty when present
 	SlamScores slam; // with the dense variants
 	// +dense (SLAM)'s map split by DirectionClass, at its last cubemap at or before 10 s into the
 	// sweep (the last one of a shorter recording); with the dense variants.
 	DirectionClassScores directions[DIRECTION_CLASS_COUNT];
+	DirectionClassScores geometry[GEOMETRY_CLASS_COUNT]; // the same map by GeometryClass, with the true scene
 	double directions_at_s = -1.0; // that cubemap's time, RGB-D clock; < 0: not measured
+	// At the same cubemap, with the true scene: a mirror sphere at the probe against a ray-traced
+	// reference (eval/mirror_error.h), read from the true map (the ground-truth cubemap and its true
+	// distances) and from the live map (+dense (SLAM) and its distances), at MIRROR_RADII_M.
+	struct MirrorRow {
+		double radius_m = 0.0;
+		bool true_map = false;
+		MirrorScores scores;
+	};
+	std::vector<MirrorRow> mirrors;
+	double mirror_clearance_m = 0.0; // the nearest true surface from that probe
 	double light_switch_s = -1.0; // RGB-D clock; < 0: none
 	double start_s = 0.0; // the recording's first frame (RGB-D clock): the sweep's moments count from it
 	bool linearised = false;
@@ -149,6 +195,7 @@ struct BudgetResult {
 	bool ok = false;
 	std::string error;
 	std::vector<BudgetRow> rows;
+	std::vector<std::string> missing; // rows that could not be measured, each with why
 	EvaluationResult shipped; // the first run's result (the live system as shipped): its direction split
 	double start_s = 0.0;
 	int cubemap_size = 0;

@@ -768,6 +768,7 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 		}
 		info << "roomprobe_synth" << 1;
 		info << "scene" << p_scene.name;
+		info << "scene_panorama" << (p_options.scene_panorama_path.empty() ? std::string("none") : p_options.scene_panorama_path);
 		info << "trajectory" << (p_scene.trajectory == TrajectoryKind::WallSweep ? "wall_sweep" : "orbit");
 		info << "seed" << std::to_string(p_options.seed);
 		info << "duration_s" << p_options.duration_s;

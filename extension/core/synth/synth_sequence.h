@@ -110,6 +110,10 @@ struct SequenceOptions {
 	bool photometric_views = true; // with calibration_views: an exposure sweep and a flat field (write_photometric_views)
 	double cubemap_ldr_exposure = 1.0; // of the 8-bit view next to each cubemap EXR
 	bool exr_full_float = false; // EXRs (cubemaps, HDR fisheye) as 32-bit float rather than half
+	// The panorama the scene was made with (SceneOptions::panorama_path), written to synth.yaml as
+	// scene_panorama ("none" when empty) so that the evaluation can rebuild the true scene
+	// (eval/truth_scene.h).
+	std::string scene_panorama_path;
 	std::function<void(const std::string &)> progress; // optional: a line now and then
 };
 

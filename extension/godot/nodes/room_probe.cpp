@@ -94,6 +94,13 @@ void RoomProbe::set_sh_parameter(const StringName &p_name) {
 
 StringName RoomProbe::get_sh_parameter() const { return sh_parameter; }
 
+void RoomProbe::set_position_parameter(const StringName &p_name) {
+	position_parameter = p_name;
+	apply_to_material();
+}
+
+StringName RoomProbe::get_position_parameter() const { return position_parameter; }
+
 void RoomProbe::set_reflection_probe_path(const NodePath &p_path) {
 	restore_driven();
 	reflection_probe_path = p_path;
@@ -406,6 +413,9 @@ void RoomProbe::apply_to_material() {
 	if (!String(material_parameter).is_empty()) {
 		drive_shader_parameter(target_material, material_parameter, cubemap);
 	}
+	if (!String(position_parameter).is_empty()) {
+		drive_shader_parameter(target_material, position_parameter, to_godot(map->position)); // where the map was rendered
+	}
 	if (!String(sh_parameter).is_empty()) {
 		Node3D *frame = sh_frame_path.is_empty() || !is_inside_tree() ? nullptr : cast_to<Node3D>(get_node_or_null(sh_frame_path));
 		drive_shader_parameter(target_material, sh_parameter, frame ? get_sh_coefficients_in(frame->get_global_basis()) : get_sh_coefficients());
@@ -568,6 +578,8 @@ void RoomProbe::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_material_parameter"), &RoomProbe::get_material_parameter);
 	ClassDB::bind_method(D_METHOD("set_sh_parameter", "name"), &RoomProbe::set_sh_parameter);
 	ClassDB::bind_method(D_METHOD("get_sh_parameter"), &RoomProbe::get_sh_parameter);
+	ClassDB::bind_method(D_METHOD("set_position_parameter", "name"), &RoomProbe::set_position_parameter);
+	ClassDB::bind_method(D_METHOD("get_position_parameter"), &RoomProbe::get_position_parameter);
 	ClassDB::bind_method(D_METHOD("update_now"), &RoomProbe::update_now);
 	ClassDB::bind_method(D_METHOD("get_cubemap"), &RoomProbe::get_cubemap);
 	ClassDB::bind_method(D_METHOD("get_face_image", "layer"), &RoomProbe::get_face_image);
@@ -599,6 +611,7 @@ void RoomProbe::_bind_methods() {
 	ADD_PROPERTY(PropertyInfo(Variant::OBJECT, "target_material", PROPERTY_HINT_RESOURCE_TYPE, "ShaderMaterial", PROPERTY_USAGE_DEFAULT, "ShaderMaterial"), "set_target_material", "get_target_material");
 	ADD_PROPERTY(PropertyInfo(Variant::STRING_NAME, "material_parameter"), "set_material_parameter", "get_material_parameter");
 	ADD_PROPERTY(PropertyInfo(Variant::STRING_NAME, "sh_parameter"), "set_sh_parameter", "get_sh_parameter");
+	ADD_PROPERTY(PropertyInfo(Variant::STRING_NAME, "position_parameter"), "set_position_parameter", "get_position_parameter");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "sh_frame", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "Node3D"), "set_sh_frame", "get_sh_frame");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "reflection_probe", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "ReflectionProbe"), "set_reflection_probe", "get_reflection_probe");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "world_environment", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "WorldEnvironment"), "set_world_environment", "get_world_environment");

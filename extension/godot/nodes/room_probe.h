@@ -41,6 +41,8 @@ public:
 	godot::StringName get_material_parameter() const;
 	void set_sh_parameter(const godot::StringName &p_name);
 	godot::StringName get_sh_parameter() const;
+	void set_position_parameter(const godot::StringName &p_name);
+	godot::StringName get_position_parameter() const;
 	void set_reflection_probe_path(const godot::NodePath &p_path);
 	godot::NodePath get_reflection_probe_path() const;
 	void set_world_environment_path(const godot::NodePath &p_path);
@@ -116,6 +118,7 @@ private:
 	godot::Ref<godot::ShaderMaterial> target_material;
 	godot::StringName material_parameter = "environment";
 	godot::StringName sh_parameter = "sh";
+	godot::StringName position_parameter = "probe_position";
 	godot::NodePath sh_frame_path; // a Node3D: the SH given to target_material are in its frame
 	struct Driven {
 		uint64_t object = 0; // instance id (a freed object is skipped)
