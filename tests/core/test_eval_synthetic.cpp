@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 
 using namespace roomprobe;
 namespace fs = std::filesystem;
@@ -57,6 +58,14 @@ synth::SequenceResult write_living_room(const EvalTempFolder &p_folder, double p
 	return written;
 }
 
+// The evaluation's options for the recording in p_folder, with texels of p_texel_size_m.
+EvaluationOptions options_for(const EvalTempFolder &p_folder, double p_texel_size_m) {
+	EvaluationOptions options;
+	options.recording = p_folder.path.string();
+	options.texel_size_m = p_texel_size_m;
+	return options;
+}
+
 } // namespace
 
 TEST_CASE("eval: on living_room the full coarse pipeline beats the 5.3 baseline, and the dense model improves on it") {
@@ -92,12 +101,30 @@ TEST_CASE("eval: on living_room the full coarse pipeline beats the 5.3 baseline,
 	}
 }
 
+TEST_CASE("eval: a recording with no fisheye or no RGB-D frames is refused, not scored") {
+	EvalTempFolder folder;
+	write_living_room(folder, 0.5);
+	const EvaluationOptions options = options_for(folder, 0.08);
+	// Empty indexes (the header lines stay): once a full score table from nothing, status 0.
+	for (const char *index : { "fisheye.txt", "rgb.txt" }) {
+		CAPTURE(index);
+		const fs::path path = folder.path / index, kept = folder.path / (std::string(index) + ".kept");
+		fs::copy_file(path, kept, fs::copy_options::overwrite_existing);
+		{
+			std::ofstream empty(path, std::ios::trunc);
+			empty << "# emptied by the test\n";
+		}
+		const EvaluationResult result = evaluate_recording(options);
+		CHECK_FALSE(result.ok);
+		CHECK(result.error.find(std::string(index) == "fisheye.txt" ? "no fisheye frames" : "no RGB-D frames") != std::string::npos);
+		fs::copy_file(kept, path, fs::copy_options::overwrite_existing);
+	}
+}
+
 TEST_CASE("eval: the error budget has the live system and each oracle's row, scored at the sweep's moments") {
 	EvalTempFolder folder;
 	write_living_room(folder, 1.0);
-	EvaluationOptions options;
-	options.recording = folder.path.string();
-	options.texel_size_m = 0.04;
+	EvaluationOptions options = options_for(folder, 0.04);
 	options.max_cubemaps = 6;
 	const BudgetResult budget = error_budget(options);
 	REQUIRE_MESSAGE(budget.ok, budget.error);

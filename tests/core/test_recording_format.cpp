@@ -12,6 +12,8 @@
 
 #include <doctest/doctest.h>
 
+#include <ImfRgbaFile.h>
+
 #include <glm/gtc/quaternion.hpp>
 
 #include <cmath>
@@ -620,6 +622,48 @@ TEST_CASE("damaged recording: a PNG with corrupt data fails to read, naming the 
 	CHECK(reader.read_fisheye(0).ok);
 }
 
+TEST_CASE("damaged recording: 65535 depth is no reading, never 65.5 m; an HDR frame with NaN or infinity fails to read, naming the file") {
+	const fs::path folder = scratch_folder("impossible_values");
+	write_recording(folder, 3);
+	RecordingReader reader;
+	REQUIRE(reader.open(folder.string()).ok);
+	// All 65535 (a saturated sensor's "none", once fused as a wall 65.5 m away): no reading at all,
+	// which tracking then reports (a frame with no depth is lost: test_slam_dense.cpp). The RGB
+	// image stays usable (a calibration recording has boards without depth).
+	const std::string depth_path = (folder / reader.get_rgbd_ref(1).depth.path).string();
+	REQUIRE(recording_io::write_png(depth_path, cv::Mat(RGB_HEIGHT, RGB_WIDTH, CV_16UC1, cv::Scalar(65535))) == "");
+	const RgbdFrameResult saturated = reader.read_rgbd(1);
+	REQUIRE_MESSAGE(saturated.ok, saturated.error);
+	CHECK(cv::countNonZero(saturated.frame.depth_m == saturated.frame.depth_m) == 0); // NaN everywhere
+	// One 65535 pixel among readings is simply no reading there.
+	cv::Mat raw(RGB_HEIGHT, RGB_WIDTH, CV_16UC1, cv::Scalar(1500));
+	raw.at<uint16_t>(3, 4) = 65535;
+	REQUIRE(recording_io::write_png(depth_path, raw) == "");
+	const RgbdFrameResult mostly = reader.read_rgbd(1);
+	REQUIRE_MESSAGE(mostly.ok, mostly.error);
+	CHECK(std::isnan(mostly.frame.depth_m.at<float>(3, 4)));
+	CHECK(mostly.frame.depth_m.at<float>(3, 5) == doctest::Approx(1.5));
+	// The HDR fisheye frame with a NaN and an infinity: refused, never scored as a perfect map.
+	size_t hdr = reader.fisheye_count();
+	for (size_t i = 0; i < reader.fisheye_count(); i++) {
+		hdr = ends_with(reader.get_fisheye_ref(i).path, ".exr") ? i : hdr;
+	}
+	REQUIRE(hdr < reader.fisheye_count());
+	const std::string exr_path = (folder / reader.get_fisheye_ref(hdr).path).string();
+	{
+		// Written with OpenEXR itself: RoomProbe's writer refuses non-finite values.
+		std::vector<Imf::Rgba> pixels(size_t(FISHEYE_SIZE) * FISHEYE_SIZE, Imf::Rgba(0.5f, 0.5f, 0.5f, 1.0f));
+		pixels[size_t(10) * FISHEYE_SIZE + 10].g = std::numeric_limits<float>::quiet_NaN();
+		pixels[size_t(10) * FISHEYE_SIZE + 11].r = std::numeric_limits<float>::infinity();
+		Imf::RgbaOutputFile file(exr_path.c_str(), FISHEYE_SIZE, FISHEYE_SIZE, Imf::WRITE_RGBA);
+		file.setFrameBuffer(pixels.data(), 1, size_t(FISHEYE_SIZE));
+		file.writePixels(FISHEYE_SIZE);
+	}
+	const FisheyeFrameResult bad = reader.read_fisheye(hdr);
+	CHECK_FALSE(bad.ok);
+	CHECK(contains(bad.error, exr_path + ": 2 channel values are NaN or infinite"));
+}
+
 TEST_CASE("damaged recording: a timestamp going backwards in rgb.txt skips that frame") {
 	const fs::path folder = scratch_folder("backwards");
 	write_recording(folder, 4);
@@ -675,7 +719,7 @@ TEST_CASE("damaged recording: bad index lines and a missing fisheye image are is
 	const fs::path folder = scratch_folder("bad_lines");
 	write_recording(folder, 3);
 	std::string fisheye = read_text(folder / "fisheye.txt");
-	write_text(folder / "fisheye.txt", fisheye + "not-a-time fisheye/000009.png\n10.2\n");
+	write_text(folder / "fisheye.txt", fisheye + "not-a-time fisheye/000009.png\n10.2\n10.3 ../../etc/passwd\n10.4 fisheye/../../outside.png\n10.5 /etc/passwd\n");
 	fs::remove(folder / "fisheye/000000.png");
 	RecordingReader reader;
 	REQUIRE(reader.open(folder.string()).ok);
@@ -688,6 +732,14 @@ TEST_CASE("damaged recording: bad index lines and a missing fisheye image are is
 	const RecordingIssue *no_path = find_issue(reader, "expected 'timestamp_s relative/path'");
 	REQUIRE_MESSAGE(no_path, all_issues(reader));
 	CHECK(no_path->line == 6);
+	// No index may reach outside the recording (the reader once opened /etc/passwd this way).
+	for (const auto &[text, line] : { std::pair<const char *, int>{ "'../../etc/passwd' leaves the recording folder", 7 },
+			 std::pair<const char *, int>{ "'fisheye/../../outside.png' leaves the recording folder", 8 },
+			 std::pair<const char *, int>{ "'/etc/passwd' is an absolute path", 9 } }) {
+		const RecordingIssue *escape = find_issue(reader, text);
+		REQUIRE_MESSAGE(escape, all_issues(reader));
+		CHECK(escape->line == line);
+	}
 	check_plays_on(reader, 3, 1);
 }
 

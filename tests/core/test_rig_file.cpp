@@ -194,6 +194,10 @@ TEST_CASE("rig file: each bad file gives an error naming the file and the field"
 		{ "zero_fisheye_fy", replace_once(good, "  fy: 478.645871127404", "  fy: 0"), "fisheye.fy", "must be positive" },
 		{ "zero_width", replace_once(good, "  width: 640", "  width: 0"), "rgb.width", "must be positive" },
 		{ "fractional_height", replace_once(good, "  height: 1024", "  height: 1024.5"), "fisheye.height", "integer" },
+		// A fisheye of 100000 x 100000 once made OpenCV fail to allocate 40 GB in the evaluation.
+		{ "huge_fisheye", replace_once(replace_once(good, "  width: 1024", "  width: 100000"), "  height: 1024", "  height: 100000"), "fisheye.width",
+				"at most 16384 pixels" },
+		{ "huge_rgb_height", replace_once(good, "  height: 480", "  height: 20000"), "rgb.height", "at most 16384 pixels" },
 		{ "bad_quaternion", replace_once(good, "[0.7071067811865476, 0.0, 0.0, 0.7071067811865476]", "[0.5, 0.0, 0.0, 0.5]"),
 				"rgb_from_fisheye.rotation_xyzw", "unit quaternion" },
 		{ "short_quaternion", replace_once(good, "[0.7071067811865476, 0.0, 0.0, 0.7071067811865476]", "[0.0, 0.0, 1.0]"),

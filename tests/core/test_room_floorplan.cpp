@@ -108,6 +108,27 @@ TEST_CASE("too few points") {
 	CHECK(one.message == "floorplan has 1 point; a room needs at least 3");
 }
 
+TEST_CASE("too many points are refused before anything else is checked") {
+	// A 2-m circle of FLOORPLAN_MAX_POINTS points is a room; one more is refused, and a 100000-point
+	// one (which once held the editor for minutes) at once, whatever its coordinates hold.
+	auto circle = [](size_t p_count) {
+		std::vector<Vec2> points;
+		for (size_t i = 0; i < p_count; i++) {
+			const double a = 2.0 * 3.14159265358979 * double(i) / double(p_count);
+			points.push_back({ 2.0 * std::cos(a), 2.0 * std::sin(a) });
+		}
+		return make_floorplan(points);
+	};
+	CHECK(check_floorplan(circle(FLOORPLAN_MAX_POINTS)).ok);
+	const FloorplanCheck over = check_floorplan(circle(FLOORPLAN_MAX_POINTS + 1));
+	CHECK(over.problem == Problem::TooManyPoints);
+	CHECK(over.message == "floorplan has 1025 points; at most 1024 are accepted (a room's corners, not a point cloud)");
+	Floorplan huge = circle(100000);
+	huge.points[5].x = std::nan("");
+	CHECK(check_floorplan(huge).problem == Problem::TooManyPoints);
+	CHECK(std::string(floorplan_problem_summary(Problem::TooManyPoints)) == "The floorplan has too many points");
+}
+
 TEST_CASE("collinear points enclose zero area") {
 	const FloorplanCheck check = check_floorplan(make_floorplan({ { 0, 0 }, { 1, 0 }, { 3, 0 } }));
 	CHECK_FALSE(check.ok);

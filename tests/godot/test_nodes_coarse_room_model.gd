@@ -125,6 +125,8 @@ func test_invalid_floorplans_warn_and_say_why() -> void:
 		"fewer than 3 points": [PackedVector2Array([Vector2(0, 0), Vector2(1, 0)]), 2.5],
 		"zero area": [PackedVector2Array([Vector2(0, 0), Vector2(1, 0), Vector2(2, 0)]), 2.5],
 		"at or below": [PackedVector2Array(FIGURE4), 0.0],
+		# 100000 points once held the main thread for minutes: refused at once (issue #17).
+		"too many points": [_circle(100000), 2.5],
 	}
 	for expected in cases:
 		_room.floorplan = cases[expected][0]
@@ -137,6 +139,15 @@ func test_invalid_floorplans_warn_and_say_why() -> void:
 	_room.ceiling_height = HEIGHT
 	assert_true(_room.is_valid(), "valid again after the fix")
 	assert_eq(_room.get_mesh().get_surface_count(), 1)
+
+
+## p_count points on a 2-m circle: a valid polygon of any size.
+func _circle(p_count: int) -> PackedVector2Array:
+	var points := PackedVector2Array()
+	points.resize(p_count)
+	for i in p_count:
+		points[i] = Vector2(2.0 * cos(TAU * i / p_count), 2.0 * sin(TAU * i / p_count))
+	return points
 
 
 func test_mesh_follows_edits_live() -> void:

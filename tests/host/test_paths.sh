@@ -174,6 +174,28 @@ test_synth_photometric_options_refused() {
 	done
 }
 
+# roomprobe_eval refuses a size without bound, an --out that is a file, and a rig whose images
+# could not be allocated, each with a message and a non-zero status (issue #17: these aborted).
+test_eval_refuses_bad_input() {
+	local dir=build/test-data/eval-refused # inside the clone: the tool runs in the toolchain's root too
+	cd "$repo" || return
+	rm -rf "$dir" && mkdir -p "$dir/recording"
+	sed -e 's/  width: 1024/  width: 100000/' -e 's/  height: 1024/  height: 100000/' calib/synthetic_rig.yaml >"$dir/recording/rig.yaml"
+	: >"$dir/recording/rgb.txt" && : >"$dir/recording/depth.txt" && : >"$dir/recording/fisheye.txt"
+	echo "not a folder" >"$dir/out-file"
+	rp eval --recording "$dir/recording" --cubemap-size 100000
+	check "eval --cubemap-size 100000 exited with status $rc" test "$rc" -eq 2
+	check "eval --cubemap-size 100000: no bound in the message" says "--cubemap-size needs a whole number of pixels in [1, 4096]"
+	# The tool itself, not only ./roomprobe's path check, refuses an --out that is a file.
+	rp shell build/bin/roomprobe_eval --recording "$dir/recording" --out "$dir/out-file"
+	check "roomprobe_eval --out FILE exited with status $rc" test "$rc" -eq 2
+	check "roomprobe_eval --out FILE: the message does not say it is a file" says "is a file, not a folder"
+	check "roomprobe_eval --out FILE overwrote the file" grep -q "not a folder" "$dir/out-file"
+	rp eval --recording "$dir/recording"
+	check "eval on a 100000-px fisheye exited with status $rc" test "$rc" -eq 1
+	check "eval on a 100000-px fisheye: the message does not name the field" says "rig.yaml: fisheye.width: must be at most 16384 pixels"
+}
+
 # bake-prt bakes an OBJ given relative to the caller's folder, reuses the bake while the mesh is
 # unchanged, and refuses a bad option with its message.
 test_bake_prt_bakes_and_caches() {
@@ -227,7 +249,7 @@ test_editor_sees_the_callers_files() {
 }
 
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
-	calibrate_refuses_and_never_overwrites synth_photometric_options_refused bake_prt_bakes_and_caches unknown_verb_is_named
+	calibrate_refuses_and_never_overwrites synth_photometric_options_refused eval_refuses_bad_input bake_prt_bakes_and_caches unknown_verb_is_named
 	editor_sees_the_callers_files)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.
 echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench and roomprobe_calibrate"

@@ -1486,9 +1486,7 @@ int bench_7scenes(const Arguments &p_args) {
 	return bench_dataset(p_args, open_frames_dataset(p_args.seven_scenes, &reader, options), "7scenes", p_args.seven_scenes, reader, source);
 }
 
-} // namespace
-
-int main(int argc, char **argv) {
+int run(int argc, char **argv) {
 	if (argc < 2) {
 		return usage(nullptr);
 	}
@@ -1645,4 +1643,10 @@ int main(int argc, char **argv) {
 		rc = bench_7scenes(args);
 	}
 	return rc;
+}
+
+} // namespace
+
+int main(int argc, char **argv) {
+	return roomprobe::cli::guarded_main("roomprobe_bench", [&] { return run(argc, argv); });
 }

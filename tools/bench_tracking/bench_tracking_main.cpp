@@ -343,9 +343,7 @@ int run_dataset(int p_argc, char **p_argv) {
 	return 0;
 }
 
-} // namespace
-
-int main(int p_argc, char **p_argv) {
+int run(int p_argc, char **p_argv) {
 	if (p_argc > 1 && std::string(p_argv[1]).rfind("--", 0) == 0) {
 		return run_dataset(p_argc, p_argv);
 	}
@@ -380,4 +378,10 @@ int main(int p_argc, char **p_argv) {
 
 	compare(frames, passes, camera);
 	return 0;
+}
+
+} // namespace
+
+int main(int p_argc, char **p_argv) {
+	return roomprobe::cli::guarded_main("roomprobe_bench_tracking", [&] { return run(p_argc, p_argv); });
 }

@@ -53,9 +53,7 @@ bool parse_board(const std::string &p_text, BoardSpec *r_board) {
 	return true;
 }
 
-} // namespace
-
-int main(int p_argc, char **p_argv) {
+int run(int p_argc, char **p_argv) {
 	std::string images, out, ocamcalib_path;
 	bool force = false, board_given = false, square_given = false, is_recording = false;
 	ClockOffsetOptions clock_options;
@@ -234,4 +232,10 @@ int main(int p_argc, char **p_argv) {
 			out.c_str(), r.rgb_rms_px, r.fisheye_rms_px, r.pair_rgb_rms_px, r.pair_fisheye_rms_px, r.depth_scale, r.depth_residual_rms_m * 1e3,
 			rig.fisheye_time_offset_s * 1000.0, rig.photometry.known ? 1 : 0);
 	return 0;
+}
+
+} // namespace
+
+int main(int p_argc, char **p_argv) {
+	return roomprobe::cli::guarded_main("roomprobe_calibrate", [&] { return run(p_argc, p_argv); });
 }

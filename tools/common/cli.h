@@ -4,11 +4,27 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <string>
 #include <vector>
 
 namespace roomprobe::cli {
+
+// A tool's main body, guarded: an exception that reaches the program's edge (a failed allocation
+// in OpenCV, a filesystem error) becomes one line naming the tool and exit code 1, never an abort.
+template <typename Run>
+int guarded_main(const char *p_tool, Run p_run) {
+	try {
+		return p_run();
+	} catch (const std::exception &e) {
+		std::fprintf(stderr, "%s: %s\n", p_tool, e.what());
+	} catch (...) {
+		std::fprintf(stderr, "%s: an unexpected error\n", p_tool);
+	}
+	return 1;
+}
 
 // p_text as finite numbers separated by commas ("0.3,8", "-5,0"); false on anything else.
 inline bool parse_number_list(const std::string &p_text, std::vector<double> *r_values) {

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include "../common/cli.h"
 
 using namespace roomprobe::drivers;
 
@@ -24,9 +25,7 @@ void print_device(const DeviceInfo &p_info) {
 	}
 }
 
-} // namespace
-
-int main(int p_argc, char **p_argv) {
+int run(int p_argc, char **p_argv) {
 	bool fake = false;
 	for (int i = 1; i < p_argc; i++) {
 		if (std::strcmp(p_argv[i], "--fake") == 0) {
@@ -84,4 +83,10 @@ int main(int p_argc, char **p_argv) {
 	}
 	std::printf("summary: openni2=%zu aravis=%zu v4l2=%zu\n", openni2, cameras.size(), nodes.size());
 	return 0;
+}
+
+} // namespace
+
+int main(int p_argc, char **p_argv) {
+	return roomprobe::cli::guarded_main("roomprobe_devices", [&] { return run(p_argc, p_argv); });
 }

@@ -12,11 +12,14 @@
 #include "../common/cli.h"
 
 #include <cstdio>
+#include <filesystem>
 #include <cstdlib>
 #include <iostream>
 #include <string>
 
-int main(int argc, char **argv) {
+namespace {
+
+int run(int argc, char **argv) {
 	roomprobe::EvaluationOptions options;
 	bool per_frame = false, quiet = false, budget = false;
 	auto usage = [](const char *p_error) {
@@ -43,8 +46,8 @@ int main(int argc, char **argv) {
 				return usage("--out needs a folder");
 			}
 		} else if (arg == "--cubemap-size") {
-			if (!cursor.positive_integer(&n)) {
-				return usage("--cubemap-size needs a positive integer");
+			if (!cursor.positive_integer(&n) || n > 4096) {
+				return usage("--cubemap-size needs a whole number of pixels in [1, 4096]");
 			}
 			options.cubemap_size = int(n);
 		} else if (arg == "--texel-size") {
@@ -82,6 +85,10 @@ int main(int argc, char **argv) {
 	if (options.recording.empty()) {
 		return usage("--recording is required");
 	}
+	std::error_code ec;
+	if (!options.out.empty() && std::filesystem::exists(options.out, ec) && !std::filesystem::is_directory(options.out, ec)) {
+		return usage(("--out " + options.out + " is a file, not a folder: the cubemaps are written into a folder").c_str());
+	}
 	if (!quiet) {
 		options.progress = [](const std::string &p_line) { std::cerr << p_line << "\n"; };
 	}
@@ -101,4 +108,10 @@ int main(int argc, char **argv) {
 	}
 	std::cout << roomprobe::format_evaluation(result, per_frame);
 	return 0;
+}
+
+} // namespace
+
+int main(int argc, char **argv) {
+	return roomprobe::cli::guarded_main("roomprobe_eval", [&] { return run(argc, argv); });
 }

@@ -22,9 +22,7 @@ int usage_error(const std::string &p_message) {
 	return 2;
 }
 
-} // namespace
-
-int main(int p_argc, char **p_argv) {
+int run(int p_argc, char **p_argv) {
 	std::string recording, out;
 	long first = 0, frames = 0;
 	cli::Arguments args(p_argc, p_argv, 1);
@@ -75,4 +73,10 @@ int main(int p_argc, char **p_argv) {
 	const size_t written = frames > 0 ? std::min(size_t(frames), reader.rgbd_count() - size_t(first)) : reader.rgbd_count() - size_t(first);
 	std::printf("summary: out=%s frames=%zu width=%d height=%d\n", out.c_str(), written, reader.get_rig().rgb.width, reader.get_rig().rgb.height);
 	return 0;
+}
+
+} // namespace
+
+int main(int p_argc, char **p_argv) {
+	return roomprobe::cli::guarded_main("roomprobe_oni", [&] { return run(p_argc, p_argv); });
 }

@@ -47,9 +47,7 @@ int usage_error(const std::string &p_message) {
 	return 2;
 }
 
-} // namespace
-
-int main(int p_argc, char **p_argv) {
+int run(int p_argc, char **p_argv) {
 	std::string rig_path, out, rgbd_uri, fisheye_id, backend = "aravis";
 	double seconds = 0.0, rgbd_latency_ms = -1.0, fisheye_latency_ms = -1.0; // < 0: the rig file's
 	bool use_rgbd = true, use_fisheye = true, fake = false;
@@ -185,4 +183,10 @@ int main(int p_argc, char **p_argv) {
 			(unsigned long long)status.written[1], (unsigned long long)status.dropped[1], (unsigned long long)status.gaps,
 			status.megabytes_written, status.megabytes_per_s, rgbd_host.p50_ms, rgbd_host.p95_ms, fisheye_host.p50_ms, fisheye_host.p95_ms, closed.ok ? 1 : 0);
 	return closed.ok ? 0 : 1;
+}
+
+} // namespace
+
+int main(int p_argc, char **p_argv) {
+	return roomprobe::cli::guarded_main("roomprobe_record", [&] { return run(p_argc, p_argv); });
 }

@@ -92,9 +92,7 @@ bool parse_u64(const std::string &p_text, uint64_t *r_value) {
 	}
 }
 
-} // namespace
-
-int main(int argc, char **argv) {
+int run(int argc, char **argv) {
 	using namespace roomprobe;
 	std::string scene_name, out, rig_path = "calib/synthetic_rig.yaml", hdri;
 	bool hdri_given = false;
@@ -280,4 +278,10 @@ int main(int argc, char **argv) {
 			t.fisheye_frames ? 1000.0 * t.fisheye_s / t.fisheye_frames : 0.0, t.cubemap_s, t.cubemaps ? 1000.0 * t.cubemap_s / t.cubemaps : 0.0,
 			t.write_wait_s, t.calibration_s, total);
 	return 0;
+}
+
+} // namespace
+
+int main(int argc, char **argv) {
+	return roomprobe::cli::guarded_main("roomprobe_synth", [&] { return run(argc, argv); });
 }

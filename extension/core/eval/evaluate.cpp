@@ -240,6 +240,15 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		result.error = p_options.recording + ": no ground-truth cubemaps";
 		return result;
 	}
+	// Nothing to score from nothing: every variant but the dense ones needs fisheye frames.
+	if (reader.fisheye_count() == 0) {
+		result.error = p_options.recording + ": no fisheye frames (fisheye.txt lists none)";
+		return result;
+	}
+	if (p_options.dense && reader.rgbd_count() == 0) {
+		result.error = p_options.recording + ": no RGB-D frames (rgb.txt and depth.txt list none; --no-dense scores the coarse model alone)";
+		return result;
+	}
 	const Rig &rig = reader.get_rig();
 	const RoomInfo &room = reader.get_room();
 	const Trajectory &trajectory = reader.ground_truth_trajectory(RecordingStream::Rgbd);
@@ -352,6 +361,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	result.start_s = events.empty() ? 0.0 : events.front().time_s;
 	size_t next_event = 0;
 	double baseline_total_ms = 0.0, metrics_total_ms = 0.0;
+	size_t rgbd_frames_used = 0;
 	size_t comparisons = 0;
 	size_t count = reader.ground_truth_cubemap_count();
 	if (p_options.max_cubemaps > 0 && p_options.max_cubemaps < count) {
@@ -366,6 +376,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 				if (dense) {
 					RgbdFrameResult rgbd = reader.read_rgbd(event.index);
 					if (rgbd.ok) {
+						rgbd_frames_used++;
 						engine_gain.push_rgbd(rgbd.frame);
 						engine_tracked.push_rgbd(std::move(rgbd.frame));
 						slam_figures.add(*engine_tracked.tracked_frame(), trajectory, &result.slam);
@@ -514,6 +525,14 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	}
 	if (result.cubemaps == 0) {
 		result.error = p_options.recording + ": no ground-truth cubemap could be evaluated";
+		return result;
+	}
+	if (result.fisheye_frames_used == 0) {
+		result.error = p_options.recording + ": none of its " + std::to_string(reader.fisheye_count()) + " fisheye frames could be used (see the messages above)";
+		return result;
+	}
+	if (dense && rgbd_frames_used == 0) {
+		result.error = p_options.recording + ": none of its " + std::to_string(reader.rgbd_count()) + " RGB-D frames could be read (see the messages above)";
 		return result;
 	}
 	for (VariantScores &v : result.variants) {

@@ -243,6 +243,11 @@ std::string read_frame_index(const std::string &p_path, std::vector<FrameRef> *r
 			r_issues->push_back({ p_path, line.line, "'" + std::string(path) + "' is an absolute path; frame paths are relative to the recording folder; frame skipped" });
 			continue;
 		}
+		const fs::path normal = fs::path(std::string(path)).lexically_normal();
+		if (normal.empty() || *normal.begin() == ".." || normal == ".") {
+			r_issues->push_back({ p_path, line.line, "'" + std::string(path) + "' leaves the recording folder; frame paths stay inside it; frame skipped" });
+			continue;
+		}
 		if (!r_frames->empty() && !(timestamp > r_frames->back().timestamp_s)) {
 			const bool repeats = timestamp == r_frames->back().timestamp_s;
 			r_issues->push_back({ p_path, line.line,

@@ -19,7 +19,8 @@ cv::Mat depth_metres_from_raw(const cv::Mat &p_raw, double p_scale_m) {
 		const uint16_t *in = p_raw.ptr<uint16_t>(y);
 		float *out = depth_m.ptr<float>(y);
 		for (int x = 0; x < p_raw.cols; x++) {
-			out[x] = in[x] == 0 ? no_reading : float(double(in[x]) * p_scale_m);
+			// 0 and 65535 are the sensors' "no reading" (65535: saturated or invalid), never a distance.
+			out[x] = in[x] == 0 || in[x] == 65535 ? no_reading : float(double(in[x]) * p_scale_m);
 		}
 	}
 	return depth_m;

@@ -63,8 +63,8 @@ struct RgbdFrame {
 	CaptureInfo capture; // live frames only (exposure and gain stay unknown)
 };
 
-// depth_m from 16-bit raw depth (CV_16UC1, units of p_scale_m, 0 = no reading): CV_32FC1 metres,
-// NaN where there is no reading. Recordings (depth PNGs) and live cameras (OpenNI2's millimetres)
+// depth_m from 16-bit raw depth (CV_16UC1, units of p_scale_m, 0 or 65535 = no reading: sensors
+// mark saturated or invalid pixels with either): CV_32FC1 metres, NaN where there is no reading. Recordings (depth PNGs) and live cameras (OpenNI2's millimetres)
 // both come in this way.
 cv::Mat depth_metres_from_raw(const cv::Mat &p_raw, double p_scale_m);
 

@@ -67,9 +67,9 @@ std::string depth_to_raw(const cv::Mat &p_depth, double p_scale_m, const std::st
 				continue;
 			}
 			const double units = std::round(metres / p_scale_m);
-			if (units > 65535.0) {
+			if (units > 65534.0) { // 65535 reads back as "no reading" (depth_metres_from_raw)
 				return p_path + ": depth " + format_number(metres) + " m at pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-						") is beyond what 16 bits hold at depth_scale_m " + format_number(p_scale_m) + " (" + format_number(65535.0 * p_scale_m) + " m)";
+						") is beyond what 16 bits hold at depth_scale_m " + format_number(p_scale_m) + " (" + format_number(65534.0 * p_scale_m) + " m)";
 			}
 			out[x] = uint16_t(units);
 		}

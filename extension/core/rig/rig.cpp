@@ -50,6 +50,14 @@ struct Checker {
 			fail(p_field, "must be positive (got " + std::to_string(p_value) + ")");
 		}
 	}
+	// An image side: positive and at most RIG_MAX_IMAGE_SIDE pixels (a 100000-pixel side would ask
+	// for tens of gigabytes a frame before anything could say what is wrong).
+	void image_side(const std::string &p_field, int p_value) {
+		positive(p_field, p_value);
+		if (p_value > RIG_MAX_IMAGE_SIDE) {
+			fail(p_field, "must be at most " + std::to_string(RIG_MAX_IMAGE_SIDE) + " pixels (got " + std::to_string(p_value) + ")");
+		}
+	}
 	void non_negative(const std::string &p_field, double p_value) {
 		if (!(std::isfinite(p_value) && p_value >= 0.0)) {
 			fail(p_field, "must be zero or positive (got " + format_double(p_value) + ")");
@@ -67,8 +75,8 @@ std::string quaternion_problem(const glm::dquat &p_rotation) {
 std::string check_rig(const Rig &p_rig) {
 	Checker c;
 	const PinholeParams &rgb = p_rig.rgb;
-	c.positive("rgb.width", rgb.width);
-	c.positive("rgb.height", rgb.height);
+	c.image_side("rgb.width", rgb.width);
+	c.image_side("rgb.height", rgb.height);
 	c.positive("rgb.fx", rgb.fx);
 	c.positive("rgb.fy", rgb.fy);
 	c.finite("rgb.cx", rgb.cx);
@@ -97,8 +105,8 @@ std::string check_rig(const Rig &p_rig) {
 		return c.error;
 	}
 	const OmniParams &fisheye = p_rig.fisheye;
-	c.positive("fisheye.width", fisheye.width);
-	c.positive("fisheye.height", fisheye.height);
+	c.image_side("fisheye.width", fisheye.width);
+	c.image_side("fisheye.height", fisheye.height);
 	c.non_negative("fisheye.xi", fisheye.xi);
 	c.positive("fisheye.fx", fisheye.fx);
 	c.positive("fisheye.fy", fisheye.fy);

@@ -76,6 +76,8 @@ std::string save_rig(const std::string &p_path, const Rig &p_rig, const RigCalib
 inline constexpr int RIG_FILE_VERSION = 2;
 // A rotation in a rig file may be this far off unit norm (it is then normalised).
 inline constexpr double RIG_UNIT_TOLERANCE = 1e-6;
+// The largest image side a rig may declare, pixels (16K: beyond any RGB-D camera or fisheye).
+inline constexpr int RIG_MAX_IMAGE_SIDE = 16384;
 // Checks the values (positive sizes and focal lengths, finite numbers, a unit rotation, a lens
 // angle the unified model can project; none of the fisheye's for a rig without one): an empty
 // string, or "field: problem", e.g.

@@ -99,6 +99,10 @@ FloorplanCheck check_floorplan_unguarded(const Floorplan &p_floorplan) {
 	using Problem = FloorplanCheck::Problem;
 	const std::vector<Vec2> &points = p_floorplan.points;
 	const std::size_t n = points.size();
+	if (n > FLOORPLAN_MAX_POINTS) {
+		return fail(Problem::TooManyPoints, "floorplan has " + std::to_string(n) + " points; at most " + std::to_string(FLOORPLAN_MAX_POINTS) +
+						" are accepted (a room's corners, not a point cloud)");
+	}
 
 	for (std::size_t i = 0; i < n; ++i) {
 		if (!std::isfinite(points[i].x) || !std::isfinite(points[i].y)) {
@@ -174,6 +178,8 @@ const char *floorplan_problem_summary(FloorplanCheck::Problem p_problem) {
 			return "The ceiling is at or below the floor (ceiling height <= 0)";
 		case FloorplanCheck::Problem::NonFinite:
 			return "The floorplan or ceiling height is not a finite number";
+		case FloorplanCheck::Problem::TooManyPoints:
+			return "The floorplan has too many points";
 	}
 	return "The floorplan is invalid";
 }

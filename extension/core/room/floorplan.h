@@ -6,6 +6,7 @@
 
 #include "room_types.h"
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,11 @@ struct Floorplan {
 	double ceiling_height_m = 0.0; // Floor-to-ceiling height, metres; must be > 0.
 };
 
+// The most corners a floorplan may have. A room's walls number in the tens; the checks and the
+// room mesh grow with the square of the count, so a 100000-point polygon (a point cloud pasted
+// by mistake) once held the editor's main thread for minutes. Refused before anything else runs.
+inline constexpr std::size_t FLOORPLAN_MAX_POINTS = 1024;
+
 // Result of check_floorplan(). When ok is true, problem is None and message is empty.
 struct FloorplanCheck {
 	enum class Problem {
@@ -37,6 +43,7 @@ struct FloorplanCheck {
 		ZeroArea, // All points collinear (or the polygon otherwise encloses no area).
 		CeilingNotPositive, // ceiling_height_m <= 0.
 		NonFinite, // A coordinate or the ceiling height is NaN or infinite.
+		TooManyPoints, // More than FLOORPLAN_MAX_POINTS points.
 	};
 
 	bool ok = true;
@@ -48,7 +55,7 @@ struct FloorplanCheck {
 // least 3 points, a positive ceiling, no repeated consecutive points, a simple
 // (non-self-intersecting) polygon with non-zero area. Either orientation is
 // accepted. Reports only the first problem found, checking in this order:
-// NonFinite, TooFewPoints, CeilingNotPositive, repeated consecutive points
+// TooManyPoints (before reading a point), NonFinite, TooFewPoints, CeilingNotPositive, repeated consecutive points
 // (SelfIntersecting), all points collinear (ZeroArea), crossing/touching edges
 // (SelfIntersecting). Never throws (the core is exception-free at its API).
 FloorplanCheck check_floorplan(const Floorplan &p_floorplan);
