@@ -80,10 +80,9 @@ cv::Mat observed_mask(const CoarseTexture &p_texture) {
 	if (p_texture.quality.empty()) {
 		return observed;
 	}
-	cv::Mat one_channel = cv::Mat(p_texture.quality > 0.0f) / 255; // CV_8U 0 or 1
-	cv::Mat as_float;
-	one_channel.convertTo(as_float, CV_32F);
-	cv::cvtColor(as_float, observed, cv::COLOR_GRAY2RGB);
+	cv::Mat one_channel;
+	cv::Mat(p_texture.quality > 0.0f).convertTo(one_channel, CV_32F, 1.0 / 255.0); // 255 or 0 -> 1 or 0
+	cv::cvtColor(one_channel, observed, cv::COLOR_GRAY2RGB);
 	return observed;
 }
 

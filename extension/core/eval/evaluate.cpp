@@ -113,10 +113,10 @@ using FaceMasks = std::array<cv::Mat, 6>;
 FaceMasks dense_coverage(const Cubemap &p_live, const Cubemap &p_coarse_only) {
 	FaceMasks covered;
 	for (int f = 0; f < 6; f++) {
-		cv::Mat differs;
-		cv::compare(p_live.faces[size_t(f)].reshape(1), p_coarse_only.faces[size_t(f)].reshape(1), differs, cv::CMP_NE);
-		cv::reduce(differs.reshape(3, p_live.size).reshape(1, p_live.size * p_live.size), covered[size_t(f)], 1, cv::REDUCE_MAX);
-		covered[size_t(f)] = covered[size_t(f)].reshape(1, p_live.size);
+		cv::Mat difference, channels[3];
+		cv::absdiff(p_live.faces[size_t(f)], p_coarse_only.faces[size_t(f)], difference);
+		cv::split(difference, channels);
+		covered[size_t(f)] = (channels[0] + channels[1] + channels[2]) > 0.0f; // any channel differs
 	}
 	return covered;
 }
@@ -209,6 +209,30 @@ void compose_oracles(const Cubemap &p_live, const FaceMasks &p_dense, const Cube
 					dense_oracle[x] = truth[x];
 				}
 			}
+		}
+	}
+}
+
+// EvaluationResult::mirrors at one cubemap: mirror spheres of MIRROR_RADII_M at the probe, read
+// from the true map (p_truth with the scene's own distances) and from p_live; a radius that would
+// reach into the scene is left out.
+void measure_mirrors(const synth::SynthRenderer &p_scene, const Cubemap &p_truth, const Cubemap &p_live, const glm::dvec3 &p_probe, double p_time_s,
+		EvaluationResult *r_result) {
+	Cubemap true_map = p_truth;
+	true_map.distance_m = true_distances(p_scene, p_probe, p_truth.size);
+	r_result->mirrors.clear();
+	r_result->mirror_clearance_m = std::numeric_limits<double>::infinity();
+	for (const cv::Mat &face : true_map.distance_m) {
+		double lowest = std::numeric_limits<double>::infinity();
+		cv::minMaxLoc(face, &lowest, nullptr, nullptr, nullptr, face > 0.0f); // rays that hit nothing do not count
+		r_result->mirror_clearance_m = std::min(r_result->mirror_clearance_m, lowest);
+	}
+	for (const double radius : MIRROR_RADII_M) {
+		if (radius > 0.95 * r_result->mirror_clearance_m) {
+			continue; // the sphere would reach into the scene
+		}
+		for (const bool true_one : { true, false }) {
+			r_result->mirrors.push_back({ radius, true_one, mirror_sphere_error(p_scene, true_one ? true_map : p_live, p_probe, radius, p_time_s) });
 		}
 	}
 }
@@ -462,26 +486,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 					split_by_direction(engine_tracked, *direction_renderer, estimates[VARIANT_DENSE_SLAM], covers(), gt, probe, render_size, result.directions);
 					if (truth_scene) {
 						split_by_geometry(estimates[VARIANT_DENSE_SLAM], covers(), gt, prism_mask, result.geometry);
-					}
-					if (truth_scene) {
-						Cubemap true_map = gt;
-						true_map.distance_m = true_distances(*truth_scene, probe, size);
-						result.mirrors.clear();
-						result.mirror_clearance_m = std::numeric_limits<double>::infinity();
-						for (const cv::Mat &face : true_map.distance_m) {
-							double lowest = std::numeric_limits<double>::infinity();
-							cv::minMaxLoc(face, &lowest, nullptr, nullptr, nullptr, face > 0.0f); // rays that hit nothing do not count
-							result.mirror_clearance_m = std::min(result.mirror_clearance_m, lowest);
-						}
-						for (const double radius : MIRROR_RADII_M) {
-							if (radius > 0.95 * result.mirror_clearance_m) {
-								continue; // the sphere would reach into the scene
-							}
-							for (const bool true_one : { true, false }) {
-								result.mirrors.push_back({ radius, true_one,
-										mirror_sphere_error(*truth_scene, true_one ? true_map : estimates[VARIANT_DENSE_SLAM], probe, radius, ref.timestamp_s) });
-							}
-						}
+						measure_mirrors(*truth_scene, gt, estimates[VARIANT_DENSE_SLAM], probe, ref.timestamp_s, &result);
 					}
 					result.directions_at_s = ref.timestamp_s;
 				}

@@ -33,11 +33,11 @@ MirrorScores mirror_sphere_error(const synth::SynthRenderer &p_scene, const Cube
 		}
 		scores.views++;
 		const glm::dvec3 forward = -side, right = glm::normalize(glm::cross(forward, up)), down = glm::cross(forward, right);
+		const glm::dvec3 o = eye - p_centre;
 		for (int v = 0; v < p_image_size; v++) {
 			for (int u = 0; u < p_image_size; u++) {
 				const glm::dvec3 ray = glm::normalize(forward + ((u - c) / focal) * right + ((v - c) / focal) * down);
 				// The ray's first point on the sphere.
-				const glm::dvec3 o = eye - p_centre;
 				const double b = glm::dot(o, ray), discriminant = b * b - (glm::dot(o, o) - p_radius_m * p_radius_m);
 				if (discriminant <= 0.0) {
 					continue;

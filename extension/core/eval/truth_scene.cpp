@@ -8,7 +8,7 @@
 
 namespace roomprobe {
 
-TruthSceneResult load_truth_scene(const std::string &p_recording, const std::string &p_panorama_override) {
+TruthSceneResult load_truth_scene(const std::string &p_recording) {
 	TruthSceneResult result;
 	const std::string path = (std::filesystem::path(p_recording) / "synth.yaml").string();
 	std::error_code ec;
@@ -31,7 +31,7 @@ TruthSceneResult load_truth_scene(const std::string &p_recording, const std::str
 		if (info["scene_panorama"].empty() || !info["scene_panorama"].isString()) {
 			// Recordings made before issue #16 do not say: the panorama (living_room's window,
 			// panorama_room's walls) would be guessed wrong.
-			if (p_panorama_override.empty() && (name == "living_room" || name == "panorama_room")) {
+			if (name == "living_room" || name == "panorama_room") {
 				result.error = path + ": no `scene_panorama` (made before it was recorded): make the recording again with ./roomprobe synth";
 				return result;
 			}
@@ -41,9 +41,6 @@ TruthSceneResult load_truth_scene(const std::string &p_recording, const std::str
 	} catch (const cv::Exception &e) {
 		result.error = path + ": cannot be read (" + e.what() + ")";
 		return result;
-	}
-	if (!p_panorama_override.empty()) {
-		options.panorama_path = p_panorama_override;
 	}
 	const synth::SceneResult scene = synth::make_scene(name, options);
 	if (!scene.ok) {

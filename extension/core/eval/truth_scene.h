@@ -22,9 +22,8 @@ struct TruthSceneResult {
 
 // Rebuilds the scene of recording folder p_recording from its synth.yaml: `scene`, `duration_s`
 // and `scene_panorama` (the panorama's path or "none"; written by ./roomprobe synth since issue
-// #16, and required for the two scenes that show one; p_panorama_override replaces it when not
-// empty).
-TruthSceneResult load_truth_scene(const std::string &p_recording, const std::string &p_panorama_override = "");
+// #16, and required for the two scenes that show one).
+TruthSceneResult load_truth_scene(const std::string &p_recording);
 
 // A surface point lies on the room's prism (floor, ceiling or a wall of p_floorplan) within
 // p_tolerance_m: the room's shell, which the coarse model can show, rather than what stands in it.

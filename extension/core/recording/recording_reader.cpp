@@ -531,10 +531,9 @@ FisheyeFrameResult RecordingReader::read_fisheye(size_t p_index) const {
 		hdr = true;
 		if (error.empty()) {
 			// NaN or infinite radiance would pass through every stage and score as perfect.
-			cv::Mat finite;
-			cv::Mat(image == image).convertTo(finite, CV_8U); // NaN != NaN
-			const int non_finite = int(image.total() * 3) - cv::countNonZero(finite.reshape(1)) +
-					cv::countNonZero(cv::abs(image.reshape(1)) == std::numeric_limits<float>::infinity());
+			const cv::Mat values = image.reshape(1);
+			// NaN compares false, so |x| < infinity holds exactly for the finite values.
+			const int non_finite = int(values.total()) - cv::countNonZero(cv::abs(values) < std::numeric_limits<float>::infinity());
 			if (non_finite > 0) {
 				error = path + ": " + std::to_string(non_finite) + " channel value" + (non_finite == 1 ? " is" : "s are") +
 						" NaN or infinite; an HDR frame must hold finite radiance";
