@@ -6,6 +6,10 @@ Suites, in order (see tests/README.md):
              host by ./roomprobe test before this runner, which reports them (--host-results)
   build      scons -j<nproc> tests=yes (or the arguments in $ROOMPROBE_SCONS_ARGS / --scons-args)
   core       every build/tests/*_tests (doctest) program
+  fuzz       every libFuzzer target of tests/fuzz/ for a few seconds on its corpus (tools/fuzz/fuzz.py;
+             clang builds the core again into build/fuzz/)
+  soak       roomprobe_bench soak: the fixture back and forth through the engine for 3000 frames;
+             resident memory flat after the warm-up
   editor     godot --headless --editor --quit: a fresh copy of the project and the project itself
              import, and the extension loads and unloads, without errors
   godot      tests/godot/test_*.gd, headless
@@ -14,7 +18,7 @@ Suites, in order (see tests/README.md):
 The last line printed is exactly "N passed, N failed" (", N skipped" appended when some were
 skipped); the exit status is 0 only when nothing failed. Raw logs: build/test-logs/.
 
---sanitize thread|address builds with scons sanitize=... and runs only the core suite's
+--sanitize thread|address (address,undefined) builds with scons sanitize=... and runs only the core suite's
 build/debug-tsan|asan/tests/core_tests, under ThreadSanitizer or AddressSanitizer with UBSan.
 """
 
@@ -30,7 +34,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import rp_godot as rp  # noqa: E402
 
-SUITES = ["host", "package", "build", "core", "editor", "godot", "rendering"]
+SUITES = ["host", "package", "build", "core", "fuzz", "soak", "editor", "godot", "rendering"]
 LOGS = os.path.join(rp.BUILD, "test-logs")
 
 BUILD_TIMEOUT = 3600
@@ -97,7 +101,7 @@ def main():
     ap.add_argument("--no-build", action="store_true", help="skip the build (use what is built)")
     ap.add_argument("--scons-args", metavar="ARGS",
                     help="arguments for scons instead of '-j<nproc> tests=yes' (also $ROOMPROBE_SCONS_ARGS)")
-    ap.add_argument("--sanitize", choices=sorted(SANITIZER_ENV),
+    ap.add_argument("--sanitize", choices=sorted(SANITIZER_ENV) + ["address,undefined"],
                     help="build the core test program with -fsanitize=thread (or address,undefined) into "
                          "build/<target>-tsan|asan/ and run only the core suite under it")
     ap.add_argument("-v", "--verbose", action="store_true", help="show every output line of every step")
@@ -106,6 +110,8 @@ def main():
     ap.add_argument("--host-results", metavar="FILE",
                     help="the host suite's results, written by tests/host/test_paths.sh (./roomprobe test passes it)")
     opts = ap.parse_args()
+    if opts.sanitize == "address,undefined":
+        opts.sanitize = "address"  # the address build is AddressSanitizer and UndefinedBehaviorSanitizer
     if opts.sanitize and set(opts.suite or ["core"]) - {"build", "core"}:
         ap.error("--sanitize runs only the core suite (and the build)")
 
@@ -133,6 +139,10 @@ def main():
 
     if counted("core"):
         results.append(suite_core(opts))
+    if counted("fuzz"):
+        results.append(suite_fuzz(opts))
+    if counted("soak"):
+        results.append(suite_soak(opts))
 
     needs_import = any(counted(n) for n in ("editor", "godot", "rendering"))
     if needs_import:
@@ -156,6 +166,79 @@ def main():
     if opts.filter and ran and sum(s.passed + s.failed + s.skipped for s in ran) == 0:
         ran[0].fail(f"no test matched --filter '{opts.filter}'")
     return finish(results, start)
+
+
+# ---------------------------------------------------------------------------------- fuzz
+
+# Seconds each libFuzzer target runs in the suite, on its corpus (the long runs are
+# ./roomprobe fuzz TARGET --runs N, outside the suite).
+FUZZ_SECONDS = 10
+FUZZ_RESULT = re.compile(r"^fuzz (\w+): (\d+) executions in .*?(no crash.*|FAILED.*)$")
+
+
+def suite_fuzz(opts):
+    """tools/fuzz/fuzz.py all --seconds FUZZ_SECONDS: builds the targets with clang (build/fuzz/),
+    makes their seed corpora when missing, and fuzzes each; one test per target."""
+    s = Suite("fuzz")
+    log = os.path.join(LOGS, "fuzz.log")
+    s.logs.append(log)
+    rp.header(f"fuzz: every libFuzzer target of tests/fuzz/ for {FUZZ_SECONDS} s on its corpus (tools/fuzz/fuzz.py)")
+    s.ran = True
+    echo = (lambda line: print("    " + line, flush=True)) if opts.verbose else None
+    r = rp.run(["python3", os.path.join(rp.REPO, "tools", "fuzz", "fuzz.py"), "all", "--seconds", str(FUZZ_SECONDS)], log, 3600, echo=echo)
+    s.seconds = r.seconds
+    for line in r.lines:
+        m = FUZZ_RESULT.match(line)
+        if m:
+            print(line)
+            if m.group(3).startswith("no crash"):
+                s.passed += 1
+            else:
+                s.fail(f"fuzz {m.group(1)}: {m.group(3)}")
+    if s.passed + s.failed == 0 or (r.rc != 0 and s.failed == 0):
+        s.fail(f"fuzz: {rp.describe_exit(r)} (see {rp.relpath(log)})")
+        rp.tail(r.lines, 30)
+    return s
+
+
+# ---------------------------------------------------------------------------------- soak
+
+# The short soak (the long one: ./roomprobe soak --frames 50000): the fixture played back and
+# forth for SOAK_FRAMES RGB-D frames after SOAK_WARMUP frames of warm-up (resident memory climbs
+# for the first couple of thousand frames as the allocators' pools fill, then stays), 32² probe.
+SOAK_FRAMES = 3000
+SOAK_WARMUP = 2000
+SOAK_SUMMARY = re.compile(r"^summary: mode=soak .*rss_growth_pct=(-?[\d.]+) .*time_ratio=([\d.]+) lost=(\d+) unreadable=(\d+)")
+
+
+def suite_soak(opts):
+    """roomprobe_bench soak on the fixture recording: one test, passed when resident memory stays
+    within 5 % after the warm-up and every frame reads. The time per frame is reported, not judged
+    here (a benchmark's figure; the long soak judges it)."""
+    s = Suite("soak")
+    log = os.path.join(LOGS, "soak.log")
+    s.logs.append(log)
+    make_fixture_recording()
+    cmd = [os.path.join(rp.BUILD, "bin", "roomprobe_bench"), "soak", "--recording", FIXTURE_RECORDING, "--frames", str(SOAK_FRAMES),
+           "--warmup-frames", str(SOAK_WARMUP), "--probe-size", "32"]
+    rp.header(f"soak: {rp.relpath(cmd[0])} soak, {SOAK_FRAMES} frames of the fixture back and forth")
+    s.ran = True
+    echo = (lambda line: print("    " + line, flush=True)) if opts.verbose else None
+    r = rp.run(cmd, log, 3600, echo=echo)
+    s.seconds = r.seconds
+    m = next((SOAK_SUMMARY.match(line) for line in r.lines if SOAK_SUMMARY.match(line)), None)
+    if m is None:
+        s.fail(f"soak: {rp.describe_exit(r)}, no summary line (see {rp.relpath(log)})")
+        rp.tail(r.lines, 30)
+        return s
+    growth, ratio, lost, unreadable = float(m.group(1)), float(m.group(2)), int(m.group(3)), int(m.group(4))
+    print(next(line for line in r.lines if line.startswith("summary: mode=soak")))
+    if growth > 5.0 or unreadable > 0:
+        s.fail(f"soak: resident memory {growth:+.2f} % after the warm-up (at most +5 %), {unreadable} frames unreadable")
+    else:
+        s.passed += 1
+    s.notes.append(f"memory {growth:+.2f} %, time per frame x{ratio:.3f} last tenth / first, {lost} frames lost")
+    return s
 
 
 # ---------------------------------------------------------------------------------- host

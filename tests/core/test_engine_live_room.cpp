@@ -968,3 +968,74 @@ TEST_CASE("engine: a probe's map raycasts dense_faces_per_render faces and keeps
 		CHECK(face_diff(engine.probe_map(probe)->cubemap, full_moved, f) <= TEXEL_TOL);
 	}
 }
+
+// ---------------------------------------------------------------- corrupt frames mid-stream (issue #17)
+
+TEST_CASE("engine: corrupt frames in the middle of a stream are refused or lost and counted; tracking and the maps go on") {
+	const Recording &rec = recording();
+	LiveRoom engine;
+	REQUIRE(engine.configure(live_config(rec)).empty());
+	const int probe = engine.add_probe(rec.probe, PROBE_SIZE);
+	const RgbdFrame &sample = rec.rgbd.front();
+	// What a failing driver or a damaged file can hand over, each once, half-way through.
+	std::vector<RgbdFrame> bad_rgbd(4, sample);
+	bad_rgbd[0].rgb = cv::Mat(sample.rgb.rows / 2, sample.rgb.cols / 2, CV_8UC3, cv::Scalar(1, 2, 3)); // the wrong size
+	bad_rgbd[1].rgb = cv::Mat();
+	bad_rgbd[1].depth_m = cv::Mat(); // nothing at all
+	bad_rgbd[2].depth_m = cv::Mat(sample.depth_m.size(), CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
+	bad_rgbd[2].depth_m(cv::Rect(0, 0, 40, 40)).setTo(-3.0f); // infinite and negative depth
+	bad_rgbd[3].depth_m = cv::Mat(sample.depth_m.size(), CV_16UC1, cv::Scalar(500)); // the raw type, not metres
+	std::vector<FisheyeFrame> bad_fisheye(3, rec.fisheye.front());
+	bad_fisheye[0].image = cv::Mat(17, 23, CV_8UC1, cv::Scalar(9)); // the wrong size
+	bad_fisheye[1].image = cv::Mat(rec.fisheye.front().image.size(), CV_32FC3, cv::Scalar(std::numeric_limits<float>::quiet_NaN(), 1.0f, 1.0f));
+	bad_fisheye[1].hdr = true; // NaN radiance
+	bad_fisheye[2].image = cv::Mat();
+
+	size_t rgbd_seen = 0;
+	for (const Event &event : rec.events) {
+		if (!event.fisheye && rgbd_seen++ == RGBD_FRAMES / 2) {
+			for (RgbdFrame bad : bad_rgbd) {
+				bad.timestamp_s = rec.rgbd[event.index].timestamp_s - 0.004; // between two good frames
+				engine.push_rgbd(bad);
+			}
+			for (FisheyeFrame bad : bad_fisheye) {
+				bad.timestamp_s = rec.rgbd[event.index].timestamp_s - rec.rig.fisheye_time_offset_s - 0.002;
+				engine.push_fisheye(bad);
+			}
+		}
+		push_event(engine, rec, event);
+	}
+	engine.finish();
+	engine.render_probes();
+	const LiveRoomStats stats = engine.stats();
+	MESSAGE("stage errors " << stats.stage_errors << ", lost " << stats.lost << "; last error: " << stats.last_error << "; fisheye pushed " << stats.fisheye_pushed << ", integrated " << stats.fisheye_integrated << ", without pose " << stats.fisheye_without_pose << " (" << rec.fisheye.size() << " good)");
+	// Each bad RGB-D frame is lost (nothing fused from it); each bad fisheye frame is refused,
+	// named, and never integrated (a wrong-sized one once textured the room silently).
+	CHECK(stats.lost >= bad_rgbd.size());
+	CHECK(stats.stage_errors == bad_fisheye.size());
+	CHECK(stats.last_error.find("fisheye frame: an empty image") == 0);
+	CHECK(stats.fisheye_integrated == rec.fisheye.size());
+	// Tracking goes on: every good frame's pose as without the bad ones, to the tolerance that two
+	// runs of the same frames keep (the bad frames fuse nothing, so the model is the same).
+	const Trajectory &clean = step_result().trajectory;
+	const Trajectory tracked = engine.trajectory();
+	size_t compared = 0;
+	for (const RgbdFrame &good : rec.rgbd) {
+		Pose a, b;
+		std::string error;
+		if (clean.pose_at(good.timestamp_s, &a, &error) && tracked.pose_at(good.timestamp_s, &b, &error)) {
+			CHECK(glm::length(a.translation - b.translation) < 1e-3);
+			compared++;
+		}
+	}
+	CHECK(compared + 2 >= rec.rgbd.size());
+	// Nothing non-finite reached the coarse texture or the map.
+	const auto snapshot = engine.coarse_snapshot();
+	REQUIRE(snapshot != nullptr);
+	CHECK(cv::checkRange(snapshot->atlas));
+	const auto map = engine.probe_map(probe);
+	REQUIRE(map != nullptr);
+	for (const cv::Mat &face : map->cubemap.faces) {
+		CHECK(cv::checkRange(face));
+	}
+}

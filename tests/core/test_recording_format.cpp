@@ -12,6 +12,9 @@
 
 #include <doctest/doctest.h>
 
+#include <ImfChannelList.h>
+#include <ImfHeader.h>
+#include <ImfOutputFile.h>
 #include <ImfRgbaFile.h>
 
 #include <glm/gtc/quaternion.hpp>
@@ -612,7 +615,20 @@ TEST_CASE("damaged recording: a PNG with corrupt data fails to read, naming the 
 	const RgbdFrameResult broken = reader.read_rgbd(0);
 	CHECK_FALSE(broken.ok);
 	CHECK(contains(broken.error, "rgb/000000.png"));
+	CHECK_FALSE(contains(broken.error, "truncated")); // the file is whole: corrupt, not cut short
 	CHECK(reader.read_rgbd(1).ok);
+
+	// A damaged chunk length is corruption too, not a file cut short.
+	const fs::path png1 = folder / "rgb/000001.png";
+	std::string bytes1 = read_text(png1);
+	const size_t idat1 = bytes1.find("IDAT");
+	REQUIRE(idat1 != std::string::npos);
+	bytes1[idat1 - 4] = char(0xF0);
+	write_text(png1, bytes1);
+	const RgbdFrameResult bad_length = reader.read_rgbd(1);
+	CHECK_FALSE(bad_length.ok);
+	CHECK(contains(bad_length.error, "rgb/000001.png: corrupt PNG: chunk 'IDAT'"));
+	CHECK(contains(bad_length.error, "above PNG's limit"));
 
 	fs::remove(folder / "fisheye/000001.exr");
 	const FisheyeFrameResult missing = reader.read_fisheye(1);
@@ -662,6 +678,31 @@ TEST_CASE("damaged recording: 65535 depth is no reading, never 65.5 m; an HDR fr
 	const FisheyeFrameResult bad = reader.read_fisheye(hdr);
 	CHECK_FALSE(bad.ok);
 	CHECK(contains(bad.error, exr_path + ": 2 channel values are NaN or infinite"));
+	// RoomProbe's writer refuses to write such a frame at all.
+	{
+		RecordingWriter writer;
+		fs::remove_all(folder.string() + "_writer");
+		REQUIRE(writer.open((folder.string() + "_writer"), make_rig(), make_room()).ok);
+		FisheyeFrame nan_frame = make_hdr_fisheye();
+		nan_frame.image.at<cv::Vec3f>(3, 3)[1] = std::numeric_limits<float>::quiet_NaN();
+		const RecordingStatus refused = writer.add_fisheye(nan_frame);
+		CHECK_FALSE(refused.ok);
+		CHECK(contains(refused.error, "1 of its 4800 HDR values are NaN or infinite"));
+		fs::remove_all(folder.string() + "_writer");
+	}
+	// An EXR whose header claims a huge image (a damaged or hostile file): refused before any
+	// pixel is allocated (100000 x 100000 floats would be 120 GB).
+	{
+		Imf::Header header(100000, 100000);
+		header.channels().insert("R", Imf::Channel(Imf::FLOAT));
+		header.channels().insert("G", Imf::Channel(Imf::FLOAT));
+		header.channels().insert("B", Imf::Channel(Imf::FLOAT));
+		Imf::OutputFile file(exr_path.c_str(), header); // no pixels written: only the header matters
+	}
+	const FisheyeFrameResult huge = reader.read_fisheye(hdr);
+	CHECK_FALSE(huge.ok);
+	CHECK(contains(huge.error, exr_path + ": "));
+	CHECK(contains(huge.error, "100000 x 100000"));
 }
 
 TEST_CASE("damaged recording: a timestamp going backwards in rgb.txt skips that frame") {
@@ -755,6 +796,12 @@ TEST_CASE("damaged recording: malformed room.yaml fails open, naming the file an
 	CHECK(contains(status.error, "malformed YAML"));
 	CHECK_FALSE(reader.is_open());
 
+	// Found by fuzzing (./roomprobe fuzz room): OpenCV's YAML parser never returned on it.
+	write_text(folder / "room.yaml", "%YAML:1.0\n---J#  RoomProom: 1.\n(  - [ 0., 0. ]\n");
+	status = reader.open(folder.string());
+	CHECK_FALSE(status.ok);
+	CHECK(contains(status.error, "room.yaml: malformed YAML: line 2: text after the document marker"));
+
 	write_text(folder / "room.yaml", "%YAML:1.0\n---\nroomprobe_room: 1\nfloorplan_m: [ [0, 0], [4, 0, 1], [4, 5] ]\nceiling_height_m: 2.5\n"
 									 "initial_rgb_pose:\n  rotation_xyzw: [0, 0, 0, 1]\n  translation_m: [0, 1.5, 0]\n");
 	status = reader.open(folder.string());
@@ -809,6 +856,15 @@ TEST_CASE("damaged recording: a missing rig.yaml or index fails open, naming the
 	status = reader.open((folder / "nowhere").string());
 	CHECK_FALSE(status.ok);
 	CHECK(contains(status.error, "no such recording folder"));
+
+	// A folder where an index should be is said to be one, not "missing".
+	const fs::path other = scratch_folder("index_is_folder");
+	write_recording(other, 3);
+	fs::remove(other / "rgb.txt");
+	fs::create_directory(other / "rgb.txt");
+	status = reader.open(other.string());
+	CHECK_FALSE(status.ok);
+	CHECK(contains(status.error, "rgb.txt: a folder, not a file"));
 }
 
 TEST_CASE("damaged recording: broken ground truth is an issue, not a failure") {

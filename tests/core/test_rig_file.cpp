@@ -260,6 +260,8 @@ TEST_CASE("rig file: missing, empty and malformed files give an error naming the
 		{ "a_list", "%YAML:1.0\n---\n- 1\n- 2\n", "roomprobe_rig" },
 		{ "only_header", "%YAML:1.0\n---\n", "roomprobe_rig" },
 		{ "binary", std::string("%YAML:1.0\n---\n\x01\x02\xff\xfe: [\x7f\n", 20), "" },
+		// Found by fuzzing (./roomprobe fuzz rig): OpenCV's YAML parser never returned on it.
+		{ "text_after_marker", "%YAML:1.0\n---J a: 1.\nx  - 1\n", "line 2: text after the document marker" },
 	};
 	for (const Case &c : cases) {
 		const std::string case_name = c.name;

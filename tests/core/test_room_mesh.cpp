@@ -536,6 +536,14 @@ TEST_CASE("an atlas larger than max_atlas_size is an error") {
 	CHECK_FALSE(result.ok);
 	CHECK(result.error.find("max_atlas_size") != std::string::npos);
 
+	// 1e-300 m once printed an overflowed texel count (-9223372036854775808); the count stays a
+	// positive number in the message.
+	options.texel_size_m = 1e-300;
+	result = build_room_mesh(figure4_two_rooms(), options);
+	CHECK_FALSE(result.ok);
+	CHECK(result.error.find("e+30") != std::string::npos);
+	CHECK(result.error.find('-') == std::string::npos);
+
 	// The default fits easily.
 	CHECK(build_room_mesh(figure4_two_rooms()).ok);
 }

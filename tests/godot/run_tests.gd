@@ -22,13 +22,18 @@ const TEST_CASE_SCRIPT := "res://tests/lib/test_case.gd"
 class ErrorCollector extends Logger:
 	var _mutex := Mutex.new()
 	var _errors: Array[String] = []
+	var _warnings: Array[String] = []
 	## Script errors logged so far (a test stopped by one never completes its coroutine).
 	var script_errors := 0
 
 	func _log_error(function: String, file: String, line: int, code: String, rationale: String, _editor_notify: bool, error_type: int, script_backtraces: Array[ScriptBacktrace]) -> void:
-		if error_type == ERROR_TYPE_WARNING:
-			return
 		var details := rationale if not rationale.is_empty() else code
+		if error_type == ERROR_TYPE_WARNING:
+			# Warnings never fail a test; the ones a test expects (expect_warning) must occur.
+			_mutex.lock()
+			_warnings.append(details)
+			_mutex.unlock()
+			return
 		var where := "%s:%d" % [file, line]
 		# For errors raised from a script (push_error, failed engine calls) name the script line.
 		for bt in script_backtraces:
@@ -48,6 +53,13 @@ class ErrorCollector extends Logger:
 		_mutex.lock()
 		var out := _errors.duplicate()
 		_errors.clear()
+		_mutex.unlock()
+		return out
+
+	func take_warnings() -> Array[String]:
+		_mutex.lock()
+		var out := _warnings.duplicate()
+		_warnings.clear()
 		_mutex.unlock()
 		return out
 
@@ -204,6 +216,7 @@ func _run_test(tc: RoomProbeTestCase, file: String, test_name: String) -> void:
 	var id := "%s::%s" % [file, test_name]
 	tc._rp_reset()
 	_collector.take()
+	_collector.take_warnings()
 	# Before, the test and after each get timeout_s; then some slack.
 	_deadline_msec = Time.get_ticks_msec() + int(tc.timeout_s * 3000.0) + 30_000
 	var orphans_before := Performance.get_monitor(Performance.OBJECT_ORPHAN_NODE_COUNT)
@@ -238,6 +251,10 @@ func _run_test(tc: RoomProbeTestCase, file: String, test_name: String) -> void:
 			problems.append("engine error: %s" % e.replace("\t", " (") + ")")
 	for e in expected:
 		problems.append("expected an error containing \"%s\", none was logged" % e)
+	var warnings := _collector.take_warnings()
+	for w in tc._expected_warnings:
+		if not warnings.any(func(logged: String) -> bool: return logged.contains(w)):
+			problems.append("expected a warning containing \"%s\", none was logged" % w)
 	var orphans := int(Performance.get_monitor(Performance.OBJECT_ORPHAN_NODE_COUNT) - orphans_before)
 	if orphans > 0:
 		_orphans_reported += orphans

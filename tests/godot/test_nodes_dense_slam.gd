@@ -109,6 +109,17 @@ func test_places_an_object_on_the_real_table() -> void:
 	# Through the AR camera's centre pixel: the same as a ray along its view direction.
 	var centre: Dictionary = slam.place_on_surface(Vector2(s.camera.get_viewport().get_visible_rect().size / 2.0))
 	assert_false(centre.is_empty(), "the camera looks at something")
+	assert_false(centre.has("error"), str(centre))
+	# Bad arguments are errors, never read as "nothing hit" (issue #17).
+	expect_error("place_on_surface: screen_position (100000, 5) is outside the camera's viewport")
+	var off_screen: Dictionary = slam.place_on_surface(Vector2(100000, 5))
+	assert_true(off_screen.has("error") and not off_screen.has("position"), str(off_screen))
+	expect_error("place_on_ray: direction (0, 0, 0) is zero")
+	var zero: Dictionary = slam.place_on_ray(Vector3(2.5, 1.6, 2.0), Vector3.ZERO)
+	assert_true(zero.has("error"), str(zero))
+	expect_error("must be finite")
+	var nan_ray: Dictionary = slam.place_on_ray(Vector3(2.5, 1.6, 2.0), Vector3(NAN, -1, 0))
+	assert_true(nan_ray.has("error"), str(nan_ray))
 	# A SurfaceAnchor above the table puts itself and its child down on it by itself; one over
 	# the bare floor (only the coarse room there) waits.
 	var anchor = ClassDB.instantiate("SurfaceAnchor")
@@ -198,14 +209,37 @@ func test_tracking_settings_reach_the_engine_and_bad_values_warn() -> void:
 	assert_eq(slam.colour_weight, 0.3)
 	assert_eq(slam.tracking_max_depth, 8.0)
 	assert_eq(slam.fusion_max_depth, 4.0)
-	for bad in [["colour_weight", -1.0], ["tracking_max_depth", 0.1], ["fusion_max_depth", NAN], ["tracking_max_depth", INF]]:
-		slam.set(bad[0], bad[1])
-		assert_true(" ".join(slam.get_warnings()).contains("colour_weight in 0..100"), "%s = %s: %s" % [bad[0], bad[1], slam.get_warnings()])
-		assert_false(slam.process_rig_frame(), "%s = %s still processes frames" % [bad[0], bad[1]])
+	# Out of range: clamped, with a warning; not a number: refused, with an error (issue #17).
+	expect_warning("DenseSLAM.colour_weight must be within [0, 100]")
+	slam.colour_weight = -1.0
+	assert_eq(slam.colour_weight, 0.0)
+	expect_warning("DenseSLAM.tracking_max_depth must be within [0.5, 100] m")
+	slam.tracking_max_depth = 0.1
+	assert_eq(slam.tracking_max_depth, 0.5)
+	expect_error("DenseSLAM.fusion_max_depth must be a finite number")
+	slam.fusion_max_depth = NAN
+	assert_eq(slam.fusion_max_depth, 4.0)
+	expect_error("DenseSLAM.tracking_max_depth must be a finite number")
+	slam.tracking_max_depth = INF
+	assert_eq(slam.tracking_max_depth, 0.5)
+	expect_warning("DenseSLAM.mesh_update_interval must be within [1, 300] frames")
+	slam.mesh_update_interval = 100000
+	assert_eq(slam.mesh_update_interval, 300)
+	expect_warning("DenseSLAM.mesh_layers has bits above the 20 render layers")
+	slam.mesh_layers = -1
+	assert_eq(slam.mesh_layers, (1 << 20) - 1)
+	assert_false(" ".join(slam.get_warnings()).contains("not being processed"), str(slam.get_warnings()))
+	# What a clamp cannot mend: a truncation distance below the voxel size.
+	slam.voxel_size = 0.05
+	slam.truncation_distance = 0.02
+	assert_true(" ".join(slam.get_warnings()).contains("truncation_distance larger than voxel_size"), str(slam.get_warnings()))
+	assert_false(slam.process_rig_frame(), "invalid volume settings still process frames")
+	slam.voxel_size = 0.01
+	slam.truncation_distance = 0.04
 	slam.colour_weight = 0.0
 	slam.tracking_max_depth = 6.0
 	slam.fusion_max_depth = 3.0
-	assert_false(" ".join(slam.get_warnings()).contains("colour_weight in 0..100"), str(slam.get_warnings()))
+	assert_false(" ".join(slam.get_warnings()).contains("not being processed"), str(slam.get_warnings()))
 	# Geometry only still tracks the living room, which constrains every direction.
 	var tracked := 0
 	while tracked < 3 and rig.step():

@@ -251,3 +251,19 @@ func test_warnings_say_what_is_missing() -> void:
 	assert_false(_probe.update_now(), "no map without a model")
 	assert_null(_probe.get_cubemap())
 	assert_eq(_probe.get_sh_coefficients().size(), 0)
+
+
+func test_a_probe_far_outside_the_room_says_so() -> void:
+	_paint_atlas()
+	add_to_tree(_root)
+	assert_true(_probe.update_now())
+	assert_false(" ".join(_probe.get_warnings()).contains("outside the room"), str(_probe.get_warnings()))
+	# 20 m beyond the 4 m wall: its map sees the room from behind the walls (issue #17).
+	_probe.position = Vector3(24.0, 1.25, 1.5)
+	expect_warning("is 20.00 m outside the room")
+	assert_true(_probe.update_now())
+	assert_true(" ".join(_probe.get_warnings()).contains("20.00 m outside the room"), str(_probe.get_warnings()))
+	# A little outside is a floorplan's slack, not a mistake; back inside, the warning goes.
+	_probe.position = Vector3(4.3, 1.25, 1.5)
+	assert_true(_probe.update_now())
+	assert_false(" ".join(_probe.get_warnings()).contains("outside the room"), str(_probe.get_warnings()))

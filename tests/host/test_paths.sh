@@ -96,6 +96,10 @@ test_bench_tum_outside_clone() {
 	check "$scratch/trajectories/T.txt does not hold 3 lines of 8 numbers" \
 		test "$(grep -cE '^[0-9.eE+-]+( [0-9.eE+-]+){7}$' "$scratch/trajectories/T.txt" 2>/dev/null)" -eq 3
 	check "files written inside the toolchain root at $RP_ROOT$scratch/trajectories" no_files_in_root "$scratch/trajectories"
+	# Two sources (#17: --tum was once ignored beside --recording): a usage error naming both.
+	rp bench slam --recording "$scratch/tum-seq" --tum "$scratch/tum-seq" --frames 3
+	check "bench with --recording and --tum exited with status $rc, not 2" test "$rc" -eq 2
+	check "bench with two sources did not say to give one" grep -q 'each name a source: give one' <<<"$out"
 }
 
 test_relative_paths_from_another_folder() {

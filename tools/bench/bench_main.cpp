@@ -49,6 +49,7 @@
 //                             [--intrinsics FX,FY,CX,CY | --rig FILE] [--save-trajectory FILE] [--voxel-size-m V]
 //                             [--colour-weight W] [--icp-depth-range MIN,MAX] [--tsdf-depth-range MIN,MAX] [--max-jump M,DEG]
 //        roomprobe_bench live --recording DIR [--speed X] [--frames N] [--threads N] [--probe-size N] [the same camera and SLAM options]
+//        roomprobe_bench soak --recording DIR [--frames N] [--threads N] [--probe-size N] [the same camera and SLAM options]
 
 #include "../common/cli.h"
 #include "opencv_peers.h"
@@ -87,6 +88,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <unistd.h>
 
 using namespace roomprobe;
 
@@ -380,6 +383,7 @@ struct Arguments {
 	int probe_size = 0; // 0: the mode's default
 	int probes = 1; // slam --recording: probes rendered every frame (the first at the probe, the others around it)
 	double speed = 1.0; // live: playback speed
+	long warmup_frames = 0; // soak: frames before memory and time are judged (0: a fifth of them)
 	std::string rig_file; // --rig: the RGB-D camera of this rig file
 	bool has_intrinsics = false; // --intrinsics fx,fy,cx,cy
 	double intrinsics[4] = { 0.0, 0.0, 0.0, 0.0 };
@@ -395,12 +399,16 @@ void print_usage(std::FILE *p_out) {
 			"                            [--intrinsics FX,FY,CX,CY | --rig FILE] [--save-trajectory FILE] [SLAM settings]\n"
 			"       roomprobe_bench live --recording DIR [--speed X] [--frames N] [--threads N] [--probe-size N]\n"
 			"                            [--intrinsics FX,FY,CX,CY | --rig FILE] [SLAM settings]\n"
+			"       roomprobe_bench soak --recording DIR [--frames N] [--warmup-frames N] [--threads N] [--probe-size N] [SLAM settings]\n"
 			"  slam --recording DIR  a RoomProbe recording through the engine (LiveRoom) in step mode: SLAM, coarse model,\n"
 			"                        one probe's map after every RGB-D frame; per-stage timings, full frame, ATE, RPE. A SLAM-only\n"
 			"                        recording (no room.yaml or no fisheye stream) runs dense SLAM alone, saying what it skips\n"
 			"  slam --tum DIR        a TUM RGB-D sequence (rgb.txt, depth.txt, groundtruth.txt): dense SLAM alone\n"
 			"  slam --7scenes DIR    a 7-Scenes-layout folder (frame-NNNNNN.color.jpg, .depth.png in mm, .pose.txt,\n"
 			"                        camera-intrinsics.txt; frames at 30 Hz): dense SLAM alone\n"
+			"  soak --recording DIR  the recording played back and forth through the engine in step mode, every stage and\n"
+			"                        a probe, for --frames RGB-D frames (default 50000): resident memory flat within 5 %% after\n"
+			"                        the warm-up (--warmup-frames N, default a fifth) and no growth in the time per frame, or status 1\n"
 			"  live --recording DIR  the recording played in real time into the threaded engine (start()), the probe map\n"
 			"                        polled at 60 Hz like Godot's main loop; frames dropped, latency, ATE\n"
 			"  --frames N            stop after N RGB-D frames (default: all)\n"
@@ -1486,6 +1494,169 @@ int bench_7scenes(const Arguments &p_args) {
 	return bench_dataset(p_args, open_frames_dataset(p_args.seven_scenes, &reader, options), "7scenes", p_args.seven_scenes, reader, source);
 }
 
+// ---------------------------------------------------------------- soak --recording (issue #17)
+
+// The process's resident memory, bytes (/proc/self/statm's second field, in pages).
+size_t resident_bytes() {
+	std::ifstream statm("/proc/self/statm");
+	size_t pages = 0, resident = 0;
+	statm >> pages >> resident;
+	return resident * size_t(sysconf(_SC_PAGESIZE));
+}
+
+// The soak's verdict: resident memory in the last tenth of the run within this share of the first
+// tenth after the warm-up, and the time per frame of the last tenth at most this factor of the first
+// tenth after the warm-up (medians both; the time's margin is this machine's noise between two
+// windows of the same work).
+constexpr double SOAK_MEMORY_GROWTH_MAX = 0.05;
+constexpr double SOAK_TIME_RATIO_MAX = 1.15;
+constexpr double SOAK_WARMUP_SHARE = 0.2; // of the frames: the TSDF and the pools reach their size
+
+// The recording played back and forth (so the camera never jumps) through the engine in step mode,
+// with every stage and one probe, for --frames RGB-D frames; resident memory and per-frame times
+// sampled as it goes. Timestamps keep increasing: each pass starts a frame period after the last.
+int bench_soak(const Arguments &p_args) {
+	const int probe_size = p_args.probe_size > 0 ? p_args.probe_size : STEP_PROBE_SIZE;
+	Arguments all_frames = p_args;
+	all_frames.frames = -1; // --frames counts the soak's frames, not the recording's
+	RecordingSetup setup;
+	if (!open_recording(all_frames, probe_size, &setup)) {
+		return 1;
+	}
+	if (!setup.engine_skip.empty()) {
+		std::fprintf(stderr, "roomprobe_bench: soak --recording %s: %s; the soak runs every stage\n", p_args.recording.c_str(), setup.engine_skip.c_str());
+		return 1;
+	}
+	const RecordingReader &reader = setup.reader;
+	const std::vector<PlaybackEvent> &events = reader.get_events();
+	const double first_s = events.front().time_s, last_s = events.back().time_s;
+	const double period_s = std::max(1e-3, (last_s - first_s) / double(std::max<size_t>(1, reader.rgbd_count())));
+	const double offset_s = setup.config.rig.fisheye_time_offset_s; // fisheye clock = RGB-D clock - offset
+	setup.config.ground_truth = Trajectory(); // its timestamps no longer match: poses are tracked anyway
+	const size_t total = p_args.frames > 0 ? size_t(p_args.frames) : 50000;
+	const size_t sample_every = std::max<size_t>(1, total / 100);
+	const size_t warmup = p_args.warmup_frames > 0 ? std::min(total - 1, size_t(p_args.warmup_frames))
+												   : std::max<size_t>(1, size_t(SOAK_WARMUP_SHARE * double(total)));
+
+	std::printf("roomprobe_bench soak --recording %s\n", p_args.recording.c_str());
+	std::printf("  %zu RGB-D frames: the recording's %zu RGB-D and %zu fisheye frames back and forth, every stage, one %d^2 probe\n", total,
+			reader.rgbd_count(), reader.fisheye_count(), probe_size);
+	std::printf("  %8s %10s %10s %10s %12s %8s\n", "frame", "rss_MB", "tsdf_MB", "frame_ms", "fisheye_ms", "lost");
+	const size_t rss_start = resident_bytes();
+	Series frame_ms, fisheye_ms, window_ms;
+	std::vector<std::pair<size_t, size_t>> rss_samples; // (frame, bytes)
+	size_t done = 0, failed = 0, pass = 0;
+	uint64_t lost = 0;
+	{
+		LiveRoom engine;
+		const std::string error = engine.configure(setup.config);
+		if (!error.empty()) {
+			std::fprintf(stderr, "roomprobe_bench: soak --recording %s: %s\n", p_args.recording.c_str(), error.c_str());
+			return 1;
+		}
+		engine.add_probe(setup.probe, probe_size);
+		while (done < total) {
+			const bool forward = pass % 2 == 0;
+			const double pass_start_s = double(pass) * (last_s - first_s + period_s);
+			for (size_t k = 0; k < events.size() && done < total; k++) {
+				const PlaybackEvent &event = events[forward ? k : events.size() - 1 - k];
+				const double t_s = pass_start_s + (forward ? event.time_s - first_s : last_s - event.time_s);
+				if (event.stream == RecordingStream::Rgbd) {
+					RgbdFrameResult frame = reader.read_rgbd(event.index);
+					if (!frame.ok) {
+						failed++;
+						continue;
+					}
+					frame.frame.timestamp_s = t_s;
+					frame.frame.depth_timestamp_s = t_s;
+					const Clock::time_point start = Clock::now();
+					engine.push_rgbd(std::move(frame.frame));
+					engine.render_probes();
+					const double ms = ms_since(start);
+					frame_ms.add(ms);
+					window_ms.add(ms);
+					const std::shared_ptr<const TrackedFrame> tracked = engine.tracked_frame();
+					lost += tracked && tracked->state == TrackingState::Lost ? 1 : 0;
+					if (++done % sample_every == 0 || done == total) {
+						const size_t rss = resident_bytes();
+						rss_samples.push_back({ done, rss });
+						std::printf("  %8zu %10.1f %10.1f %10.2f %12.2f %8llu\n", done, double(rss) / 1e6, double(engine.stats().tsdf.bytes_used) / 1e6,
+								window_ms.median(), fisheye_ms.empty() ? 0.0 : fisheye_ms.median(), (unsigned long long)lost);
+						std::fflush(stdout);
+						window_ms = Series();
+					}
+				} else {
+					FisheyeFrameResult frame = reader.read_fisheye(event.index);
+					if (!frame.ok) {
+						failed++;
+						continue;
+					}
+					frame.frame.timestamp_s = t_s - offset_s;
+					const Clock::time_point start = Clock::now();
+					engine.push_fisheye(std::move(frame.frame));
+					fisheye_ms.add(ms_since(start));
+				}
+			}
+			pass++;
+		}
+		engine.finish();
+	}
+	const size_t rss_after = resident_bytes();
+
+	// Memory: the median of the samples in the last tenth of the run against the median of those in
+	// the first tenth after the warm-up (single samples swing by some percent as the allocators'
+	// pools and the meshing's buffers come and go: a leak grows, a swing does not).
+	const size_t tenth_frames = std::max<size_t>(1, (done - std::min(done, warmup)) / 10);
+	Series rss_early, rss_late;
+	size_t rss_max = 0;
+	for (const auto &[frame, bytes] : rss_samples) {
+		if (frame >= warmup) {
+			rss_max = std::max(rss_max, bytes);
+			if (frame < warmup + tenth_frames) {
+				rss_early.add(double(bytes));
+			}
+		}
+		if (frame + tenth_frames >= done) {
+			rss_late.add(double(bytes));
+		}
+	}
+	if (rss_early.empty() && !rss_samples.empty()) { // a short run: the first sample after the warm-up
+		const auto first = std::find_if(rss_samples.begin(), rss_samples.end(), [&](const auto &p_sample) { return p_sample.first >= warmup; });
+		rss_early.add(double(first != rss_samples.end() ? first->second : rss_samples.back().second));
+	}
+	const double rss_warm = rss_early.median();
+	const double growth = rss_warm > 0.0 ? rss_late.median() / rss_warm - 1.0 : 0.0;
+	// Time: the median of the first tenth after the warm-up against the last tenth's.
+	const size_t tenth = std::max<size_t>(1, (frame_ms.size() - std::min(frame_ms.size(), warmup)) / 10);
+	Series early, late;
+	for (size_t i = 0; i < frame_ms.size(); i++) {
+		if (i >= warmup && i < warmup + tenth) {
+			early.add(frame_ms.values[i]);
+		}
+		if (i + tenth >= frame_ms.size()) {
+			late.add(frame_ms.values[i]);
+		}
+	}
+	const double ratio = early.median() > 0.0 ? late.median() / early.median() : 0.0;
+	const bool memory_flat = growth <= SOAK_MEMORY_GROWTH_MAX;
+	const bool time_flat = ratio <= SOAK_TIME_RATIO_MAX;
+	std::printf("\n  %zu passes over the recording; %zu frames unreadable; %llu of %zu frames lost to tracking\n", pass, failed,
+			(unsigned long long)lost, done);
+	std::printf("  resident memory, medians: %.1f MB in the first tenth after the warm-up (%zu frames), %.1f MB in the last: %+.2f %% "
+				"(at most %+.0f %%): %s; %.1f MB at the start, at most %.1f MB after the warm-up\n",
+			rss_warm / 1e6, warmup, rss_late.median() / 1e6, 100.0 * growth, 100.0 * SOAK_MEMORY_GROWTH_MAX, memory_flat ? "flat" : "GROWS",
+			double(rss_start) / 1e6, double(rss_max) / 1e6);
+	std::printf("  time per frame (push and probe map), medians: %.2f ms in the first tenth after the warm-up, %.2f ms in the last: x%.3f "
+				"(at most x%.2f): %s\n",
+			early.median(), late.median(), ratio, SOAK_TIME_RATIO_MAX, time_flat ? "flat" : "GROWS");
+	std::printf("  after the engine is destroyed: %.1f MB resident (leaks at exit: ./roomprobe soak --sanitize address)\n", double(rss_after) / 1e6);
+	std::printf("summary: mode=soak frames=%zu rss_early_mb=%.1f rss_late_mb=%.1f rss_max_mb=%.1f rss_growth_pct=%.2f frame_ms_early=%.2f "
+				"frame_ms_late=%.2f time_ratio=%.3f lost=%llu unreadable=%zu flat=%s\n",
+			done, rss_warm / 1e6, rss_late.median() / 1e6, double(rss_max) / 1e6, 100.0 * growth, early.median(), late.median(), ratio,
+			(unsigned long long)lost, failed, memory_flat && time_flat ? "yes" : "no");
+	return memory_flat && time_flat && failed == 0 ? 0 : 1;
+}
+
 int run(int argc, char **argv) {
 	if (argc < 2) {
 		return usage(nullptr);
@@ -1495,8 +1666,8 @@ int run(int argc, char **argv) {
 		print_usage(stdout);
 		return 0;
 	}
-	if (verb != "slam" && verb != "live") {
-		return usage(("unknown benchmark '" + verb + "' (slam or live)").c_str());
+	if (verb != "slam" && verb != "live" && verb != "soak") {
+		return usage(("unknown benchmark '" + verb + "' (slam, live or soak)").c_str());
 	}
 	Arguments args;
 	args.mode = verb;
@@ -1527,6 +1698,11 @@ int run(int argc, char **argv) {
 				return usage("--probes needs a probe count, 1 to 64");
 			}
 			args.probes = int(n);
+		} else if (arg == "--warmup-frames" && args.mode == "soak") {
+			if (!cursor.positive_integer(&n)) {
+				return usage("--warmup-frames needs a positive integer");
+			}
+			args.warmup_frames = n;
 		} else if (arg == "--probe-size") {
 			if (!cursor.positive_integer(&n) || n > 4096) {
 				return usage("--probe-size needs a face size in texels, 1 to 4096");
@@ -1604,15 +1780,16 @@ int run(int argc, char **argv) {
 			return usage(("unknown argument " + arg + " for " + args.mode).c_str());
 		}
 	}
-	if (args.mode == "live" && args.recording.empty()) {
-		return usage("live needs --recording");
+	if ((args.mode == "live" || args.mode == "soak") && args.recording.empty()) {
+		return usage((args.mode + " needs --recording").c_str());
 	}
 	const int sources = int(!args.recording.empty()) + int(!args.tum.empty()) + int(!args.seven_scenes.empty());
 	if (sources == 0) {
 		return usage("--recording, --tum or --7scenes is required");
 	}
-	if (sources > 1 && !args.save_trajectory.empty()) {
-		return usage("--save-trajectory takes one source (--recording, --tum or --7scenes), not several");
+	if (sources > 1) {
+		// A benchmark ends with one summary line, of one source.
+		return usage("--recording, --tum and --7scenes each name a source: give one");
 	}
 	if (!args.rig_file.empty() && args.has_intrinsics) {
 		return usage("--rig and --intrinsics both give the RGB-D camera: take one");
@@ -1626,23 +1803,16 @@ int run(int argc, char **argv) {
 	if (args.mode == "live") {
 		return bench_live(args);
 	}
-	int rc = 0;
+	if (args.mode == "soak") {
+		return bench_soak(args);
+	}
 	if (!args.recording.empty()) {
-		rc = bench_recording(args);
+		return bench_recording(args);
 	}
-	if (rc == 0 && !args.tum.empty()) {
-		if (!args.recording.empty()) {
-			std::printf("\n");
-		}
-		rc = bench_tum(args);
+	if (!args.tum.empty()) {
+		return bench_tum(args);
 	}
-	if (rc == 0 && !args.seven_scenes.empty()) {
-		if (!args.recording.empty() || !args.tum.empty()) {
-			std::printf("\n");
-		}
-		rc = bench_7scenes(args);
-	}
-	return rc;
+	return bench_7scenes(args);
 }
 
 } // namespace

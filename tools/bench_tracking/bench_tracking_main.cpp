@@ -297,6 +297,10 @@ int run_dataset(int p_argc, char **p_argv) {
 	std::string arg;
 	while (cursor.next(&arg)) {
 		if (arg == "--7scenes" || arg == "--tum") {
+			if (!kind.empty()) {
+				std::fprintf(stderr, "--7scenes and --tum each name a dataset: give one\n");
+				return 2;
+			}
 			kind = arg.substr(2);
 			if (!cursor.value(&folder)) {
 				std::fprintf(stderr, "%s needs a folder\n", arg.c_str());

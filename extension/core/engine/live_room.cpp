@@ -615,6 +615,12 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 	if (!coarse) {
 		return;
 	}
+	// A frame a failing driver or a damaged file delivers is refused at the door, named.
+	const std::string problem = check_fisheye_image(p_frame, cfg.rig.fisheye.width, cfg.rig.fisheye.height);
+	if (!problem.empty()) {
+		record_error("fisheye frame", problem + " (frame skipped)");
+		return;
+	}
 	try {
 		if (p_wait_for_pose && cfg.coarse_poses == PoseSource::Tracked) {
 			// SLAM may not have reached this instant yet: wait for it while it still has frames
@@ -988,6 +994,15 @@ Trajectory LiveRoom::trajectory() const {
 
 const RoomMesh *LiveRoom::room_mesh() const {
 	return coarse ? &coarse->mesh() : own_room.get();
+}
+
+double LiveRoom::distance_outside_room_m(const glm::dvec3 &p_world) const {
+	const RoomMesh *mesh = room_mesh();
+	if (mesh == nullptr) {
+		return 0.0;
+	}
+	const glm::dvec3 room = p_world - cfg.room_origin_m;
+	return roomprobe::distance_outside_room_m(mesh->floorplan, Vec3{ room.x, room.y, room.z });
 }
 
 PlacementHit LiveRoom::place_ray(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_max_distance_m) const {

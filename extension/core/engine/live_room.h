@@ -258,6 +258,8 @@ public:
 	bool fisheye_pose(double p_fisheye_timestamp_s, Pose *r_world_from_fisheye, std::string *r_error) const;
 	// The room's mesh (null without a room). Valid until the next configure.
 	const RoomMesh *room_mesh() const;
+	// How far a world point lies outside the room's prism, metres (0 inside, and without a room).
+	double distance_outside_room_m(const glm::dvec3 &p_world) const;
 
 	PlacementHit place_ray(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_max_distance_m = 100.0) const;
 

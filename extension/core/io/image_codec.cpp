@@ -9,8 +9,8 @@
 
 #include "opencv.h"
 
+#include <cerrno>
 #include <csetjmp>
-#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -334,14 +334,18 @@ std::string png_write(const std::string &p_path, const cv::Mat &p_image) {
 	if (!error.empty()) {
 		return p_path + ": " + error;
 	}
-	std::ofstream file(p_path, std::ios::binary | std::ios::trunc);
-	if (!file) {
-		return p_path + ": cannot be opened for writing";
+	// stdio rather than a stream: a full disk is named by errno ("No space left on device").
+	std::FILE *file = std::fopen(p_path.c_str(), "wb");
+	if (file == nullptr) {
+		return p_path + ": cannot be opened for writing: " + std::strerror(errno);
 	}
-	file.write(reinterpret_cast<const char *>(bytes.data()), std::streamsize(bytes.size()));
-	file.close();
-	if (!file) {
-		return p_path + ": could not be written (disk full?)";
+	const bool written = std::fwrite(bytes.data(), 1, bytes.size(), file) == bytes.size();
+	const int write_errno = errno;
+	const bool closed = std::fclose(file) == 0;
+	if (!written || !closed) {
+		const int cause = written ? errno : write_errno;
+		std::remove(p_path.c_str()); // no half image left behind; the index never lists it
+		return p_path + ": could not be written: " + std::strerror(cause);
 	}
 	return "";
 }

@@ -1,10 +1,134 @@
 #include "yaml_fields.h"
 
+#include <algorithm>
 #include <charconv>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <set>
+#include <string_view>
 
 namespace roomprobe {
+
+// The parse error carries "(<line>): <what>" in the exception's func field and the parser's
+// function in err.
+std::string describe_yaml_parse_error(const cv::Exception &p_exception) {
+	if (p_exception.code != cv::Error::StsParseError) {
+		return p_exception.err;
+	}
+	const std::string &detail = p_exception.func;
+	const size_t close = detail.find("): ");
+	if (detail.rfind("(", 0) == 0 && close != std::string::npos) {
+		return "line " + detail.substr(1, close - 1) + ": " + detail.substr(close + 3);
+	}
+	return detail;
+}
+
+namespace {
+
+bool is_control(unsigned char p_c) { return (p_c < 0x20 && p_c != '\t') || p_c == 0x7f; }
+bool is_key_char(char p_c) { return std::isalnum(static_cast<unsigned char>(p_c)) != 0 || p_c == '_'; }
+// A plain scalar's characters: numbers (1e-3, .nan, -.inf), words (pinhole_radtan), dates.
+bool is_scalar_char(char p_c) { return is_key_char(p_c) || p_c == '.' || p_c == '+' || p_c == '-' || p_c == '/'; }
+
+// The flow part of a line: scalars, quoted strings, '[', ']', ',' and a trailing comment;
+// r_depth carries the open '[' count across lines. "" or what is wrong.
+std::string screen_values(std::string_view p_text, int *r_depth) {
+	constexpr int MAX_DEPTH = 8; // RoomProbe's files nest lists two deep
+	for (size_t i = 0; i < p_text.size(); i++) {
+		const char c = p_text[i];
+		if (c == '[') {
+			if (++*r_depth > MAX_DEPTH) {
+				return "lists nested more than " + std::to_string(MAX_DEPTH) + " deep";
+			}
+		} else if (c == ']') {
+			if (--*r_depth < 0) {
+				return "']' without its '['";
+			}
+		} else if (c == '"' || c == '\'') {
+			const size_t close = p_text.find(c, i + 1);
+			if (close == std::string_view::npos) {
+				return std::string("a quoted string that does not end on its line");
+			}
+			i = close;
+		} else if (c == '#' && (i == 0 || p_text[i - 1] == ' ')) {
+			return std::string(); // a comment to the end of the line
+		} else if (!is_scalar_char(c) && c != ',' && c != ' ') {
+			char text[64];
+			std::snprintf(text, sizeof(text), "unexpected character '%c' (0x%02x)", std::isprint(static_cast<unsigned char>(c)) ? c : '?',
+					static_cast<unsigned char>(c));
+			return text;
+		}
+	}
+	return std::string();
+}
+
+} // namespace
+
+std::string screen_yaml_text(const std::string &p_text) {
+	int depth = 0; // '[' still open
+	int number = 0;
+	for (size_t start = 0; start < p_text.size();) {
+		number++;
+		const size_t end = std::min(p_text.find('\n', start), p_text.size());
+		std::string_view line(p_text.data() + start, end - start);
+		start = end + 1;
+		auto fail = [&](const std::string &p_what) { return "line " + std::to_string(number) + ": " + p_what; };
+		while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) {
+			line.remove_suffix(1);
+		}
+		const size_t indent = std::min(line.find_first_not_of(' '), line.size());
+		std::string_view rest = line.substr(indent);
+		if (rest.empty() || (number == 1 && rest.rfind("%YAML", 0) == 0)) {
+			continue;
+		}
+		if (rest.front() == '#') { // a whole-line comment: any text (UTF-8 too), no control characters
+			if (std::any_of(rest.begin(), rest.end(), [](char c) { return is_control(static_cast<unsigned char>(c)); })) {
+				return fail("a control character in a comment");
+			}
+			continue;
+		}
+		for (const char c : rest) {
+			if (is_control(static_cast<unsigned char>(c)) || static_cast<unsigned char>(c) >= 0x80) {
+				return fail(c == '\t' ? "a tab (YAML indents with spaces)" : "a byte that is not printable ASCII outside a comment");
+			}
+		}
+		if (depth == 0) {
+			if (rest.rfind("---", 0) == 0) {
+				if (indent != 0 || rest.size() != 3) {
+					return fail("text after the document marker '---' (a line of its own in YAML files here)");
+				}
+				continue;
+			}
+			if (rest == "-" || rest.rfind("- ", 0) == 0) { // a list item: its value follows
+				rest.remove_prefix(std::min<size_t>(2, rest.size()));
+			} else { // key: [value]
+				size_t key = 0;
+				while (key < rest.size() && is_key_char(rest[key])) {
+					key++;
+				}
+				if (key == 0 || std::isdigit(static_cast<unsigned char>(rest[0])) != 0) {
+					return fail("expected 'key: value', a list item '- ' or a comment");
+				}
+				if (key == rest.size() || rest[key] != ':') {
+					return fail("expected ':' after the key '" + std::string(rest.substr(0, key)) + "'");
+				}
+				rest.remove_prefix(key + 1);
+				if (!rest.empty() && rest.front() != ' ') {
+					return fail("expected a space after ':'");
+				}
+			}
+		}
+		const std::string problem = screen_values(rest, &depth);
+		if (!problem.empty()) {
+			return fail(problem);
+		}
+	}
+	if (depth != 0) {
+		return "line " + std::to_string(number) + ": a list '[' is never closed";
+	}
+	return std::string();
+}
 
 bool YamlFieldReader::fail(const std::string &p_field, const std::string &p_problem) {
 	error = p_field + ": " + p_problem;
@@ -99,6 +223,14 @@ bool YamlFieldReader::numbers(const cv::FileNode &p_node, const std::string &p_f
 		}
 	}
 	return true;
+}
+
+std::string check_yaml_text(const std::string &p_text) {
+	if (p_text.rfind("%YAML", 0) != 0) {
+		return "malformed YAML: the first line must be '%YAML:1.0' (cv::FileStorage's header)";
+	}
+	const std::string unsafe = screen_yaml_text(p_text);
+	return unsafe.empty() ? unsafe : "malformed YAML: " + unsafe;
 }
 
 } // namespace roomprobe

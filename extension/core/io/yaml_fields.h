@@ -17,6 +17,22 @@
 
 namespace roomprobe {
 
+// What cv::FileStorage's YAML parser may be given: "" when p_text keeps to the YAML that
+// RoomProbe's files use, else "line N: what". Fuzzing found malformed texts on which OpenCV 4.10's
+// parser never returns ("---J a: 1", stray '%' or control bytes inside a block), so the text is
+// screened first, line by line: comments; "---" alone; "key: value", "key:" and "- value" with
+// space indentation; values of plain scalars, quoted strings and '[' ']' lists (across lines);
+// printable ASCII outside comments. Files written by cv::FileStorage and the hand-written ones in
+// calib/ pass.
+std::string screen_yaml_text(const std::string &p_text);
+// The checks a YAML file's text gets before cv::FileStorage parses it: the '%YAML' header that
+// FileStorage needs to tell YAML from XML and JSON, then screen_yaml_text. "" or "malformed YAML: why".
+std::string check_yaml_text(const std::string &p_text);
+
+// cv::FileStorage's parse error (text parsed from memory) as "line <line>: <what>"; other OpenCV
+// errors as OpenCV words them.
+std::string describe_yaml_parse_error(const cv::Exception &p_exception);
+
 class YamlFieldReader {
 public:
 	// Whether a number may be NaN or infinite (YAML's .nan, .inf). Accept leaves the value's range

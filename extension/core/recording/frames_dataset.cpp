@@ -64,7 +64,7 @@ std::string frame_name(long p_number, int p_digits, const char *p_kind) {
 std::string read_text_matrix(const std::string &p_path, int p_rows, int p_cols, std::vector<double> *r_values) {
 	std::error_code ec;
 	if (!fs::is_regular_file(p_path, ec)) {
-		return p_path + ": missing";
+		return recording_io::not_a_file_error(p_path);
 	}
 	std::ifstream file(p_path, std::ios::binary);
 	if (!file) {

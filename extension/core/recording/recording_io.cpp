@@ -84,10 +84,20 @@ std::string walk_png_chunks(uint64_t p_size, ReadHeader p_read) {
 			return "truncated: the PNG ends at byte " + std::to_string(p_size) + ", before its IEND chunk";
 		}
 		const uint64_t length = read_be32(header);
+		const std::string type(reinterpret_cast<const char *>(header + 4), 4);
+		// A damaged length or type is corruption, not a file cut short: chunk types are four
+		// ASCII letters, and lengths are below 2^31 (PNG specification, 5.3).
+		if (!std::all_of(type.begin(), type.end(), [](char c) { return std::isalpha(static_cast<unsigned char>(c)) != 0; })) {
+			return "corrupt PNG: the chunk at byte " + std::to_string(offset) + " has no valid type";
+		}
+		if (length > 0x7fffffffu) {
+			return "corrupt PNG: chunk '" + type + "' at byte " + std::to_string(offset) + " claims " + std::to_string(length) +
+					" bytes, above PNG's limit of 2^31 - 1";
+		}
 		const uint64_t end = offset + 8 + length + 4;
 		if (end > p_size) {
-			return "truncated: the PNG ends at byte " + std::to_string(p_size) + ", inside a chunk ('" +
-					std::string(reinterpret_cast<const char *>(header + 4), 4) + "') that needs " + std::to_string(end) + " bytes";
+			return "truncated: the PNG ends at byte " + std::to_string(p_size) + ", inside a chunk ('" + type + "') that needs " +
+					std::to_string(end) + " bytes";
 		}
 		if (std::memcmp(header + 4, "IEND", 4) == 0) {
 			return std::string();
@@ -109,12 +119,25 @@ std::string catch_all(const std::string &p_path, Function p_function) {
 
 std::string read_whole_file(const std::string &p_path, std::vector<uint8_t> *r_bytes) {
 	if (!file_exists(p_path)) {
-		return p_path + ": missing";
+		return not_a_file_error(p_path);
 	}
 	return read_file_bytes(p_path, r_bytes);
 }
 
 } // namespace
+
+// The largest HDR image read: 2^26 pixels, 768 MB as float RGB (a damaged or hostile header's
+// size is refused before anything is allocated).
+constexpr int64_t EXR_MAX_PIXELS = int64_t(1) << 26;
+
+std::string not_a_file_error(const std::string &p_path) {
+	std::error_code error;
+	const fs::file_status status = fs::status(p_path, error);
+	if (status.type() == fs::file_type::directory) {
+		return p_path + ": a folder, not a file";
+	}
+	return p_path + (fs::exists(status) ? ": not a regular file" : ": missing");
+}
 
 std::string format_number(double p_value) {
 	char buffer[512];
@@ -196,7 +219,7 @@ std::string describe_type(int p_cv_type) {
 std::string read_index_lines(const std::string &p_path, std::vector<IndexLine> *r_lines) {
 	r_lines->clear();
 	if (!file_exists(p_path)) {
-		return p_path + ": missing";
+		return not_a_file_error(p_path);
 	}
 	std::ifstream file(p_path, std::ios::binary);
 	if (!file) {
@@ -275,7 +298,7 @@ std::string check_png_bytes(const std::vector<uint8_t> &p_bytes) {
 
 std::string read_png_info(const std::string &p_path, PngInfo *r_info) {
 	if (!file_exists(p_path)) {
-		return p_path + ": missing";
+		return not_a_file_error(p_path);
 	}
 	std::ifstream file(p_path, std::ios::binary);
 	if (!file) {
@@ -490,20 +513,26 @@ std::string write_exr_rgb(const std::string &p_path, const cv::Mat &p_rgb, bool 
 
 std::string read_exr_size(const std::string &p_path, int *r_width, int *r_height) {
 	if (!file_exists(p_path)) {
-		return p_path + ": missing";
+		return not_a_file_error(p_path);
 	}
 	return catch_all(p_path, [&]() -> std::string {
 		Imf::InputFile file(p_path.c_str());
 		const Imath::Box2i window = file.header().dataWindow();
-		*r_width = window.max.x - window.min.x + 1;
-		*r_height = window.max.y - window.min.y + 1;
+		const int64_t width = int64_t(window.max.x) - window.min.x + 1;
+		const int64_t height = int64_t(window.max.y) - window.min.y + 1;
+		if (width <= 0 || height <= 0 || width > kImageMaxSidePx || height > kImageMaxSidePx) {
+			return p_path + ": the data window is " + std::to_string(width) + " x " + std::to_string(height) + " pixels, not 1 to " +
+					std::to_string(kImageMaxSidePx) + " a side";
+		}
+		*r_width = int(width);
+		*r_height = int(height);
 		return std::string();
 	});
 }
 
 std::string read_exr_rgb(const std::string &p_path, cv::Mat *r_rgb) {
 	if (!file_exists(p_path)) {
-		return p_path + ": missing";
+		return not_a_file_error(p_path);
 	}
 	return catch_all(p_path, [&]() -> std::string {
 		Imf::InputFile file(p_path.c_str());
@@ -519,12 +548,17 @@ std::string read_exr_rgb(const std::string &p_path, cv::Mat *r_rgb) {
 			}
 		}
 		const Imath::Box2i window = file.header().dataWindow();
-		const int width = window.max.x - window.min.x + 1;
-		const int height = window.max.y - window.min.y + 1;
+		// In 64 bits: a damaged header's window can span more than an int.
+		const int64_t width = int64_t(window.max.x) - window.min.x + 1;
+		const int64_t height = int64_t(window.max.y) - window.min.y + 1;
 		if (width <= 0 || height <= 0) {
 			return p_path + ": empty data window";
 		}
-		cv::Mat rgb(height, width, CV_32FC3);
+		if (width > kImageMaxSidePx || height > kImageMaxSidePx || width * height > EXR_MAX_PIXELS) {
+			return p_path + ": the image claims " + std::to_string(width) + " x " + std::to_string(height) + " pixels, above the limit of " +
+					std::to_string(kImageMaxSidePx) + " a side and " + std::to_string(EXR_MAX_PIXELS) + " in all";
+		}
+		cv::Mat rgb(int(height), int(width), CV_32FC3);
 		Imf::FrameBuffer buffer;
 		for (int c = 0; c < 3; c++) {
 			buffer.insert(names[c], Imf::Slice::Make(Imf::FLOAT, rgb.ptr<float>() + c, window, 3 * sizeof(float), 3 * sizeof(float) * size_t(width)));

@@ -27,6 +27,10 @@ bool parse_int(std::string_view p_text, int *r_value);
 // p_relative joined onto p_folder, as a path string for messages and opening.
 std::string join(const std::filesystem::path &p_folder, const std::string &p_relative);
 
+// Why p_path cannot be read as a file, naming it: "missing", "a folder, not a file" or "not a
+// regular file" (a folder where an index should be was once called missing).
+std::string not_a_file_error(const std::string &p_path);
+
 // "8-bit 3-channel", "16-bit 1-channel", "32-bit float 3-channel", for messages.
 std::string describe_type(int p_cv_type);
 

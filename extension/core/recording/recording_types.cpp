@@ -26,6 +26,30 @@ cv::Mat depth_metres_from_raw(const cv::Mat &p_raw, double p_scale_m) {
 	return depth_m;
 }
 
+std::string check_fisheye_image(const FisheyeFrame &p_frame, int p_width, int p_height) {
+	const cv::Mat &image = p_frame.image;
+	const bool hdr_type = image.type() == CV_32FC3;
+	if (image.empty() || (!hdr_type && image.type() != CV_8UC1 && image.type() != CV_8UC3)) {
+		return image.empty() ? "an empty image" : "a fisheye image must be CV_8UC1, CV_8UC3 (R, G, B) or CV_32FC3 (HDR)";
+	}
+	if (p_frame.hdr != hdr_type) {
+		return std::string("hdr is ") + (p_frame.hdr ? "set" : "not set") + " but the image is " + (hdr_type ? "float" : "8-bit");
+	}
+	if (image.cols != p_width || image.rows != p_height) {
+		return "the image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) + ", the rig's fisheye " +
+				std::to_string(p_width) + "x" + std::to_string(p_height);
+	}
+	if (hdr_type) {
+		cv::Mat finite;
+		cv::compare(cv::abs(image.reshape(1)), std::numeric_limits<float>::infinity(), finite, cv::CMP_LT); // false for NaN too
+		const int bad = int(finite.total()) - cv::countNonZero(finite);
+		if (bad > 0) {
+			return std::to_string(bad) + " of its " + std::to_string(finite.total()) + " HDR values are NaN or infinite";
+		}
+	}
+	return std::string();
+}
+
 std::string to_string(const RecordingIssue &p_issue) {
 	std::string text = p_issue.file;
 	if (p_issue.line > 0) {

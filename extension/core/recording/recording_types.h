@@ -81,6 +81,12 @@ struct FisheyeFrame {
 	CaptureInfo capture; // live frames and synthetic ones with their exposure
 };
 
+// What is wrong with a fisheye frame's image for a fisheye of p_width x p_height ("" when
+// nothing): its type (CV_8UC1, CV_8UC3, or CV_32FC3 exactly when hdr), its size, and for HDR any
+// NaN or infinite value, counted. The writer refuses such a frame and the engine does not
+// integrate it (a wrong-sized image once textured the room with garbage, silently).
+std::string check_fisheye_image(const FisheyeFrame &p_frame, int p_width, int p_height);
+
 // The room of a recording (room.yaml).
 struct RoomInfo {
 	Floorplan floorplan; // metres, floor plane y = 0; Vec2::y is world z

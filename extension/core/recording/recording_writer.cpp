@@ -315,16 +315,9 @@ RecordingStatus RecordingWriter::add_fisheye(const FisheyeFrame &p_frame) {
 		return fail(path("fisheye.txt") + ": timestamp " + format_number(p_frame.timestamp_s) + " is not after the previous frame's " +
 				format_number(last_fisheye_time_s));
 	}
-	if (!hdr_type && !ldr_type) {
-		return fail(file + ": a fisheye image must be CV_8UC1, CV_8UC3 (R, G, B) or CV_32FC3 (HDR); got " +
-				(image.empty() ? std::string("an empty image") : describe_type(image.type())));
-	}
-	if (p_frame.hdr != hdr_type) {
-		return fail(file + ": hdr is " + (p_frame.hdr ? "set" : "not set") + " but the image is " + describe_type(image.type()));
-	}
-	if (image.cols != rig.fisheye.width || image.rows != rig.fisheye.height) {
-		return fail(file + ": the fisheye image is " + size_text(image.cols, image.rows) + ", the rig's fisheye " +
-				size_text(rig.fisheye.width, rig.fisheye.height));
+	const std::string problem = check_fisheye_image(p_frame, rig.fisheye.width, rig.fisheye.height);
+	if (!problem.empty()) {
+		return fail(file + ": " + problem + (ldr_type || hdr_type || image.empty() ? "" : "; got " + describe_type(image.type())));
 	}
 	std::string error;
 	if (hdr_type) {

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 namespace roomprobe {
 
@@ -111,19 +112,6 @@ bool read_room(YamlFieldReader &p_reader, const cv::FileNode &p_root, RoomInfo *
 	return true;
 }
 
-// cv::FileStorage's parse errors carry "<file>(<line>): <what>" in the exception's func field;
-// this rewrites it as "line <line>: <what>" (the caller names the file).
-std::string describe_parse_error(const cv::Exception &p_exception, const std::string &p_path) {
-	std::string detail = p_exception.code == cv::Error::StsParseError ? p_exception.func : p_exception.err;
-	if (detail.rfind(p_path + "(", 0) == 0) {
-		const size_t close = detail.find("): ", p_path.size());
-		if (close != std::string::npos) {
-			detail = "line " + detail.substr(p_path.size() + 1, close - p_path.size() - 1) + ": " + detail.substr(close + 3);
-		}
-	}
-	return detail;
-}
-
 } // namespace
 
 std::string check_room(const RoomInfo &p_room) {
@@ -154,25 +142,30 @@ RoomLoadResult load_room_file(const std::string &p_path) {
 	RoomLoadResult result;
 	std::error_code ec;
 	if (!std::filesystem::is_regular_file(p_path, ec)) {
-		result.error = p_path + ": " + (std::filesystem::exists(p_path, ec) ? "not a regular file" : "missing");
+		result.error = recording_io::not_a_file_error(p_path);
 		return result;
 	}
+	// Read here and parsed from memory, as the rig file: the text is screened first.
+	std::string text;
 	{
-		std::ifstream file(p_path);
-		std::string first_line;
-		if (!file || !std::getline(file, first_line)) {
+		std::ifstream file(p_path, std::ios::binary);
+		std::stringstream bytes;
+		bytes << file.rdbuf();
+		text = bytes.str();
+		if (!file || text.empty()) {
 			result.error = p_path + ": cannot read the room file (empty or unreadable)";
 			return result;
 		}
-		if (first_line.rfind("%YAML", 0) != 0) {
-			result.error = p_path + ": malformed YAML: the first line must be '%YAML:1.0' (cv::FileStorage's header)";
-			return result;
-		}
+	}
+	const std::string malformed = check_yaml_text(text);
+	if (!malformed.empty()) {
+		result.error = p_path + ": " + malformed;
+		return result;
 	}
 	YamlFieldReader reader(YamlFieldReader::NonFinite::Refuse);
 	RoomInfo room;
 	try {
-		cv::FileStorage storage(p_path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
+		cv::FileStorage storage(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
 		if (!storage.isOpened()) {
 			result.error = p_path + ": cannot open the room file";
 			return result;
@@ -182,7 +175,7 @@ RoomLoadResult load_room_file(const std::string &p_path) {
 			return result;
 		}
 	} catch (const cv::Exception &e) {
-		result.error = p_path + ": malformed YAML: " + describe_parse_error(e, p_path);
+		result.error = p_path + ": malformed YAML: " + describe_yaml_parse_error(e);
 		return result;
 	} catch (const std::exception &e) {
 		result.error = p_path + ": " + e.what();

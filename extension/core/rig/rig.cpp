@@ -334,20 +334,6 @@ bool read_rig(YamlFieldReader &p_reader, const cv::FileNode &p_root, Rig *r_rig)
 			p_reader.real(p_root, "", "fisheye_time_offset_s", &r_rig->fisheye_time_offset_s);
 }
 
-// cv::FileStorage's parse errors (reading from memory) carry "(<line>): <what>" in the exception's
-// func field and the parser's function in err; this gives "line <line>: <what>".
-std::string describe_parse_error(const cv::Exception &p_exception) {
-	if (p_exception.code != cv::Error::StsParseError) {
-		return p_exception.err;
-	}
-	const std::string &detail = p_exception.func;
-	const size_t close = detail.find("): ");
-	if (detail.rfind("(", 0) == 0 && close != std::string::npos) {
-		return "line " + detail.substr(1, close - 1) + ": " + detail.substr(close + 3);
-	}
-	return detail;
-}
-
 } // namespace
 
 RigLoadResult load_rig(const std::string &p_path) {
@@ -374,9 +360,9 @@ RigLoadResult load_rig(const std::string &p_path) {
 		result.error = p_path + ": the rig file is empty";
 		return result;
 	}
-	// cv::FileStorage tells YAML from XML and JSON by this header; say so rather than "invalid".
-	if (text.rfind("%YAML", 0) != 0) {
-		result.error = p_path + ": malformed YAML: the first line must be '%YAML:1.0' (cv::FileStorage's header)";
+	const std::string malformed = check_yaml_text(text);
+	if (!malformed.empty()) {
+		result.error = p_path + ": " + malformed;
 		return result;
 	}
 	Rig rig;
@@ -392,7 +378,7 @@ RigLoadResult load_rig(const std::string &p_path) {
 			return result;
 		}
 	} catch (const cv::Exception &e) {
-		result.error = p_path + ": malformed YAML: " + describe_parse_error(e);
+		result.error = p_path + ": malformed YAML: " + describe_yaml_parse_error(e);
 		return result;
 	} catch (const std::exception &e) {
 		// OpenCV's parser throws std::length_error on some inputs (e.g. a key that starts with ':').

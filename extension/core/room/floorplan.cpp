@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstddef>
 #include <exception>
+#include <limits>
 #include <utility>
 
 namespace roomprobe {
@@ -232,6 +233,29 @@ Floorplan normalized(const Floorplan &p_floorplan) {
 		std::reverse(result.points.begin() + 1, result.points.end());
 	}
 	return result;
+}
+
+double distance_outside_room_m(const Floorplan &p_floorplan, const Vec3 &p_point) {
+	const std::vector<Vec2> &points = p_floorplan.points;
+	const std::size_t n = points.size();
+	// Inside the polygon by the crossing rule, and the distance to its nearest wall.
+	bool inside = false;
+	double nearest_sq = std::numeric_limits<double>::infinity();
+	for (std::size_t i = 0, j = n - 1; i < n; j = i++) {
+		const Vec2 &a = points[j];
+		const Vec2 &b = points[i];
+		if ((b.y > p_point.z) != (a.y > p_point.z) && p_point.x < (a.x - b.x) * (p_point.z - b.y) / (a.y - b.y) + b.x) {
+			inside = !inside;
+		}
+		const double ex = b.x - a.x, ez = b.y - a.y;
+		const double length_sq = ex * ex + ez * ez;
+		const double t = length_sq > 0.0 ? std::clamp(((p_point.x - a.x) * ex + (p_point.z - a.y) * ez) / length_sq, 0.0, 1.0) : 0.0;
+		const double dx = p_point.x - (a.x + t * ex), dz = p_point.z - (a.y + t * ez);
+		nearest_sq = std::min(nearest_sq, dx * dx + dz * dz);
+	}
+	const double across = inside || n == 0 ? 0.0 : std::sqrt(nearest_sq);
+	const double up = std::max({ 0.0, -p_point.y, p_point.y - p_floorplan.ceiling_height_m });
+	return std::hypot(across, up);
 }
 
 } // namespace roomprobe

@@ -75,6 +75,11 @@ double floorplan_perimeter_m(const Floorplan &p_floorplan);
 // Meaningful for floorplans that pass check_floorplan().
 bool is_counter_clockwise(const Floorplan &p_floorplan);
 
+// How far p_point (room frame: x, y up, z) lies outside the room's prism, in metres: 0 inside or
+// on it. A probe far outside sees the room from behind its walls, a map of nothing, so RoomProbe
+// warns (issue #17). Meant for floorplans that pass check_floorplan().
+double distance_outside_room_m(const Floorplan &p_floorplan, const Vec3 &p_point);
+
 // Returns the floorplan in the normalized (counter-clockwise) orientation.
 // A clockwise polygon is reversed while keeping points[0] first, so that the
 // result is points[0], points[n-1], ..., points[1]; an already counter-clockwise

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstddef>
 #include <exception>
 #include <numeric>
@@ -246,6 +247,17 @@ void add_triangle(RoomMesh &r_mesh, int p_chart_index, uint32_t p_a, uint32_t p_
 	r_mesh.triangle_charts.push_back(p_chart_index);
 }
 
+// A texel count for a message. A tiny texel_size_m makes counts beyond int64_t (1e-300 m once
+// printed -9223372036854775808), so large ones are written as a double.
+std::string texel_count_text(double p_texels) {
+	if (p_texels < 1e15) {
+		return std::to_string(int64_t(std::ceil(p_texels)));
+	}
+	char text[32];
+	std::snprintf(text, sizeof(text), "%.3g", p_texels);
+	return text;
+}
+
 std::string check_options(const RoomMeshOptions &p_options) {
 	if (!std::isfinite(p_options.texel_size_m) || p_options.texel_size_m <= 0.0) {
 		return "texel_size_m must be a finite number above 0";
@@ -324,8 +336,8 @@ RoomMeshResult build_room_mesh_unguarded(const Floorplan &p_floorplan, const Roo
 		// Reject before converting to int, so huge rooms cannot overflow.
 		if (chart.used_w_texels > p_options.max_atlas_size || chart.used_h_texels > p_options.max_atlas_size) {
 			result.error = std::string("the ") + surface_kind_name(chart.kind) + " chart needs " +
-					std::to_string(int64_t(std::ceil(chart.used_w_texels))) + " x " +
-					std::to_string(int64_t(std::ceil(chart.used_h_texels))) + " texels, above max_atlas_size " +
+					texel_count_text(chart.used_w_texels) + " x " + texel_count_text(chart.used_h_texels) +
+					" texels, above max_atlas_size " +
 					std::to_string(p_options.max_atlas_size) + "; use a larger texel_size_m";
 			return result;
 		}

@@ -1,5 +1,7 @@
 #include "coarse_room_model.h"
 
+#include "../property_checks.h"
+
 #include "../convert/image_convert.h"
 #include "../convert/mesh_convert.h"
 #include "../convert/pose_convert.h"
@@ -89,6 +91,9 @@ void CoarseRoomModel::set_ceiling_height(double p_metres) {
 double CoarseRoomModel::get_ceiling_height() const { return ceiling_height; }
 
 void CoarseRoomModel::set_floorplan_source(FloorplanSource p_source) {
+	if (!property_checks::enum_in_range("CoarseRoomModel.floorplan_source", p_source, 2)) {
+		return;
+	}
 	floorplan_source = p_source;
 	take_recording_room();
 	update_configuration_warnings();
@@ -117,7 +122,7 @@ void CoarseRoomModel::take_recording_room() {
 }
 
 void CoarseRoomModel::set_texel_size(double p_metres) {
-	texel_size = p_metres;
+	texel_size = property_checks::clamped("CoarseRoomModel.texel_size", p_metres, TEXEL_SIZE_MIN_M, TEXEL_SIZE_MAX_M, texel_size, " m");
 	rebuild();
 }
 
@@ -205,6 +210,9 @@ void CoarseRoomModel::set_rig_capture_path(const NodePath &p_path) {
 NodePath CoarseRoomModel::get_rig_capture_path() const { return rig_capture_path; }
 
 void CoarseRoomModel::set_pose_source(PoseSource p_source) {
+	if (!property_checks::enum_in_range("CoarseRoomModel.pose_source", p_source, 2)) {
+		return;
+	}
 	pose_source = p_source;
 	push_room();
 	update_configuration_warnings();
@@ -227,6 +235,9 @@ void CoarseRoomModel::set_inpainting(bool p_enabled) {
 bool CoarseRoomModel::get_inpainting() const { return inpainting; }
 
 void CoarseRoomModel::set_lighting_compensation(LightingCompensation p_mode) {
+	if (!property_checks::enum_in_range("CoarseRoomModel.lighting_compensation", p_mode, 3)) {
+		return;
+	}
 	lighting_compensation = p_mode;
 	push_room();
 }
@@ -234,7 +245,7 @@ void CoarseRoomModel::set_lighting_compensation(LightingCompensation p_mode) {
 CoarseRoomModel::LightingCompensation CoarseRoomModel::get_lighting_compensation() const { return lighting_compensation; }
 
 void CoarseRoomModel::set_room_layers(uint32_t p_layers) {
-	room_layers = p_layers;
+	room_layers = property_checks::render_layers("CoarseRoomModel.room_layers", p_layers);
 	if (mesh_instance != nullptr) {
 		mesh_instance->set_layer_mask(room_layers);
 	}

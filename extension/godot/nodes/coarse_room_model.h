@@ -111,6 +111,10 @@ private:
 
 	godot::PackedVector2Array floorplan;
 	double ceiling_height = 2.5;
+	// The texel sizes the setter accepts (clamped with a warning outside): finer makes atlases
+	// beyond any GPU's texture limit for a room, coarser leaves a wall a handful of texels.
+	static constexpr double TEXEL_SIZE_MIN_M = 0.001;
+	static constexpr double TEXEL_SIZE_MAX_M = 1.0;
 	double texel_size = 0.02;
 
 	FloorplanCheck check;

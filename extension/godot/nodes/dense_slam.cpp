@@ -1,7 +1,11 @@
 #include "dense_slam.h"
 
+#include "../property_checks.h"
+
 #include <camera/pinhole_camera.h>
 
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 
 #include "../convert/image_convert.h"
@@ -173,49 +177,49 @@ void DenseSLAM::set_coarse_model_path(const NodePath &p_path) { coarse_model_pat
 NodePath DenseSLAM::get_coarse_model_path() const { return coarse_model_path; }
 
 void DenseSLAM::set_voxel_size(double p_metres) {
-	voxel_size = p_metres;
+	voxel_size = property_checks::clamped("DenseSLAM.voxel_size", p_metres, 0.002, 0.1, voxel_size, " m");
 	push_settings();
 }
 
 double DenseSLAM::get_voxel_size() const { return voxel_size; }
 
 void DenseSLAM::set_truncation_distance(double p_metres) {
-	truncation_distance = p_metres;
+	truncation_distance = property_checks::clamped("DenseSLAM.truncation_distance", p_metres, 0.005, 0.5, truncation_distance, " m");
 	push_settings();
 }
 
 double DenseSLAM::get_truncation_distance() const { return truncation_distance; }
 
 void DenseSLAM::set_colour_weight(double p_metres_per_intensity) {
-	colour_weight = p_metres_per_intensity;
+	colour_weight = property_checks::clamped("DenseSLAM.colour_weight", p_metres_per_intensity, 0.0, 100.0, colour_weight);
 	push_settings();
 }
 
 double DenseSLAM::get_colour_weight() const { return colour_weight; }
 
 void DenseSLAM::set_tracking_max_depth(double p_metres) {
-	tracking_max_depth = p_metres;
+	tracking_max_depth = property_checks::clamped("DenseSLAM.tracking_max_depth", p_metres, 0.5, 100.0, tracking_max_depth, " m");
 	push_settings();
 }
 
 double DenseSLAM::get_tracking_max_depth() const { return tracking_max_depth; }
 
 void DenseSLAM::set_fusion_max_depth(double p_metres) {
-	fusion_max_depth = p_metres;
+	fusion_max_depth = property_checks::clamped("DenseSLAM.fusion_max_depth", p_metres, 0.5, 100.0, fusion_max_depth, " m");
 	push_settings();
 }
 
 double DenseSLAM::get_fusion_max_depth() const { return fusion_max_depth; }
 
 void DenseSLAM::set_max_blocks(int p_blocks) {
-	max_blocks = p_blocks;
+	max_blocks = int(property_checks::clamped_int("DenseSLAM.max_blocks", p_blocks, 1, 4194304));
 	push_settings();
 }
 
 int DenseSLAM::get_max_blocks() const { return max_blocks; }
 
 void DenseSLAM::set_mesh_layers(uint32_t p_layers) {
-	mesh_layers = p_layers;
+	mesh_layers = property_checks::render_layers("DenseSLAM.mesh_layers", p_layers);
 	masked_camera = 0; // the AR camera's mask is looked at again
 	for (auto &[region, view] : chunk_views) {
 		view.instance->set_layer_mask(mesh_layers);
@@ -225,12 +229,14 @@ void DenseSLAM::set_mesh_layers(uint32_t p_layers) {
 uint32_t DenseSLAM::get_mesh_layers() const { return mesh_layers; }
 
 void DenseSLAM::set_mesh_update_interval(int p_frames) {
-	mesh_update_interval = p_frames;
+	mesh_update_interval = int(property_checks::clamped_int("DenseSLAM.mesh_update_interval", p_frames, 1, 300, " frames"));
 	push_settings();
 }
 
 int DenseSLAM::get_mesh_update_interval() const { return mesh_update_interval; }
-void DenseSLAM::set_mesh_upload_budget(int p_triangles) { mesh_upload_budget = p_triangles; }
+void DenseSLAM::set_mesh_upload_budget(int p_triangles) {
+	mesh_upload_budget = int(property_checks::clamped_int("DenseSLAM.mesh_upload_budget", p_triangles, 0, 1000000, " triangles"));
+}
 int DenseSLAM::get_mesh_upload_budget() const { return mesh_upload_budget; }
 
 // ---------------------------------------------------------------- results
@@ -495,7 +501,30 @@ Ref<ArrayMesh> DenseSLAM::get_mesh() const {
 
 // ---------------------------------------------------------------- placement (Embree)
 
+// A bad argument is an error and a Dictionary holding only "error", so that it is never read as
+// "nothing hit" (an empty Dictionary).
+static Dictionary placement_refused(const std::string &p_message) {
+	ERR_PRINT(String(("DenseSLAM: " + p_message).c_str()));
+	Dictionary d;
+	d.set("error", String(p_message.c_str()));
+	return d;
+}
+
+static bool is_finite(const Vector3 &p_v) { return std::isfinite(p_v.x) && std::isfinite(p_v.y) && std::isfinite(p_v.z); }
+
+static std::string text(const Vector3 &p_v) {
+	char out[96];
+	std::snprintf(out, sizeof(out), "(%g, %g, %g)", p_v.x, p_v.y, p_v.z);
+	return out;
+}
+
 Dictionary DenseSLAM::place_on_ray(const Vector3 &p_origin, const Vector3 &p_direction) const {
+	if (!is_finite(p_origin) || !is_finite(p_direction)) {
+		return placement_refused("place_on_ray: origin " + text(p_origin) + " and direction " + text(p_direction) + " must be finite");
+	}
+	if (p_direction.dot(p_direction) < 1e-12f) {
+		return placement_refused("place_on_ray: direction " + text(p_direction) + " is zero; give the ray's direction");
+	}
 	Dictionary d;
 	if (!engine) {
 		return d;
@@ -515,6 +544,18 @@ Dictionary DenseSLAM::place_on_surface(const Vector2 &p_screen_position) const {
 	ERR_FAIL_COND_V_MSG(camera_path.is_empty(), Dictionary(), "place_on_surface needs the camera property (a Camera3D).");
 	const Camera3D *camera = cast_to<Camera3D>(get_node_or_null(camera_path));
 	ERR_FAIL_NULL_V_MSG(camera, Dictionary(), "camera does not lead to a Camera3D.");
+	// Far off-screen the camera's ray still goes somewhere, and once returned a hit no one could
+	// see: a point outside the viewport is refused.
+	const Rect2 visible = camera->get_viewport()->get_visible_rect();
+	const Vector2 &p = p_screen_position;
+	const bool inside = p.x >= visible.position.x && p.y >= visible.position.y && p.x < visible.position.x + visible.size.x &&
+			p.y < visible.position.y + visible.size.y; // false for NaN too
+	if (!inside) {
+		char out[192];
+		std::snprintf(out, sizeof(out), "place_on_surface: screen_position (%g, %g) is outside the camera's viewport (%g x %g pixels)", p.x,
+				p.y, visible.size.x, visible.size.y);
+		return placement_refused(out);
+	}
 	return place_on_ray(camera->project_ray_origin(p_screen_position), camera->project_ray_normal(p_screen_position));
 }
 

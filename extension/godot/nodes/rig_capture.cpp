@@ -1,5 +1,7 @@
 #include "rig_capture.h"
 
+#include "../property_checks.h"
+
 #include <camera/pinhole_camera.h>
 
 #include "../convert/image_convert.h"
@@ -24,7 +26,11 @@ void RigCapture::set_recording_path(const String &p_path) {
 }
 
 String RigCapture::get_recording_path() const { return recording_path; }
-void RigCapture::set_pacing(Pacing p_pacing) { pacing = p_pacing; }
+void RigCapture::set_pacing(Pacing p_pacing) {
+	if (property_checks::enum_in_range("RigCapture.pacing", p_pacing, 2)) {
+		pacing = p_pacing;
+	}
+}
 RigCapture::Pacing RigCapture::get_pacing() const { return pacing; }
 void RigCapture::set_loop(bool p_loop) { loop = p_loop; }
 bool RigCapture::get_loop() const { return loop; }
@@ -32,8 +38,7 @@ void RigCapture::set_autoplay(bool p_autoplay) { autoplay = p_autoplay; }
 bool RigCapture::get_autoplay() const { return autoplay; }
 
 void RigCapture::set_source(Source p_source) {
-	if (p_source != SOURCE_RECORDING && p_source != SOURCE_LIVE) {
-		ERR_PRINT(String("RigCapture: source must be Recording (0) or Live (1); got ") + String::num_int64(int64_t(p_source)) + "; left as it was");
+	if (!property_checks::enum_in_range("RigCapture.source (0 Recording, 1 Live)", p_source, 2)) {
 		return;
 	}
 	if (p_source == source) {
@@ -76,8 +81,7 @@ void RigCapture::set_fisheye_device(const String &p_id) { fisheye_device = p_id;
 String RigCapture::get_fisheye_device() const { return fisheye_device; }
 
 void RigCapture::set_fisheye_backend(FisheyeBackend p_backend) {
-	if (p_backend != FISHEYE_BACKEND_ARAVIS && p_backend != FISHEYE_BACKEND_UVC) {
-		ERR_PRINT(String("RigCapture: fisheye_backend must be Aravis (0) or UVC (1); got ") + String::num_int64(int64_t(p_backend)) + "; left as it was");
+	if (!property_checks::enum_in_range("RigCapture.fisheye_backend (0 Aravis, 1 UVC)", p_backend, 2)) {
 		return;
 	}
 	fisheye_backend = p_backend;

@@ -1,5 +1,7 @@
 #include "room_probe.h"
 
+#include "../property_checks.h"
+
 #include "../convert/image_convert.h"
 #include "../convert/pose_convert.h"
 #include "../convert/virtual_object_convert.h"
@@ -9,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
@@ -42,9 +45,9 @@ RoomProbe::~RoomProbe() {
 }
 
 void RoomProbe::set_resolution(int p_texels) {
-	resolution = p_texels;
-	if (engine && probe_id != 0 && resolution >= 1 && resolution <= 4096) {
-		engine->set_probe(probe_id, to_glm(get_global_position()), resolution);
+	resolution = int(property_checks::clamped_int("RoomProbe.resolution", p_texels, RESOLUTION_MIN, RESOLUTION_MAX, " texels"));
+	if (engine && probe_id != 0) {
+		place_in_engine();
 	}
 }
 
@@ -66,6 +69,9 @@ void RoomProbe::set_dense_slam_path(const NodePath &p_path) {
 NodePath RoomProbe::get_dense_slam_path() const { return dense_slam_path; }
 
 void RoomProbe::set_update_mode(UpdateMode p_mode) {
+	if (!property_checks::enum_in_range("RoomProbe.update_mode", p_mode, 2)) {
+		return;
+	}
 	update_mode = p_mode;
 	set_process(update_mode == UPDATE_ALWAYS && is_inside_tree());
 }
@@ -202,7 +208,7 @@ void RoomProbe::_process(double p_delta) {
 	}
 	if (engine->is_running()) {
 		// The probe worker renders; this only says where the probe is and takes finished maps.
-		engine->set_probe(probe_id, to_glm(get_global_position()), std::clamp(resolution, 1, 4096));
+		place_in_engine();
 		refresh_virtual_objects();
 		if (take_map()) {
 			emit_signal("environment_map_updated");
@@ -211,7 +217,7 @@ void RoomProbe::_process(double p_delta) {
 		if (Engine::get_singleton()->is_editor_hint()) {
 			// The editor: only when the probe moved, or its room, objects or size changed (an idle
 			// scene costs nothing).
-			engine->set_probe(probe_id, to_glm(get_global_position()), std::clamp(resolution, 1, 4096));
+			place_in_engine();
 			refresh_virtual_objects();
 			if (engine->probe_is_current(probe_id)) {
 				return;
@@ -231,7 +237,7 @@ void RoomProbe::connect_engine() {
 	disconnect_engine();
 	engine = found;
 	if (engine) {
-		probe_id = engine->add_probe(to_glm(get_global_position()), std::clamp(resolution, 1, 4096));
+		probe_id = engine->add_probe(to_glm(get_global_position()), resolution);
 	}
 }
 
@@ -243,9 +249,28 @@ void RoomProbe::disconnect_engine() {
 	probe_id = 0;
 }
 
+// Tells the engine where the probe is; a probe far outside the room sees it from behind its walls
+// (a map of nothing), which is said once each time it leaves.
+void RoomProbe::place_in_engine() {
+	const glm::dvec3 position = to_glm(get_global_position());
+	engine->set_probe(probe_id, position, resolution);
+	const double outside_m = engine->distance_outside_room_m(position);
+	const bool outside = outside_m > PROBE_OUTSIDE_WARNING_M;
+	if (outside && !outside_room) {
+		char text[192];
+		std::snprintf(text, sizeof(text), "RoomProbe %s is %.2f m outside the room: its map sees the room from outside, mostly empty.",
+				String(get_name()).utf8_string().c_str(), outside_m);
+		WARN_PRINT(text);
+	}
+	if (outside != outside_room) {
+		outside_room = outside;
+		outside_room_m = outside_m;
+		update_configuration_warnings();
+	}
+}
+
 bool RoomProbe::update_now() {
 	MainThreadTimer timer;
-	ERR_FAIL_COND_V_MSG(resolution < 1 || resolution > 4096, false, "resolution must be 1..4096.");
 	if (!engine) {
 		connect_engine();
 	}
@@ -254,7 +279,7 @@ bool RoomProbe::update_now() {
 		engine->apply_config();
 	}
 	ERR_FAIL_COND_V_MSG(engine->room_mesh() == nullptr, false, "The CoarseRoomModel has no valid room.");
-	engine->set_probe(probe_id, to_glm(get_global_position()), resolution);
+	place_in_engine();
 	refresh_virtual_objects();
 	ERR_FAIL_COND_V_MSG(!engine->render_probe(probe_id), false, "Rendering the probe's map failed.");
 	take_map();
@@ -431,7 +456,7 @@ void RoomProbe::set_sh_frame_path(const NodePath &p_path) {
 NodePath RoomProbe::get_sh_frame_path() const { return sh_frame_path; }
 
 void RoomProbe::set_virtual_objects_mask(uint32_t p_mask) {
-	virtual_objects_mask = p_mask;
+	virtual_objects_mask = property_checks::render_layers("RoomProbe.virtual_objects_mask", p_mask);
 	virtual_objects_signature.clear();
 	if (virtual_objects_mask == 0 && engine && probe_id != 0) {
 		engine->set_probe_objects(probe_id, nullptr);
@@ -546,6 +571,11 @@ PackedStringArray RoomProbe::get_warnings() const {
 		} else if (!bool(const_cast<Node *>(room)->call("is_valid"))) {
 			warnings.push_back("The CoarseRoomModel has no valid room: no environment map.");
 		}
+	}
+	if (outside_room) {
+		char text[160];
+		std::snprintf(text, sizeof(text), "The probe is %.2f m outside the room (floorplan and ceiling): its map sees the room from outside.", outside_room_m);
+		warnings.push_back(text);
 	}
 	if (is_inside_tree() && !reflection_probe_path.is_empty() && cast_to<ReflectionProbe>(get_node_or_null(reflection_probe_path)) == nullptr) {
 		warnings.push_back("reflection_probe does not lead to a ReflectionProbe.");

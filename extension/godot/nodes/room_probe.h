@@ -93,6 +93,7 @@ private:
 	void disconnect_engine();
 	// Copies the engine's newest map of this probe into the Cubemap and the outputs; true when new.
 	bool take_map();
+	void place_in_engine();
 	void apply_to_material();
 	// Route (b): places and sets up the ReflectionProbe so that it sees the textured room only.
 	void drive_reflection_probe();
@@ -111,6 +112,9 @@ private:
 	// object, handed to the engine when any of them changed (envmap/virtual_objects.h).
 	void refresh_virtual_objects();
 
+	// Face sides the setter accepts (clamped with a warning outside).
+	static constexpr int RESOLUTION_MIN = 8;
+	static constexpr int RESOLUTION_MAX = 4096;
 	int resolution = 256;
 	godot::NodePath coarse_model_path;
 	godot::NodePath dense_slam_path;
@@ -148,6 +152,10 @@ private:
 	mutable godot::Ref<godot::Image> faces[6]; // RGBF, made on request
 	godot::Ref<godot::Cubemap> cubemap; // RGBAH with mipmaps
 	double upload_ms = 0.0;
+	// Beyond this a probe is far outside its room (a little outside is a floorplan's slack).
+	static constexpr double PROBE_OUTSIDE_WARNING_M = 0.5;
+	bool outside_room = false;
+	double outside_room_m = 0.0;
 };
 
 } // namespace roomprobe

@@ -1,6 +1,7 @@
 #include "surface_anchor.h"
 
 #include "../convert/pose_convert.h"
+#include "../property_checks.h"
 
 #include <algorithm>
 #include <cmath>
@@ -17,10 +18,7 @@ void SurfaceAnchor::set_dense_slam_path(const NodePath &p_path) {
 NodePath SurfaceAnchor::get_dense_slam_path() const { return dense_slam_path; }
 
 void SurfaceAnchor::set_search_height(double p_metres) {
-	if (!(p_metres > 0.0 && p_metres <= 100.0)) {
-		WARN_PRINT("SurfaceAnchor: search_height must be in (0, 100] m; kept at the nearest valid value.");
-	}
-	search_height = std::isfinite(p_metres) ? std::clamp(p_metres, 0.01, 100.0) : 1.0;
+	search_height = property_checks::clamped("SurfaceAnchor.search_height", p_metres, 0.01, 100.0, search_height, " m");
 }
 
 double SurfaceAnchor::get_search_height() const { return search_height; }

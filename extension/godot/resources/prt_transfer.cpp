@@ -1,5 +1,7 @@
 #include "prt_transfer.h"
 
+#include "../property_checks.h"
+
 #include "../convert/mesh_convert.h"
 
 #include <prt/prt_transfer.h>
@@ -39,7 +41,7 @@ Ref<Mesh> PRTTransfer::get_mesh() const {
 }
 
 void PRTTransfer::set_surface(int p_surface) {
-	surface = p_surface < 0 ? 0 : p_surface;
+	surface = int(property_checks::clamped_int("PRTTransfer.surface", p_surface, 0, 255));
 	emit_changed();
 }
 
@@ -48,8 +50,8 @@ int PRTTransfer::get_surface() const {
 }
 
 void PRTTransfer::set_samples_per_vertex(int p_samples) {
-	// Clamped to the range the inspector offers: 16 (a quick look) to 65536 (a reference).
-	samples_per_vertex = p_samples < 16 ? 16 : (p_samples > 65536 ? 65536 : p_samples);
+	// The range the inspector offers: 16 (a quick look) to 65536 (a reference).
+	samples_per_vertex = int(property_checks::clamped_int("PRTTransfer.samples_per_vertex", p_samples, 16, 65536));
 	emit_changed();
 }
 

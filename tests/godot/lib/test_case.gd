@@ -22,6 +22,7 @@ var _failures: Array[String] = []
 var _skip_reason := ""
 var _skipped := false
 var _expected_errors: Array[String] = []
+var _expected_warnings: Array[String] = []
 
 
 ## Called before every test. Override; may await.
@@ -125,6 +126,12 @@ func expect_error(substring: String) -> void:
 	_expected_errors.append(substring)
 
 
+## Declares that the current test will log a warning whose text contains substring (a clamped
+## property, say); the test fails if none is logged. Other warnings never fail a test.
+func expect_warning(substring: String) -> void:
+	_expected_warnings.append(substring)
+
+
 ## Declares that an engine bug makes Godot report "count RIDs of type rid_type were leaked"
 ## at exit because of what this test did (e.g. "Texture"). tools/run_tests.py adds up these
 ## declarations and tolerates exactly that many such RIDs; any other count still fails.
@@ -224,6 +231,7 @@ func _rp_reset() -> void:
 	_skip_reason = ""
 	_skipped = false
 	_expected_errors.clear()
+	_expected_warnings.clear()
 
 
 func _record_failure(msg: String) -> void:

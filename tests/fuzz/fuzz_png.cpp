@@ -1,0 +1,25 @@
+// PNG frames (io/image_codec.h png_decode, recording/recording_io.h check_png_bytes, the check a
+// recording's frames get when opened): any bytes decode to an image within the pixel limit, or
+// give a reason; a PNG the chunk walk calls complete either decodes or is called corrupt.
+#include "fuzz_common.h"
+
+#include <io/image_codec.h>
+#include <recording/recording_io.h>
+
+#include <vector>
+
+using namespace roomprobe;
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t *p_data, size_t p_size) {
+	cv::Mat image;
+	const std::string error = png_decode(p_data, p_size, &image);
+	if (error.empty()) {
+		fuzz::require(!image.empty() && int64_t(image.total()) <= kImageMaxPixels, "a decoded PNG is an image within the pixel limit");
+	} else {
+		fuzz::require(image.empty(), "a PNG that fails to decode gives no image");
+	}
+	const std::vector<uint8_t> bytes(p_data, p_data + p_size);
+	const std::string walk = recording_io::check_png_bytes(bytes);
+	fuzz::require(walk.empty() || !walk.empty(), "the chunk walk returns"); // reaching here is the check: no crash, no hang
+	return 0;
+}

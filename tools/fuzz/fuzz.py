@@ -1,0 +1,216 @@
+#!/usr/bin/env python3
+"""./roomprobe fuzz TARGET|all [--runs N] [--seconds S]: the libFuzzer targets of tests/fuzz/.
+
+Runs inside the toolchain. Builds the targets (scons fuzz=yes: clang, the core instrumented,
+AddressSanitizer and UndefinedBehaviorSanitizer), makes each target's seed corpus when it has
+none (build/fuzz/corpus/TARGET/: files of a synthetic recording, small PNGs written here, and
+the recording target's own template), then fuzzes each target on its corpus. A crash or a broken
+invariant leaves its input in build/fuzz/crashes/TARGET/ and fails the run. Ends with one line:
+'summary: targets=K execs=N crashes=C seconds=S'.
+"""
+
+import argparse
+import os
+import re
+import shutil
+import struct
+import subprocess
+import sys
+import time
+import zlib
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(REPO, "tools"))
+import rp_godot as rp  # noqa: E402
+
+TARGETS = ["rig", "room", "index", "png", "depth", "exr", "recording"]
+# Inputs longer than this are cut (libFuzzer's -max_len): a whole 640x480 frame seed would make each
+# execution slow; its header and first rows are what the decoders' checks read.
+MAX_LEN = {"png": 65536, "depth": 65536, "exr": 65536}
+FUZZ_DIR = os.path.join(rp.BUILD, "fuzz")
+# The synthetic recording the seeds come from: the test suite's fixture, else one made here.
+FIXTURE = os.path.join(rp.BUILD, "test-data", "living_room_1s")
+SEED_RECORDING = os.path.join(rp.BUILD, "test-data", "fuzz-seed-recording")
+EXECS = re.compile(r"^stat::number_of_executed_units:\s*(\d+)")
+# The recording target's bundle replaces these template files; the synthetic recording's own
+# text files go in under the same names.
+BUNDLE_TEXT = ["rig.yaml", "room.yaml", "rgb.txt", "depth.txt", "fisheye.txt"]
+INDEX_LINES = 40  # an index seed keeps its first lines: the fuzzer mutates, it need not read a whole sweep
+
+
+def png_bytes(width, height, bit_depth, colour_type, rows):
+    """A minimal PNG (IHDR, one IDAT, IEND) of the given raw rows, each with filter byte 0."""
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    raw = b"".join(b"\x00" + row for row in rows)
+    header = struct.pack(">IIBBBBB", width, height, bit_depth, colour_type, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b"")
+
+
+def small_pngs():
+    """Small PNGs of each kind a recording holds: 8-bit RGB, 8-bit gray, 16-bit depth (with the
+    0 and 65535 'no reading' values), gray with alpha."""
+    rgb = [bytes((x * 30 + y) % 256 for x in range(8) for _ in range(3)) for y in range(6)]
+    gray = [bytes((x * 20 + y * 7) % 256 for x in range(8)) for y in range(6)]
+    depth = [b"".join(struct.pack(">H", [0, 65535, 500 + 37 * x + y][min(x, 2)]) for x in range(8)) for y in range(6)]
+    gray_alpha = [bytes(v for x in range(8) for v in ((x * 20) % 256, 255)) for _ in range(6)]
+    return {"rgb8.png": png_bytes(8, 6, 8, 2, rgb), "gray8.png": png_bytes(8, 6, 8, 0, gray),
+            "depth16.png": png_bytes(8, 6, 16, 0, depth), "gray_alpha.png": png_bytes(8, 6, 8, 4, gray_alpha)}
+
+
+def seed_recording():
+    """A synthetic recording to take seeds from (the tests' fixture, or a short one made now)."""
+    if os.path.isfile(os.path.join(FIXTURE, "rig.yaml")):
+        return FIXTURE
+    if not os.path.isfile(os.path.join(SEED_RECORDING, "rig.yaml")):
+        print(f"fuzz: synthesising a short recording for the seeds into {SEED_RECORDING}", flush=True)
+        subprocess.run(["scons", "-Q", f"-j{os.cpu_count() or 2}", "build/bin/roomprobe_synth"], cwd=REPO, check=True,
+                       stdout=subprocess.DEVNULL)
+        shutil.rmtree(SEED_RECORDING, ignore_errors=True)
+        subprocess.run([os.path.join(rp.BUILD, "bin", "roomprobe_synth"), "--scene", "living_room", "--seconds", "0.3",
+                        "--no-calibration", "--out", SEED_RECORDING], cwd=REPO, check=True, stdout=subprocess.DEVNULL)
+    return SEED_RECORDING
+
+
+def first_lines(path, count):
+    with open(path, "rb") as f:
+        return b"".join(f.readlines()[:count])
+
+
+def first_file(folder, suffix):
+    names = sorted(n for n in os.listdir(folder) if n.endswith(suffix)) if os.path.isdir(folder) else []
+    return os.path.join(folder, names[0]) if names else None
+
+
+def template_files():
+    """The recording target's template (small frames of every kind), as {relative path: bytes}."""
+    bundle = os.path.join(FUZZ_DIR, "template.bundle")
+    subprocess.run([binary("recording")], env=dict(os.environ, ROOMPROBE_FUZZ_SEED=bundle), check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    data = open(bundle, "rb").read()
+    files = {}
+    for part in data[2:].split(b"\n@@"):
+        name, _, body = part.partition(b"\n")
+        files[name.decode()] = body
+    return files
+
+
+def make_corpus(target, corpus):
+    """Writes TARGET's seeds into corpus/ (called when it is missing or empty)."""
+    os.makedirs(corpus, exist_ok=True)
+    recording = seed_recording()
+    seeds = {}
+    if target == "rig":
+        seeds["synthetic_rig.yaml"] = open(os.path.join(recording, "rig.yaml"), "rb").read()
+    elif target == "room":
+        seeds["synthetic_room.yaml"] = open(os.path.join(recording, "room.yaml"), "rb").read()
+    elif target == "index":
+        for root, _, names in os.walk(recording):
+            for name in names:
+                if name.endswith(".txt"):
+                    rel = os.path.relpath(os.path.join(root, name), recording).replace("/", "_")
+                    seeds[rel] = first_lines(os.path.join(root, name), INDEX_LINES)
+    elif target in ("png", "depth"):
+        for kind in ("rgb", "depth") if target == "png" else ("depth",):
+            path = first_file(os.path.join(recording, kind), ".png")
+            if path:
+                seeds[f"synthetic_{kind}.png"] = open(path, "rb").read()
+        seeds.update(small_pngs() if target == "png" else {"depth16.png": small_pngs()["depth16.png"]})
+        for name, body in template_files().items():
+            if name.endswith(".png") and (target == "png" or name.startswith("depth/")):
+                seeds["template_" + name.replace("/", "_")] = body
+    elif target == "exr":
+        for folder in ("fisheye", "groundtruth/cubemaps"):
+            path = first_file(os.path.join(recording, folder), ".exr")
+            if path:
+                seeds[folder.replace("/", "_") + ".exr"] = open(path, "rb").read()
+        for name, body in template_files().items():
+            if name.endswith(".exr"):
+                seeds["template_" + name.replace("/", "_")] = body
+    elif target == "recording":
+        template_files()  # writes FUZZ_DIR/template.bundle
+        shutil.copy(os.path.join(FUZZ_DIR, "template.bundle"), os.path.join(corpus, "template.bundle"))
+        parts = []
+        for name in BUNDLE_TEXT:
+            path = os.path.join(recording, name)
+            if os.path.isfile(path):
+                parts.append(b"@@" + name.encode() + b"\n" + (first_lines(path, INDEX_LINES) if name.endswith(".txt") else open(path, "rb").read()))
+        seeds["synthetic_text.bundle"] = b"\n".join(parts)
+    if not seeds:
+        sys.exit(f"fuzz: no seeds for {target} in {recording}")
+    for name, data in seeds.items():
+        with open(os.path.join(corpus, name), "wb") as f:
+            f.write(data)
+
+
+def binary(target):
+    return os.path.join(FUZZ_DIR, "bin", f"fuzz_{target}")
+
+
+def run_target(target, runs, seconds):
+    corpus = os.path.join(FUZZ_DIR, "corpus", target)
+    if not os.path.isdir(corpus) or not os.listdir(corpus):
+        make_corpus(target, corpus)
+    crashes = os.path.join(FUZZ_DIR, "crashes", target)
+    os.makedirs(crashes, exist_ok=True)
+    before = set(os.listdir(crashes))
+    cmd = [binary(target), corpus, f"-artifact_prefix={crashes}/", "-print_final_stats=1", "-timeout=20",
+           "-rss_limit_mb=3072", f"-runs={runs}" if runs else "-runs=-1"]
+    if seconds:
+        cmd.append(f"-max_total_time={seconds}")
+    if target in MAX_LEN:
+        cmd.append(f"-max_len={MAX_LEN[target]}")
+    env = dict(os.environ, ASAN_OPTIONS="detect_leaks=1:allocator_may_return_null=0",
+               UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1",
+               ASAN_SYMBOLIZER_PATH=shutil.which("llvm-symbolizer-21") or "")
+    log_path = os.path.join(FUZZ_DIR, f"{target}.log")
+    print(f"fuzz {target}: {' '.join(cmd)} (log {os.path.relpath(log_path, REPO)})", flush=True)
+    start = time.monotonic()
+    with open(log_path, "w") as log:
+        result = subprocess.run(cmd, cwd=REPO, env=env, stdout=log, stderr=subprocess.STDOUT)
+    elapsed = time.monotonic() - start
+    execs = 0
+    with open(log_path, errors="replace") as log:
+        lines = log.read().splitlines()
+    for line in lines:
+        m = EXECS.match(line)
+        if m:
+            execs = int(m.group(1))
+    found = sorted(set(os.listdir(crashes)) - before)
+    # Ctrl-C (libFuzzer: "run interrupted", status 72) stops a run; it finds nothing.
+    interrupted = any("libFuzzer: run interrupted" in line for line in lines) and not found
+    failed = (result.returncode != 0 and not interrupted) or bool(found)
+    if failed:
+        start_at = next((i for i, line in enumerate(lines) if "ERROR: " in line or "broken invariant" in line), max(0, len(lines) - 30))
+        print("\n".join(lines[start_at:start_at + 40]))
+    print(f"fuzz {target}: {execs} executions in {elapsed:.0f} s ({execs / max(elapsed, 1e-9):.0f}/s), corpus {len(os.listdir(corpus))} inputs, "
+          + (f"FAILED (status {result.returncode}); inputs kept: {', '.join(os.path.join(os.path.relpath(crashes, REPO), f) for f in found) or 'none'}"
+             if failed else "no crash" + (" (interrupted)" if interrupted else "")), flush=True)
+    return execs, (len(found) or 1) if failed else 0, elapsed
+
+
+def main():
+    ap = argparse.ArgumentParser(prog="./roomprobe fuzz", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("target", choices=TARGETS + ["all"])
+    ap.add_argument("--runs", type=int, default=0, help="executions per target (libFuzzer's -runs)")
+    ap.add_argument("--seconds", type=int, default=0, help="time per target (libFuzzer's -max_total_time)")
+    opts = ap.parse_args()
+    if opts.runs < 0 or opts.seconds < 0 or (opts.runs == 0 and opts.seconds == 0):
+        ap.error("give --runs N or --seconds S (or both), each > 0")
+    build = subprocess.run(["scons", "-Q", f"-j{os.cpu_count() or 2}", "fuzz=yes"], cwd=REPO)
+    if build.returncode != 0:
+        sys.exit("fuzz: building the targets failed (scons fuzz=yes)")
+    total_execs = total_crashes = 0
+    total_seconds = 0.0
+    targets = TARGETS if opts.target == "all" else [opts.target]
+    for target in targets:
+        execs, crashes, seconds = run_target(target, opts.runs, opts.seconds)
+        total_execs += execs
+        total_crashes += crashes
+        total_seconds += seconds
+    print(f"summary: targets={len(targets)} execs={total_execs} crashes={total_crashes} seconds={total_seconds:.0f}")
+    sys.exit(1 if total_crashes else 0)
+
+
+if __name__ == "__main__":
+    main()
