@@ -3,9 +3,6 @@
 #include "../convert/pose_convert.h"
 #include "../property_checks.h"
 
-#include <algorithm>
-#include <cmath>
-
 using namespace godot;
 
 namespace roomprobe {
