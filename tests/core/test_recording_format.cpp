@@ -802,6 +802,17 @@ TEST_CASE("damaged recording: malformed room.yaml fails open, naming the file an
 	CHECK_FALSE(status.ok);
 	CHECK(contains(status.error, "room.yaml: malformed YAML: line 2: text after the document marker"));
 
+	// Found by fuzzing: a field indented under a comment, then fields at column 0 (and a comment
+	// of bytes that are not UTF-8) hung OpenCV's parser too.
+	write_text(folder / "room.yaml", "%YAML:1.0\n---\n#  c\n   translation_m: [ 3.78, 1.54,\n       1.12 ]\nm:\n   - [ 1., 0. ]\n");
+	status = reader.open(folder.string());
+	CHECK_FALSE(status.ok);
+	CHECK(contains(status.error, "room.yaml: malformed YAML: line 4: the first field is indented"));
+	write_text(folder / "room.yaml", "%YAML:1.0\n---\n# \xff\xff\xff\nroomprobe_room: 1\n");
+	status = reader.open(folder.string());
+	CHECK_FALSE(status.ok);
+	CHECK(contains(status.error, "room.yaml: malformed YAML: line 3: a comment that is not UTF-8 text"));
+
 	write_text(folder / "room.yaml", "%YAML:1.0\n---\nroomprobe_room: 1\nfloorplan_m: [ [0, 0], [4, 0, 1], [4, 5] ]\nceiling_height_m: 2.5\n"
 									 "initial_rgb_pose:\n  rotation_xyzw: [0, 0, 0, 1]\n  translation_m: [0, 1.5, 0]\n");
 	status = reader.open(folder.string());
@@ -825,6 +836,19 @@ TEST_CASE("damaged recording: malformed room.yaml fails open, naming the file an
 	status = reader.open(folder.string());
 	CHECK_FALSE(status.ok);
 	CHECK(contains(status.error, "room.yaml: probe: unknown field"));
+
+	// A list at its key's own indentation is YAML, but cv::FileStorage refuses it: said plainly.
+	write_text(folder / "room.yaml", "%YAML:1.0\n---\nroomprobe_room: 1\nfloorplan_m:\n- [0, 0]\n- [4, 0]\n- [4, 5]\nceiling_height_m: 2.5\n");
+	status = reader.open(folder.string());
+	CHECK_FALSE(status.ok);
+	CHECK(contains(status.error, "room.yaml: malformed YAML: line 5: a list item must be indented under its key"));
+	// Indented lists, nested maps and comments in UTF-8 pass the layout check.
+	write_text(folder / "room.yaml", "%YAML:1.0\n---\n# a comment in UTF-8: \xc3\xbc\nroomprobe_room: 1\nfloorplan_m:\n  - [0, 0]\n  - [4, 0]\n  - [4, 5]\n"
+									 "ceiling_height_m: 2.5\ninitial_rgb_pose:\n  rotation_xyzw: [0, 0, 0, 1]\n  translation_m: [0, 1.5, 0]\n"
+									 "probes:\n  - [1, 1, 1]\n");
+	status = reader.open(folder.string());
+	CHECK_MESSAGE(status.ok, status.error);
+	CHECK(reader.get_room().floorplan.points.size() == 3);
 
 	// Without room.yaml the recording has no room (SLAM only), and its cubemaps are an issue.
 	fs::remove(folder / "room.yaml");

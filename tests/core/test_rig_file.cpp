@@ -262,6 +262,13 @@ TEST_CASE("rig file: missing, empty and malformed files give an error naming the
 		{ "binary", std::string("%YAML:1.0\n---\n\x01\x02\xff\xfe: [\x7f\n", 20), "" },
 		// Found by fuzzing (./roomprobe fuzz rig): OpenCV's YAML parser never returned on it.
 		{ "text_after_marker", "%YAML:1.0\n---J a: 1.\nx  - 1\n", "line 2: text after the document marker" },
+		// Found by fuzzing too: fields indented under nothing, then a list item at column 0, also
+		// never returned; the block layout is now checked before OpenCV parses.
+		{ "misaligned_blocks", "%YAML:1.0\n   model: pinhole_radtan\n   width: A\n- #\n- #1641\n", "line 2: the first field is indented" },
+		{ "bad_header", "%YAML:1..:\nroomprobe_rig: 1\n", "line 1: the header must be '%YAML:1.0'" },
+		{ "item_among_fields", "%YAML:1.0\n---\nroomprobe_rig: 1\nrgb:\n  model: x\n  - 1\n", "line 6: a list item among fields" },
+		{ "outdented_field", "%YAML:1.0\n---\nroomprobe_rig: 1\nrgb:\n    model: x\n  width: 1\n",
+				"line 6: this field's indentation (2 spaces) lines up with no block above it" },
 	};
 	for (const Case &c : cases) {
 		const std::string case_name = c.name;

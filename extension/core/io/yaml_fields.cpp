@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <set>
 #include <string_view>
+#include <vector>
 
 namespace roomprobe {
 
@@ -63,11 +64,92 @@ std::string screen_values(std::string_view p_text, int *r_depth) {
 	return std::string();
 }
 
+// Whether p_text is well-formed UTF-8 (comments may hold any language, not stray bytes).
+bool is_utf8(std::string_view p_text) {
+	for (size_t i = 0; i < p_text.size();) {
+		const unsigned char c = static_cast<unsigned char>(p_text[i]);
+		const size_t length = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xe ? 3 : (c >> 3) == 0x1e ? 4 : 0;
+		if (length == 0 || i + length > p_text.size()) {
+			return false;
+		}
+		for (size_t k = 1; k < length; k++) {
+			if ((static_cast<unsigned char>(p_text[i + k]) >> 6) != 0x2) {
+				return false;
+			}
+		}
+		i += length;
+	}
+	return true;
+}
+
+// The block structure: every line that starts a map field or a list item lines up with a block
+// that is open, and a block opens only under "key:" or "-" with nothing after it. OpenCV's parser
+// loops for ever on some misaligned texts (a map entry indented under nothing, then a list item
+// at column 0), so misalignment is refused here, naming the line.
+class BlockLayout {
+public:
+	enum class Kind { Map, List };
+
+	// "" or what is wrong with a line at p_indent of p_kind; p_opens: nothing follows ':' or '-'.
+	std::string add(size_t p_indent, Kind p_kind, bool p_opens) {
+		const char *what = p_kind == Kind::Map ? "field" : "list item";
+		if (opening) {
+			opening = false;
+			if (p_indent > parent_indent) {
+				levels.push_back({ p_indent, p_kind });
+				return finish(p_indent, p_opens);
+			}
+			if (p_indent == parent_indent && p_kind == Kind::List) { // YAML allows it; cv::FileStorage does not
+				return "a list item must be indented under its key";
+			}
+			// "key:" with nothing under it is YAML's null: the line belongs to an outer block.
+		}
+		if (levels.empty()) {
+			if (p_indent != 0) {
+				return std::string("the first ") + what + " is indented (the document starts at column 0)";
+			}
+			levels.push_back({ 0, p_kind });
+			return finish(p_indent, p_opens);
+		}
+		while (!levels.empty() && levels.back().indent > p_indent) {
+			levels.pop_back();
+		}
+		if (levels.empty() || levels.back().indent != p_indent) {
+			return std::string("this ") + what + "'s indentation (" + std::to_string(p_indent) + " spaces) lines up with no block above it";
+		}
+		if (levels.back().kind != p_kind) {
+			return std::string("a ") + what + " among " + (p_kind == Kind::Map ? "list items" : "fields") + " at the same indentation";
+		}
+		return finish(p_indent, p_opens);
+	}
+
+private:
+	struct Level {
+		size_t indent;
+		Kind kind;
+	};
+	std::string finish(size_t p_indent, bool p_opens) {
+		opening = p_opens;
+		parent_indent = p_indent;
+		return std::string();
+	}
+	std::vector<Level> levels;
+	bool opening = false;
+	size_t parent_indent = 0;
+};
+
+bool is_yaml_header(std::string_view p_line) {
+	// "%YAML:1.0" (what cv::FileStorage writes) or "%YAML 1.x".
+	return p_line.size() == 9 && p_line.rfind("%YAML", 0) == 0 && (p_line[5] == ':' || p_line[5] == ' ') && p_line[6] == '1' &&
+			p_line[7] == '.' && std::isdigit(static_cast<unsigned char>(p_line[8])) != 0;
+}
+
 } // namespace
 
 std::string screen_yaml_text(const std::string &p_text) {
 	int depth = 0; // '[' still open
 	int number = 0;
+	BlockLayout layout;
 	for (size_t start = 0; start < p_text.size();) {
 		number++;
 		const size_t end = std::min(p_text.find('\n', start), p_text.size());
@@ -79,12 +161,21 @@ std::string screen_yaml_text(const std::string &p_text) {
 		}
 		const size_t indent = std::min(line.find_first_not_of(' '), line.size());
 		std::string_view rest = line.substr(indent);
-		if (rest.empty() || (number == 1 && rest.rfind("%YAML", 0) == 0)) {
+		if (number == 1 && rest.rfind("%YAML", 0) == 0) {
+			if (!is_yaml_header(line)) {
+				return fail("the header must be '%YAML:1.0'");
+			}
 			continue;
 		}
-		if (rest.front() == '#') { // a whole-line comment: any text (UTF-8 too), no control characters
+		if (rest.empty()) {
+			continue;
+		}
+		if (rest.front() == '#') { // a whole-line comment: any text in UTF-8, no control characters
 			if (std::any_of(rest.begin(), rest.end(), [](char c) { return is_control(static_cast<unsigned char>(c)); })) {
 				return fail("a control character in a comment");
+			}
+			if (!is_utf8(rest)) {
+				return fail("a comment that is not UTF-8 text");
 			}
 			continue;
 		}
@@ -100,7 +191,9 @@ std::string screen_yaml_text(const std::string &p_text) {
 				}
 				continue;
 			}
+			BlockLayout::Kind kind = BlockLayout::Kind::Map;
 			if (rest == "-" || rest.rfind("- ", 0) == 0) { // a list item: its value follows
+				kind = BlockLayout::Kind::List;
 				rest.remove_prefix(std::min<size_t>(2, rest.size()));
 			} else { // key: [value]
 				size_t key = 0;
@@ -117,6 +210,11 @@ std::string screen_yaml_text(const std::string &p_text) {
 				if (!rest.empty() && rest.front() != ' ') {
 					return fail("expected a space after ':'");
 				}
+			}
+			const size_t value = std::min(rest.find_first_not_of(' '), rest.size());
+			const std::string misaligned = layout.add(indent, kind, value == rest.size() || rest[value] == '#');
+			if (!misaligned.empty()) {
+				return fail(misaligned);
 			}
 		}
 		const std::string problem = screen_values(rest, &depth);

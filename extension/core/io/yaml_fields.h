@@ -20,10 +20,11 @@ namespace roomprobe {
 // What cv::FileStorage's YAML parser may be given: "" when p_text keeps to the YAML that
 // RoomProbe's files use, else "line N: what". Fuzzing found malformed texts on which OpenCV 4.10's
 // parser never returns ("---J a: 1", stray '%' or control bytes inside a block), so the text is
-// screened first, line by line: comments; "---" alone; "key: value", "key:" and "- value" with
-// space indentation; values of plain scalars, quoted strings and '[' ']' lists (across lines);
-// printable ASCII outside comments. Files written by cv::FileStorage and the hand-written ones in
-// calib/ pass.
+// screened first, line by line: the '%YAML:1.0' header; comments in UTF-8; "---" alone;
+// "key: value", "key:" and "- value" with space indentation, each lining up with an open block
+// (a misaligned field or list item hung the parser too); values of plain scalars, quoted strings
+// and '[' ']' lists (across lines); printable ASCII outside comments. Files written by
+// cv::FileStorage and the hand-written ones in calib/ pass.
 std::string screen_yaml_text(const std::string &p_text);
 // The checks a YAML file's text gets before cv::FileStorage parses it: the '%YAML' header that
 // FileStorage needs to tell YAML from XML and JSON, then screen_yaml_text. "" or "malformed YAML: why".
