@@ -34,7 +34,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import rp_godot as rp  # noqa: E402
 
-SUITES = ["host", "package", "build", "core", "fuzz", "soak", "editor", "godot", "rendering"]
+SUITES = ["host", "package", "build", "core", "fuzz", "soak", "room", "editor", "godot", "rendering"]
 LOGS = os.path.join(rp.BUILD, "test-logs")
 
 BUILD_TIMEOUT = 3600
@@ -143,6 +143,8 @@ def main():
         results.append(suite_fuzz(opts))
     if counted("soak"):
         results.append(suite_soak(opts))
+    if counted("room"):
+        results.append(suite_room(opts))
 
     needs_import = any(counted(n) for n in ("editor", "godot", "rendering"))
     if needs_import:
@@ -609,14 +611,77 @@ def show_with_context(lines, bad, limit=60):
 
 
 # The synthetic recording the Godot tests play (tests/godot/test_nodes_rig_capture.gd).
+# ---------------------------------------------------------------------------------- room
+
+# The room without a tape measure (issue #18): roomprobe_room on a 10-s living-room sweep, tracked
+# as live, against the issue's figures (corners within 5 cm, the ceiling within 3 cm, up within
+# 0.5 degrees, a given floorplan registered within 2 cm); on the 1-s fixture, which sees one wall,
+# a clear state and no file; and the tool's refusals.
+ROOM_SWEEP = os.path.join(rp.BUILD, "test-data", "living_room_10s")
+ROOM_LINE = re.compile(r"^corner_error_max_m=([\d.]+) ceiling_error_m=([\d.]+) up_error_deg=([\d.]+) registration_error_m=(-?[\d.]+) registration_rms_m=([\d.]+)$")
+ROOM_LIMITS = {"corner_error_max_m": 0.05, "ceiling_error_m": 0.03, "up_error_deg": 0.5, "registration_error_m": 0.02}
+
+
+def suite_room(opts):
+    s = Suite("room")
+    log = os.path.join(LOGS, "room.log")
+    s.logs.append(log)
+    tool = os.path.join(rp.BUILD, "bin", "roomprobe_room")
+    rp.header(f"room: {rp.relpath(tool)} on a 10-s living-room sweep and the 1-s fixture")
+    s.ran = True
+    make_fixture_recording()
+    make_fixture_recording(ROOM_SWEEP, ("--no-calibration",), seconds=10, seed=1)
+    out = os.path.join(rp.BUILD, "test-data", "room-out")
+    shutil.rmtree(out, ignore_errors=True)
+    os.makedirs(out)
+    start = time.monotonic()
+    found = os.path.join(out, "living_room.yaml")
+    r = rp.run([tool, "--recording", ROOM_SWEEP, "--out", found], log, 900)
+    m = next((ROOM_LINE.match(line) for line in r.lines if ROOM_LINE.match(line)), None)
+    if r.rc != 0 or m is None or not os.path.isfile(found) or not os.path.isfile(os.path.join(out, "living_room.png")):
+        s.fail(f"room: the 10-s sweep: {rp.describe_exit(r)}, figures line {'found' if m else 'missing'} (see {rp.relpath(log)})")
+        rp.tail(r.lines, 20)
+    else:
+        figures = dict(zip(["corner_error_max_m", "ceiling_error_m", "up_error_deg", "registration_error_m"], map(float, m.groups())))
+        print(m.group(0))
+        over = [f"{k}={v} (at most {ROOM_LIMITS[k]})" for k, v in figures.items() if not (0.0 <= v <= ROOM_LIMITS[k])]
+        if over:
+            s.fail("room: the 10-s sweep: " + ", ".join(over))
+        else:
+            s.passed += 1
+        s.notes.append(m.group(0))
+    # One wall seen: a clear state, status 1, and nothing written.
+    one_wall = os.path.join(out, "fixture.yaml")
+    r = rp.run([tool, "--recording", FIXTURE_RECORDING, "--out", one_wall], log + ".fixture", 300)
+    said = "\n".join(r.lines)
+    if r.rc == 1 and "do not close a room" in said and not os.path.exists(one_wall):
+        s.passed += 1
+    else:
+        s.fail(f"room: the 1-s fixture (one wall): {rp.describe_exit(r)}, {'no' if 'do not close a room' not in said else 'a'} clear state, "
+               f"{'a file written' if os.path.exists(one_wall) else 'nothing written'}")
+    # An --out that exists is kept; one that is a folder is refused.
+    kept = os.path.join(out, "kept.yaml")
+    with open(kept, "w") as f:
+        f.write("mine\n")
+    r1 = rp.run([tool, "--recording", FIXTURE_RECORDING, "--out", kept], log + ".kept", 60)
+    r2 = rp.run([tool, "--recording", FIXTURE_RECORDING, "--out", out], log + ".folder", 60)
+    if r1.rc == 2 and open(kept).read() == "mine\n" and any("exists: it is kept" in line for line in r1.lines) and r2.rc == 2 and \
+            any("is a folder" in line for line in r2.lines):
+        s.passed += 1
+    else:
+        s.fail(f"room: --out refusals: an existing file: {rp.describe_exit(r1)}; a folder: {rp.describe_exit(r2)}")
+    s.seconds = time.monotonic() - start
+    return s
+
+
 FIXTURE_RECORDING = os.path.join(rp.BUILD, "test-data", "living_room_1s")
 # The same second with the fisheye bracketed (every other frame 5 stops shorter), for the HDR test
 # (tests/godot/test_nodes_coarse_pipeline.gd).
 FIXTURE_BRACKETED = os.path.join(rp.BUILD, "test-data", "living_room_1s_bracketed")
 
 
-def make_fixture_recording(p_folder=FIXTURE_RECORDING, p_extra=()):
-    """Renders a 1-second living_room recording with the synth tool, once per tool build."""
+def make_fixture_recording(p_folder=FIXTURE_RECORDING, p_extra=(), seconds=1, seed=7):
+    """Renders a living_room recording (1 s by default) with the synth tool, once per tool build."""
     tool = os.path.join(rp.BUILD, "bin", "roomprobe_synth")
     stamp = os.path.join(p_folder, ".made-by")
     if not os.path.exists(tool):
@@ -626,7 +691,7 @@ def make_fixture_recording(p_folder=FIXTURE_RECORDING, p_extra=()):
         return
     shutil.rmtree(p_folder, ignore_errors=True)
     log = os.path.join(LOGS, f"fixture-{os.path.basename(p_folder)}.log")
-    r = rp.run([tool, "--scene", "living_room", "--out", p_folder, "--seconds", "1", "--seed", "7", *p_extra], log, 600)
+    r = rp.run([tool, "--scene", "living_room", "--out", p_folder, "--seconds", str(seconds), "--seed", str(seed), *p_extra], log, 900)
     if r.rc == 0:
         with open(stamp, "w") as f:
             f.write(made_by)

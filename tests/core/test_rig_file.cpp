@@ -265,6 +265,10 @@ TEST_CASE("rig file: missing, empty and malformed files give an error naming the
 		// Found by fuzzing too: fields indented under nothing, then a list item at column 0, also
 		// never returned; the block layout is now checked before OpenCV parses.
 		{ "misaligned_blocks", "%YAML:1.0\n   model: pinhole_radtan\n   width: A\n- #\n- #1641\n", "line 2: the first field is indented" },
+		// Found by fuzzing: OpenCV writes a whole double of 2^31 or more as an integer and reads
+		// it back as a 32-bit one (fy 525071067811865 came back as -1569026023).
+		{ "huge_focal_length", replace_once(good, "  fy: 525.0\n", "  fy: 525071067811865.\n"), "rgb.fy: must be within +-1e9" },
+		{ "whole_number_beyond_32_bits", replace_once(good, "  width: 640\n", "  width: 3000000000\n"), "does not fit 32 bits" },
 		{ "bad_header", "%YAML:1..:\nroomprobe_rig: 1\n", "line 1: the header must be '%YAML:1.0'" },
 		{ "item_among_fields", "%YAML:1.0\n---\nroomprobe_rig: 1\nrgb:\n  model: x\n  - 1\n", "line 6: a list item among fields" },
 		{ "outdented_field", "%YAML:1.0\n---\nroomprobe_rig: 1\nrgb:\n    model: x\n  width: 1\n",

@@ -54,6 +54,23 @@ std::string screen_values(std::string_view p_text, int *r_depth) {
 			i = close;
 		} else if (c == '#' && (i == 0 || p_text[i - 1] == ' ')) {
 			return std::string(); // a comment to the end of the line
+		} else if (is_scalar_char(c) && (i == 0 || !is_scalar_char(p_text[i - 1]))) {
+			// A plain scalar: a whole number must fit 32 bits, or OpenCV reads another number
+			// (3000000000 reads as -1294967296) without a word.
+			size_t end = i;
+			while (end < p_text.size() && is_scalar_char(p_text[end])) {
+				end++;
+			}
+			const std::string_view token = p_text.substr(i, end - i);
+			const size_t digits = token.find_first_not_of("+-") == std::string_view::npos ? 0 : token.find_first_not_of("+-");
+			const std::string_view magnitude = token.substr(digits);
+			if (digits <= 1 && !magnitude.empty() && magnitude.find_first_not_of("0123456789") == std::string_view::npos) {
+				const std::string_view significant = magnitude.substr(std::min(magnitude.find_first_not_of('0'), magnitude.size()));
+				if (significant.size() > 10 || (significant.size() == 10 && significant > "2147483647")) {
+					return "the whole number " + std::string(token) + " does not fit 32 bits (OpenCV would read another number)";
+				}
+			}
+			i = end - 1;
 		} else if (!is_scalar_char(c) && c != ',' && c != ' ') {
 			char text[64];
 			std::snprintf(text, sizeof(text), "unexpected character '%c' (0x%02x)", std::isprint(static_cast<unsigned char>(c)) ? c : '?',
@@ -303,6 +320,10 @@ bool YamlFieldReader::number(const cv::FileNode &p_node, const std::string &p_fi
 		char buffer[16];
 		const std::to_chars_result written = std::to_chars(buffer, buffer + sizeof(buffer), value);
 		return fail(p_field, "must be finite (got " + std::string(buffer, written.ptr) + ")");
+	}
+	if (std::isfinite(value) && std::abs(value) > YAML_MAX_MAGNITUDE) {
+		return fail(p_field, "must be within +-1e9 (got " + std::to_string(value) +
+						"): cv::FileStorage writes whole numbers beyond 32 bits as integers that read back as other numbers");
 	}
 	*r_value = value;
 	return true;

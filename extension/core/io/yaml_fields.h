@@ -26,6 +26,13 @@ namespace roomprobe {
 // and '[' ']' lists (across lines); printable ASCII outside comments. Files written by
 // cv::FileStorage and the hand-written ones in calib/ pass.
 std::string screen_yaml_text(const std::string &p_text);
+
+// The largest magnitude a number in RoomProbe's YAML may have. OpenCV 4.10 writes a whole
+// double of 2^31 or more without a decimal point (525071067811865.0 as "525071067811865"), and
+// its parser then reads a 32-bit integer (-1569026023): found by fuzzing the rig file. No
+// camera parameter, distance or time RoomProbe stores comes near 1e9, so larger values are
+// refused at loading (and so never saved), and the screen refuses whole numbers beyond 32 bits.
+inline constexpr double YAML_MAX_MAGNITUDE = 1e9;
 // The checks a YAML file's text gets before cv::FileStorage parses it: the '%YAML' header that
 // FileStorage needs to tell YAML from XML and JSON, then screen_yaml_text. "" or "malformed YAML: why".
 std::string check_yaml_text(const std::string &p_text);

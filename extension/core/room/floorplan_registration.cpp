@@ -1,0 +1,216 @@
+// Step 4 of room_estimation.h: a given floorplan placed on the reconstructed walls.
+#include "room_estimation.h"
+
+#include "wall_planes.h"
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace roomprobe {
+
+using namespace room_planes;
+
+FloorplanRegistration register_floorplan(const Floorplan &p_given, const std::vector<SurfaceSample> &p_world_samples, const RoomEstimationOptions &p_options) {
+	FloorplanRegistration result;
+	const FloorplanCheck check = check_floorplan(p_given);
+	if (!check.ok) {
+		result.message = "the given floorplan: " + check.message;
+		return result;
+	}
+	std::vector<Vec2> given = p_given.points;
+	if (signed_area(given) < 0.0) {
+		std::reverse(given.begin(), given.end());
+	}
+	// The reconstructed walls (world frame: Y up) and their samples.
+	const double sin_normal = std::sin(p_options.normal_tolerance_deg * DEG);
+	std::vector<FlatSample> flat;
+	for (const SurfaceSample &s : p_world_samples) {
+		if (std::abs(s.normal.y) <= sin_normal && s.position_m.y > 0.05) {
+			FlatSample f;
+			f.position = { s.position_m.x, s.position_m.z };
+			const double length = std::hypot(s.normal.x, s.normal.z);
+			f.normal = { s.normal.x / length, s.normal.z / length };
+			f.angle = std::atan2(f.normal.y, f.normal.x);
+			f.area_m2 = s.area_m2;
+			flat.push_back(f);
+		}
+	}
+	double axis = 0.0;
+	bool manhattan = false;
+	const std::vector<WallEstimate> walls = find_walls(flat, p_options, &axis, &manhattan);
+	if (walls.size() < 2) {
+		result.message = "fewer than two walls reconstructed: nothing to register the floorplan to";
+		return result;
+	}
+	// The walls' own samples: what the given edges must fit.
+	std::vector<FlatSample> wall_samples;
+	for (const FlatSample &s : flat) {
+		for (const WallEstimate &wall : walls) {
+			if (dot2(s.normal, wall.normal) >= std::cos(p_options.normal_tolerance_deg * DEG) &&
+					std::abs(dot2(wall.normal, s.position) - wall.offset_m) <= p_options.plane_tolerance_m) {
+				wall_samples.push_back(s);
+				break;
+			}
+		}
+	}
+	if (wall_samples.size() > 3000) { // an even subsample: the fit needs the walls' shape, not every triangle
+		std::vector<FlatSample> thinned;
+		const double step = double(wall_samples.size()) / 3000.0;
+		for (double i = 0.0; size_t(i) < wall_samples.size(); i += step) {
+			thinned.push_back(wall_samples[size_t(i)]);
+		}
+		wall_samples = thinned;
+	}
+	double total = 0.0;
+	for (const FlatSample &s : wall_samples) {
+		total += s.area_m2;
+	}
+	const size_t n = given.size();
+	struct Edge {
+		Vec2 a, b, inward;
+	};
+	constexpr double TAU_M = 0.10; // a sample farther than this from its edge is not that edge's
+	auto placed_edges = [&](double p_yaw, const Vec2 &p_t) {
+		const double c = std::cos(p_yaw), s = std::sin(p_yaw);
+		std::vector<Edge> edges;
+		for (size_t i = 0; i < n; i++) {
+			const Vec2 &a = given[i], &b = given[(i + 1) % n];
+			Edge e;
+			e.a = { c * a.x - s * a.y + p_t.x, s * a.x + c * a.y + p_t.y };
+			e.b = { c * b.x - s * b.y + p_t.x, s * b.x + c * b.y + p_t.y };
+			const double length = std::hypot(e.b.x - e.a.x, e.b.y - e.a.y);
+			e.inward = { -(e.b.y - e.a.y) / length, (e.b.x - e.a.x) / length };
+			edges.push_back(e);
+		}
+		return edges;
+	};
+	// Each sample's distance to the nearest edge facing its way (point to segment).
+	auto nearest = [&](const std::vector<Edge> &p_edges, const FlatSample &p_sample, size_t *r_edge) {
+		double best = 1e9;
+		for (size_t i = 0; i < p_edges.size(); i++) {
+			const Edge &e = p_edges[i];
+			if (dot2(e.inward, p_sample.normal) < std::cos(20.0 * DEG)) {
+				continue;
+			}
+			const Vec2 d = { e.b.x - e.a.x, e.b.y - e.a.y };
+			const double t = std::clamp(((p_sample.position.x - e.a.x) * d.x + (p_sample.position.y - e.a.y) * d.y) / dot2(d, d), 0.0, 1.0);
+			const double distance = std::hypot(p_sample.position.x - (e.a.x + t * d.x), p_sample.position.y - (e.a.y + t * d.y));
+			if (distance < best) {
+				best = distance;
+				*r_edge = i;
+			}
+		}
+		return best;
+	};
+	auto cost = [&](double p_yaw, const Vec2 &p_t) {
+		const std::vector<Edge> edges = placed_edges(p_yaw, p_t);
+		double sum = 0.0;
+		for (const FlatSample &s : wall_samples) {
+			size_t edge = 0;
+			const double d = std::min(nearest(edges, s, &edge), TAU_M);
+			sum += s.area_m2 * d * d;
+		}
+		return sum;
+	};
+	// Candidates: each given edge turned onto each wall direction, then placed by two walls that
+	// are not parallel.
+	double best_cost = 1e18, best_yaw = 0.0;
+	Vec2 best_t;
+	std::vector<double> yaws;
+	for (size_t i = 0; i < n; i++) {
+		const Vec2 &a = given[i], &b = given[(i + 1) % n];
+		const double length = std::hypot(b.x - a.x, b.y - a.y);
+		const double inward_angle = std::atan2((b.x - a.x) / length, -(b.y - a.y) / length);
+		for (const WallEstimate &wall : walls) {
+			const double yaw = wrap_angle(std::atan2(wall.normal.y, wall.normal.x) - inward_angle);
+			if (std::none_of(yaws.begin(), yaws.end(), [&](double y) { return std::abs(wrap_angle(y - yaw)) < 1.0 * DEG; })) {
+				yaws.push_back(yaw);
+			}
+		}
+	}
+	for (const double yaw : yaws) {
+		const std::vector<Edge> turned = placed_edges(yaw, { 0.0, 0.0 });
+		for (size_t w1 = 0; w1 < walls.size(); w1++) {
+			for (size_t w2 = w1 + 1; w2 < walls.size(); w2++) {
+				const Vec2 &n1 = walls[w1].normal, &n2 = walls[w2].normal;
+				const double det = n1.x * n2.y - n1.y * n2.x;
+				if (std::abs(det) < 0.3) {
+					continue;
+				}
+				for (const Edge &e1 : turned) {
+					if (dot2(e1.inward, n1) < std::cos(2.0 * DEG)) {
+						continue;
+					}
+					for (const Edge &e2 : turned) {
+						if (dot2(e2.inward, n2) < std::cos(2.0 * DEG)) {
+							continue;
+						}
+						// n1 . (a1 + t) = d1, n2 . (a2 + t) = d2
+						const double r1 = walls[w1].offset_m - dot2(n1, e1.a), r2 = walls[w2].offset_m - dot2(n2, e2.a);
+						const Vec2 t = { (r1 * n2.y - n1.y * r2) / det, (n1.x * r2 - r1 * n2.x) / det };
+						const double c = cost(yaw, t);
+						if (c < best_cost) {
+							best_cost = c;
+							best_yaw = yaw;
+							best_t = t;
+						}
+					}
+				}
+			}
+		}
+	}
+	if (best_cost >= 1e18) {
+		result.message = "no wall of the given floorplan lines up with the reconstructed walls' directions";
+		return result;
+	}
+	// Refine: Gauss-Newton on point-to-line distances of the samples within TAU_M.
+	double rms = 0.0, inlier_area = 0.0;
+	for (int iteration = 0; iteration < 10; iteration++) {
+		const std::vector<Edge> edges = placed_edges(best_yaw, best_t);
+		cv::Matx33d normal_matrix = cv::Matx33d::zeros();
+		cv::Vec3d rhs(0.0, 0.0, 0.0);
+		double squares = 0.0;
+		inlier_area = 0.0;
+		for (const FlatSample &s : wall_samples) {
+			size_t index = 0;
+			if (nearest(edges, s, &index) > TAU_M) {
+				continue;
+			}
+			const Edge &e = edges[index];
+			const Vec2 q_minus_a = { s.position.x - e.a.x, s.position.y - e.a.y };
+			const double r = dot2(e.inward, q_minus_a); // the sample's signed distance from the edge's line
+			// The edge's points are R(yaw) g + t: turning by d moves a by d perp(a - t) and its
+			// normal by d perp(n); moving by dt moves a by dt.
+			const double d_yaw = dot2(perp(e.inward), q_minus_a) - dot2(e.inward, perp({ e.a.x - best_t.x, e.a.y - best_t.y }));
+			const cv::Vec3d jacobian(d_yaw, -e.inward.x, -e.inward.y);
+			normal_matrix += s.area_m2 * jacobian * jacobian.t();
+			rhs += -s.area_m2 * r * jacobian;
+			squares += s.area_m2 * r * r;
+			inlier_area += s.area_m2;
+		}
+		rms = inlier_area > 0.0 ? std::sqrt(squares / inlier_area) : 0.0;
+		cv::Vec3d step;
+		if (inlier_area <= 0.0 || !cv::solve(normal_matrix, rhs, step, cv::DECOMP_CHOLESKY)) {
+			break;
+		}
+		best_yaw = wrap_angle(best_yaw + step[0]);
+		best_t = { best_t.x + step[1], best_t.y + step[2] };
+		if (std::abs(step[0]) < 1e-7 && std::hypot(step[1], step[2]) < 1e-7) {
+			break;
+		}
+	}
+	result.ok = true;
+	result.yaw_deg = best_yaw / DEG;
+	result.residual_rms_m = rms;
+	result.inlier_share = total > 0.0 ? inlier_area / total : 0.0;
+	result.world_from_given.rotation = glm::angleAxis(-best_yaw, glm::dvec3(0.0, 1.0, 0.0)); // (x, z) turned by yaw: about Y by -yaw
+	result.world_from_given.translation = glm::dvec3(best_t.x, 0.0, best_t.y);
+	result.poor = rms > 0.03 || result.inlier_share < 0.5;
+	result.message = format("placed with a %.2f cm residual over %.0f%% of the walls' surface", rms * 100.0, result.inlier_share * 100.0) +
+			(result.poor ? ": a poor fit (is it the same room?)" : "");
+	return result;
+}
+
+} // namespace roomprobe

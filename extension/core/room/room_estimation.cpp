@@ -1,0 +1,623 @@
+#include "room_estimation.h"
+
+#include "wall_planes.h"
+
+#include <slam/marching_cubes.h>
+
+#include <CGAL/Arr_segment_traits_2.h>
+#include <CGAL/Arrangement_2.h>
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+
+namespace roomprobe {
+
+namespace {
+
+using namespace room_planes;
+
+// A wall seen ending this close to a wall across it ends in that corner.
+constexpr double CORNER_REACH_M = 0.3;
+
+using ExactKernel = CGAL::Exact_predicates_exact_constructions_kernel;
+using Traits = CGAL::Arr_segment_traits_2<ExactKernel>;
+using Arrangement = CGAL::Arrangement_2<Traits>;
+
+// Up: the area-weighted mean of the normals near the hint (floor, table tops and ceiling all
+// share it), in narrowing windows.
+glm::dvec3 refine_up(const std::vector<SurfaceSample> &p_samples, glm::dvec3 p_up) {
+	for (const double window_deg : { 35.0, 15.0, 6.0 }) {
+		glm::dvec3 sum(0.0);
+		for (const SurfaceSample &sample : p_samples) {
+			const double c = glm::dot(sample.normal, p_up);
+			if (std::abs(c) >= std::cos(window_deg * DEG)) {
+				sum += (c > 0.0 ? sample.normal : -sample.normal) * sample.area_m2;
+			}
+		}
+		if (glm::length(sum) <= 0.0) {
+			break;
+		}
+		p_up = glm::normalize(sum);
+	}
+	return p_up;
+}
+
+// The normal of the best plane through weighted points (the smallest eigenvector of their covariance).
+glm::dvec3 plane_normal(const std::vector<SurfaceSample> &p_points, const glm::dvec3 &p_side) {
+	glm::dvec3 mean(0.0);
+	double weight = 0.0;
+	for (const SurfaceSample &s : p_points) {
+		mean += s.area_m2 * s.position_m;
+		weight += s.area_m2;
+	}
+	mean /= weight;
+	cv::Matx33d covariance = cv::Matx33d::zeros();
+	for (const SurfaceSample &s : p_points) {
+		const glm::dvec3 d = s.position_m - mean;
+		for (int r = 0; r < 3; r++) {
+			for (int c = 0; c < 3; c++) {
+				covariance(r, c) += s.area_m2 * d[r] * d[c];
+			}
+		}
+	}
+	cv::Mat values, vectors;
+	cv::eigen(cv::Mat(covariance), values, vectors); // descending
+	glm::dvec3 normal(vectors.at<double>(2, 0), vectors.at<double>(2, 1), vectors.at<double>(2, 2));
+	normal = glm::normalize(normal);
+	return glm::dot(normal, p_side) < 0.0 ? -normal : normal;
+}
+
+// The angle (radians) from the wall's normal to the normal of the line its points follow (2-D
+// principal axis of its inliers).
+double wall_line_residual(const std::vector<FlatSample> &p_flat, const WallEstimate &p_wall, const RoomEstimationOptions &p_options) {
+	double weight = 0.0;
+	Vec2 mean;
+	std::vector<const FlatSample *> inliers;
+	for (const FlatSample &s : p_flat) {
+		if (dot2(s.normal, p_wall.normal) >= std::cos(p_options.normal_tolerance_deg * DEG) &&
+				std::abs(dot2(p_wall.normal, s.position) - p_wall.offset_m) <= p_options.plane_tolerance_m) {
+			inliers.push_back(&s);
+			mean = { mean.x + s.area_m2 * s.position.x, mean.y + s.area_m2 * s.position.y };
+			weight += s.area_m2;
+		}
+	}
+	if (inliers.size() < 10) {
+		return 0.0;
+	}
+	mean = { mean.x / weight, mean.y / weight };
+	double xx = 0.0, xy = 0.0, yy = 0.0;
+	for (const FlatSample *s : inliers) {
+		const double dx = s->position.x - mean.x, dy = s->position.y - mean.y;
+		xx += s->area_m2 * dx * dx;
+		xy += s->area_m2 * dx * dy;
+		yy += s->area_m2 * dy * dy;
+	}
+	const double line_angle = 0.5 * std::atan2(2.0 * xy, xx - yy); // the principal axis
+	const double normal_angle = line_angle + PI / 2.0;
+	return std::remainder(normal_angle - std::atan2(p_wall.normal.y, p_wall.normal.x), PI / 2.0);
+}
+
+// A line n . p = d clipped to a box: false when it misses.
+bool clip_line(const Vec2 &p_normal, double p_offset, const Vec2 &p_min, const Vec2 &p_max, Vec2 *r_a, Vec2 *r_b) {
+	const Vec2 along = perp(p_normal);
+	const Vec2 base = { p_normal.x * p_offset, p_normal.y * p_offset };
+	double t0 = -1e9, t1 = 1e9;
+	const double origin[2] = { base.x, base.y }, direction[2] = { along.x, along.y }, low[2] = { p_min.x, p_min.y }, high[2] = { p_max.x, p_max.y };
+	for (int axis = 0; axis < 2; axis++) {
+		if (std::abs(direction[axis]) < 1e-12) {
+			if (origin[axis] < low[axis] || origin[axis] > high[axis]) {
+				return false;
+			}
+			continue;
+		}
+		double a = (low[axis] - origin[axis]) / direction[axis], b = (high[axis] - origin[axis]) / direction[axis];
+		if (a > b) {
+			std::swap(a, b);
+		}
+		t0 = std::max(t0, a);
+		t1 = std::min(t1, b);
+	}
+	if (t1 - t0 < 1e-6) {
+		return false;
+	}
+	*r_a = { base.x + along.x * t0, base.y + along.y * t0 };
+	*r_b = { base.x + along.x * t1, base.y + along.y * t1 };
+	return true;
+}
+
+bool inside_polygon(const std::vector<Vec2> &p_polygon, const Vec2 &p_point) {
+	bool inside = false;
+	for (size_t i = 0, j = p_polygon.size() - 1; i < p_polygon.size(); j = i++) {
+		const Vec2 &a = p_polygon[i], &b = p_polygon[j];
+		if ((a.y > p_point.y) != (b.y > p_point.y) && p_point.x < (b.x - a.x) * (p_point.y - a.y) / (b.y - a.y) + a.x) {
+			inside = !inside;
+		}
+	}
+	return inside;
+}
+
+// Drops corners where the boundary runs straight on (the arrangement splits walls at every line).
+std::vector<Vec2> drop_straight_corners(std::vector<Vec2> p_points) {
+	bool changed = true;
+	while (changed && p_points.size() > 3) {
+		changed = false;
+		for (size_t i = 0; i < p_points.size(); i++) {
+			const Vec2 &a = p_points[(i + p_points.size() - 1) % p_points.size()], &b = p_points[i], &c = p_points[(i + 1) % p_points.size()];
+			const Vec2 u = { b.x - a.x, b.y - a.y }, v = { c.x - b.x, c.y - b.y };
+			const double lu = std::hypot(u.x, u.y), lv = std::hypot(v.x, v.y);
+			if (lu < 1e-6 || lv < 1e-6 || std::abs(u.x * v.y - u.y * v.x) / (lu * lv) < 1e-3) {
+				p_points.erase(p_points.begin() + long(i));
+				changed = true;
+				break;
+			}
+		}
+	}
+	return p_points;
+}
+
+// Where the floor was seen, on a grid in the floor plane's 2-D coordinates.
+struct FloorGrid {
+	Vec2 origin;
+	double cell = 0.05;
+	int width = 0, height = 0;
+	std::vector<uint8_t> seen;
+	bool at(const Vec2 &p_point) const {
+		const int x = int(std::floor((p_point.x - origin.x) / cell)), y = int(std::floor((p_point.y - origin.y) / cell));
+		return x >= 0 && y >= 0 && x < width && y < height && seen[size_t(y) * size_t(width) + size_t(x)] != 0;
+	}
+};
+
+// The share of the face's floor the sweep saw, or 1 when a camera position lies in it.
+double face_seen(const std::vector<Vec2> &p_face, const FloorGrid &p_grid, const std::vector<Vec2> &p_cameras) {
+	for (const Vec2 &camera : p_cameras) {
+		if (inside_polygon(p_face, camera)) {
+			return 1.0;
+		}
+	}
+	Vec2 low = p_face.front(), high = p_face.front();
+	for (const Vec2 &p : p_face) {
+		low = { std::min(low.x, p.x), std::min(low.y, p.y) };
+		high = { std::max(high.x, p.x), std::max(high.y, p.y) };
+	}
+	size_t total = 0, seen = 0;
+	for (double y = low.y + 0.5 * p_grid.cell; y < high.y; y += p_grid.cell) {
+		for (double x = low.x + 0.5 * p_grid.cell; x < high.x; x += p_grid.cell) {
+			if (inside_polygon(p_face, { x, y })) {
+				total++;
+				seen += p_grid.at({ x, y }) ? 1 : 0;
+			}
+		}
+	}
+	return total == 0 ? 0.0 : double(seen) / double(total);
+}
+
+// The room's polygon: the walls' lines and the ends of what was seen of them cut the floor into
+// faces (CGAL's arrangement); the faces whose floor was seen are joined, and the largest region's
+// boundary is the room. Empty when no bounded region was seen.
+std::vector<Vec2> room_polygon(const std::vector<WallEstimate> &p_walls, const FloorGrid &p_grid, const std::vector<Vec2> &p_cameras,
+		const RoomEstimationOptions &p_options) {
+	struct Line {
+		Vec2 normal;
+		double offset;
+	};
+	std::vector<Line> lines;
+	auto add_line = [&](const Vec2 &p_normal, double p_offset) {
+		for (const Line &line : lines) { // the same line (either orientation) is inserted once
+			const double c = dot2(line.normal, p_normal);
+			if (std::abs(c) > std::cos(1.0 * DEG) && std::abs(line.offset - c * p_offset) < 0.05) {
+				return;
+			}
+		}
+		lines.push_back({ p_normal, p_offset });
+	};
+	for (const WallEstimate &wall : p_walls) {
+		add_line(wall.normal, wall.offset_m);
+	}
+	// The ends of each wall as seen, where the room may end (a partition's end). An end near a
+	// wall across it is that corner, seen short of it (something stood in the corner): the
+	// walls' own lines make the corner.
+	for (const WallEstimate &wall : p_walls) {
+		for (const double end : { wall.from_m, wall.to_m }) {
+			const Vec2 point = { wall.normal.x * wall.offset_m + perp(wall.normal).x * end, wall.normal.y * wall.offset_m + perp(wall.normal).y * end };
+			const bool near_wall = std::any_of(p_walls.begin(), p_walls.end(), [&](const WallEstimate &p_other) {
+				return std::abs(dot2(p_other.normal, wall.normal)) < std::cos(5.0 * DEG) && std::abs(dot2(p_other.normal, point) - p_other.offset_m) < CORNER_REACH_M;
+			});
+			if (!near_wall) {
+				add_line(perp(wall.normal), end);
+			}
+		}
+	}
+	Vec2 low = { p_grid.origin.x, p_grid.origin.y }, high = { p_grid.origin.x + p_grid.cell * p_grid.width, p_grid.origin.y + p_grid.cell * p_grid.height };
+	for (const WallEstimate &wall : p_walls) {
+		for (const double t : { wall.from_m, wall.to_m }) {
+			const Vec2 p = { wall.normal.x * wall.offset_m + perp(wall.normal).x * t, wall.normal.y * wall.offset_m + perp(wall.normal).y * t };
+			low = { std::min(low.x, p.x), std::min(low.y, p.y) };
+			high = { std::max(high.x, p.x), std::max(high.y, p.y) };
+		}
+	}
+	low = { low.x - 1.0, low.y - 1.0 };
+	high = { high.x + 1.0, high.y + 1.0 };
+	std::vector<Traits::X_monotone_curve_2> segments;
+	for (const Line &line : lines) {
+		Vec2 a, b;
+		if (clip_line(line.normal, line.offset, low, high, &a, &b)) {
+			segments.emplace_back(ExactKernel::Point_2(a.x, a.y), ExactKernel::Point_2(b.x, b.y));
+		}
+	}
+	Arrangement arrangement;
+	CGAL::insert(arrangement, segments.begin(), segments.end());
+
+	std::map<Arrangement::Face_const_handle, bool> inside;
+	for (Arrangement::Face_const_iterator face = arrangement.faces_begin(); face != arrangement.faces_end(); ++face) {
+		bool in = false;
+		if (!face->is_unbounded()) {
+			std::vector<Vec2> polygon;
+			Arrangement::Ccb_halfedge_const_circulator edge = face->outer_ccb(), first = edge;
+			do {
+				polygon.push_back({ CGAL::to_double(edge->source()->point().x()), CGAL::to_double(edge->source()->point().y()) });
+			} while (++edge != first);
+			in = face_seen(polygon, p_grid, p_cameras) >= p_options.min_floor_seen;
+		}
+		inside[face] = in;
+	}
+	// The boundary: halfedges with an inside face on their left and an outside one on their right.
+	std::map<Arrangement::Vertex_const_handle, Arrangement::Halfedge_const_handle> from;
+	for (Arrangement::Halfedge_const_iterator edge = arrangement.halfedges_begin(); edge != arrangement.halfedges_end(); ++edge) {
+		if (inside[edge->face()] && !inside[edge->twin()->face()]) {
+			from[edge->source()] = edge;
+		}
+	}
+	std::vector<Vec2> best;
+	double best_area = 0.0;
+	while (!from.empty()) {
+		std::vector<Vec2> loop;
+		auto at = from.begin();
+		const Arrangement::Vertex_const_handle start = at->first;
+		Arrangement::Vertex_const_handle vertex = start;
+		while (true) {
+			const auto found = from.find(vertex);
+			if (found == from.end()) {
+				break;
+			}
+			const Arrangement::Halfedge_const_handle edge = found->second;
+			from.erase(found);
+			loop.push_back({ CGAL::to_double(vertex->point().x()), CGAL::to_double(vertex->point().y()) });
+			vertex = edge->target();
+			if (vertex == start) {
+				break;
+			}
+		}
+		const double area = loop.size() >= 3 ? signed_area(loop) : 0.0;
+		if (area > best_area) {
+			best_area = area;
+			best = loop;
+		}
+	}
+	return best.empty() ? best : drop_straight_corners(best);
+}
+
+} // namespace
+
+const char *room_estimate_state_name(RoomEstimateState p_state) {
+	switch (p_state) {
+		case RoomEstimateState::Complete:
+			return "complete";
+		case RoomEstimateState::Partial:
+			return "partial";
+		case RoomEstimateState::NoSurface:
+			return "no surface";
+		case RoomEstimateState::NoFloor:
+			return "no floor";
+		case RoomEstimateState::TooFewWalls:
+			return "too few walls";
+	}
+	return "unknown";
+}
+
+std::vector<SurfaceSample> surface_samples(const TriangleMesh &p_mesh) {
+	std::vector<SurfaceSample> samples;
+	samples.reserve(p_mesh.indices.size() / 3);
+	for (size_t i = 0; i + 2 < p_mesh.indices.size(); i += 3) {
+		const glm::dvec3 a(p_mesh.vertices[p_mesh.indices[i]]), b(p_mesh.vertices[p_mesh.indices[i + 1]]), c(p_mesh.vertices[p_mesh.indices[i + 2]]);
+		const glm::dvec3 cross = glm::cross(b - a, c - a);
+		const double twice_area = glm::length(cross);
+		if (!(twice_area > 0.0)) {
+			continue;
+		}
+		SurfaceSample sample;
+		sample.position_m = (a + b + c) / 3.0;
+		sample.normal = cross / twice_area; // counter-clockwise seen from the free side: towards free space
+		sample.area_m2 = 0.5 * twice_area;
+		samples.push_back(sample);
+	}
+	return samples;
+}
+
+std::vector<SurfaceSample> transform_samples(const std::vector<SurfaceSample> &p_samples, const Pose &p_pose) {
+	std::vector<SurfaceSample> out = p_samples;
+	for (SurfaceSample &s : out) {
+		s.position_m = transform_point(p_pose, s.position_m);
+		s.normal = p_pose.rotation * s.normal;
+	}
+	return out;
+}
+
+RoomEstimate estimate_room(const std::vector<SurfaceSample> &p_samples, const glm::dvec3 &p_up_hint, const std::vector<glm::dvec3> &p_camera_positions,
+		const RoomEstimationOptions &p_options) {
+	RoomEstimate result;
+	double total_area = 0.0;
+	for (const SurfaceSample &s : p_samples) {
+		total_area += s.area_m2;
+	}
+	if (p_samples.empty() || total_area < p_options.floor_min_area_m2) {
+		result.state = RoomEstimateState::NoSurface;
+		result.message = format("the dense model holds %.2f m2 of surface: sweep the room first", total_area);
+		return result;
+	}
+	const double hint_length = glm::length(p_up_hint);
+	const glm::dvec3 hint = hint_length > 0.0 && std::isfinite(hint_length) ? p_up_hint / hint_length : glm::dvec3(0.0, 1.0, 0.0);
+	glm::dvec3 up = refine_up(p_samples, hint);
+	const double cos_normal = std::cos(p_options.normal_tolerance_deg * DEG);
+
+	// 1. The floor: the lowest horizontal, upward-facing plane with floor_min_area_m2 seen.
+	auto floor_heights = [&](const glm::dvec3 &p_up) {
+		std::vector<std::pair<double, double>> heights;
+		for (const SurfaceSample &s : p_samples) {
+			if (glm::dot(s.normal, p_up) >= cos_normal) {
+				heights.emplace_back(glm::dot(s.position_m, p_up), s.area_m2);
+			}
+		}
+		return heights;
+	};
+	double floor_height = 0.0;
+	bool found_floor = false;
+	for (int pass = 0; pass < 2; pass++) { // again with the up the floor's own plane gives
+		const std::vector<std::pair<double, double>> heights = floor_heights(up);
+		if (heights.empty()) {
+			break;
+		}
+		const LineHistogram histogram(heights, p_options.plane_tolerance_m);
+		size_t bin = 0;
+		while (bin < histogram.window.size() && histogram.window[bin] < p_options.floor_min_area_m2) {
+			bin++;
+		}
+		if (bin == histogram.window.size()) {
+			break;
+		}
+		bin = histogram.local_peak(bin, 0.1);
+		floor_height = mean_near(heights, mean_near(heights, histogram.centre(bin), 2.0 * p_options.plane_tolerance_m), p_options.plane_tolerance_m,
+				&result.floor_rms_m, &result.floor_seen_m2);
+		std::vector<SurfaceSample> floor;
+		for (const SurfaceSample &s : p_samples) {
+			if (glm::dot(s.normal, up) >= cos_normal && std::abs(glm::dot(s.position_m, up) - floor_height) <= p_options.plane_tolerance_m) {
+				floor.push_back(s);
+			}
+		}
+		found_floor = true;
+		if (pass == 0 && floor.size() >= 3) {
+			up = plane_normal(floor, up);
+		}
+	}
+	if (!found_floor) {
+		result.state = RoomEstimateState::NoFloor;
+		result.message = format("no horizontal plane with %.1f m2 seen: the floor was not in the sweep", p_options.floor_min_area_m2);
+		return result;
+	}
+	for (const glm::dvec3 &camera : p_camera_positions) {
+		if (glm::dot(camera, up) - floor_height < 0.2) {
+			result.state = RoomEstimateState::NoFloor;
+			result.message = format("the lowest large horizontal plane is %.2f m above a camera position: not a floor under the sweep",
+					floor_height - glm::dot(camera, up));
+			return result;
+		}
+	}
+
+	// 2. Walls: vertical samples in 2-D, their directions, and the planes along each.
+	glm::dvec3 e1 = std::abs(up.x) < 0.9 ? glm::dvec3(1.0, 0.0, 0.0) : glm::dvec3(0.0, 0.0, 1.0);
+	e1 = glm::normalize(e1 - glm::dot(e1, up) * up);
+	glm::dvec3 e3 = glm::cross(e1, up);
+	const double sin_normal = std::sin(p_options.normal_tolerance_deg * DEG);
+	auto flatten = [&](const glm::dvec3 &p_e1, const glm::dvec3 &p_e3) {
+		std::vector<FlatSample> flat;
+		for (const SurfaceSample &s : p_samples) {
+			const double vertical = glm::dot(s.normal, up);
+			const double height = glm::dot(s.position_m, up) - floor_height;
+			if (std::abs(vertical) <= sin_normal && height > 0.05) {
+				FlatSample f;
+				f.position = { glm::dot(s.position_m, p_e1), glm::dot(s.position_m, p_e3) };
+				const Vec2 n = { glm::dot(s.normal, p_e1), glm::dot(s.normal, p_e3) };
+				const double length = std::hypot(n.x, n.y);
+				f.normal = { n.x / length, n.y / length };
+				f.angle = std::atan2(f.normal.y, f.normal.x);
+				f.area_m2 = s.area_m2;
+				flat.push_back(f);
+			}
+		}
+		return flat;
+	};
+	// The world's x axis along the dominant wall normal: the normals' mean first, then the walls'
+	// own points, far better (a line through metres of surface; marching cubes' normals scatter
+	// by degrees), until the walls lie on the axes.
+	std::vector<FlatSample> flat;
+	std::vector<WallEstimate> walls;
+	for (int pass = 0; pass < 4; pass++) {
+		flat = flatten(e1, e3);
+		double axis = 0.0;
+		walls = find_walls(flat, p_options, &axis, &result.manhattan);
+		double residual = 0.0, weight = 0.0;
+		for (const WallEstimate &wall : walls) { // the walls on the axes (snapped to them)
+			if (std::abs(std::remainder(std::atan2(wall.normal.y, wall.normal.x) - axis, PI / 2.0)) < 1e-9) {
+				const double w = wall.area_m2 * (wall.to_m - wall.from_m) * (wall.to_m - wall.from_m);
+				residual += w * wall_line_residual(flat, wall, p_options);
+				weight += w;
+			}
+		}
+		const double correction = weight > 0.0 ? residual / weight : 0.0;
+		const double turn = axis + correction;
+		if (std::abs(turn) < 1e-5 || pass == 3) { // the walls again, on the axes their lines give
+			walls = find_walls(flat, p_options, &axis, &result.manhattan, correction);
+			break;
+		}
+		e1 = glm::normalize(std::cos(turn) * e1 + std::sin(turn) * e3);
+		e3 = glm::cross(e1, up);
+	}
+
+	// Where the floor was seen, and where the camera went.
+	FloorGrid grid;
+	grid.cell = p_options.floor_cell_m;
+	std::vector<Vec2> floor_points;
+	for (const SurfaceSample &s : p_samples) {
+		if (glm::dot(s.normal, up) >= cos_normal && std::abs(glm::dot(s.position_m, up) - floor_height) <= p_options.plane_tolerance_m) {
+			floor_points.push_back({ glm::dot(s.position_m, e1), glm::dot(s.position_m, e3) });
+		}
+	}
+	std::vector<Vec2> cameras;
+	for (const glm::dvec3 &camera : p_camera_positions) {
+		cameras.push_back({ glm::dot(camera, e1), glm::dot(camera, e3) });
+	}
+	Vec2 low = floor_points.front(), high = low;
+	for (const Vec2 &p : floor_points) {
+		low = { std::min(low.x, p.x), std::min(low.y, p.y) };
+		high = { std::max(high.x, p.x), std::max(high.y, p.y) };
+	}
+	grid.origin = low;
+	grid.width = int(std::ceil((high.x - low.x) / grid.cell)) + 1;
+	grid.height = int(std::ceil((high.y - low.y) / grid.cell)) + 1;
+	grid.seen.assign(size_t(grid.width) * size_t(grid.height), 0);
+	for (const Vec2 &p : floor_points) {
+		const int x = int((p.x - low.x) / grid.cell), y = int((p.y - low.y) / grid.cell);
+		grid.seen[size_t(y) * size_t(grid.width) + size_t(x)] = 1;
+	}
+
+	std::vector<double> distinct;
+	for (const WallEstimate &wall : walls) {
+		const double angle = std::atan2(wall.normal.y, wall.normal.x);
+		if (std::none_of(distinct.begin(), distinct.end(), [&](double a) { return std::abs(wrap_angle(a - angle)) < 5.0 * DEG; })) {
+			distinct.push_back(angle);
+		}
+	}
+	std::vector<Vec2> polygon = distinct.size() >= 3 ? room_polygon(walls, grid, cameras, p_options) : std::vector<Vec2>();
+	if (polygon.size() < 3) {
+		result.state = RoomEstimateState::TooFewWalls;
+		result.message = std::to_string(walls.size()) + " wall" + (walls.size() == 1 ? "" : "s") + " seen, facing " + std::to_string(distinct.size()) +
+				" direction" + (distinct.size() == 1 ? "" : "s") + ": they do not close a room; sweep the walls all round";
+		return result;
+	}
+	// The world: origin on the floor at the polygon's bounding-box minimum.
+	Vec2 min_corner = polygon.front();
+	for (const Vec2 &p : polygon) {
+		min_corner = { std::min(min_corner.x, p.x), std::min(min_corner.y, p.y) };
+	}
+	glm::dmat3 rows(e1, up, e3); // columns e1, up, e3: model_from_world's rotation
+	const glm::dmat3 world_from_model_rotation = glm::transpose(rows);
+	const glm::dvec3 origin_model = min_corner.x * e1 + floor_height * up + min_corner.y * e3;
+	result.world_from_model.rotation = glm::normalize(glm::quat_cast(world_from_model_rotation));
+	result.world_from_model.translation = -(world_from_model_rotation * origin_model);
+	for (Vec2 &p : polygon) {
+		p = { p.x - min_corner.x, p.y - min_corner.y };
+	}
+	result.floorplan.points = polygon;
+	for (WallEstimate &wall : walls) {
+		wall.offset_m -= dot2(wall.normal, min_corner);
+		const double shift = dot2(perp(wall.normal), min_corner);
+		wall.from_m -= shift;
+		wall.to_m -= shift;
+	}
+	result.walls = walls;
+
+	// How much of each edge was seen as a wall.
+	std::vector<size_t> unseen;
+	for (size_t i = 0; i < polygon.size(); i++) {
+		const Vec2 &a = polygon[i], &b = polygon[(i + 1) % polygon.size()];
+		const double length = std::hypot(b.x - a.x, b.y - a.y);
+		const Vec2 inward = { -(b.y - a.y) / length, (b.x - a.x) / length };
+		double confidence = 0.0;
+		for (const WallEstimate &wall : walls) {
+			if (dot2(wall.normal, inward) > std::cos(2.0 * DEG) && std::abs(dot2(wall.normal, a) - wall.offset_m) < 0.05) {
+				const double ta = dot2(perp(wall.normal), a), tb = dot2(perp(wall.normal), b);
+				const double overlap = std::min(std::max(ta, tb), wall.to_m) - std::max(std::min(ta, tb), wall.from_m);
+				confidence = std::max(confidence, std::clamp(overlap / length, 0.0, 1.0));
+			}
+		}
+		result.edge_confidence.push_back(confidence);
+		if (confidence < 0.3) {
+			unseen.push_back(i);
+		}
+	}
+
+	// 3. The ceiling, when the dense model holds it: the highest large downward-facing plane.
+	std::vector<std::pair<double, double>> ceiling;
+	for (const SurfaceSample &s : p_samples) {
+		const double height = glm::dot(s.position_m, up) - floor_height;
+		if (glm::dot(s.normal, up) <= -cos_normal && height >= p_options.min_ceiling_height_m && height <= p_options.max_ceiling_height_m) {
+			ceiling.emplace_back(height, s.area_m2);
+		}
+	}
+	if (!ceiling.empty()) {
+		const LineHistogram histogram(ceiling, p_options.plane_tolerance_m);
+		size_t bin = histogram.window.size();
+		while (bin > 0 && histogram.window[bin - 1] < p_options.ceiling_min_area_m2) {
+			bin--;
+		}
+		if (bin > 0) {
+			const size_t peak = histogram.local_peak(bin - 1, 0.1);
+			result.floorplan.ceiling_height_m =
+					mean_near(ceiling, mean_near(ceiling, histogram.centre(peak), 2.0 * p_options.plane_tolerance_m), p_options.plane_tolerance_m);
+			result.ceiling_source = "dense model";
+		}
+	}
+
+	const bool closed = unseen.empty();
+	result.state = closed && result.floorplan.ceiling_height_m > 0.0 ? RoomEstimateState::Complete : RoomEstimateState::Partial;
+	result.message = std::to_string(polygon.size()) + " corners, " + std::to_string(walls.size()) + " walls" + (result.manhattan ? " (at right angles)" : "");
+	if (!closed) {
+		result.message += "; never seen as walls: edge";
+		for (const size_t i : unseen) {
+			result.message += " " + std::to_string(i);
+		}
+		result.message += " (the room ends there where the sweep's view did)";
+	}
+	if (result.floorplan.ceiling_height_m <= 0.0) {
+		result.message += "; the ceiling was not in the dense model";
+	}
+	return result;
+}
+
+RoomComparison compare_rooms(const Floorplan &p_estimate, const Pose &p_estimate_world_from_model, const Floorplan &p_truth,
+		const Pose &p_true_world_from_model) {
+	RoomComparison result;
+	const Pose true_from_estimate = compose(p_true_world_from_model, inverse(p_estimate_world_from_model));
+	std::vector<Vec2> mapped;
+	for (const Vec2 &p : p_estimate.points) {
+		const glm::dvec3 q = transform_point(true_from_estimate, glm::dvec3(p.x, 0.0, p.y));
+		mapped.push_back({ q.x, q.z });
+	}
+	auto nearest = [](const Vec2 &p_point, const std::vector<Vec2> &p_set) {
+		double best = 1e9;
+		for (const Vec2 &q : p_set) {
+			best = std::min(best, std::hypot(p_point.x - q.x, p_point.y - q.y));
+		}
+		return best;
+	};
+	for (const Vec2 &p : mapped) {
+		result.corner_error_max_m = std::max(result.corner_error_max_m, nearest(p, p_truth.points));
+	}
+	for (const Vec2 &p : p_truth.points) {
+		result.corner_error_max_m = std::max(result.corner_error_max_m, nearest(p, mapped));
+	}
+	result.corners = mapped.size();
+	result.true_corners = p_truth.points.size();
+	result.ceiling_error_m = std::abs(p_estimate.ceiling_height_m - p_truth.ceiling_height_m);
+	const glm::dvec3 up_estimate = glm::inverse(p_estimate_world_from_model.rotation) * glm::dvec3(0.0, 1.0, 0.0);
+	const glm::dvec3 up_true = glm::inverse(p_true_world_from_model.rotation) * glm::dvec3(0.0, 1.0, 0.0);
+	result.up_error_deg = std::acos(std::clamp(glm::dot(up_estimate, up_true), -1.0, 1.0)) / DEG;
+	return result;
+}
+
+} // namespace roomprobe

@@ -1,0 +1,306 @@
+// The room without a tape measure (issue #18, room/room_estimation.h): the world frame, the
+// floorplan and the ceiling from a dense surface, the ceiling and unseen walls from the fisheye,
+// and a given floorplan registered. The surfaces are built from known rooms, seen from an unknown
+// frame (turned, tilted, moved), as marching cubes would give them: triangles facing free space.
+
+#include "room/reference_rooms.h"
+#include "room/room_estimation.h"
+#include "slam/marching_cubes.h"
+#include "synth/synth_renderer.h"
+#include "synth/synth_scene.h"
+#include "synth/synth_sequence.h"
+
+#include "synth_test_rig.h"
+
+#include <doctest/doctest.h>
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+using namespace roomprobe;
+
+namespace {
+
+constexpr double CELL_M = 0.05; // triangle size of walls and furniture
+constexpr double FLOOR_CELL_M = 0.02; // ... and of the floor, where the room's extent is read
+
+// A rectangle corner + a u + b v, split into cells, its triangles facing p_normal.
+void add_quad(TriangleMesh *r_mesh, const glm::dvec3 &p_corner, glm::dvec3 p_u, glm::dvec3 p_v, const glm::dvec3 &p_normal, double p_cell_m = CELL_M) {
+	if (glm::dot(glm::cross(p_u, p_v), p_normal) < 0.0) {
+		std::swap(p_u, p_v);
+	}
+	const int nu = std::max(1, int(std::ceil(glm::length(p_u) / p_cell_m - 1e-9))), nv = std::max(1, int(std::ceil(glm::length(p_v) / p_cell_m - 1e-9)));
+	for (int i = 0; i < nu; i++) {
+		for (int j = 0; j < nv; j++) {
+			const glm::dvec3 a = p_corner + p_u * (double(i) / nu) + p_v * (double(j) / nv);
+			const glm::dvec3 du = p_u / double(nu), dv = p_v / double(nv);
+			const uint32_t base = uint32_t(r_mesh->vertices.size());
+			for (const glm::dvec3 &p : { a, a + du, a + du + dv, a + dv }) {
+				r_mesh->vertices.emplace_back(glm::vec3(p));
+				r_mesh->normals.emplace_back(glm::vec3(p_normal));
+			}
+			r_mesh->indices.insert(r_mesh->indices.end(), { base, base + 1, base + 2, base, base + 2, base + 3 });
+		}
+	}
+}
+
+struct RoomSurface {
+	bool floor = true;
+	double wall_seen_m = 1.5; // the walls seen up to this height (a camera at 1.45 m looking down)
+	bool ceiling = false;
+	std::vector<size_t> walls; // the floorplan edges seen (empty: all)
+};
+
+// The surface of a floorplan's room in world coordinates (floor cells inside the polygon).
+TriangleMesh room_mesh_of(const Floorplan &p_plan, const RoomSurface &p_what) {
+	TriangleMesh mesh;
+	const size_t n = p_plan.points.size();
+	double min_x = 1e9, max_x = -1e9, min_z = 1e9, max_z = -1e9;
+	for (const Vec2 &p : p_plan.points) {
+		min_x = std::min(min_x, p.x), max_x = std::max(max_x, p.x), min_z = std::min(min_z, p.y), max_z = std::max(max_z, p.y);
+	}
+	auto inside = [&](double x, double z) {
+		bool in = false;
+		for (size_t i = 0, j = n - 1; i < n; j = i++) {
+			const Vec2 &a = p_plan.points[i], &b = p_plan.points[j];
+			if ((a.y > z) != (b.y > z) && x < (b.x - a.x) * (z - a.y) / (b.y - a.y) + a.x) {
+				in = !in;
+			}
+		}
+		return in;
+	};
+	for (double x = min_x; x < max_x - 1e-9; x += FLOOR_CELL_M) {
+		for (double z = min_z; z < max_z - 1e-9; z += FLOOR_CELL_M) {
+			if (inside(x + 0.5 * FLOOR_CELL_M, z + 0.5 * FLOOR_CELL_M)) {
+				if (p_what.floor) {
+					add_quad(&mesh, { x, 0.0, z }, { FLOOR_CELL_M, 0.0, 0.0 }, { 0.0, 0.0, FLOOR_CELL_M }, { 0.0, 1.0, 0.0 }, FLOOR_CELL_M);
+				}
+				if (p_what.ceiling) {
+					add_quad(&mesh, { x, p_plan.ceiling_height_m, z }, { FLOOR_CELL_M, 0.0, 0.0 }, { 0.0, 0.0, FLOOR_CELL_M }, { 0.0, -1.0, 0.0 }, FLOOR_CELL_M);
+				}
+			}
+		}
+	}
+	const bool ccw = floorplan_signed_area_m2(p_plan) > 0.0;
+	for (size_t i = 0; i < n; i++) {
+		if (!p_what.walls.empty() && std::find(p_what.walls.begin(), p_what.walls.end(), i) == p_what.walls.end()) {
+			continue;
+		}
+		const Vec2 &a = p_plan.points[i], &b = p_plan.points[(i + 1) % n];
+		const glm::dvec3 along(b.x - a.x, 0.0, b.y - a.y);
+		const glm::dvec3 inward = glm::normalize(ccw ? glm::dvec3(-along.z, 0.0, along.x) : glm::dvec3(along.z, 0.0, -along.x));
+		add_quad(&mesh, { a.x, 0.0, a.y }, along, { 0.0, p_what.ceiling ? p_plan.ceiling_height_m : p_what.wall_seen_m, 0.0 }, inward);
+	}
+	return mesh;
+}
+
+// A box standing on the floor (a table, a wardrobe): its sides and top.
+void add_box(TriangleMesh *r_mesh, const glm::dvec3 &p_min, const glm::dvec3 &p_max) {
+	const glm::dvec3 size = p_max - p_min;
+	add_quad(r_mesh, p_min, { 0.0, size.y, 0.0 }, { 0.0, 0.0, size.z }, { -1.0, 0.0, 0.0 });
+	add_quad(r_mesh, { p_max.x, p_min.y, p_min.z }, { 0.0, size.y, 0.0 }, { 0.0, 0.0, size.z }, { 1.0, 0.0, 0.0 });
+	add_quad(r_mesh, p_min, { size.x, 0.0, 0.0 }, { 0.0, size.y, 0.0 }, { 0.0, 0.0, -1.0 });
+	add_quad(r_mesh, { p_min.x, p_min.y, p_max.z }, { size.x, 0.0, 0.0 }, { 0.0, size.y, 0.0 }, { 0.0, 0.0, 1.0 });
+	add_quad(r_mesh, { p_min.x, p_max.y, p_min.z }, { size.x, 0.0, 0.0 }, { 0.0, 0.0, size.z }, { 0.0, 1.0, 0.0 });
+}
+
+// The unknown frame the dense model lives in: turned 30 degrees about up, tilted 3 degrees,
+// moved (as the first camera's frame would be).
+Pose model_from_world() {
+	Pose pose;
+	pose.rotation = glm::angleAxis(glm::radians(3.0), glm::normalize(glm::dvec3(1.0, 0.0, 0.4))) * glm::angleAxis(glm::radians(30.0), glm::dvec3(0.0, 1.0, 0.0));
+	pose.translation = glm::dvec3(-1.2, 1.4, 0.7);
+	return pose;
+}
+
+struct Estimated {
+	RoomEstimate estimate;
+	RoomComparison comparison;
+	std::vector<SurfaceSample> world_samples; // in the estimated world
+};
+
+Estimated estimate_from(const TriangleMesh &p_world_mesh, const Floorplan &p_truth, const std::vector<glm::dvec3> &p_cameras_world) {
+	const Pose model = model_from_world();
+	const std::vector<SurfaceSample> samples = transform_samples(surface_samples(p_world_mesh), model);
+	std::vector<glm::dvec3> cameras;
+	for (const glm::dvec3 &c : p_cameras_world) {
+		cameras.push_back(transform_point(model, c));
+	}
+	// The hint: the fisheye's axis, 6 degrees off up (a hand-held rig is not level).
+	const glm::dvec3 hint = model.rotation * (glm::angleAxis(glm::radians(6.0), glm::dvec3(0.0, 0.0, 1.0)) * glm::dvec3(0.0, 1.0, 0.0));
+	Estimated out;
+	out.estimate = estimate_room(samples, hint, cameras);
+	out.comparison = compare_rooms(out.estimate.floorplan, out.estimate.world_from_model, p_truth, inverse(model));
+	out.world_samples = transform_samples(samples, out.estimate.world_from_model);
+	return out;
+}
+
+// Tolerances: the surfaces lie exactly on the true planes, so what is left is how the planes are
+// binned and fitted (1 cm bins, means of thousands of triangle centres): a millimetre or two.
+constexpr double CORNER_TOLERANCE_M = 0.01;
+constexpr double UP_TOLERANCE_DEG = 0.05;
+
+} // namespace
+
+TEST_CASE("room estimation: a non-convex room with a table, from an unknown frame, to its corners, up and ceiling") {
+	const Floorplan truth = l_shaped_room(); // 6 x 5 m less a 3 x 2 m corner, ceiling 2.4 m
+	RoomSurface seen;
+	seen.ceiling = true;
+	TriangleMesh mesh = room_mesh_of(truth, seen);
+	add_box(&mesh, { 1.5, 0.0, 1.0 }, { 2.7, 0.75, 1.8 }); // a table: its sides face the room too
+	const Estimated result = estimate_from(mesh, truth, { { 1.5, 1.45, 2.5 }, { 4.5, 1.45, 1.5 } });
+	CAPTURE(result.estimate.message);
+	REQUIRE(result.estimate.state == RoomEstimateState::Complete);
+	CHECK(result.estimate.manhattan);
+	CHECK(result.estimate.ceiling_source == "dense model");
+	CHECK(result.comparison.corners == 6);
+	CHECK(result.comparison.corner_error_max_m <= CORNER_TOLERANCE_M);
+	CHECK(result.comparison.ceiling_error_m <= CORNER_TOLERANCE_M);
+	CHECK(result.comparison.up_error_deg <= UP_TOLERANCE_DEG);
+	CHECK(check_floorplan(result.estimate.floorplan).ok);
+	for (const double confidence : result.estimate.edge_confidence) {
+		CHECK(confidence > 0.9);
+	}
+	// The world: y = 0 on the floor, the floorplan at the origin's corner, axes along the walls.
+	for (const Vec2 &p : result.estimate.floorplan.points) {
+		CHECK((std::abs(p.x) < 1e-6 || std::abs(p.x - 3.0) < CORNER_TOLERANCE_M || std::abs(p.x - 6.0) < CORNER_TOLERANCE_M ||
+				std::abs(p.y) < 1e-6 || std::abs(p.y - 3.0) < CORNER_TOLERANCE_M || std::abs(p.y - 5.0) < CORNER_TOLERANCE_M));
+	}
+}
+
+TEST_CASE("room estimation: a partition counts as a wall, and a wardrobe's front does not; no ceiling seen is said") {
+	const Floorplan truth = figure4_two_rooms(); // 8 x 4.5 m with a 12 cm partition 3 m deep
+	TriangleMesh mesh = room_mesh_of(truth, RoomSurface());
+	add_box(&mesh, { 0.05, 0.0, 3.7 }, { 0.65, 2.1, 4.45 }); // a wardrobe in the corner, 75 cm wide
+	const Estimated result = estimate_from(mesh, truth, { { 2.0, 1.45, 2.0 }, { 6.0, 1.45, 2.0 } });
+	CAPTURE(result.estimate.message);
+	REQUIRE(result.estimate.state == RoomEstimateState::Partial);
+	CHECK(result.estimate.message.find("the ceiling was not in the dense model") != std::string::npos);
+	CHECK(result.estimate.floorplan.ceiling_height_m == 0.0);
+	CHECK(result.comparison.corners == truth.points.size());
+	CHECK(result.comparison.corner_error_max_m <= CORNER_TOLERANCE_M);
+	CHECK(result.comparison.up_error_deg <= UP_TOLERANCE_DEG);
+}
+
+TEST_CASE("room estimation: walls at other than right angles keep their angles") {
+	Floorplan truth;
+	truth.points = { { 0.0, 0.0 }, { 5.0, 0.0 }, { 5.0, 3.0 }, { 3.0, 4.5 }, { 0.0, 4.5 } }; // one wall at 36.9 degrees
+	truth.ceiling_height_m = 2.5;
+	RoomSurface seen;
+	seen.ceiling = true;
+	const Estimated result = estimate_from(room_mesh_of(truth, seen), truth, { { 2.0, 1.45, 2.0 } });
+	CAPTURE(result.estimate.message);
+	REQUIRE(result.estimate.state == RoomEstimateState::Complete);
+	CHECK_FALSE(result.estimate.manhattan);
+	CHECK(result.comparison.corners == 5);
+	CHECK(result.comparison.corner_error_max_m <= CORNER_TOLERANCE_M);
+}
+
+TEST_CASE("room estimation: a sweep that saw one wall, or no floor, gives a clear state and no room") {
+	const Floorplan truth = living_room();
+	RoomSurface one_wall;
+	one_wall.walls = { 0 };
+	const Estimated wall = estimate_from(room_mesh_of(truth, one_wall), truth, { { 2.5, 1.45, 2.0 } });
+	CHECK(wall.estimate.state == RoomEstimateState::TooFewWalls);
+	CHECK(wall.estimate.message.find("1 wall seen") != std::string::npos);
+	CHECK(wall.estimate.floorplan.points.empty());
+
+	RoomSurface two_walls; // at a right angle: still no closed room
+	two_walls.walls = { 0, 1 };
+	const Estimated corner = estimate_from(room_mesh_of(truth, two_walls), truth, { { 2.5, 1.45, 2.0 } });
+	CHECK(corner.estimate.state == RoomEstimateState::TooFewWalls);
+	CHECK(corner.estimate.floorplan.points.empty());
+
+	RoomSurface walls_only;
+	walls_only.floor = false;
+	const Estimated no_floor = estimate_from(room_mesh_of(truth, walls_only), truth, { { 2.5, 1.45, 2.0 } });
+	CHECK(no_floor.estimate.state == RoomEstimateState::NoFloor);
+	CHECK(no_floor.estimate.message.find("floor") != std::string::npos);
+
+	const RoomEstimate nothing = estimate_room({}, glm::dvec3(0.0, 1.0, 0.0), {});
+	CHECK(nothing.state == RoomEstimateState::NoSurface);
+}
+
+TEST_CASE("room estimation: a given floorplan is registered to the reconstructed walls; another room fits poorly") {
+	const Floorplan truth = l_shaped_room();
+	const Estimated result = estimate_from(room_mesh_of(truth, RoomSurface()), truth, { { 1.5, 1.45, 2.5 } });
+	REQUIRE(result.estimate.floorplan.points.size() == 6);
+	// The true floorplan, typed in its own frame, placed on the walls: its corners land on the
+	// estimated ones (within 2 cm and 0.5 degrees, the issue's figure; here the surfaces are exact).
+	const FloorplanRegistration placed = register_floorplan(truth, result.world_samples);
+	CAPTURE(placed.message);
+	REQUIRE(placed.ok);
+	CHECK_FALSE(placed.poor);
+	CHECK(placed.residual_rms_m <= 0.005);
+	Floorplan moved = truth;
+	for (Vec2 &p : moved.points) {
+		const glm::dvec3 q = transform_point(placed.world_from_given, glm::dvec3(p.x, 0.0, p.y));
+		p = { q.x, q.z };
+	}
+	const RoomComparison landed = compare_rooms(moved, Pose(), result.estimate.floorplan, Pose());
+	CHECK(landed.corner_error_max_m <= 0.02);
+	// The L is not symmetric, so its yaw is unique: the estimated world's axes run along its walls.
+	CHECK(std::abs(std::remainder(placed.yaw_deg, 90.0)) <= 0.5);
+
+	Floorplan other;
+	other.points = { { 0.0, 0.0 }, { 7.0, 0.0 }, { 7.0, 2.0 }, { 0.0, 2.0 } };
+	other.ceiling_height_m = 2.4;
+	const FloorplanRegistration wrong = register_floorplan(other, result.world_samples);
+	CAPTURE(wrong.message);
+	CHECK((!wrong.ok || wrong.poor));
+}
+
+TEST_CASE("room estimation: the fisheye finds the ceiling over textured walls, and a wall the RGB-D camera never saw") {
+	// The living room, rendered: its walls carry stripes, bricks and checks (horizontal edges at
+	// many heights), its ceiling tiles; 12 upward fisheye views along the hand-held orbit.
+	synth::SceneOptions options;
+	options.duration_s = 10.0;
+	const synth::SceneResult made = synth::make_scene("living_room", options);
+	REQUIRE(made.ok);
+	synth::SynthRenderer renderer(made.scene);
+	REQUIRE(renderer.ok());
+	const Rig rig = small_test_rig(32, 24, 512, 512);
+	const synth::HandheldTrajectory trajectory = synth::make_handheld_trajectory(made.scene, 1);
+	std::vector<FisheyeView> views;
+	for (int i = 0; i < 12; i++) {
+		const double t = 0.2 + 0.8 * i; // before the ceiling light switches on at 5 s too
+		const Pose world_from_fisheye = compose(trajectory.world_from_rgb(t), rig.rgb_from_fisheye);
+		views.push_back({ synth::render_fisheye(renderer, rig.fisheye, world_from_fisheye, t, synth::FisheyeOptions()).image, world_from_fisheye });
+	}
+	Floorplan plan = living_room();
+	const double true_ceiling_m = plan.ceiling_height_m;
+	plan.ceiling_height_m = 0.0;
+	// Tolerance: at 512 px the fisheye sees about 0.4 degrees a pixel; the walls' top edges lie
+	// 1.5 to 3.5 m from the orbit, 1 m above it, so a pixel spans 1.5 to 4 cm of height there:
+	// the issue's 3 cm is under a pixel on the nearer walls.
+	const CeilingSearch ceiling = ceiling_from_fisheye(views, rig.fisheye, plan, 1.8, 4.0);
+	CAPTURE(ceiling.message);
+	REQUIRE(ceiling.ok);
+	CHECK(std::abs(ceiling.height_m - true_ceiling_m) <= 0.03);
+
+	// Wall 1 (x = 5) as a sweep that never looked there leaves it: 60 cm short, confidence 0.
+	Floorplan partial = living_room();
+	partial.ceiling_height_m = ceiling.height_m;
+	partial.points[1].x = 4.4;
+	partial.points[2].x = 4.4;
+	std::vector<double> confidence = { 1.0, 0.0, 1.0, 1.0 };
+	const std::vector<std::string> lines = complete_walls_from_fisheye(views, rig.fisheye, &partial, &confidence);
+	CAPTURE(lines.size() == 1 ? lines[0] : std::string());
+	CHECK(confidence[1] == FISHEYE_WALL_CONFIDENCE);
+	CHECK(std::abs(partial.points[1].x - 5.0) <= 0.05);
+	CHECK(std::abs(partial.points[2].x - 5.0) <= 0.05);
+	CHECK(partial.points[1].y == 0.0);
+
+	// Views with no edges at all (a uniform sky): no ceiling, said so.
+	std::vector<FisheyeView> blank = views;
+	for (FisheyeView &view : blank) {
+		view.image = cv::Mat(view.image.size(), view.image.type(), cv::Scalar::all(128));
+	}
+	const CeilingSearch none = ceiling_from_fisheye(blank, rig.fisheye, plan, 1.8, 4.0);
+	CHECK_FALSE(none.ok);
+	CHECK(none.message.find("no clear wall-ceiling edge") != std::string::npos);
+}

@@ -1,0 +1,231 @@
+// roomprobe_room: the room a recording's sweep shows (issue #18): the world frame, the floorplan,
+// the ceiling height (pipeline/room_sweep.h), written as a room.yaml, with a picture of the
+// floorplan over the dense model seen from above. When the recording holds its true room, the
+// two are compared, and the true floorplan is registered to the reconstructed walls as a given
+// floorplan would be; the last line is
+//   corner_error_max_m=... ceiling_error_m=... up_error_deg=... registration_error_m=... registration_rms_m=...
+//
+// roomprobe_room --recording DIR --out FILE [--picture FILE] [--true-poses] [--seconds S] [--force] [--quiet]
+
+#include <io/image_codec.h>
+#include <pipeline/room_sweep.h>
+#include <recording/room_file.h>
+
+#include "../common/cli.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <string>
+
+namespace {
+
+using namespace roomprobe;
+
+// Seen from above (x to the right, z down the picture, as Godot's top view), 1 px = 1 cm: the
+// dense surface shaded by height, the camera's path (blue), the true floorplan (green) and the
+// one found (red), all in the found world frame.
+cv::Mat top_view(const RoomSweepResult &p_result) {
+	const Floorplan &found = p_result.estimate.floorplan;
+	std::vector<std::vector<Vec2>> outlines;
+	if (!found.points.empty()) {
+		outlines.push_back(found.points);
+	}
+	const Pose found_from_true = compose(p_result.world_from_model, inverse(p_result.true_world_from_model));
+	std::vector<Vec2> truth;
+	if (p_result.has_truth) {
+		for (const Vec2 &p : p_result.truth.floorplan.points) {
+			const glm::dvec3 q = transform_point(found_from_true, glm::dvec3(p.x, 0.0, p.y));
+			truth.push_back({ q.x, q.z });
+		}
+		outlines.push_back(truth);
+	}
+	const std::vector<SurfaceSample> world = transform_samples(p_result.samples, p_result.world_from_model);
+	double min_x = 1e9, min_z = 1e9, max_x = -1e9, max_z = -1e9;
+	auto grow = [&](double p_x, double p_z) {
+		min_x = std::min(min_x, p_x);
+		max_x = std::max(max_x, p_x);
+		min_z = std::min(min_z, p_z);
+		max_z = std::max(max_z, p_z);
+	};
+	for (const auto &outline : outlines) {
+		for (const Vec2 &p : outline) {
+			grow(p.x, p.y);
+		}
+	}
+	if (outlines.empty()) {
+		for (const SurfaceSample &s : world) {
+			grow(s.position_m.x, s.position_m.z);
+		}
+	}
+	if (!(max_x > min_x)) {
+		return cv::Mat();
+	}
+	constexpr double PX_PER_M = 100.0, MARGIN_M = 0.5;
+	const int width = std::min(4000, int((max_x - min_x + 2 * MARGIN_M) * PX_PER_M));
+	const int height = std::min(4000, int((max_z - min_z + 2 * MARGIN_M) * PX_PER_M));
+	auto pixel = [&](double p_x, double p_z) { return cv::Point(int((p_x - min_x + MARGIN_M) * PX_PER_M), int((p_z - min_z + MARGIN_M) * PX_PER_M)); };
+	cv::Mat picture(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
+	for (const SurfaceSample &s : world) { // darker the higher: walls dark, floor light
+		const cv::Point p = pixel(s.position_m.x, s.position_m.z);
+		if (p.x >= 0 && p.y >= 0 && p.x < width && p.y < height) {
+			const int shade = std::clamp(int(220.0 - 60.0 * s.position_m.y), 40, 220);
+			cv::Vec3b &c = picture.at<cv::Vec3b>(p);
+			c = cv::Vec3b(uint8_t(std::min<int>(c[0], shade)), uint8_t(std::min<int>(c[1], shade)), uint8_t(std::min<int>(c[2], shade)));
+		}
+	}
+	auto draw = [&](const std::vector<Vec2> &p_outline, const cv::Scalar &p_bgr, int p_thickness) {
+		std::vector<cv::Point> points;
+		for (const Vec2 &p : p_outline) {
+			points.push_back(pixel(p.x, p.y));
+		}
+		cv::polylines(picture, std::vector<std::vector<cv::Point>>{ points }, true, p_bgr, p_thickness, cv::LINE_AA);
+	};
+	if (!truth.empty()) {
+		draw(truth, cv::Scalar(60, 170, 60), 5);
+	}
+	if (!found.points.empty()) {
+		draw(found.points, cv::Scalar(40, 40, 220), 2);
+	}
+	return picture;
+}
+
+int run(int argc, char **argv) {
+	RoomSweepOptions options;
+	std::string out, picture_path;
+	bool force = false, quiet = false;
+	auto usage = [](const char *p_error) {
+		std::fprintf(stderr,
+				"%s%susage: roomprobe_room --recording DIR --out FILE [--picture FILE] [--true-poses] [--seconds S]\n"
+				"                      [--force] [--quiet]\n"
+				"  --out FILE: the room.yaml to write (an existing file is kept unless --force)\n"
+				"  --picture FILE: the top view (default: FILE with .png)\n"
+				"  --true-poses: fuse depth at the recording's true poses instead of tracking\n"
+				"  --seconds S: only the sweep's first S seconds\n",
+				p_error ? "roomprobe_room: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
+		return 2;
+	};
+	cli::Arguments cursor(argc, argv, 1);
+	std::string arg;
+	while (cursor.next(&arg)) {
+		double x = 0.0;
+		if (arg == "--recording") {
+			if (!cursor.value(&options.recording)) {
+				return usage("--recording needs a folder");
+			}
+		} else if (arg == "--out") {
+			if (!cursor.value(&out)) {
+				return usage("--out needs a file name");
+			}
+		} else if (arg == "--picture") {
+			if (!cursor.value(&picture_path)) {
+				return usage("--picture needs a file name");
+			}
+		} else if (arg == "--seconds") {
+			if (!cursor.positive_number(&x) || x > 36000.0) {
+				return usage("--seconds needs a positive number of seconds, at most 36000");
+			}
+			options.max_seconds = x;
+		} else if (arg == "--true-poses") {
+			options.true_poses = true;
+		} else if (arg == "--force") {
+			force = true;
+		} else if (arg == "--quiet") {
+			quiet = true;
+		} else if (arg == "--help" || arg == "-h") {
+			usage(nullptr);
+			return 0;
+		} else {
+			return usage(("unknown argument " + arg).c_str());
+		}
+	}
+	if (options.recording.empty() || out.empty()) {
+		return usage("--recording and --out are required");
+	}
+	std::error_code ec;
+	if (std::filesystem::is_directory(out, ec)) {
+		return usage(("--out " + out + " is a folder: name the room.yaml to write").c_str());
+	}
+	if (std::filesystem::exists(out, ec) && !force) {
+		return usage(("--out " + out + " exists: it is kept (give --force to replace it)").c_str());
+	}
+	if (picture_path.empty()) {
+		picture_path = std::filesystem::path(out).replace_extension(".png").string();
+	}
+	if (!quiet) {
+		options.progress = [](const std::string &p_line) { std::cerr << p_line << "\n"; };
+	}
+	const RoomSweepResult result = sweep_room(options);
+	if (!result.error.empty()) {
+		std::fprintf(stderr, "roomprobe_room: %s\n", result.error.c_str());
+		return 1;
+	}
+	const RoomEstimate &estimate = result.estimate;
+	std::printf("room: %s: %s\n", room_estimate_state_name(estimate.state), estimate.message.c_str());
+	std::printf("floor: %.2f m2 seen, %.1f mm rms\n", estimate.floor_seen_m2, estimate.floor_rms_m * 1000.0);
+	for (size_t i = 0; i < estimate.floorplan.points.size(); i++) {
+		const Vec2 &p = estimate.floorplan.points[i];
+		std::printf("corner %zu: (%.3f, %.3f) m; edge %zu seen %.0f%%\n", i, p.x, p.y, i,
+				100.0 * (i < estimate.edge_confidence.size() ? estimate.edge_confidence[i] : 0.0));
+	}
+	for (const WallEstimate &wall : estimate.walls) {
+		std::printf("wall: normal (%.3f, %.3f), at %.3f m, seen from %.2f to %.2f m along it, %.2f m2, %.1f mm rms\n", wall.normal.x, wall.normal.y,
+				wall.offset_m, wall.from_m, wall.to_m, wall.area_m2, wall.rms_m * 1000.0);
+	}
+	if (estimate.floorplan.ceiling_height_m > 0.0) {
+		std::printf("ceiling: %.3f m (%s)\n", estimate.floorplan.ceiling_height_m, estimate.ceiling_source.c_str());
+	}
+	if (!result.fisheye_ceiling.message.empty()) {
+		std::printf("fisheye ceiling search: %s (%zu views)\n", result.fisheye_ceiling.message.c_str(), result.fisheye_ceiling.views_used);
+	}
+	for (const std::string &line : result.fisheye_walls) {
+		std::printf("fisheye wall search: %s\n", line.c_str());
+	}
+	const cv::Mat picture = top_view(result);
+	if (!picture.empty()) {
+		const std::string written = png_write(picture_path, picture);
+		if (!written.empty()) {
+			std::fprintf(stderr, "roomprobe_room: %s\n", written.c_str());
+			return 1;
+		}
+		std::printf("picture: %s\n", picture_path.c_str());
+	}
+	if (result.room.floorplan.points.empty()) {
+		std::fprintf(stderr, "roomprobe_room: %s: no room written: %s\n", options.recording.c_str(), estimate.message.c_str());
+		return 1;
+	}
+	const std::string saved = save_room_file(out, result.room);
+	if (!saved.empty()) {
+		std::fprintf(stderr, "roomprobe_room: %s\n", saved.c_str());
+		return 1;
+	}
+	std::printf("room.yaml: %s\n", out.c_str());
+	if (result.has_truth) {
+		const RoomComparison comparison = compare_rooms(estimate.floorplan, result.world_from_model, result.truth.floorplan, result.true_world_from_model);
+		// The true floorplan as a given one: placed on the reconstructed walls, then compared
+		// where it lands (corners as sets: a symmetric room fits turned too).
+		const FloorplanRegistration registration = register_floorplan(result.truth.floorplan, transform_samples(result.samples, result.world_from_model));
+		double registration_error_m = -1.0;
+		if (registration.ok) {
+			Floorplan placed = result.truth.floorplan;
+			for (Vec2 &p : placed.points) {
+				const glm::dvec3 q = transform_point(registration.world_from_given, glm::dvec3(p.x, 0.0, p.y));
+				p = { q.x, q.z };
+			}
+			registration_error_m = compare_rooms(placed, result.world_from_model, result.truth.floorplan, result.true_world_from_model).corner_error_max_m;
+		}
+		std::printf("registration of the true floorplan: %s\n", registration.message.c_str());
+		std::printf("corner_error_max_m=%.4f ceiling_error_m=%.4f up_error_deg=%.3f registration_error_m=%.4f registration_rms_m=%.4f\n",
+				comparison.corner_error_max_m, comparison.ceiling_error_m, comparison.up_error_deg, registration_error_m, registration.residual_rms_m);
+	}
+	return 0;
+}
+
+} // namespace
+
+int main(int argc, char **argv) {
+	return roomprobe::cli::guarded_main("roomprobe_room", [&] { return run(argc, argv); });
+}
