@@ -269,6 +269,8 @@ TEST_CASE("rig file: missing, empty and malformed files give an error naming the
 		// it back as a 32-bit one (fy 525071067811865 came back as -1569026023).
 		{ "huge_focal_length", replace_once(good, "  fy: 525.0\n", "  fy: 525071067811865.\n"), "rgb.fy: must be within +-1e9" },
 		{ "whole_number_beyond_32_bits", replace_once(good, "  width: 640\n", "  width: 3000000000\n"), "does not fit 32 bits" },
+		{ "octal", replace_once(good, "  width: 640\n", "  width: 01200\n"), "starts with 0 (OpenCV would read it as octal or hexadecimal)" },
+		{ "hexadecimal", replace_once(good, "  width: 640\n", "  width: 0x100000280\n"), "starts with 0" },
 		{ "bad_header", "%YAML:1..:\nroomprobe_rig: 1\n", "line 1: the header must be '%YAML:1.0'" },
 		{ "item_among_fields", "%YAML:1.0\n---\nroomprobe_rig: 1\nrgb:\n  model: x\n  - 1\n", "line 6: a list item among fields" },
 		{ "outdented_field", "%YAML:1.0\n---\nroomprobe_rig: 1\nrgb:\n    model: x\n  width: 1\n",

@@ -65,8 +65,8 @@ cv::Mat top_view(const RoomSweepResult &p_result) {
 		return cv::Mat();
 	}
 	constexpr double PX_PER_M = 100.0, MARGIN_M = 0.5;
-	const int width = std::min(4000, int((max_x - min_x + 2 * MARGIN_M) * PX_PER_M));
-	const int height = std::min(4000, int((max_z - min_z + 2 * MARGIN_M) * PX_PER_M));
+	const int width = int(std::min(4000.0, (max_x - min_x + 2 * MARGIN_M) * PX_PER_M));
+	const int height = int(std::min(4000.0, (max_z - min_z + 2 * MARGIN_M) * PX_PER_M));
 	auto pixel = [&](double p_x, double p_z) { return cv::Point(int((p_x - min_x + MARGIN_M) * PX_PER_M), int((p_z - min_z + MARGIN_M) * PX_PER_M)); };
 	cv::Mat picture(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
 	for (const SurfaceSample &s : world) { // darker the higher: walls dark, floor light
@@ -154,6 +154,12 @@ int run(int argc, char **argv) {
 	}
 	if (picture_path.empty()) {
 		picture_path = std::filesystem::path(out).replace_extension(".png").string();
+	}
+	if (std::filesystem::path(picture_path).lexically_normal() == std::filesystem::path(out).lexically_normal()) {
+		return usage(("the picture and the room would both be " + out + ": give --picture another name").c_str());
+	}
+	if (std::filesystem::exists(picture_path, ec) && !force) {
+		return usage(("the picture " + picture_path + " exists: it is kept (give --force to replace it)").c_str());
 	}
 	if (!quiet) {
 		options.progress = [](const std::string &p_line) { std::cerr << p_line << "\n"; };

@@ -62,11 +62,18 @@ std::string screen_values(std::string_view p_text, int *r_depth) {
 				end++;
 			}
 			const std::string_view token = p_text.substr(i, end - i);
-			const size_t digits = token.find_first_not_of("+-") == std::string_view::npos ? 0 : token.find_first_not_of("+-");
-			const std::string_view magnitude = token.substr(digits);
-			if (digits <= 1 && !magnitude.empty() && magnitude.find_first_not_of("0123456789") == std::string_view::npos) {
-				const std::string_view significant = magnitude.substr(std::min(magnitude.find_first_not_of('0'), magnitude.size()));
-				if (significant.size() > 10 || (significant.size() == 10 && significant > "2147483647")) {
+			const size_t sign = token.find_first_not_of("+-") == std::string_view::npos ? 0 : token.find_first_not_of("+-");
+			const std::string_view magnitude = token.substr(sign);
+			// OpenCV reads whole numbers with strtol(.., 0): a leading 0 means octal, 0x hex.
+			const bool hexadecimal = magnitude.size() > 1 && magnitude[0] == '0' && (magnitude[1] == 'x' || magnitude[1] == 'X');
+			const bool octal = magnitude.size() > 1 && magnitude[0] == '0' && std::isdigit(static_cast<unsigned char>(magnitude[1])) != 0 &&
+					magnitude.find_first_of(".eE") == std::string_view::npos; // 0.5 and 01e5 are read as reals
+			if (sign <= 1 && (hexadecimal || octal)) {
+				return "the number " + std::string(token) + " starts with 0 (OpenCV would read it as octal or hexadecimal)";
+			}
+			if (sign <= 1 && !magnitude.empty() && magnitude.find_first_not_of("0123456789") == std::string_view::npos) {
+				const char *limit = sign == 1 && token[0] == '-' ? "2147483648" : "2147483647";
+				if (magnitude.size() > 10 || (magnitude.size() == 10 && magnitude > limit)) {
 					return "the whole number " + std::string(token) + " does not fit 32 bits (OpenCV would read another number)";
 				}
 			}

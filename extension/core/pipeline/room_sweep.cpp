@@ -40,7 +40,7 @@ RoomSweepResult estimate_room_in_engine(const LiveRoom &p_engine, const Rig &p_r
 	RoomEstimate &estimate = result.estimate;
 	result.world_from_model = estimate.world_from_model;
 	const bool has_floorplan = estimate.state == RoomEstimateState::Complete || estimate.state == RoomEstimateState::Partial;
-	if (has_floorplan && estimate.floorplan.ceiling_height_m <= 0.0 && p_rig.has_fisheye()) {
+	if (has_floorplan && p_rig.has_fisheye()) {
 		std::vector<FisheyeView> views;
 		double highest_camera_m = 0.0;
 		for (const glm::dvec3 &camera : cameras) {
@@ -53,12 +53,33 @@ RoomSweepResult estimate_room_in_engine(const LiveRoom &p_engine, const Rig &p_r
 				views.push_back({ frame.image, compose(estimate.world_from_model, model_from_fisheye) });
 			}
 		}
-		result.fisheye_ceiling = ceiling_from_fisheye(views, p_rig.fisheye, estimate.floorplan, highest_camera_m + 0.3, p_options.max_ceiling_height_m,
-				estimate.edge_confidence);
-		if (result.fisheye_ceiling.ok) {
-			estimate.floorplan.ceiling_height_m = result.fisheye_ceiling.height_m;
-			estimate.ceiling_source = "fisheye";
+		if (estimate.floorplan.ceiling_height_m <= 0.0) {
+			const double lowest_m = std::max(p_options.min_ceiling_height_m, highest_camera_m + 0.3);
+			if (lowest_m < p_options.max_ceiling_height_m) {
+				result.fisheye_ceiling = ceiling_from_fisheye(views, p_rig.fisheye, estimate.floorplan, lowest_m, p_options.max_ceiling_height_m,
+						estimate.edge_confidence);
+			} else {
+				result.fisheye_ceiling.message = "the camera went within 0.3 m of the highest ceiling searched (" +
+						std::to_string(p_options.max_ceiling_height_m) + " m): no ceiling above it to search";
+			}
+			if (result.fisheye_ceiling.ok) {
+				estimate.floorplan.ceiling_height_m = result.fisheye_ceiling.height_m;
+				estimate.ceiling_source = "fisheye";
+			}
+		}
+		if (estimate.floorplan.ceiling_height_m > 0.0) { // the edges never seen as walls, from the fisheye
+			const std::vector<double> before = estimate.edge_confidence;
 			result.fisheye_walls = complete_walls_from_fisheye(views, p_rig.fisheye, &estimate.floorplan, &estimate.edge_confidence);
+			// A moved edge's neighbours grew: their seen share is measured again.
+			std::vector<double> measured = floorplan_edge_confidence(estimate.floorplan.points, estimate.walls);
+			for (size_t i = 0; i < measured.size(); i++) {
+				if (before[i] < 0.3 && estimate.edge_confidence[i] >= 0.3) {
+					measured[i] = std::max(measured[i], estimate.edge_confidence[i]);
+				}
+			}
+			estimate.edge_confidence = measured;
+			rebase_room_origin(&estimate);
+			result.world_from_model = estimate.world_from_model;
 		}
 	}
 	if (has_floorplan) { // the state and its sentence, after the fisheye's part
@@ -162,11 +183,24 @@ RoomSweepResult sweep_room(const RoomSweepOptions &p_options) {
 			result.room.probes.push_back(transform_point(found_from_true, probe));
 		}
 	}
-	if (result.room.probes.empty() && !result.room.floorplan.points.empty()) { // one probe at the room's middle, 1 m up
+	if (result.room.probes.empty() && !result.room.floorplan.points.empty()) {
+		// One probe 1 m up at the floorplan's centroid, or, when that lies outside (an L), where
+		// the camera first was.
+		const std::vector<Vec2> &points = result.room.floorplan.points;
+		double area = 0.0;
 		glm::dvec3 centre(0.0, 1.0, 0.0);
-		for (const Vec2 &p : result.room.floorplan.points) {
-			centre.x += p.x / double(result.room.floorplan.points.size());
-			centre.z += p.y / double(result.room.floorplan.points.size());
+		for (size_t i = 0; i < points.size(); i++) {
+			const Vec2 &a = points[i], &b = points[(i + 1) % points.size()];
+			const double cross = a.x * b.y - b.x * a.y;
+			area += cross;
+			centre.x += (a.x + b.x) * cross;
+			centre.z += (a.y + b.y) * cross;
+		}
+		centre.x /= 3.0 * area;
+		centre.z /= 3.0 * area;
+		if (distance_outside_room_m(result.room.floorplan, Vec3{ centre.x, centre.y, centre.z }) > 0.0) {
+			const glm::dvec3 camera = result.room.initial_rgb_pose.translation;
+			centre = glm::dvec3(camera.x, 1.0, camera.z);
 		}
 		result.room.probes.push_back(centre);
 	}

@@ -6,6 +6,8 @@
 #include <opencv2/core.hpp>
 
 #include <algorithm>
+#include <array>
+#include <set>
 #include <cmath>
 
 namespace roomprobe {
@@ -40,8 +42,15 @@ FloorplanRegistration register_floorplan(const Floorplan &p_given, const std::ve
 	double axis = 0.0;
 	bool manhattan = false;
 	const std::vector<WallEstimate> walls = find_walls(flat, p_options, &axis, &manhattan);
-	if (walls.size() < 2) {
-		result.message = "fewer than two walls reconstructed: nothing to register the floorplan to";
+	bool crossing = false; // two walls that are not parallel fix a placement
+	for (size_t i = 0; i < walls.size(); i++) {
+		for (size_t j = i + 1; j < walls.size(); j++) {
+			crossing = crossing || std::abs(walls[i].normal.x * walls[j].normal.y - walls[i].normal.y * walls[j].normal.x) >= 0.3;
+		}
+	}
+	if (!crossing) {
+		result.message = std::to_string(walls.size()) + " wall" + (walls.size() == 1 ? "" : "s") +
+				" reconstructed, none across another: a placement needs two walls that are not parallel (sweep a corner)";
 		return result;
 	}
 	// The walls' own samples: what the given edges must fit.
@@ -104,10 +113,15 @@ FloorplanRegistration register_floorplan(const Floorplan &p_given, const std::ve
 		}
 		return best;
 	};
+	// The candidates are scored on a few hundred samples (the refinement below uses them all).
+	std::vector<FlatSample> scoring;
+	for (size_t i = 0; i < wall_samples.size(); i += std::max<size_t>(1, wall_samples.size() / 300)) {
+		scoring.push_back(wall_samples[i]);
+	}
 	auto cost = [&](double p_yaw, const Vec2 &p_t) {
 		const std::vector<Edge> edges = placed_edges(p_yaw, p_t);
 		double sum = 0.0;
-		for (const FlatSample &s : wall_samples) {
+		for (const FlatSample &s : scoring) {
 			size_t edge = 0;
 			const double d = std::min(nearest(edges, s, &edge), TAU_M);
 			sum += s.area_m2 * d * d;
@@ -130,6 +144,7 @@ FloorplanRegistration register_floorplan(const Floorplan &p_given, const std::ve
 			}
 		}
 	}
+	std::set<std::array<long, 3>> tried;
 	for (const double yaw : yaws) {
 		const std::vector<Edge> turned = placed_edges(yaw, { 0.0, 0.0 });
 		for (size_t w1 = 0; w1 < walls.size(); w1++) {
@@ -150,6 +165,10 @@ FloorplanRegistration register_floorplan(const Floorplan &p_given, const std::ve
 						// n1 . (a1 + t) = d1, n2 . (a2 + t) = d2
 						const double r1 = walls[w1].offset_m - dot2(n1, e1.a), r2 = walls[w2].offset_m - dot2(n2, e2.a);
 						const Vec2 t = { (r1 * n2.y - n1.y * r2) / det, (n1.x * r2 - r1 * n2.x) / det };
+						// Collinear edges (a wall drawn in pieces) give the same placement: score it once.
+						if (!tried.insert({ std::lround(yaw / (0.1 * DEG)), std::lround(t.x / 0.01), std::lround(t.y / 0.01) }).second) {
+							continue;
+						}
 						const double c = cost(yaw, t);
 						if (c < best_cost) {
 							best_cost = c;

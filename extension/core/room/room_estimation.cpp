@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <numeric>
 
 namespace roomprobe {
@@ -267,32 +268,28 @@ std::vector<Vec2> room_polygon(const std::vector<WallEstimate> &p_walls, const F
 		inside[face] = in;
 	}
 	// The boundary: halfedges with an inside face on their left and an outside one on their right.
-	std::map<Arrangement::Vertex_const_handle, Arrangement::Halfedge_const_handle> from;
-	for (Arrangement::Halfedge_const_iterator edge = arrangement.halfedges_begin(); edge != arrangement.halfedges_end(); ++edge) {
-		if (inside[edge->face()] && !inside[edge->twin()->face()]) {
-			from[edge->source()] = edge;
-		}
-	}
+	// The boundary: halfedges with an inside face on their left and an outside one on their right,
+	// walked face by face: after a boundary halfedge, the next one turns around its target through
+	// the inside faces (so two regions meeting at one corner are walked apart, not mixed up).
+	auto on_boundary = [&](Arrangement::Halfedge_const_handle p_edge) { return inside[p_edge->face()] && !inside[p_edge->twin()->face()]; };
+	std::set<Arrangement::Halfedge_const_handle> walked;
 	std::vector<Vec2> best;
 	double best_area = 0.0;
-	while (!from.empty()) {
-		std::vector<Vec2> loop;
-		auto at = from.begin();
-		const Arrangement::Vertex_const_handle start = at->first;
-		Arrangement::Vertex_const_handle vertex = start;
-		while (true) {
-			const auto found = from.find(vertex);
-			if (found == from.end()) {
-				break;
-			}
-			const Arrangement::Halfedge_const_handle edge = found->second;
-			from.erase(found);
-			loop.push_back({ CGAL::to_double(vertex->point().x()), CGAL::to_double(vertex->point().y()) });
-			vertex = edge->target();
-			if (vertex == start) {
-				break;
-			}
+	for (Arrangement::Halfedge_const_iterator start = arrangement.halfedges_begin(); start != arrangement.halfedges_end(); ++start) {
+		if (!on_boundary(start) || walked.count(start) != 0) {
+			continue;
 		}
+		std::vector<Vec2> loop;
+		Arrangement::Halfedge_const_handle edge = start;
+		do {
+			walked.insert(edge);
+			loop.push_back({ CGAL::to_double(edge->source()->point().x()), CGAL::to_double(edge->source()->point().y()) });
+			Arrangement::Halfedge_const_handle next = edge->next();
+			for (size_t turns = 0; !on_boundary(next) && turns < arrangement.number_of_halfedges(); turns++) {
+				next = next->twin()->next();
+			}
+			edge = next;
+		} while (edge != Arrangement::Halfedge_const_handle(start) && walked.count(edge) == 0);
 		const double area = loop.size() >= 3 ? signed_area(loop) : 0.0;
 		if (area > best_area) {
 			best_area = area;
@@ -348,6 +345,49 @@ std::vector<SurfaceSample> transform_samples(const std::vector<SurfaceSample> &p
 	return out;
 }
 
+std::vector<double> floorplan_edge_confidence(const std::vector<Vec2> &p_points, const std::vector<WallEstimate> &p_walls) {
+	std::vector<double> confidence(p_points.size(), 0.0);
+	const bool counter_clockwise = signed_area(p_points) > 0.0;
+	for (size_t i = 0; i < p_points.size(); i++) {
+		const Vec2 &a = p_points[i], &b = p_points[(i + 1) % p_points.size()];
+		const double length = std::hypot(b.x - a.x, b.y - a.y);
+		if (!(length > 0.0)) {
+			continue;
+		}
+		const Vec2 left = { -(b.y - a.y) / length, (b.x - a.x) / length };
+		const Vec2 inward = counter_clockwise ? left : Vec2{ -left.x, -left.y };
+		for (const WallEstimate &wall : p_walls) {
+			if (dot2(wall.normal, inward) > std::cos(2.0 * DEG) && std::abs(dot2(wall.normal, a) - wall.offset_m) < 0.05) {
+				const double ta = dot2(perp(wall.normal), a), tb = dot2(perp(wall.normal), b);
+				const double overlap = std::min(std::max(ta, tb), wall.to_m) - std::max(std::min(ta, tb), wall.from_m);
+				confidence[i] = std::max(confidence[i], std::clamp(overlap / length, 0.0, 1.0));
+			}
+		}
+	}
+	return confidence;
+}
+
+void rebase_room_origin(RoomEstimate *io_estimate) {
+	std::vector<Vec2> &points = io_estimate->floorplan.points;
+	if (points.empty()) {
+		return;
+	}
+	Vec2 low = points.front();
+	for (const Vec2 &p : points) {
+		low = { std::min(low.x, p.x), std::min(low.y, p.y) };
+	}
+	for (Vec2 &p : points) {
+		p = { p.x - low.x, p.y - low.y };
+	}
+	for (WallEstimate &wall : io_estimate->walls) {
+		wall.offset_m -= dot2(wall.normal, low);
+		const double shift = dot2(perp(wall.normal), low);
+		wall.from_m -= shift;
+		wall.to_m -= shift;
+	}
+	io_estimate->world_from_model.translation -= glm::dvec3(low.x, 0.0, low.y);
+}
+
 RoomEstimate estimate_room(const std::vector<SurfaceSample> &p_samples, const glm::dvec3 &p_up_hint, const std::vector<glm::dvec3> &p_camera_positions,
 		const RoomEstimationOptions &p_options) {
 	RoomEstimate result;
@@ -377,7 +417,12 @@ RoomEstimate estimate_room(const std::vector<SurfaceSample> &p_samples, const gl
 	};
 	double floor_height = 0.0;
 	bool found_floor = false;
+	glm::dvec3 first_up = up; // pass 0's up and floor, kept should pass 1 find no floor
+	double first_height = 0.0, first_seen = 0.0;
 	for (int pass = 0; pass < 2; pass++) { // again with the up the floor's own plane gives
+		if (pass == 1) {
+			found_floor = false;
+		}
 		const std::vector<std::pair<double, double>> heights = floor_heights(up);
 		if (heights.empty()) {
 			break;
@@ -399,12 +444,23 @@ RoomEstimate estimate_room(const std::vector<SurfaceSample> &p_samples, const gl
 				floor.push_back(s);
 			}
 		}
-		found_floor = true;
-		if (pass == 0 && floor.size() >= 3) {
-			up = plane_normal(floor, up);
+		found_floor = result.floor_seen_m2 > 0.0;
+		if (pass == 0 && found_floor) {
+			first_up = up;
+			first_height = floor_height;
+			first_seen = result.floor_seen_m2;
+			if (floor.size() >= 3) {
+				up = plane_normal(floor, up);
+			}
 		}
 	}
-	if (!found_floor) {
+	if (!found_floor && first_seen > 0.0) { // pass 1 lost the floor pass 0 had
+		up = first_up;
+		floor_height = first_height;
+		result.floor_seen_m2 = first_seen;
+		found_floor = true;
+	}
+	if (!found_floor || !(result.floor_seen_m2 > 0.0)) {
 		result.state = RoomEstimateState::NoFloor;
 		result.message = format("no horizontal plane with %.1f m2 seen: the floor was not in the sweep", p_options.floor_min_area_m2);
 		return result;
@@ -412,8 +468,8 @@ RoomEstimate estimate_room(const std::vector<SurfaceSample> &p_samples, const gl
 	for (const glm::dvec3 &camera : p_camera_positions) {
 		if (glm::dot(camera, up) - floor_height < 0.2) {
 			result.state = RoomEstimateState::NoFloor;
-			result.message = format("the lowest large horizontal plane is %.2f m above a camera position: not a floor under the sweep",
-					floor_height - glm::dot(camera, up));
+			result.message = format("a camera position is only %.2f m above the lowest large horizontal plane: not a floor under the sweep",
+					glm::dot(camera, up) - floor_height);
 			return result;
 		}
 	}
@@ -481,6 +537,11 @@ RoomEstimate estimate_room(const std::vector<SurfaceSample> &p_samples, const gl
 	for (const glm::dvec3 &camera : p_camera_positions) {
 		cameras.push_back({ glm::dot(camera, e1), glm::dot(camera, e3) });
 	}
+	if (floor_points.empty()) {
+		result.state = RoomEstimateState::NoFloor;
+		result.message = "no floor seen within the plane's tolerance: the floor was not in the sweep";
+		return result;
+	}
 	Vec2 low = floor_points.front(), high = low;
 	for (const Vec2 &p : floor_points) {
 		low = { std::min(low.x, p.x), std::min(low.y, p.y) };
@@ -509,44 +570,18 @@ RoomEstimate estimate_room(const std::vector<SurfaceSample> &p_samples, const gl
 				" direction" + (distinct.size() == 1 ? "" : "s") + ": they do not close a room; sweep the walls all round";
 		return result;
 	}
-	// The world: origin on the floor at the polygon's bounding-box minimum.
-	Vec2 min_corner = polygon.front();
-	for (const Vec2 &p : polygon) {
-		min_corner = { std::min(min_corner.x, p.x), std::min(min_corner.y, p.y) };
-	}
+	// The world: y = 0 on the floor, axes e1, up, e3 (origin moved to the floorplan's corner below).
 	glm::dmat3 rows(e1, up, e3); // columns e1, up, e3: model_from_world's rotation
 	const glm::dmat3 world_from_model_rotation = glm::transpose(rows);
-	const glm::dvec3 origin_model = min_corner.x * e1 + floor_height * up + min_corner.y * e3;
 	result.world_from_model.rotation = glm::normalize(glm::quat_cast(world_from_model_rotation));
-	result.world_from_model.translation = -(world_from_model_rotation * origin_model);
-	for (Vec2 &p : polygon) {
-		p = { p.x - min_corner.x, p.y - min_corner.y };
-	}
+	result.world_from_model.translation = -(world_from_model_rotation * (floor_height * up));
 	result.floorplan.points = polygon;
-	for (WallEstimate &wall : walls) {
-		wall.offset_m -= dot2(wall.normal, min_corner);
-		const double shift = dot2(perp(wall.normal), min_corner);
-		wall.from_m -= shift;
-		wall.to_m -= shift;
-	}
 	result.walls = walls;
-
-	// How much of each edge was seen as a wall.
+	rebase_room_origin(&result);
+	result.edge_confidence = floorplan_edge_confidence(result.floorplan.points, result.walls);
 	std::vector<size_t> unseen;
-	for (size_t i = 0; i < polygon.size(); i++) {
-		const Vec2 &a = polygon[i], &b = polygon[(i + 1) % polygon.size()];
-		const double length = std::hypot(b.x - a.x, b.y - a.y);
-		const Vec2 inward = { -(b.y - a.y) / length, (b.x - a.x) / length };
-		double confidence = 0.0;
-		for (const WallEstimate &wall : walls) {
-			if (dot2(wall.normal, inward) > std::cos(2.0 * DEG) && std::abs(dot2(wall.normal, a) - wall.offset_m) < 0.05) {
-				const double ta = dot2(perp(wall.normal), a), tb = dot2(perp(wall.normal), b);
-				const double overlap = std::min(std::max(ta, tb), wall.to_m) - std::max(std::min(ta, tb), wall.from_m);
-				confidence = std::max(confidence, std::clamp(overlap / length, 0.0, 1.0));
-			}
-		}
-		result.edge_confidence.push_back(confidence);
-		if (confidence < 0.3) {
+	for (size_t i = 0; i < result.edge_confidence.size(); i++) {
+		if (result.edge_confidence[i] < 0.3) {
 			unseen.push_back(i);
 		}
 	}

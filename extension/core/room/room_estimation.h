@@ -89,6 +89,12 @@ struct RoomEstimate {
 RoomEstimate estimate_room(const std::vector<SurfaceSample> &p_samples, const glm::dvec3 &p_up_hint, const std::vector<glm::dvec3> &p_camera_positions,
 		const RoomEstimationOptions &p_options = RoomEstimationOptions());
 
+// Per floorplan edge, the share of it the walls cover (a wall on its line, facing into the room).
+std::vector<double> floorplan_edge_confidence(const std::vector<Vec2> &p_points, const std::vector<WallEstimate> &p_walls);
+// Moves the estimated world's origin to the floorplan's bounding-box minimum (after its edges
+// moved), keeping the walls and world_from_model in step.
+void rebase_room_origin(RoomEstimate *io_estimate);
+
 // One fisheye image at its pose in the estimated world frame.
 struct FisheyeView {
 	cv::Mat image; // CV_8UC1, CV_8UC3 or CV_32FC3 (HDR), as recorded
