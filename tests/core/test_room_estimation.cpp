@@ -63,19 +63,9 @@ TriangleMesh room_mesh_of(const Floorplan &p_plan, const RoomSurface &p_what) {
 	for (const Vec2 &p : p_plan.points) {
 		min_x = std::min(min_x, p.x), max_x = std::max(max_x, p.x), min_z = std::min(min_z, p.y), max_z = std::max(max_z, p.y);
 	}
-	auto inside = [&](double x, double z) {
-		bool in = false;
-		for (size_t i = 0, j = n - 1; i < n; j = i++) {
-			const Vec2 &a = p_plan.points[i], &b = p_plan.points[j];
-			if ((a.y > z) != (b.y > z) && x < (b.x - a.x) * (z - a.y) / (b.y - a.y) + a.x) {
-				in = !in;
-			}
-		}
-		return in;
-	};
 	for (double x = min_x; x < max_x - 1e-9; x += FLOOR_CELL_M) {
 		for (double z = min_z; z < max_z - 1e-9; z += FLOOR_CELL_M) {
-			if (inside(x + 0.5 * FLOOR_CELL_M, z + 0.5 * FLOOR_CELL_M)) {
+			if (polygon_contains(p_plan.points, { x + 0.5 * FLOOR_CELL_M, z + 0.5 * FLOOR_CELL_M })) {
 				if (p_what.floor) {
 					add_quad(&mesh, { x, 0.0, z }, { FLOOR_CELL_M, 0.0, 0.0 }, { 0.0, 0.0, FLOOR_CELL_M }, { 0.0, 1.0, 0.0 }, FLOOR_CELL_M);
 				}

@@ -189,7 +189,7 @@ def add_logs(paths, where):
             sys.exit(f"fuzz: {path}: its name does not start with a target ({', '.join(TARGETS)})")
         with open(path, errors="replace") as f:
             text = f.read()
-        units = [int(m.group(1)) for m in re.finditer(r"^stat::number_of_executed_units:\s*(\d+)", text, re.M)]
+        units = [int(m.group(1)) for m in map(EXECS.match, text.splitlines()) if m]
         took = [int(m.group(1)) for m in re.finditer(r"^Done \d+ runs in (\d+) second", text, re.M)]
         if not units:
             sys.exit(f"fuzz: {path}: no 'stat::number_of_executed_units' line (was -print_final_stats=1 given?)")

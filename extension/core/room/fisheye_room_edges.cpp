@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace roomprobe {
 
@@ -53,6 +54,14 @@ float bilinear(const cv::Mat &p_image, const glm::dvec2 &p_pixel) {
 	const float fx = float(p_pixel.x - x), fy = float(p_pixel.y - y);
 	const float *row0 = p_image.ptr<float>(y), *row1 = p_image.ptr<float>(y + 1);
 	return (1 - fy) * ((1 - fx) * row0[x] + fx * row0[x + 1]) + fy * ((1 - fx) * row1[x] + fx * row1[x + 1]);
+}
+
+double median_of(std::vector<double> p_values) {
+	if (p_values.empty()) {
+		return 0.0;
+	}
+	std::nth_element(p_values.begin(), p_values.begin() + long(p_values.size() / 2), p_values.end());
+	return p_values[p_values.size() / 2];
 }
 
 struct EdgeViews {
@@ -114,11 +123,7 @@ struct EdgeViews {
 				values.push_back(v);
 			}
 		}
-		if (values.size() < 5) {
-			return -1.0;
-		}
-		std::nth_element(values.begin(), values.begin() + long(values.size() / 2), values.end());
-		return values[values.size() / 2];
+		return values.size() < 5 ? -1.0 : median_of(std::move(values));
 	}
 
 	double strip_spread(const Vec2 &p_a, const Vec2 &p_b, double p_height_m, const std::vector<glm::dvec3> &p_offsets) const;
@@ -159,11 +164,7 @@ double EdgeViews::strip_spread(const Vec2 &p_a, const Vec2 &p_b, double p_height
 			spreads.push_back(std::sqrt(squares / double(values.size())));
 		}
 	}
-	if (spreads.size() < 5) {
-		return -1.0;
-	}
-	std::nth_element(spreads.begin(), spreads.begin() + long(spreads.size() / 2), spreads.end());
-	return spreads[spreads.size() / 2];
+	return spreads.size() < 5 ? -1.0 : median_of(std::move(spreads));
 }
 
 // Offsets from a wall's top edge: into the ceiling (along p_inward) or down the wall.
@@ -183,14 +184,6 @@ std::vector<glm::dvec3> wall_offsets() {
 // alike than the median the views see the strip beside it.
 double edge_cue(double p_edge, double p_edge_median, double p_spread, double p_spread_median) {
 	return (p_edge / p_edge_median) * p_spread_median / (p_spread + 0.05 * p_spread_median);
-}
-
-double median_of(std::vector<double> p_values) {
-	if (p_values.empty()) {
-		return 0.0;
-	}
-	std::nth_element(p_values.begin(), p_values.begin() + long(p_values.size() / 2), p_values.end());
-	return p_values[p_values.size() / 2];
 }
 
 // The peak of a profile, refined by a parabola through it and its neighbours (in steps), and its
@@ -225,7 +218,7 @@ CeilingSearch ceiling_from_fisheye(const std::vector<FisheyeView> &p_views, cons
 		return result;
 	}
 	const bool any_seen = std::any_of(p_edge_confidence.begin(), p_edge_confidence.end(), [](double c) { return c >= 0.3; });
-	const bool counter_clockwise = signed_area(p_floorplan.points) > 0.0;
+	const bool counter_clockwise = polygon_signed_area_m2(p_floorplan.points) > 0.0;
 	const int steps = int(std::floor((p_max_m - p_min_m) / STEP_M)) + 1;
 	std::vector<double> combined(size_t(steps), 0.0);
 	size_t in_view = 0;
@@ -288,7 +281,7 @@ std::vector<std::string> complete_walls_from_fisheye(const std::vector<FisheyeVi
 	if (edges.views.empty()) {
 		return lines;
 	}
-	const bool counter_clockwise = signed_area(io_floorplan->points) > 0.0;
+	const bool counter_clockwise = polygon_signed_area_m2(io_floorplan->points) > 0.0;
 	for (size_t i = 0; i < n; i++) {
 		if ((*io_edge_confidence)[i] >= 0.3) {
 			continue;

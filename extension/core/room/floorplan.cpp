@@ -186,7 +186,23 @@ const char *floorplan_problem_summary(FloorplanCheck::Problem p_problem) {
 }
 
 double floorplan_signed_area_m2(const Floorplan &p_floorplan) {
-	const std::vector<Vec2> &points = p_floorplan.points;
+	return polygon_signed_area_m2(p_floorplan.points);
+}
+
+bool polygon_contains(const std::vector<Vec2> &p_points, const Vec2 &p_point) {
+	bool inside = false;
+	for (std::size_t i = 0, j = p_points.size() - 1; i < p_points.size(); j = i++) {
+		const Vec2 &a = p_points[j];
+		const Vec2 &b = p_points[i];
+		if ((b.y > p_point.y) != (a.y > p_point.y) && p_point.x < (a.x - b.x) * (p_point.y - b.y) / (a.y - b.y) + b.x) {
+			inside = !inside;
+		}
+	}
+	return inside;
+}
+
+double polygon_signed_area_m2(const std::vector<Vec2> &p_points) {
+	const std::vector<Vec2> &points = p_points;
 	const std::size_t n = points.size();
 	double twice_area = 0.0;
 	for (std::size_t i = 0; i < n; ++i) {
@@ -239,14 +255,11 @@ double distance_outside_room_m(const Floorplan &p_floorplan, const Vec3 &p_point
 	const std::vector<Vec2> &points = p_floorplan.points;
 	const std::size_t n = points.size();
 	// Inside the polygon by the crossing rule, and the distance to its nearest wall.
-	bool inside = false;
+	const bool inside = n > 0 && polygon_contains(points, Vec2{ p_point.x, p_point.z });
 	double nearest_sq = std::numeric_limits<double>::infinity();
 	for (std::size_t i = 0, j = n - 1; i < n; j = i++) {
 		const Vec2 &a = points[j];
 		const Vec2 &b = points[i];
-		if ((b.y > p_point.z) != (a.y > p_point.z) && p_point.x < (a.x - b.x) * (p_point.z - b.y) / (a.y - b.y) + b.x) {
-			inside = !inside;
-		}
 		const double ex = b.x - a.x, ez = b.y - a.y;
 		const double length_sq = ex * ex + ez * ez;
 		const double t = length_sq > 0.0 ? std::clamp(((p_point.x - a.x) * ex + (p_point.z - a.y) * ez) / length_sq, 0.0, 1.0) : 0.0;

@@ -67,6 +67,10 @@ const char *floorplan_problem_summary(FloorplanCheck::Problem p_problem);
 // Signed polygon area in square metres in the (x, z) plane: positive when the
 // points are counter-clockwise (the normalized convention), negative when clockwise.
 double floorplan_signed_area_m2(const Floorplan &p_floorplan);
+// The same for a bare polygon (the room's estimation works on polygons before they are floorplans).
+double polygon_signed_area_m2(const std::vector<Vec2> &p_points);
+// Whether p_point lies inside the polygon (crossing rule; either orientation).
+bool polygon_contains(const std::vector<Vec2> &p_points, const Vec2 &p_point);
 
 // Length of the closed polygon boundary in metres (sum of all wall widths).
 double floorplan_perimeter_m(const Floorplan &p_floorplan);

@@ -22,7 +22,7 @@ FloorplanRegistration register_floorplan(const Floorplan &p_given, const std::ve
 		return result;
 	}
 	std::vector<Vec2> given = p_given.points;
-	if (signed_area(given) < 0.0) {
+	if (polygon_signed_area_m2(given) < 0.0) {
 		std::reverse(given.begin(), given.end());
 	}
 	// The reconstructed walls (world frame: Y up) and their samples.

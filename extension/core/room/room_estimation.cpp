@@ -132,17 +132,6 @@ bool clip_line(const Vec2 &p_normal, double p_offset, const Vec2 &p_min, const V
 	return true;
 }
 
-bool inside_polygon(const std::vector<Vec2> &p_polygon, const Vec2 &p_point) {
-	bool inside = false;
-	for (size_t i = 0, j = p_polygon.size() - 1; i < p_polygon.size(); j = i++) {
-		const Vec2 &a = p_polygon[i], &b = p_polygon[j];
-		if ((a.y > p_point.y) != (b.y > p_point.y) && p_point.x < (b.x - a.x) * (p_point.y - a.y) / (b.y - a.y) + a.x) {
-			inside = !inside;
-		}
-	}
-	return inside;
-}
-
 // Drops corners where the boundary runs straight on (the arrangement splits walls at every line).
 std::vector<Vec2> drop_straight_corners(std::vector<Vec2> p_points) {
 	bool changed = true;
@@ -177,7 +166,7 @@ struct FloorGrid {
 // The share of the face's floor the sweep saw, or 1 when a camera position lies in it.
 double face_seen(const std::vector<Vec2> &p_face, const FloorGrid &p_grid, const std::vector<Vec2> &p_cameras) {
 	for (const Vec2 &camera : p_cameras) {
-		if (inside_polygon(p_face, camera)) {
+		if (polygon_contains(p_face, camera)) {
 			return 1.0;
 		}
 	}
@@ -189,7 +178,7 @@ double face_seen(const std::vector<Vec2> &p_face, const FloorGrid &p_grid, const
 	size_t total = 0, seen = 0;
 	for (double y = low.y + 0.5 * p_grid.cell; y < high.y; y += p_grid.cell) {
 		for (double x = low.x + 0.5 * p_grid.cell; x < high.x; x += p_grid.cell) {
-			if (inside_polygon(p_face, { x, y })) {
+			if (polygon_contains(p_face, { x, y })) {
 				total++;
 				seen += p_grid.at({ x, y }) ? 1 : 0;
 			}
@@ -290,7 +279,7 @@ std::vector<Vec2> room_polygon(const std::vector<WallEstimate> &p_walls, const F
 			}
 			edge = next;
 		} while (edge != Arrangement::Halfedge_const_handle(start) && walked.count(edge) == 0);
-		const double area = loop.size() >= 3 ? signed_area(loop) : 0.0;
+		const double area = loop.size() >= 3 ? polygon_signed_area_m2(loop) : 0.0;
 		if (area > best_area) {
 			best_area = area;
 			best = loop;
@@ -347,7 +336,7 @@ std::vector<SurfaceSample> transform_samples(const std::vector<SurfaceSample> &p
 
 std::vector<double> floorplan_edge_confidence(const std::vector<Vec2> &p_points, const std::vector<WallEstimate> &p_walls) {
 	std::vector<double> confidence(p_points.size(), 0.0);
-	const bool counter_clockwise = signed_area(p_points) > 0.0;
+	const bool counter_clockwise = polygon_signed_area_m2(p_points) > 0.0;
 	for (size_t i = 0; i < p_points.size(); i++) {
 		const Vec2 &a = p_points[i], &b = p_points[(i + 1) % p_points.size()];
 		const double length = std::hypot(b.x - a.x, b.y - a.y);

@@ -283,15 +283,6 @@ std::vector<WallEstimate> keep_outermost(const std::vector<WallEstimate> &p_cand
 	return kept;
 }
 
-double signed_area(const std::vector<Vec2> &p_polygon) {
-	double area = 0.0;
-	for (size_t i = 0; i < p_polygon.size(); i++) {
-		const Vec2 &a = p_polygon[i], &b = p_polygon[(i + 1) % p_polygon.size()];
-		area += a.x * b.y - b.x * a.y;
-	}
-	return 0.5 * area;
-}
-
 std::vector<WallEstimate> find_walls(const std::vector<FlatSample> &p_flat, const RoomEstimationOptions &p_options, double *r_axis, bool *r_manhattan,
 		double p_axis_correction) {
 	std::vector<WallEstimate> walls;

@@ -47,7 +47,6 @@ struct FlatSample {
 inline Vec2 perp(const Vec2 &p_v) { return { -p_v.y, p_v.x }; }
 inline double dot2(const Vec2 &p_a, const Vec2 &p_b) { return p_a.x * p_b.x + p_a.y * p_b.y; }
 Vec2 from_angle(double p_angle);
-double signed_area(const std::vector<Vec2> &p_polygon); // > 0 counter-clockwise
 
 // The normal directions walls take: histogram peaks of the vertical samples' normal angles, snapped
 // to the dominant axis's multiples of 90 degrees when within manhattan_snap_deg. r_axis: the
