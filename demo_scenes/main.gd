@@ -16,6 +16,8 @@ extends Node3D
 ##   --out DIR         where to write cubemap.exr and cubemap_net.png at the end (default: none)
 ##   --quit-at-end     quit when the recording has played (the Movie Maker run does)
 ##   --true-poses      the recording's ground-truth poses instead of SLAM (evaluation mode)
+##   --auto-room       no floorplan from the recording: CoarseRoomModel finds the room from the
+##                     sweep (Automatic), and the room found is written to --out as room.yaml
 ##   --scene NAME      one of the paper's figures instead of the three objects
 ##                     (demo_scenes/figures/figure_scenes.gd: mirror_teapot, water_bottle,
 ##                     prt_mannequin, metal_teapots, chrome_sphere)
@@ -38,6 +40,7 @@ var _main_ms: Array[float] = []  # RoomProbe's main-thread time per rendered fra
 var _objects_ms: Array[float] = []  # the saved probe's maps: drawing the other virtual objects
 var _figure := ""  # the paper's figure shown (--scene), or "" for the three objects
 var _frames := 0
+var _auto_room := false
 
 
 func _ready() -> void:
@@ -52,6 +55,8 @@ func _ready() -> void:
 			_quit_at_end = true
 		elif args[i] == "--true-poses":
 			_true_poses = true
+		elif args[i] == "--auto-room":
+			_auto_room = true
 		elif args[i] == "--scene" and i + 1 < args.size() and args[i + 1] != "main":
 			var figure := FigureScenes.build(self, args[i + 1])
 			if figure.is_empty():
@@ -76,8 +81,13 @@ func _ready() -> void:
 		printerr("demo: %s" % _rig.get_last_error())
 		get_tree().quit(1)
 		return
-	_room.floorplan = _rig.get_room_floorplan()
-	_room.ceiling_height = _rig.get_room_ceiling_height()
+	if _auto_room:
+		_room.floorplan_source = 2  # FLOORPLAN_AUTOMATIC: found from the sweep, refined as it goes on
+		_room.room_estimated.connect(func(state: String, message: String):
+			print("demo: room %s: %s (%d corners, ceiling %.2f m)" % [state, message, _room.floorplan.size(), _room.ceiling_height]))
+	else:
+		_room.floorplan = _rig.get_room_floorplan()
+		_room.ceiling_height = _rig.get_room_ceiling_height()
 	_camera.fov = _rig.get_rgb_camera_fov()
 	_rig.finished.connect(_on_finished)
 	_room.texture_updated.connect(_on_texture_updated)
@@ -133,8 +143,14 @@ func _on_finished() -> void:
 	_print_summary()
 	_room.finish_inpainting()
 	_probe.update_now()
+	if _auto_room:
+		_room.estimate_room_now()  # the whole sweep (the worker's last estimate may be up to 2 s old)
+		_report_room()
 	if not _out_dir.is_empty():
 		DirAccess.make_dir_recursive_absolute(_out_dir)
+		if _auto_room and _room.is_valid():
+			var room_path := _out_dir.path_join("room.yaml")
+			print("demo: %s %s" % ["wrote" if _room.save_room(room_path, true) == OK else "could not write", room_path])
 		for item in [["cubemap.exr", _probe.save_exr], ["cubemap_net.png", _probe.save_png_net]]:
 			var path: String = _out_dir.path_join(item[0])
 			var err: int = item[1].call(path)
@@ -159,6 +175,28 @@ func _save_picture(p_name: String) -> void:
 	DirAccess.make_dir_recursive_absolute(_out_dir)
 	var path := _out_dir.path_join(p_name)
 	print("demo: %s %s" % ["wrote" if picture.save_png(path) == OK else "could not write", path])
+
+
+## The room found against the recording's own (the recording's world is its true room's: tracking
+## starts at its initial_rgb_pose), one key=value line.
+func _report_room() -> void:
+	if not _room.is_valid():
+		print("demo: room_found=no %s" % _room.get_room_estimate())
+		return
+	var found := []
+	for p in _room.floorplan:
+		found.append(_room.global_transform * Vector3(p.x, 0.0, p.y))
+	var worst := 0.0
+	var truth: PackedVector2Array = _rig.get_room_floorplan()
+	for pair in [[found, truth], [truth, found]]:
+		for p in pair[0]:
+			var a: Vector3 = p if p is Vector3 else Vector3(p.x, 0.0, p.y)
+			var nearest := INF
+			for q in pair[1]:
+				nearest = minf(nearest, a.distance_to(q if q is Vector3 else Vector3(q.x, 0.0, q.y)))
+			worst = maxf(worst, nearest)
+	print("demo: room_found=yes state=%s corners=%d corner_error_max_m=%.4f ceiling_error_m=%.4f" % [
+		_room.get_room_estimate().get("state", "?"), found.size(), worst, absf(_room.ceiling_height - _rig.get_room_ceiling_height())])
 
 
 ## One line of key=value pairs: the main-thread time per rendered frame, and the engine's latency

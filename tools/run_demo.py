@@ -17,6 +17,11 @@ prt_mannequin (Figure 7, middle; the ceiling light switches on half-way), metal_
 3.7 s, cropped to the objects and doubled; prt_mannequin also picture_before.png, before the
 light switches on) go to out/demo/NAME/; no evaluation.
 
+The room without a tape measure: --auto-room plays a 10-s sweep (out/demo/recording_10s/) with
+CoarseRoomModel's Automatic floorplan source: the room is found from the sweep while it plays, and
+out/demo/auto_room/ gets its frames, room.yaml (the room found) and evaluation.txt (roomprobe_eval
+with that room, scored against the recording's truth).
+
 Where it runs:
   default     Movie Maker under xvfb-run (no display needed), then quits
   --window    live in a window on $DISPLAY, until the window is closed (no frames written);
@@ -55,9 +60,16 @@ def main():
     ap.add_argument("--scons-args", metavar="ARGS", help="arguments for scons instead of '-j<nproc>' (also $ROOMPROBE_SCONS_ARGS)")
     ap.add_argument("--scene", default="main", choices=["main"] + FIGURES,
                     help="main (the three objects) or one of the paper's figures")
+    ap.add_argument("--auto-room", action="store_true", help="find the room from a 10-s sweep instead of the recording's room.yaml")
     opts = ap.parse_args()
     os.makedirs(OUT, exist_ok=True)
-    global SCENE_OUT, FRAMES
+    global SCENE_OUT, FRAMES, RECORDING, SECONDS
+    if opts.auto_room:
+        if opts.scene != "main":
+            ap.error("--auto-room plays the main scene")
+        SCENE_OUT = os.path.join(OUT, "auto_room")
+        FRAMES = os.path.join(SCENE_OUT, "frames")
+        RECORDING, SECONDS = os.path.join(OUT, "recording_10s"), 10  # a 6-s sweep sees two walls
     if opts.scene != "main":
         SCENE_OUT = os.path.join(OUT, opts.scene)
         FRAMES = os.path.join(SCENE_OUT, "frames")
@@ -73,17 +85,20 @@ def main():
     if not synthesise():
         return 1
     import_project()
-    if not play(opts.window, opts.once, opts.scene):
+    if not play(opts.window, opts.once, opts.scene, opts.auto_room):
         return 1
-    if not opts.no_eval and not evaluate():
+    room = os.path.join(SCENE_OUT, "room.yaml") if opts.auto_room else None
+    if opts.auto_room and not os.path.exists(room):
+        print("demo: no room was found from the sweep (see the demo's log), so no evaluation with it")
+    elif not opts.no_eval and not evaluate(room):
         return 1
     rp.header("demo: outputs")
     summary = getattr(play, "summary", "")
     frames = sorted(f for f in os.listdir(FRAMES) if f.endswith(".png")) if os.path.isdir(FRAMES) else []
     print(f"  AR frames:     {rp.relpath(FRAMES)}/ ({len(frames)} PNG at {FPS} fps)")
-    for name in ["cubemap.exr", "cubemap_net.png", "evaluation.txt", "picture.png", "picture_before.png"]:
+    for name in ["cubemap.exr", "cubemap_net.png", "evaluation.txt", "room.yaml", "picture.png", "picture_before.png"]:
         path = os.path.join(SCENE_OUT, name)
-        if name.startswith("picture") and not os.path.exists(path):
+        if (name.startswith("picture") or name == "room.yaml") and not os.path.exists(path):
             continue
         print(f"  {name + ':':<14} {rp.relpath(path) if os.path.exists(path) else '(missing)'}")
     # The last line: the figures of the run, key=value (main-thread time per frame, latency, drops).
@@ -134,13 +149,14 @@ def import_project():
         print(f"ok ({rp.fmt_duration(r.seconds)})")
 
 
-def play(window, once=False, scene="main"):
+def play(window, once=False, scene="main", auto_room=False):
     cmd = rp.godot_base_args(rendering=True) + ["--resolution", SIZE]
     if not window:
         shutil.rmtree(FRAMES, ignore_errors=True)
         os.makedirs(FRAMES)
         cmd = rp.xvfb_prefix() + cmd + ["--write-movie", os.path.join(FRAMES, "frame.png"), "--fixed-fps", str(FPS)]
     cmd += [SCENE, "--", "--recording", RECORDING, "--out", SCENE_OUT, "--scene", scene] + ([] if window and not once else ["--quit-at-end"])
+    cmd += ["--auto-room"] if auto_room else []
     rp.header(f"play ({'window' if window else 'Movie Maker under Xvfb'}): {shlex.join(cmd)}")
     log = os.path.join(SCENE_OUT, "demo.log")
     noise = rp.NoiseFilter()
@@ -150,16 +166,19 @@ def play(window, once=False, scene="main"):
         print("    " + k)
     print(f"demo: Godot ended: {rp.describe_exit(r)} after {rp.fmt_duration(r.seconds)}; log: {rp.relpath(log)}")
     play.summary = next((line.strip() for line in reversed(r.lines) if line.strip().startswith("demo: summary ")), "")
+    room = next((line.strip() for line in reversed(r.lines) if line.strip().startswith("demo: room_found=")), "")
+    if room and play.summary:
+        play.summary += room.replace("demo: ", " ", 1)
     if any(re.match(r'^WARNING: \d+ RIDs of type "Texture" were leaked', line) for line in r.lines):
         print("demo: the Texture RID leak at exit is Godot 4.6's reflection-atlas bug (godotengine/godot#122498),"
               " set off by the scene's ReflectionProbe; not RoomProbe's")
     return r.rc == 0
 
 
-def evaluate():
-    cmd = [os.path.join(rp.BUILD, "bin", "roomprobe_eval"), "--recording", RECORDING]
+def evaluate(room=None):
+    cmd = [os.path.join(rp.BUILD, "bin", "roomprobe_eval"), "--recording", RECORDING] + (["--room", room] if room else [])
     rp.header(f"evaluation: {shlex.join(cmd)}")
-    out = os.path.join(OUT, "evaluation.txt")
+    out = os.path.join(SCENE_OUT, "evaluation.txt")
     r = rp.run(cmd, out, timeout=1800, echo=lambda line: print("    " + line, flush=True))
     if r.rc != 0:
         print(f"demo: the evaluation failed ({rp.describe_exit(r)}); log: {rp.relpath(out)}")

@@ -10,6 +10,9 @@ Suites, in order (see tests/README.md):
              clang builds the core again into build/fuzz/)
   soak       roomprobe_bench soak: the fixture back and forth through the engine for 3000 frames;
              resident memory flat after the warm-up
+  room       roomprobe_room on a 10-s living-room sweep against its true room (corners, ceiling, up,
+             registration), roomprobe_eval's maps with the room found against the true room, and
+             the tool's refusals
   editor     godot --headless --editor --quit: a fresh copy of the project and the project itself
              import, and the extension loads and unloads, without errors
   godot      tests/godot/test_*.gd, headless
@@ -620,6 +623,8 @@ def show_with_context(lines, bad, limit=60):
 ROOM_SWEEP = os.path.join(rp.BUILD, "test-data", "living_room_10s")
 ROOM_LINE = re.compile(r"^corner_error_max_m=([\d.]+) ceiling_error_m=([\d.]+) up_error_deg=([\d.]+) registration_error_m=(-?[\d.]+) registration_rms_m=([\d.]+)$")
 ROOM_LIMITS = {"corner_error_max_m": 0.05, "ceiling_error_m": 0.03, "up_error_deg": 0.5, "registration_error_m": 0.02}
+ROOM_EVAL_ROW = "+light (gain)"  # the coarse model as the live system runs it (roomprobe_eval's table)
+ROOM_PSNR_LIMIT_DB = 0.5
 
 
 def suite_room(opts):
@@ -650,6 +655,25 @@ def suite_room(opts):
         else:
             s.passed += 1
         s.notes.append(m.group(0))
+    # The maps with the room found against the maps with the true room (issue #18: within 0.5 dB):
+    # the coarse model's variants, scored against the same true cubemaps.
+    if os.path.isfile(found):
+        psnr = {}
+        for name, extra in (("true", []), ("found", ["--room", found])):
+            r = rp.run([os.path.join(rp.BUILD, "bin", "roomprobe_eval"), "--recording", ROOM_SWEEP, "--no-dense", "--quiet", *extra],
+                       f"{log}.eval-{name}", 900)
+            row = next((line for line in r.lines if line.startswith(ROOM_EVAL_ROW)), None)
+            psnr[name] = float(row[len(ROOM_EVAL_ROW):].split()[0]) if r.rc == 0 and row else None
+        if None in psnr.values():
+            s.fail(f"room: the evaluation with the true and the found room: no '{ROOM_EVAL_ROW}' row (see {rp.relpath(log)}.eval-*)")
+        else:
+            line = f"psnr_true_room_db={psnr['true']:.2f} psnr_found_room_db={psnr['found']:.2f} difference_db={psnr['found'] - psnr['true']:+.2f}"
+            print(line)
+            s.notes.append(line)
+            if abs(psnr["found"] - psnr["true"]) <= ROOM_PSNR_LIMIT_DB:
+                s.passed += 1
+            else:
+                s.fail(f"room: PSNR with the found room differs by more than {ROOM_PSNR_LIMIT_DB} dB: {line}")
     # One wall seen: a clear state, status 1, and nothing written.
     one_wall = os.path.join(out, "fixture.yaml")
     r = rp.run([tool, "--recording", FIXTURE_RECORDING, "--out", one_wall], log + ".fixture", 300)
@@ -727,6 +751,7 @@ def suite_godot(opts, rendering, allow_empty):
     if not rendering:
         make_fixture_recording()
         make_fixture_recording(FIXTURE_BRACKETED, ("--exposure", "bracket", "--no-calibration"))
+        make_fixture_recording(ROOM_SWEEP, ("--no-calibration",), seconds=10, seed=1)  # test_nodes_auto_room.gd
         make_fixture_oni()
     user = []
     if opts.filter:

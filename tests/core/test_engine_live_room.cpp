@@ -1039,3 +1039,205 @@ TEST_CASE("engine: corrupt frames in the middle of a stream are refused or lost 
 		CHECK(cv::checkRange(face));
 	}
 }
+
+// ---------------------------------------------------------------- the room replaced, turned and found (issue #18)
+
+namespace {
+
+// The whole recording through a step-mode engine with p_config.
+void play_all(LiveRoom &p_engine, const Recording &p_rec, size_t p_from = 0, size_t p_to = SIZE_MAX) {
+	for (size_t e = p_from; e < std::min(p_to, p_rec.events.size()); e++) {
+		push_event(p_engine, p_rec, p_rec.events[e]);
+	}
+}
+
+// The mean absolute difference between two maps of the same scene whose worlds differ by
+// p_b_from_a's rotation: each is read along the same physical directions (bilinear).
+double mean_turned_difference(const Cubemap &p_a, const Cubemap &p_b, const glm::dquat &p_b_from_a) {
+	double sum = 0.0;
+	int n = 0;
+	for (int i = 0; i < 40; i++) {
+		for (int j = 0; j < 80; j++) {
+			const double theta = std::numbers::pi * (i + 0.5) / 40.0, phi = 2.0 * std::numbers::pi * (j + 0.5) / 80.0;
+			const glm::dvec3 in_a(std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi));
+			const glm::dvec3 a = sample_cubemap(p_a, in_a), b = sample_cubemap(p_b, p_b_from_a * in_a);
+			sum += std::abs(a.x - b.x) + std::abs(a.y - b.y) + std::abs(a.z - b.z);
+			n += 3;
+		}
+	}
+	return sum / n;
+}
+
+} // namespace
+
+TEST_CASE("engine: a room turned and moved in the world gives the same maps, read along the same directions") {
+	// One world (A, the recording's) and the same world turned 30 degrees about a tilted axis and
+	// moved (B): the room, the true poses and the probe all carried into B. The coarse model (true
+	// poses, no dense model) must then see the same room from the same place.
+	const Recording &rec = recording();
+	LiveRoomConfig a = live_config(rec);
+	a.dense = false;
+	a.coarse_poses = PoseSource::GroundTruth;
+	const synth_frames::LivingRoom &room = synth_frames::living_room();
+	std::string error;
+	for (int i = 0; i < RGBD_FRAMES; i++) {
+		const double t = i / RGBD_RATE_HZ;
+		REQUIRE(a.ground_truth.append({ t, room.trajectory.world_from_rgb(t) }, &error));
+	}
+	Pose b_from_a;
+	b_from_a.rotation = glm::angleAxis(30.0 * std::numbers::pi / 180.0, glm::normalize(glm::dvec3(0.3, 1.0, -0.2)));
+	b_from_a.translation = glm::dvec3(1.5, -0.4, 2.0);
+	LiveRoomConfig b = a;
+	b.world_from_room = b_from_a;
+	b.initial_rgb_pose = compose(b_from_a, a.initial_rgb_pose);
+	b.ground_truth.clear();
+	for (const TimedPose &pose : a.ground_truth.get_samples()) {
+		REQUIRE(b.ground_truth.append({ pose.t_s, compose(b_from_a, pose.world_from_camera) }, &error));
+	}
+	LiveRoom engine_a, engine_b;
+	REQUIRE(engine_a.configure(a) == "");
+	REQUIRE(engine_b.configure(b) == "");
+	play_all(engine_a, rec);
+	play_all(engine_b, rec);
+	const Cubemap map_a = engine_a.render_at(rec.probe, 48);
+	const Cubemap map_b = engine_b.render_at(transform_point(b_from_a, rec.probe), 48);
+	const double level = mean_value(map_a);
+	REQUIRE(level > 0.02);
+	// The two read the same atlas along the same directions; only the texel grids differ (48^2
+	// faces turned against each other): a few percent of the level at the room's edges.
+	const double turned = mean_turned_difference(map_a, map_b, b_from_a.rotation);
+	CHECK(turned < 0.05 * level);
+	// Read without the turn, the maps disagree several times more: the check above can fail.
+	CHECK(mean_turned_difference(map_a, map_b, glm::dquat(1.0, 0.0, 0.0, 0.0)) > 4.0 * turned);
+	// The room's extent follows it too.
+	CHECK(engine_b.distance_outside_room_m(transform_point(b_from_a, rec.probe)) == 0.0);
+	CHECK(engine_b.distance_outside_room_m(transform_point(b_from_a, glm::dvec3(-3.0, 1.0, -3.0))) > 1.0);
+}
+
+TEST_CASE("engine: set_room replaces the room and keeps the dense model, the tracking and the texture where the walls stayed") {
+	const Recording &rec = recording();
+	LiveRoom engine;
+	REQUIRE(engine.configure(live_config(rec)) == "");
+	const size_t half = rec.events.size() / 2;
+	play_all(engine, rec, 0, half);
+	const Trajectory before = engine.trajectory();
+	const size_t fused_before = engine.slam_model()->integrated_count();
+	const std::shared_ptr<const CoarseSnapshot> observed = engine.coarse_snapshot();
+	REQUIRE(observed != nullptr);
+	REQUIRE(fused_before > 0);
+
+	SUBCASE("the same room again: every observation carries over, nothing else changes") {
+		double carried = 0.0;
+		REQUIRE(engine.set_room(true, rec.floorplan, Pose(), 0.05, &carried) == "");
+		CHECK(carried > 0.999);
+		const std::shared_ptr<const CoarseSnapshot> kept = engine.coarse_snapshot();
+		REQUIRE(kept != nullptr);
+		// Where the fisheye observed, the colour is the old texture's exactly (the completed
+		// texture keeps observed colours; the fill comes back at the next fisheye frame).
+		const cv::Mat &seen = engine.coarse_model()->texture().observed;
+		REQUIRE(cv::countNonZero(seen) > 0);
+		cv::Mat diff;
+		cv::absdiff(kept->atlas, observed->atlas, diff);
+		cv::Mat per_texel;
+		cv::transform(diff, per_texel, cv::Matx13f(1.0f, 1.0f, 1.0f));
+		double worst_seen = 0.0;
+		cv::minMaxLoc(per_texel, nullptr, &worst_seen, nullptr, nullptr, seen);
+		CHECK(worst_seen == 0.0);
+		CHECK(engine.coarse_model()->frame_count() == observed->frames);
+	}
+	SUBCASE("one wall moved 1 m out: its texels are observed anew, the others carry over") {
+		Floorplan moved = rec.floorplan;
+		// The edge from points[0] to points[1] pushed out along its outward normal.
+		const Vec2 a = moved.points[0], b = moved.points[1];
+		const glm::dvec2 along = glm::normalize(glm::dvec2(b.x - a.x, b.y - a.y));
+		glm::dvec2 out(along.y, -along.x);
+		const double sign = floorplan_signed_area_m2(moved) > 0.0 ? 1.0 : -1.0; // counter-clockwise: the outside is to the right
+		out *= sign;
+		moved.points[0] = { a.x + out.x, a.y + out.y };
+		moved.points[1] = { b.x + out.x, b.y + out.y };
+		double carried = 0.0;
+		REQUIRE(engine.set_room(true, moved, Pose(), 0.05, &carried) == "");
+		CHECK(carried > 0.3);
+		CHECK(carried < 0.97);
+	}
+	SUBCASE("an invalid room is refused and the old one stays") {
+		Floorplan broken;
+		broken.points = { { 0.0, 0.0 }, { 1.0, 0.0 } };
+		broken.ceiling_height_m = 2.5;
+		CHECK_FALSE(engine.set_room(true, broken, Pose()).empty());
+		REQUIRE(engine.room_mesh() != nullptr);
+		CHECK(engine.room_mesh()->floorplan.points.size() == rec.floorplan.points.size());
+		Pose nan_pose;
+		nan_pose.translation.x = std::numeric_limits<double>::quiet_NaN();
+		CHECK(engine.set_room(true, rec.floorplan, nan_pose) == "the room's pose is not finite");
+	}
+	// Whatever the room did, SLAM went on from where it was: the trajectory so far is unchanged and
+	// the rest of the recording is tracked and fused.
+	check_same_trajectory(engine.trajectory(), before, 0.0, 0.0);
+	CHECK(engine.slam_model()->integrated_count() == fused_before);
+	play_all(engine, rec, half);
+	CHECK(engine.slam_model()->integrated_count() > fused_before);
+	CHECK(engine.stats().lost == 0);
+	CHECK(engine.coarse_snapshot() != nullptr);
+}
+
+TEST_CASE("engine: the room is found from the sweep in step mode and by the room worker; its fisheye views stay spread") {
+	const Recording &rec = recording();
+	LiveRoomConfig cfg = live_config(rec);
+	cfg.has_room = false;
+	cfg.find_room = true;
+	cfg.find_room_views = 2; // thinned after 4 kept: 7 fisheye frames over 0.6 s
+	cfg.find_room_interval_s = 0.05;
+	SUBCASE("step mode: find_room_now") {
+		LiveRoom engine;
+		REQUIRE(engine.configure(cfg) == "");
+		CHECK(engine.found_room() == nullptr);
+		play_all(engine, rec);
+		const std::shared_ptr<const FoundRoom> found = engine.find_room_now();
+		REQUIRE(found != nullptr);
+		CHECK(found->version == 1);
+		CHECK(engine.found_room() == found);
+		CHECK(found->fused_frames == size_t(RGBD_FRAMES));
+		CHECK(found->samples.size() > 1000);
+		// Kept: at most 2 * find_room_views - 1, spread: the first frame and a later one.
+		CHECK(found->fisheye_views >= 2);
+		CHECK(found->fisheye_views < 4);
+		// 0.6 s of a living room is not a room: a clear state and a sentence, never a wrong room.
+		CHECK_FALSE(found->result.estimate.message.empty());
+		if (!found->result.has_room) {
+			CHECK(found->result.estimate.state != RoomEstimateState::Complete);
+		}
+		CHECK(engine.find_room_now()->version == 2);
+	}
+	SUBCASE("threaded: the room worker publishes an estimate") {
+		cfg.mesh_interval_frames = 5;
+		LiveRoom engine;
+		REQUIRE(engine.configure(cfg) == "");
+		REQUIRE(engine.start());
+		size_t rgbd = 0;
+		for (const Event &event : rec.events) {
+			push_event(engine, rec, event);
+			if (!event.fisheye) { // paced: every RGB-D frame fused (the mailbox keeps only the newest)
+				rgbd++;
+				REQUIRE(wait_until([&] { return engine.stats().rgbd_processed >= rgbd; }, 30.0));
+			}
+		}
+		CHECK(wait_until([&] { return engine.found_room() != nullptr; }, 120.0));
+		CHECK(engine.found_room()->fisheye_views >= 2);
+		engine.stop();
+		CHECK(engine.stats().stage_errors == 0);
+	}
+	SUBCASE("without dense SLAM there is nothing to find it in") {
+		cfg.dense = false;
+		cfg.has_room = true; // something to model
+		cfg.coarse_poses = PoseSource::GroundTruth;
+		const synth_frames::LivingRoom &room = synth_frames::living_room();
+		std::string error;
+		REQUIRE(cfg.ground_truth.append({ 0.0, room.trajectory.world_from_rgb(0.0) }, &error));
+		LiveRoom engine;
+		REQUIRE(engine.configure(cfg) == "");
+		const std::shared_ptr<const FoundRoom> found = engine.find_room_now();
+		CHECK_FALSE(found->result.has_room);
+		CHECK(found->result.estimate.message == "no dense model: finding the room needs dense SLAM");
+	}
+}

@@ -203,7 +203,9 @@ func test_without_ground_truth_pose_source_says_why() -> void:
 	assert_true(" ".join(room.get_warnings()).contains("does not lead to a RigCapture"), str(room.get_warnings()))
 
 
-func test_a_new_floorplan_starts_the_texture_again() -> void:
+## A new room on a running engine keeps what the old one observed where its surfaces stayed
+## (LiveRoom::set_room): a new atlas layout of the same room keeps it all, a room elsewhere nothing.
+func test_a_new_floorplan_carries_the_texture_where_the_walls_stayed() -> void:
 	if not need_fixture_recording():
 		return
 	var parts := _make_scene()
@@ -212,8 +214,17 @@ func test_a_new_floorplan_starts_the_texture_again() -> void:
 	while room.get_integrated_frame_count() < 2 and rig.step():
 		room.integrate_rig_frame()
 	assert_eq(room.get_integrated_frame_count(), 2)
+	var old_size: Vector2i = room.get_atlas_size()
 	room.texel_size = 0.05
-	assert_eq(room.get_integrated_frame_count(), 0, "the observations belonged to the old atlas")
+	assert_true(room.get_atlas_size() != old_size, "a new atlas layout")
+	assert_eq(room.get_integrated_frame_count(), 2, "the same surfaces in the new atlas: the observations carried over")
+	assert_true(room.has_texture_data())
+	# A room 20 m away shares no surface with this one: its texture starts again.
+	var far := PackedVector2Array()
+	for p in room.floorplan:
+		far.append(p + Vector2(20, 20))
+	room.floorplan = far
+	assert_eq(room.get_integrated_frame_count(), 0, "nothing of the old room lies on the new one")
 	assert_false(room.has_texture_data())
 
 

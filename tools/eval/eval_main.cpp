@@ -26,9 +26,11 @@ int run(int argc, char **argv) {
 		std::fprintf(stderr,
 				"%s%susage: roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame]\n"
 				"                      [--texel-size M] [--max-cubemaps K] [--no-dense] [--quiet] [--budget]\n"
-				"                      [--rgb-texture] [--dense-range M]\n"
+				"                      [--rgb-texture] [--dense-range M] [--room FILE]\n"
 				"  --budget: the error budget, the live system with one stage at a time replaced by its oracle\n"
-				"  --dense-range M: fuse depth and draw the dense model up to M metres (default 4)\n",
+				"  --dense-range M: fuse depth and draw the dense model up to M metres (default 4)\n"
+				"  --room FILE: the coarse model uses this room.yaml (one found by ./roomprobe room) instead of the\n"
+				"    recording's, placed by the two files' initial_rgb_pose; scored against the same truth\n",
 				p_error ? "roomprobe_eval: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
 		return 2;
 	};
@@ -65,6 +67,10 @@ int run(int argc, char **argv) {
 				return usage("--dense-range needs a distance in metres, at most 20");
 			}
 			options.dense_range_m = x;
+		} else if (arg == "--room") {
+			if (!cursor.value(&options.room_file)) {
+				return usage("--room needs a room.yaml (./roomprobe room writes one)");
+			}
 		} else if (arg == "--rgb-texture") {
 			options.rgb_texture = true;
 		} else if (arg == "--budget") {

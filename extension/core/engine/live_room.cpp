@@ -211,6 +211,50 @@ bool LiveRoom::set_atlas(const cv::Mat &p_atlas) {
 	return true;
 }
 
+// The room's part of the configuration (cfg): the coarse pipeline (or, without a rig, the room
+// mesh alone), its renderer and the placement scene. Workers stopped. The error names the problem.
+std::string LiveRoom::build_room_locked() {
+	coarse.reset();
+	own_room.reset();
+	renderer.reset();
+	if (cfg.has_room && !cfg.has_rig) {
+		RoomMeshOptions mesh_options;
+		mesh_options.texel_size_m = cfg.coarse.texel_size_m;
+		RoomMeshResult built = build_room_mesh(cfg.floorplan, mesh_options);
+		if (!built.ok) {
+			return "room: " + built.error;
+		}
+		own_room = std::make_unique<RoomMesh>(std::move(built.mesh));
+		renderer = std::make_unique<CoarseCubemapRenderer>(*own_room);
+	} else if (cfg.has_room) {
+		CoarsePipelineOptions options = cfg.coarse;
+		options.pose_source = cfg.coarse_poses;
+		if (linearizer.active()) {
+			// Clipped pixels come with the frame's saturation mask, which the texture update
+			// keeps out of the lighting pairs; black in linearised units: the centre pixel's 5
+			// at the reference exposure.
+			options.lighting_options.saturated_threshold = std::numeric_limits<float>::infinity();
+			options.lighting_options.black_threshold = linearizer.centre_radiance(5);
+		}
+		auto fresh = std::make_unique<CoarsePipeline>(options);
+		const std::string error = fresh->configure(cfg.rig, cfg.floorplan);
+		if (!error.empty()) {
+			return error;
+		}
+		coarse = std::move(fresh);
+		renderer = std::make_unique<CoarseCubemapRenderer>(coarse->mesh());
+	}
+	const std::lock_guard<std::mutex> lock(placer_mutex);
+	placer.clear_coarse();
+	if (room_mesh() != nullptr) {
+		const std::string error = placer.set_coarse(*room_mesh(), cfg.world_from_room);
+		if (!error.empty()) {
+			return "placement: " + error;
+		}
+	}
+	return "";
+}
+
 std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 	stop_locked();
 	configured = false;
@@ -254,7 +298,11 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 		rgb_lut_active = cfg.photometry.known;
 		rgb_lut = rgb_radiance_lut(cfg.photometry);
 		if (cfg.dense) {
-			auto fresh = std::make_unique<DenseSlam>(cfg.slam);
+			DenseSlamOptions slam_options = cfg.slam;
+			if (cfg.find_room) { // the room's far walls matter to finding it (room/room_from_sweep.h)
+				slam_options.tsdf.max_depth_m = std::max(slam_options.tsdf.max_depth_m, FIND_ROOM_MAX_DEPTH_M);
+			}
+			auto fresh = std::make_unique<DenseSlam>(slam_options);
 			const std::string error = fresh->configure(cfg.rig.rgb, cfg.initial_rgb_pose);
 			if (!error.empty()) {
 				return fail("dense SLAM: " + error);
@@ -262,42 +310,13 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 			fresh->volume().set_keep_points(cfg.keep_points);
 			slam = std::move(fresh);
 		}
-		if (cfg.has_room && !cfg.has_rig) {
-			RoomMeshOptions mesh_options;
-			mesh_options.texel_size_m = cfg.coarse.texel_size_m;
-			RoomMeshResult built = build_room_mesh(cfg.floorplan, mesh_options);
-			if (!built.ok) {
-				return fail("room: " + built.error);
-			}
-			own_room = std::make_unique<RoomMesh>(std::move(built.mesh));
-			renderer = std::make_unique<CoarseCubemapRenderer>(*own_room);
-		} else if (cfg.has_room) {
-			CoarsePipelineOptions options = cfg.coarse;
-			options.pose_source = cfg.coarse_poses;
-			if (linearizer.active()) {
-				// Clipped pixels come with the frame's saturation mask, which the texture update
-				// keeps out of the lighting pairs; black in linearised units: the centre pixel's 5
-				// at the reference exposure.
-				options.lighting_options.saturated_threshold = std::numeric_limits<float>::infinity();
-				options.lighting_options.black_threshold = linearizer.centre_radiance(5);
-			}
-			auto fresh = std::make_unique<CoarsePipeline>(options);
-			const std::string error = fresh->configure(cfg.rig, cfg.floorplan);
-			if (!error.empty()) {
-				return fail(error);
-			}
-			coarse = std::move(fresh);
-			renderer = std::make_unique<CoarseCubemapRenderer>(coarse->mesh());
-		}
 		{
 			const std::lock_guard<std::mutex> lock(placer_mutex);
 			placer = SurfacePlacer();
-			if (room_mesh() != nullptr) {
-				const std::string error = placer.set_coarse(*room_mesh(), cfg.room_origin_m);
-				if (!error.empty()) {
-					return fail("placement: " + error);
-				}
-			}
+		}
+		const std::string room_error = build_room_locked();
+		if (!room_error.empty()) {
+			return fail(room_error);
 		}
 	} catch (const std::exception &e) {
 		return fail(std::string("configuring the live room failed: ") + e.what());
@@ -305,6 +324,13 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 	{
 		const std::lock_guard<std::mutex> lock(pose_mutex);
 		tracked.clear();
+	}
+	{
+		const std::lock_guard<std::mutex> lock(room_mutex);
+		room_views.clear();
+		room_view_spacing_s = 0.25;
+		last_found.reset();
+		found_mesh_version = 0;
 	}
 	dense_lighting.reset();
 	{
@@ -372,6 +398,9 @@ bool LiveRoom::start_locked() {
 	slam_thread = std::thread([this] { slam_worker(); });
 	coarse_thread = std::thread([this] { coarse_worker(); });
 	probe_thread = std::thread([this] { probe_worker(); });
+	if (cfg.find_room && slam) {
+		room_thread = std::thread([this] { room_worker(); });
+	}
 	return true;
 }
 
@@ -390,7 +419,11 @@ void LiveRoom::stop_locked() {
 		const std::lock_guard<std::mutex> lock(pose_mutex);
 		pose_advanced.notify_all();
 	}
-	for (std::thread *t : { &slam_thread, &coarse_thread, &probe_thread }) {
+	{
+		const std::lock_guard<std::mutex> lock(room_mutex);
+		room_wake.notify_all();
+	}
+	for (std::thread *t : { &slam_thread, &coarse_thread, &probe_thread, &room_thread }) {
 		if (t->joinable()) {
 			t->join();
 		}
@@ -482,6 +515,9 @@ void LiveRoom::push_fisheye(FisheyeFrame p_frame) {
 	const double arrival = now_s();
 	note_arrival(sequence, arrival, &counters.fisheye_pushed, &fisheye_arrivals);
 	const std::shared_lock<std::shared_mutex> shared(lifecycle);
+	if (configured && cfg.has_rig && cfg.find_room) {
+		keep_room_view(p_frame);
+	}
 	if (running) {
 		frames->fisheye.put(Frames::Fisheye{ std::move(p_frame), sequence });
 	} else if (configured && cfg.has_rig) {
@@ -564,7 +600,7 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence) {
 				world_from_rgb = out->world_from_camera;
 			}
 			if (posed) {
-				world_from_rgb.translation -= cfg.room_origin_m; // into the room's frame
+				world_from_rgb = compose(inverse(cfg.world_from_room), world_from_rgb); // into the room's frame
 				const std::lock_guard<std::mutex> lock(pending_rgb_mutex);
 				pending_rgb = PendingRgb{ p_frame, world_from_rgb };
 			}
@@ -643,7 +679,7 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 			counters.fisheye_pose_problem = error;
 			return;
 		}
-		pose.translation -= cfg.room_origin_m; // into the room's frame
+		pose = compose(inverse(cfg.world_from_room), pose); // into the room's frame
 		FisheyeFrame frame = p_frame;
 		LinearFrame linear = linearizer.linearise(p_frame.image, exposure_ratio(cfg.photometry.fisheye, p_frame.capture.exposure_us, p_frame.capture.gain));
 		frame.image = linear.radiance;
@@ -680,6 +716,213 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 		wake_probes();
 	} catch (const std::exception &e) {
 		record_error("coarse model", e.what());
+	}
+}
+
+// ---------------------------------------------------------------- the room: replaced, and found from the sweep
+
+std::string LiveRoom::set_room(bool p_has_room, const Floorplan &p_floorplan, const Pose &p_world_from_room, double p_carry_m, double *r_carried) {
+	if (r_carried != nullptr) {
+		*r_carried = 0.0;
+	}
+	if (!is_finite(p_world_from_room)) {
+		return "the room's pose is not finite";
+	}
+	const std::unique_lock<std::shared_mutex> exclusive(lifecycle);
+	if (!configured) {
+		return "the engine is not configured: " + config_error;
+	}
+	// A pending configuration (a node's edit not applied yet) gets the same room.
+	{
+		const std::lock_guard<std::mutex> lock(pending_mutex);
+		if (has_pending) {
+			pending.has_room = p_has_room;
+			pending.floorplan = p_floorplan;
+			pending.world_from_room = p_world_from_room;
+		}
+	}
+	const bool was_running = running;
+	stop_locked();
+	// The old room, kept to carry its texture over (and to go back to on failure).
+	const LiveRoomConfig old_cfg = cfg;
+	std::unique_ptr<CoarsePipeline> old_coarse = std::move(coarse);
+	std::unique_ptr<RoomMesh> old_own = std::move(own_room);
+	std::unique_ptr<CoarseCubemapRenderer> old_renderer = std::move(renderer);
+	cfg.has_room = p_has_room;
+	cfg.floorplan = p_floorplan;
+	cfg.world_from_room = p_world_from_room;
+	std::string error;
+	try {
+		error = build_room_locked();
+	} catch (const std::exception &e) {
+		error = std::string("building the room failed: ") + e.what();
+	}
+	if (!error.empty()) {
+		cfg = old_cfg;
+		coarse = std::move(old_coarse);
+		own_room = std::move(old_own);
+		renderer = std::move(old_renderer);
+		const std::lock_guard<std::mutex> lock(placer_mutex);
+		placer.clear_coarse();
+		if (room_mesh() != nullptr) {
+			placer.set_coarse(*room_mesh(), cfg.world_from_room);
+		}
+	} else {
+		std::shared_ptr<CoarseSnapshot> snapshot;
+		if (coarse && old_coarse && old_coarse->frame_count() > 0) {
+			// The new room's frame from the old one's, through the world.
+			const Pose new_from_old = compose(inverse(cfg.world_from_room), old_cfg.world_from_room);
+			const double carried = coarse->carry_texture(*old_coarse, new_from_old, p_carry_m);
+			if (r_carried != nullptr) {
+				*r_carried = carried;
+			}
+			if (carried > 0.0) {
+				std::shared_ptr<const CoarseSnapshot> before;
+				{
+					const std::lock_guard<std::mutex> lock(publish_mutex);
+					before = last_coarse;
+				}
+				snapshot = std::make_shared<CoarseSnapshot>();
+				snapshot->frames = coarse->frame_count();
+				snapshot->fisheye_sequence = before ? before->fisheye_sequence : 0;
+				snapshot->atlas = coarse->completed_color().clone();
+				if (cfg.coarse_shell_first) {
+					snapshot->observed = observed_mask(coarse->texture());
+				}
+				snapshot->cumulative = coarse->cumulative_lighting();
+			}
+		}
+		{
+			const std::lock_guard<std::mutex> lock(pending_rgb_mutex);
+			pending_rgb.reset(); // posed in the old room's frame
+		}
+		{
+			const std::lock_guard<std::mutex> lock(publish_mutex);
+			last_coarse = snapshot;
+		}
+		const std::lock_guard<std::mutex> lock(probe_mutex);
+		for (auto &[id, probe] : probes) {
+			probe->dirty = true;
+		}
+		inputs_changed = true;
+		input_generation++;
+		probes_dirty.notify_all();
+	}
+	if (was_running) {
+		start_locked();
+	}
+	return error;
+}
+
+void LiveRoom::keep_room_view(const FisheyeFrame &p_frame) {
+	if (p_frame.image.empty() || cfg.find_room_views == 0) {
+		return;
+	}
+	const std::lock_guard<std::mutex> lock(room_mutex);
+	if (!room_views.empty() && p_frame.timestamp_s - room_views.back().timestamp_s < room_view_spacing_s) {
+		return;
+	}
+	FisheyeFrame kept = p_frame;
+	kept.image = p_frame.image.clone(); // a driver may reuse its buffer
+	kept.saturated.release();
+	room_views.push_back(std::move(kept));
+	if (room_views.size() >= 2 * cfg.find_room_views) {
+		// Every other one goes: the views stay spread over the whole sweep.
+		std::vector<FisheyeFrame> thinned;
+		for (size_t i = 0; i < room_views.size(); i += 2) {
+			thinned.push_back(std::move(room_views[i]));
+		}
+		room_views = std::move(thinned);
+		room_view_spacing_s *= 2.0;
+	}
+}
+
+std::shared_ptr<const FoundRoom> LiveRoom::found_room() const {
+	const std::lock_guard<std::mutex> lock(room_mutex);
+	return last_found;
+}
+
+std::shared_ptr<const FoundRoom> LiveRoom::find_room_now(const std::vector<FisheyeFrame> *p_views) {
+	const std::shared_lock<std::shared_mutex> shared(lifecycle); // no configure meanwhile
+	return find_room_locked(p_views);
+}
+
+// The room worker calls this without the lifecycle lock: stop_locked joins it before the
+// configuration changes.
+std::shared_ptr<const FoundRoom> LiveRoom::find_room_locked(const std::vector<FisheyeFrame> *p_views) {
+	const double start = now_s();
+	auto found = std::make_shared<FoundRoom>();
+	if (!running) {
+		update_dense_mesh();
+	}
+	const std::shared_ptr<const DenseMeshSnapshot> mesh = dense_mesh();
+	SweepObservations observed;
+	if (mesh != nullptr && mesh->mesh != nullptr) {
+		observed.samples = surface_samples(*mesh->mesh);
+	}
+	const Trajectory path = trajectory();
+	for (const TimedPose &pose : path.get_samples()) {
+		observed.camera_positions.push_back(pose.world_from_camera.translation);
+	}
+	if (!path.get_samples().empty()) {
+		observed.has_first_camera = true;
+		observed.model_from_first_rgb = path.get_samples().front().world_from_camera;
+		observed.up_hint = sweep_up_hint(observed.model_from_first_rgb, cfg.rig.has_fisheye(), cfg.rig.rgb_from_fisheye);
+	}
+	std::vector<FisheyeFrame> kept;
+	if (p_views == nullptr) {
+		const std::lock_guard<std::mutex> lock(room_mutex);
+		kept = room_views;
+		p_views = &kept;
+	}
+	observed.has_fisheye = cfg.rig.has_fisheye();
+	observed.fisheye = cfg.rig.fisheye;
+	for (const FisheyeFrame &frame : *p_views) {
+		Pose world_from_fisheye;
+		std::string error;
+		if (fisheye_pose(frame.timestamp_s, &world_from_fisheye, &error)) {
+			observed.fisheye_views.push_back({ frame.image, world_from_fisheye });
+		}
+	}
+	found->fisheye_views = observed.fisheye_views.size();
+	if (!slam) {
+		found->result.estimate.message = "no dense model: finding the room needs dense SLAM";
+	} else {
+		found->result = find_room_from_sweep(observed, cfg.room_estimation);
+	}
+	found->samples = std::move(observed.samples);
+	found->fused_frames = slam ? slam->integrated_count() : 0;
+	found->seconds = now_s() - start;
+	const std::lock_guard<std::mutex> lock(room_mutex);
+	found->version = last_found ? last_found->version + 1 : 1;
+	found_mesh_version = mesh ? mesh->version : 0;
+	last_found = found;
+	return found;
+}
+
+void LiveRoom::room_worker() {
+	while (!stopping) {
+		{
+			std::unique_lock<std::mutex> lock(room_mutex);
+			room_wake.wait_for(lock, std::chrono::duration<double>(std::max(cfg.find_room_interval_s, 0.1)), [this] { return bool(stopping); });
+			if (stopping) {
+				return;
+			}
+		}
+		const std::shared_ptr<const DenseMeshSnapshot> mesh = dense_mesh();
+		uint64_t seen = 0;
+		{
+			const std::lock_guard<std::mutex> lock(room_mutex);
+			seen = found_mesh_version;
+		}
+		if (mesh == nullptr || mesh->version == seen) {
+			continue; // nothing new to look at
+		}
+		try {
+			find_room_locked(nullptr);
+		} catch (const std::exception &e) {
+			record_error("room estimation", e.what());
+		}
 	}
 }
 
@@ -725,6 +968,15 @@ void LiveRoom::set_probe_objects(int p_probe, std::shared_ptr<const VirtualScene
 void LiveRoom::remove_probe(int p_probe) {
 	const std::lock_guard<std::mutex> lock(probe_mutex);
 	probes.erase(p_probe);
+}
+
+std::vector<glm::dvec3> LiveRoom::probe_positions() const {
+	const std::lock_guard<std::mutex> lock(probe_mutex);
+	std::vector<glm::dvec3> positions;
+	for (const auto &[id, probe] : probes) {
+		positions.push_back(probe->position);
+	}
+	return positions;
 }
 
 std::shared_ptr<const ProbeMap> LiveRoom::probe_map(int p_probe) const {
@@ -781,9 +1033,11 @@ Cubemap LiveRoom::render_map(const glm::dvec3 &p_position, int p_size, const Coa
 	cumulative.valid = true;
 	Cubemap observed; // which texels the coarse model's fisheye observations show
 	if (renderer && p_coarse != nullptr && !p_coarse->atlas.empty()) {
-		map = renderer->render(p_coarse->atlas, p_position - cfg.room_origin_m, p_size);
+		const Pose room_from_world = inverse(cfg.world_from_room);
+		const glm::dvec3 in_room = transform_point(room_from_world, p_position);
+		map = renderer->render(p_coarse->atlas, in_room, p_size, room_from_world.rotation);
 		if (p_with_dense && slam && cfg.coarse_shell_first && !p_coarse->observed.empty()) {
-			observed = renderer->render(p_coarse->observed, p_position - cfg.room_origin_m, p_size);
+			observed = renderer->render(p_coarse->observed, in_room, p_size, room_from_world.rotation);
 		}
 		cumulative = p_coarse->cumulative;
 	} else {
@@ -1001,7 +1255,7 @@ double LiveRoom::distance_outside_room_m(const glm::dvec3 &p_world) const {
 	if (mesh == nullptr) {
 		return 0.0;
 	}
-	const glm::dvec3 room = p_world - cfg.room_origin_m;
+	const glm::dvec3 room = transform_point(inverse(cfg.world_from_room), p_world);
 	return roomprobe::distance_outside_room_m(mesh->floorplan, Vec3{ room.x, room.y, room.z });
 }
 

@@ -29,6 +29,7 @@
 #include <envmap/ggx_prefilter.h>
 #include <envmap/virtual_objects.h>
 #include <pipeline/coarse_pipeline.h>
+#include <room/room_from_sweep.h>
 #include <placement/surface_placement.h>
 #include <rig/photometry.h>
 #include <rig/rig.h>
@@ -59,11 +60,20 @@ struct LiveRoomConfig {
 	RigPhotometry photometry; // unknown: frames as recorded (rig/photometry.h)
 	bool has_room = false; // false: no coarse model (maps then hold only the dense model)
 	Floorplan floorplan; // metres, with the ceiling height
-	// Where the floorplan's origin is in the world (the CoarseRoomModel node's position): the
-	// coarse model lives in the room's frame, the dense model and the probes in the world's.
-	glm::dvec3 room_origin_m = glm::dvec3(0.0);
+	// The room's frame in the world (the CoarseRoomModel node's transform, or the room found from
+	// the sweep): the coarse model lives in the room's frame, the dense model and the probes in
+	// the world's. A turned room is fine: its maps' faces stay the world's.
+	Pose world_from_room;
 	Pose initial_rgb_pose; // world_from_rgb at the first RGB-D frame (room.yaml's)
 	std::vector<glm::dvec3> keep_points; // the TSDF evicts blocks far from these last (the probes)
+	// Find the room from the sweep (issue #18; CoarseRoomModel's Automatic source): the engine
+	// keeps up to find_room_views fisheye frames spread over the sweep, and its room worker
+	// estimates the room from the dense model every find_room_interval_s while it runs (or at
+	// find_room_now()). Needs dense SLAM.
+	bool find_room = false;
+	double find_room_interval_s = 2.0;
+	size_t find_room_views = 24;
+	RoomEstimationOptions room_estimation;
 	bool dense = true; // run dense SLAM (§4.2) and draw the dense model into the maps
 	// Where poses come from. Tracked: DenseSlam's trajectory (the live mode). GroundTruth: the
 	// recording's true RGB-D trajectory (evaluation mode): the coarse model takes its fisheye poses
@@ -170,6 +180,18 @@ struct LatencySummary {
 };
 LatencySummary summarise_latency(std::vector<double> p_values_ms);
 
+// The room found from the sweep so far, in the engine's world (the model frame of
+// room/room_from_sweep.h): result.estimate.world_from_model maps the engine's world into the
+// room found, so the room's pose in the world is its inverse.
+struct FoundRoom {
+	uint64_t version = 0; // 1, 2, ... per estimate
+	RoomFromSweep result;
+	std::vector<SurfaceSample> samples; // the dense surface it was found on, engine world
+	size_t fused_frames = 0; // the dense model's fused frames then
+	size_t fisheye_views = 0; // fisheye frames searched
+	double seconds = 0.0; // how long the estimate took
+};
+
 struct LiveRoomStats {
 	bool running = false;
 	uint64_t rgbd_pushed = 0, rgbd_processed = 0, rgbd_dropped = 0;
@@ -219,6 +241,21 @@ public:
 	bool config_pending() const;
 	std::string apply_config();
 
+	// Replaces the room (floorplan and pose) and keeps everything else: the dense model, the
+	// tracking, the probes. Only the coarse model is built again; its texture carries over where
+	// the new room's surface lies within p_carry_m of the old one's (the same kind of surface
+	// facing the same way), the rest is observed anew. The error (empty on success) names the
+	// problem; the old room stays then. r_carried: the share of the new surface carried over.
+	std::string set_room(bool p_has_room, const Floorplan &p_floorplan, const Pose &p_world_from_room, double p_carry_m = 0.05,
+			double *r_carried = nullptr);
+
+	// The room from the sweep (LiveRoomConfig::find_room). found_room(): the newest estimate (null
+	// before the first). find_room_now(): estimates now on the calling thread from the dense model
+	// as it is (re-meshed first in step mode) and p_views (null: the fisheye frames the engine kept),
+	// publishes and returns it. Needs dense SLAM; never throws.
+	std::shared_ptr<const FoundRoom> found_room() const;
+	std::shared_ptr<const FoundRoom> find_room_now(const std::vector<FisheyeFrame> *p_views = nullptr);
+
 	// Puts a whole atlas in as the coarse texture (CV_32FC3 linear R, G, B, the room's atlas
 	// size): the maps show it until the next fisheye frame. False when the size is wrong.
 	bool set_atlas(const cv::Mat &p_atlas);
@@ -234,6 +271,8 @@ public:
 	// The probe's own object must not be among them. A new scene marks the probe for a new map.
 	void set_probe_objects(int p_probe, std::shared_ptr<const VirtualScene> p_objects);
 	void remove_probe(int p_probe);
+	// Every probe's position, world metres, in id order.
+	std::vector<glm::dvec3> probe_positions() const;
 	// Step mode, or any time: renders every probe (or one) now on the calling thread.
 	void render_probes();
 	bool render_probe(int p_probe);
@@ -291,6 +330,10 @@ private:
 	void slam_worker();
 	void coarse_worker();
 	void probe_worker();
+	void room_worker();
+	std::shared_ptr<const FoundRoom> find_room_locked(const std::vector<FisheyeFrame> *p_views);
+	std::string build_room_locked(); // the coarse model, its renderer and placement from cfg
+	void keep_room_view(const FisheyeFrame &p_frame);
 	void record_error(const std::string &p_stage, const std::string &p_what);
 	// Counts a pushed frame and keeps its push time for the latency figures.
 	void note_arrival(uint64_t p_sequence, double p_arrival_s, uint64_t *io_pushed, std::vector<std::pair<uint64_t, double>> *io_arrivals);
@@ -354,7 +397,16 @@ private:
 	std::atomic<bool> running{ false };
 	std::atomic<bool> stopping{ false };
 	std::unique_ptr<Frames> frames;
-	std::thread slam_thread, coarse_thread, probe_thread;
+	std::thread slam_thread, coarse_thread, probe_thread, room_thread;
+
+	// The room from the sweep: fisheye frames kept for it (spread over time: when twice
+	// find_room_views are kept, every other one goes and the spacing doubles), and the estimate.
+	mutable std::mutex room_mutex;
+	std::condition_variable room_wake;
+	std::vector<FisheyeFrame> room_views;
+	double room_view_spacing_s = 0.25;
+	std::shared_ptr<const FoundRoom> last_found;
+	uint64_t found_mesh_version = 0; // the dense mesh version last estimated on
 
 	// Counters and latencies.
 	mutable std::mutex stats_mutex;

@@ -193,11 +193,12 @@ cv::Vec3f CoarseCubemapRenderer::gather(const cv::Vec3f *p_atlas, const Taps &p_
 	return cv::Vec3f(float(sum[0] / weight), float(sum[1] / weight), float(sum[2] / weight));
 }
 
-std::shared_ptr<const CoarseCubemapRenderer::Lookup> CoarseCubemapRenderer::lookup(const glm::dvec3 &p_position, int p_size) const {
+std::shared_ptr<const CoarseCubemapRenderer::Lookup> CoarseCubemapRenderer::lookup(const glm::dvec3 &p_position, int p_size,
+		const glm::dquat &p_room_from_world) const {
 	{
 		const std::lock_guard<std::mutex> lock(lookup_mutex);
 		for (auto it = lookups.begin(); it != lookups.end(); ++it) {
-			if ((*it)->size == p_size && (*it)->position == p_position) {
+			if ((*it)->size == p_size && (*it)->position == p_position && (*it)->room_from_world == p_room_from_world) {
 				lookups.splice(lookups.begin(), lookups, it);
 				return lookups.front();
 			}
@@ -206,6 +207,8 @@ std::shared_ptr<const CoarseCubemapRenderer::Lookup> CoarseCubemapRenderer::look
 	auto built = std::make_shared<Lookup>();
 	built->position = p_position;
 	built->size = p_size;
+	built->room_from_world = p_room_from_world;
+	const glm::dmat3 turn = glm::mat3_cast(p_room_from_world);
 	built->taps.resize(size_t(6) * size_t(p_size) * size_t(p_size));
 	built->distance_m.assign(built->taps.size(), 0.0f);
 	tbb::parallel_for(tbb::blocked_range<int>(0, 6 * p_size), [&](const tbb::blocked_range<int> &p_rows) {
@@ -216,7 +219,7 @@ std::shared_ptr<const CoarseCubemapRenderer::Lookup> CoarseCubemapRenderer::look
 			float *distance = &built->distance_m[size_t(row) * size_t(p_size)];
 			for (int u = 0; u < p_size; u++) {
 				RoomRayHit hit;
-				if (intersect_room(mesh, p_position, cubemap_direction(face, u, v, p_size), &hit)) {
+				if (intersect_room(mesh, p_position, turn * cubemap_direction(face, u, v, p_size), &hit)) {
 					out[u] = texel_taps(hit.chart, hit.atlas);
 					distance[u] = float(hit.distance);
 				}
@@ -231,11 +234,11 @@ std::shared_ptr<const CoarseCubemapRenderer::Lookup> CoarseCubemapRenderer::look
 	return built;
 }
 
-Cubemap CoarseCubemapRenderer::render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size) const {
+Cubemap CoarseCubemapRenderer::render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size, const glm::dquat &p_room_from_world) const {
 	if (p_size <= 0 || p_atlas_color.type() != CV_32FC3 || p_atlas_color.cols != mesh.atlas_width || p_atlas_color.rows != mesh.atlas_height) {
 		return Cubemap();
 	}
-	const std::shared_ptr<const Lookup> taps = lookup(p_position, p_size);
+	const std::shared_ptr<const Lookup> taps = lookup(p_position, p_size, p_room_from_world);
 	const cv::Mat atlas = continuous(p_atlas_color);
 	Cubemap cubemap = make_cubemap(p_size);
 	for (int f = 0; f < 6; f++) {

@@ -17,6 +17,7 @@
 
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/gtc/quaternion.hpp>
 
 #include <cstdint>
 #include <list>
@@ -49,11 +50,15 @@ public:
 	// p_atlas_color (CV_32FC3, the mesh's atlas size; CoarseTexture::color). Directions that hit
 	// nothing (a position outside the room) are black. Returns an invalid (size 0) cubemap when
 	// the atlas has the wrong size or type. The map's distance_m holds each ray's hit distance.
+	// p_room_from_world: the room's orientation in the world when the two differ (a room found
+	// from the sweep, issue #18, or a CoarseRoomModel node turned): the faces stay the world's,
+	// their rays are turned into the room's frame. p_position is then in the room's frame too.
 	// Parallel over face rows (TBB).
 	// The rays and taps depend only on the position and size, not on the atlas: they are kept for
 	// the last MAX_CACHED_LOOKUPS (position, size) pairs (28 bytes a texel: 11 MiB at 256^2), so a
 	// probe that does not move costs a gather of four taps a texel. Safe to call from any thread.
-	Cubemap render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size = 256) const;
+	Cubemap render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size = 256,
+			const glm::dquat &p_room_from_world = glm::dquat(1.0, 0.0, 0.0, 0.0)) const;
 	Cubemap render(const CoarseTexture &p_texture, const glm::dvec3 &p_position, int p_size = 256) const {
 		return render(p_texture.color, p_position, p_size);
 	}
@@ -74,12 +79,13 @@ private:
 	struct Lookup {
 		glm::dvec3 position = glm::dvec3(0.0);
 		int size = 0;
+		glm::dquat room_from_world = glm::dquat(1.0, 0.0, 0.0, 0.0);
 		std::vector<Taps> taps; // face-major, then rows, then columns
 		std::vector<float> distance_m; // the same order: the ray's hit distance (0: none)
 	};
 	Taps texel_taps(int p_chart, const glm::dvec2 &p_atlas) const;
 	static cv::Vec3f gather(const cv::Vec3f *p_atlas, const Taps &p_taps);
-	std::shared_ptr<const Lookup> lookup(const glm::dvec3 &p_position, int p_size) const;
+	std::shared_ptr<const Lookup> lookup(const glm::dvec3 &p_position, int p_size, const glm::dquat &p_room_from_world) const;
 
 	const RoomMesh &mesh;
 	std::vector<uint8_t> on_surface; // atlas_width * atlas_height, row-major

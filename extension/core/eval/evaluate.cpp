@@ -6,6 +6,7 @@
 #include <envmap/coarse_render.h>
 #include <envmap/export.h>
 #include <recording/recording_reader.h>
+#include <recording/room_file.h>
 #include <rig/fisheye_pose.h>
 #include <rig/photometry.h>
 
@@ -164,7 +165,8 @@ void split_by_direction(const LiveRoom &p_engine, const CoarseCubemapRenderer &p
 		}
 	}
 	const int size = p_truth.size;
-	const Cubemap seen = to_cubemap(p_renderer.render(masks, p_probe, p_render_size).faces, size);
+	const Pose room_from_world = inverse(p_engine.config().world_from_room); // the coarse model's frame
+	const Cubemap seen = to_cubemap(p_renderer.render(masks, transform_point(room_from_world, p_probe), p_render_size, room_from_world.rotation).faces, size);
 	score_classes(p_with_dense, p_truth, DIRECTION_CLASS_COUNT, r_scores, [&](int p_face, int p_y, int p_x) {
 		const cv::Vec3f mask = seen.faces[p_face].at<cv::Vec3f>(p_y, p_x);
 		if (mask[0] > 0.5f) {
@@ -307,6 +309,17 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	base.has_room = true;
 	base.floorplan = room.floorplan;
 	base.initial_rgb_pose = room.initial_rgb_pose;
+	if (!p_options.room_file.empty()) {
+		const RoomLoadResult given = load_room_file(p_options.room_file);
+		if (!given.ok) {
+			result.error = given.error;
+			return result;
+		}
+		base.floorplan = given.room.floorplan;
+		base.world_from_room = compose(room.initial_rgb_pose, inverse(given.room.initial_rgb_pose));
+		say("the coarse model's room: " + p_options.room_file + " (" + std::to_string(given.room.floorplan.points.size()) + " corners, ceiling " +
+				std::to_string(given.room.floorplan.ceiling_height_m) + " m), placed by its initial_rgb_pose");
+	}
 	base.keep_points = room.probes;
 	base.ground_truth = trajectory;
 	base.coarse_poses = PoseSource::GroundTruth;

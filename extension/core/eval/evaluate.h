@@ -56,6 +56,11 @@ struct EvaluationOptions {
 	// dense_render_far_m); 0: their defaults (4 m).
 	double dense_range_m = 0.0;
 	bool oracles = true; // the oracle variants, when the recording's true scene can be rebuilt
+	// Non-empty: the coarse model uses this room file (a room found from the sweep by roomprobe_room,
+	// issue #18) instead of the recording's true room. It is placed in the recording's world by
+	// the two rooms' initial_rgb_pose (both are the first RGB-D frame's camera), so the maps are
+	// scored at the same probes against the same truth.
+	std::string room_file;
 	std::function<void(const std::string &)> progress; // optional
 };
 

@@ -1,6 +1,10 @@
 #include "coarse_pipeline.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+
+#include <glm/geometric.hpp>
 
 namespace roomprobe {
 
@@ -168,6 +172,56 @@ void CoarsePipeline::finish_inpainting() {
 	inpainter->wait_idle();
 	inpainter->try_take_result(&inpainted);
 	compose_completed();
+}
+
+double CoarsePipeline::carry_texture(const CoarsePipeline &p_old, const Pose &p_new_from_old, double p_tolerance_m) {
+	if (!configured || !p_old.configured || geometry.surface_texels == 0) {
+		return 0.0;
+	}
+	const Pose old_from_new = inverse(p_new_from_old);
+	// Each texel looks for the old surface along its normal, from this far inside the room.
+	const double reach_m = 4.0 * std::max(p_tolerance_m, 0.01);
+	const double same_direction = std::cos(10.0 * M_PI / 180.0);
+	const CoarseTexture &from = p_old.coarse;
+	size_t carried = 0;
+	for (int y = 0; y < geometry.height; y++) {
+		for (int x = 0; x < geometry.width; x++) {
+			const size_t i = size_t(y) * size_t(geometry.width) + size_t(x);
+			if (geometry.charts[i] < 0) {
+				continue;
+			}
+			const glm::dvec3 point = transform_point(old_from_new, geometry.points[i]);
+			const glm::dvec3 normal = old_from_new.rotation * geometry.normals[i];
+			RoomRayHit hit;
+			if (!intersect_room(p_old.room, point + normal * reach_m, -normal, &hit) || std::abs(hit.distance - reach_m) > p_tolerance_m) {
+				continue;
+			}
+			const Chart &old_chart = p_old.room.charts[size_t(hit.chart)];
+			const Chart &new_chart = room.charts[size_t(geometry.charts[i])];
+			const glm::dvec3 old_normal(old_chart.normal.x, old_chart.normal.y, old_chart.normal.z);
+			if (old_chart.kind != new_chart.kind || glm::dot(old_normal, normal) < same_direction) {
+				continue;
+			}
+			const int ox = std::clamp(int(std::floor(hit.atlas.x)), 0, p_old.geometry.width - 1);
+			const int oy = std::clamp(int(std::floor(hit.atlas.y)), 0, p_old.geometry.height - 1);
+			if (!p_old.geometry.on_surface(ox, oy)) {
+				continue;
+			}
+			coarse.color.at<cv::Vec3f>(y, x) = from.color.at<cv::Vec3f>(oy, ox);
+			coarse.observed.at<uint8_t>(y, x) = from.observed.at<uint8_t>(oy, ox);
+			coarse.quality.at<float>(y, x) = from.quality.at<float>(oy, ox);
+			coarse.saturated.at<uint8_t>(y, x) = from.saturated.at<uint8_t>(oy, ox);
+			coarse.rgb_quality.at<float>(y, x) = from.rgb_quality.at<float>(oy, ox);
+			carried++;
+		}
+	}
+	if (carried > 0) {
+		frames = p_old.frames;
+		cumulative = p_old.cumulative;
+		inpainted.release(); // of the old layout
+		compose_completed();
+	}
+	return double(carried) / double(geometry.surface_texels);
 }
 
 const cv::Mat &CoarsePipeline::completed_color() const {

@@ -116,6 +116,14 @@ public:
 	// recording, tests). No effect otherwise.
 	void finish_inpainting();
 
+	// A new room keeps what the old one observed (issue #18: the room found from the sweep moves
+	// its walls as it refines): every texel of this room's surface whose point, seen in p_old's
+	// room (p_new_from_old maps p_old's room frame into this one's), lies within p_tolerance_m of
+	// p_old's surface of the same kind facing the same way takes that texel's observation, and
+	// the frame count and lighting changes carry over. Returns the share of this room's surface
+	// texels carried (0 to 1). The completed texture follows at the next fisheye frame.
+	double carry_texture(const CoarsePipeline &p_old, const Pose &p_new_from_old, double p_tolerance_m);
+
 	// Only observations (CoarseTexture::color keeps no inpainted values).
 	const CoarseTexture &texture() const { return coarse; }
 	// The inpainted colour when inpainting is on and a frame was added, else texture().color.

@@ -17,90 +17,6 @@ void say(const RoomSweepOptions &p_options, const std::string &p_line) {
 
 } // namespace
 
-RoomSweepResult estimate_room_in_engine(const LiveRoom &p_engine, const Rig &p_rig, const std::vector<FisheyeFrame> &p_fisheye,
-		const RoomEstimationOptions &p_options) {
-	RoomSweepResult result;
-	result.ok = true;
-	const std::shared_ptr<const DenseMeshSnapshot> mesh = p_engine.dense_mesh();
-	if (mesh != nullptr && mesh->mesh != nullptr) {
-		result.samples = surface_samples(*mesh->mesh);
-	}
-	const Trajectory trajectory = p_engine.trajectory();
-	std::vector<glm::dvec3> cameras;
-	for (const TimedPose &pose : trajectory.get_samples()) {
-		cameras.push_back(pose.world_from_camera.translation);
-	}
-	// Up, roughly: the upward fisheye's axis, else the RGB camera's -y (held upright).
-	glm::dvec3 up_hint(0.0, 1.0, 0.0);
-	if (!trajectory.get_samples().empty()) {
-		const Pose &first = trajectory.get_samples().front().world_from_camera;
-		up_hint = p_rig.has_fisheye() ? first.rotation * (p_rig.rgb_from_fisheye.rotation * glm::dvec3(0.0, 0.0, 1.0)) : first.rotation * glm::dvec3(0.0, -1.0, 0.0);
-	}
-	result.estimate = estimate_room(result.samples, up_hint, cameras, p_options);
-	RoomEstimate &estimate = result.estimate;
-	result.world_from_model = estimate.world_from_model;
-	const bool has_floorplan = estimate.state == RoomEstimateState::Complete || estimate.state == RoomEstimateState::Partial;
-	if (has_floorplan && p_rig.has_fisheye()) {
-		std::vector<FisheyeView> views;
-		double highest_camera_m = 0.0;
-		for (const glm::dvec3 &camera : cameras) {
-			highest_camera_m = std::max(highest_camera_m, transform_point(estimate.world_from_model, camera).y);
-		}
-		for (const FisheyeFrame &frame : p_fisheye) {
-			Pose model_from_fisheye;
-			std::string error;
-			if (p_engine.fisheye_pose(frame.timestamp_s, &model_from_fisheye, &error)) {
-				views.push_back({ frame.image, compose(estimate.world_from_model, model_from_fisheye) });
-			}
-		}
-		if (estimate.floorplan.ceiling_height_m <= 0.0) {
-			const double lowest_m = std::max(p_options.min_ceiling_height_m, highest_camera_m + 0.3);
-			if (lowest_m < p_options.max_ceiling_height_m) {
-				result.fisheye_ceiling = ceiling_from_fisheye(views, p_rig.fisheye, estimate.floorplan, lowest_m, p_options.max_ceiling_height_m,
-						estimate.edge_confidence);
-			} else {
-				result.fisheye_ceiling.message = "the camera went within 0.3 m of the highest ceiling searched (" +
-						std::to_string(p_options.max_ceiling_height_m) + " m): no ceiling above it to search";
-			}
-			if (result.fisheye_ceiling.ok) {
-				estimate.floorplan.ceiling_height_m = result.fisheye_ceiling.height_m;
-				estimate.ceiling_source = "fisheye";
-			}
-		}
-		if (estimate.floorplan.ceiling_height_m > 0.0) { // the edges never seen as walls, from the fisheye
-			const std::vector<double> before = estimate.edge_confidence;
-			result.fisheye_walls = complete_walls_from_fisheye(views, p_rig.fisheye, &estimate.floorplan, &estimate.edge_confidence);
-			// A moved edge's neighbours grew: their seen share is measured again.
-			std::vector<double> measured = floorplan_edge_confidence(estimate.floorplan.points, estimate.walls);
-			for (size_t i = 0; i < measured.size(); i++) {
-				if (before[i] < 0.3 && estimate.edge_confidence[i] >= 0.3) {
-					measured[i] = std::max(measured[i], estimate.edge_confidence[i]);
-				}
-			}
-			estimate.edge_confidence = measured;
-			rebase_room_origin(&estimate);
-			result.world_from_model = estimate.world_from_model;
-		}
-	}
-	if (has_floorplan) { // the state and its sentence, after the fisheye's part
-		std::string unseen;
-		for (size_t i = 0; i < estimate.edge_confidence.size(); i++) {
-			unseen += estimate.edge_confidence[i] < 0.3 ? " " + std::to_string(i) : "";
-		}
-		const bool ceiling = estimate.floorplan.ceiling_height_m > 0.0;
-		estimate.state = unseen.empty() && ceiling ? RoomEstimateState::Complete : RoomEstimateState::Partial;
-		estimate.message = std::to_string(estimate.floorplan.points.size()) + " corners, " + std::to_string(estimate.walls.size()) + " walls in the dense model" +
-				(estimate.manhattan ? " (at right angles)" : "") + (unseen.empty() ? "" : "; never seen as walls: edge" + unseen + " (the room ends there where the sweep's view did)") +
-				(ceiling ? "" : "; no ceiling: not in the dense model, and " + (result.fisheye_ceiling.message.empty() ? std::string("no fisheye") : result.fisheye_ceiling.message));
-	}
-	if (has_floorplan && estimate.floorplan.ceiling_height_m > 0.0) {
-		result.room.floorplan = estimate.floorplan;
-		const Pose first = trajectory.get_samples().empty() ? Pose() : trajectory.get_samples().front().world_from_camera;
-		result.room.initial_rgb_pose = compose(estimate.world_from_model, first);
-	}
-	return result;
-}
-
 RoomSweepResult sweep_room(const RoomSweepOptions &p_options) {
 	RoomSweepResult failed;
 	RecordingReader reader;
@@ -120,6 +36,8 @@ RoomSweepResult sweep_room(const RoomSweepOptions &p_options) {
 	config.has_room = false;
 	config.dense = true;
 	config.initial_rgb_pose = Pose(); // the dense model's frame: the first RGB-D frame's camera
+	config.find_room = true;
+	config.room_estimation = p_options.estimation;
 	if (p_options.voxel_size_m > 0.0f) {
 		config.slam.tsdf.voxel_size_m = p_options.voxel_size_m;
 	}
@@ -144,6 +62,10 @@ RoomSweepResult sweep_room(const RoomSweepOptions &p_options) {
 	for (const PlaybackEvent &event : events) {
 		if (p_options.max_seconds > 0.0 && event.time_s - start_s > p_options.max_seconds) {
 			break;
+		}
+		if (p_options.cancel != nullptr && p_options.cancel->load()) {
+			failed.error = p_options.recording + ": cancelled";
+			return failed;
 		}
 		if (event.stream == RecordingStream::Fisheye) {
 			fisheye_indices.push_back(event.index);
@@ -170,7 +92,18 @@ RoomSweepResult sweep_room(const RoomSweepOptions &p_options) {
 			say(p_options, "skipping fisheye frame: " + frame.error);
 		}
 	}
-	RoomSweepResult result = estimate_room_in_engine(engine, rig, fisheye, p_options.estimation);
+	RoomSweepResult result;
+	result.ok = true;
+	const std::shared_ptr<const FoundRoom> found = engine.find_room_now(&fisheye);
+	result.estimate = found->result.estimate;
+	result.fisheye_ceiling = found->result.fisheye_ceiling;
+	result.fisheye_walls = found->result.fisheye_walls;
+	result.world_from_model = result.estimate.world_from_model;
+	result.samples = found->samples;
+	if (found->result.has_room) {
+		result.room.floorplan = result.estimate.floorplan;
+		result.room.initial_rgb_pose = found->result.initial_rgb_pose;
+	}
 	result.rgbd_frames = rgbd_frames;
 	if (reader.has_room()) {
 		result.has_truth = true;

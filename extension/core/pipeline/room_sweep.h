@@ -1,13 +1,14 @@
 #pragma once
-// The room found from a sweep (issue #18): a recording's RGB-D frames through LiveRoom, the one
-// live system (dense SLAM only: no room is known yet), then room/room_estimation.h on its dense
-// model, and the ceiling from the fisheye when the RGB-D camera never saw it. roomprobe_room
-// and the tests run this; a live session calls estimate_room_in_engine on its own engine.
+// The room found from a recorded sweep (issue #18): a recording's RGB-D frames through LiveRoom,
+// the one live system (dense SLAM only: no room is known yet), then its find_room_now (the
+// room/room_from_sweep.h steps) with fisheye frames spread over the sweep. roomprobe_room and
+// the tests run this; a live session's engine finds the room itself (LiveRoomConfig::find_room).
 
 #include <engine/live_room.h>
 #include <recording/recording_reader.h>
 #include <room/room_estimation.h>
 
+#include <atomic>
 #include <functional>
 #include <string>
 #include <vector>
@@ -22,11 +23,11 @@ struct RoomSweepOptions {
 	double max_seconds = 0.0; // only the sweep's first this many seconds (0: all of it)
 	size_t fisheye_views = 24; // fisheye frames, evenly spread, searched for the ceiling's edge
 	float voxel_size_m = 0.0f; // 0: DenseSlamOptions' default
-	// Depth is fused this far (metres): the far walls of a room matter here, while the maps'
-	// dense model keeps to nearby surfaces (TsdfOptions' default).
-	float max_depth_m = 6.0f;
+	float max_depth_m = FIND_ROOM_MAX_DEPTH_M; // depth fused this far, metres
 	RoomEstimationOptions estimation;
 	std::function<void(const std::string &)> progress; // a line per stage; null: quiet
+	// Set from another thread to stop early (the editor closing): the result then says "cancelled".
+	const std::atomic<bool> *cancel = nullptr;
 };
 
 struct RoomSweepResult {
@@ -45,11 +46,6 @@ struct RoomSweepResult {
 	std::vector<SurfaceSample> samples; // the dense surface, model frame
 	size_t rgbd_frames = 0;
 };
-
-// The estimate on an engine's current dense model, with the fisheye's ceiling edge searched in
-// p_fisheye (frames with their timestamps, as recorded) when the model holds no ceiling.
-RoomSweepResult estimate_room_in_engine(const LiveRoom &p_engine, const Rig &p_rig, const std::vector<FisheyeFrame> &p_fisheye,
-		const RoomEstimationOptions &p_options);
 
 RoomSweepResult sweep_room(const RoomSweepOptions &p_options);
 

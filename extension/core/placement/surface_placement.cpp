@@ -21,13 +21,12 @@ std::string build_scene(const std::vector<float> &p_xyz, const std::vector<uint3
 
 } // namespace
 
-std::string SurfacePlacer::set_coarse(const RoomMesh &p_room, const glm::dvec3 &p_offset) {
+std::string SurfacePlacer::set_coarse(const RoomMesh &p_room, const Pose &p_world_from_room) {
 	std::vector<float> xyz;
 	xyz.reserve(p_room.positions.size() * 3);
 	for (const Vec3f &v : p_room.positions) {
-		xyz.push_back(float(v.x + p_offset.x));
-		xyz.push_back(float(v.y + p_offset.y));
-		xyz.push_back(float(v.z + p_offset.z));
+		const glm::dvec3 world = transform_point(p_world_from_room, glm::dvec3(v.x, v.y, v.z));
+		xyz.insert(xyz.end(), { float(world.x), float(world.y), float(world.z) });
 	}
 	return build_scene(xyz, p_room.indices, &coarse);
 }

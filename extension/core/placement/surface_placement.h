@@ -5,6 +5,7 @@
 // virtual object on the real table. The nearer of the two models wins.
 
 #include <io/embree_scene.h>
+#include <math/pose.h>
 #include <room/room_mesh.h>
 #include <slam/marching_cubes.h>
 
@@ -31,11 +32,12 @@ struct PlacementHit {
 class SurfacePlacer {
 public:
 	// Each scene is rebuilt only when given a mesh (the dense one as it grows). The coarse room
-	// mesh is in the room's frame; p_offset (metres) moves it into the world (its node's position).
-	// Return "" or what Embree reported.
-	std::string set_coarse(const RoomMesh &p_room, const glm::dvec3 &p_offset = glm::dvec3(0.0));
+	// mesh is in the room's frame; p_world_from_room places it in the world (its node's transform,
+	// or the room found from the sweep). Return "" or what Embree reported.
+	std::string set_coarse(const RoomMesh &p_room, const Pose &p_world_from_room = Pose());
 	std::string set_dense(const TriangleMesh &p_mesh);
 	void clear_dense() { dense.reset(); }
+	void clear_coarse() { coarse.reset(); }
 
 	// The nearest surface along p_origin + t * p_direction, 0 < t <= p_max_distance_m (the
 	// direction need not be unit length; distances are in metres all the same).

@@ -3,6 +3,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
+#include <glm/matrix.hpp>
 
 #include <cmath>
 
@@ -52,6 +53,27 @@ Pose pose_from_camera_transform(const Transform3D &p_transform) {
 	pose.rotation = glm::normalize(glm::quat_cast(r));
 	pose.translation = to_glm(p_transform.origin);
 	return pose;
+}
+
+Transform3D transform_from_pose(const Pose &p_a_from_b) {
+	const glm::dmat3 r = glm::mat3_cast(p_a_from_b.rotation); // glm: r[column][row]
+	Transform3D t;
+	for (int row = 0; row < 3; row++) {
+		t.basis.rows[row] = Vector3(real_t(r[0][row]), real_t(r[1][row]), real_t(r[2][row]));
+	}
+	t.origin = to_godot(p_a_from_b.translation);
+	return t;
+}
+
+bool pose_from_transform(const Transform3D &p_transform, Pose *r_pose) {
+	glm::dmat3 r;
+	if (!rotation_from_basis(p_transform.basis, &r) || glm::determinant(r) < 0.0 || !std::isfinite(p_transform.origin.x) || !std::isfinite(p_transform.origin.y) ||
+			!std::isfinite(p_transform.origin.z)) {
+		return false;
+	}
+	r_pose->rotation = glm::normalize(glm::quat_cast(r));
+	r_pose->translation = to_glm(p_transform.origin);
+	return true;
 }
 
 bool rotation_from_basis(const godot::Basis &p_basis, glm::dmat3 *r_rotation) {

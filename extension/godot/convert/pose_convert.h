@@ -15,6 +15,11 @@ godot::Transform3D camera_transform_from_pose(const Pose &p_world_from_camera);
 // The inverse.
 Pose pose_from_camera_transform(const godot::Transform3D &p_transform);
 
+// A rigid frame (a node's transform: no camera axes flipped) and back. pose_from_transform drops
+// scale and shear (rotation_from_basis); false for a degenerate or non-finite transform.
+godot::Transform3D transform_from_pose(const Pose &p_a_from_b);
+bool pose_from_transform(const godot::Transform3D &p_transform, Pose *r_pose);
+
 godot::Vector3 to_godot(const glm::dvec3 &p_v);
 glm::dvec3 to_glm(const godot::Vector3 &p_v);
 // The basis as a matrix whose columns are its axes (glm's m[column][row]).

@@ -5,12 +5,29 @@
 #include "../convert/image_convert.h"
 #include "../convert/mesh_convert.h"
 #include "../convert/pose_convert.h"
+#include "../convert/project_paths.h"
 
+#include <pipeline/room_sweep.h>
+#include <recording/room_file.h>
+
+#include <atomic>
+#include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <thread>
 
 using namespace godot;
 
 namespace roomprobe {
+
+// A room search on a recording (find_room_in_recording): the worker writes result, then done.
+struct CoarseRoomModel::RoomSearch {
+	std::thread thread;
+	std::atomic<bool> cancel{ false };
+	std::atomic<bool> done{ false };
+	std::string recording;
+	RoomSweepResult result;
+};
 
 namespace {
 
@@ -44,6 +61,7 @@ CoarseRoomModel::CoarseRoomModel() {
 }
 
 CoarseRoomModel::~CoarseRoomModel() {
+	stop_room_search();
 	if (engine && !own_engine) {
 		engine->edit_config([](LiveRoomConfig &p_config) { p_config.has_room = false; });
 	}
@@ -63,7 +81,10 @@ void CoarseRoomModel::_notification(int p_what) {
 	}
 	if (p_what == NOTIFICATION_READY) {
 		connect_engine();
-	} else if (p_what == NOTIFICATION_EXIT_TREE && engine && !own_engine) {
+	} else if (p_what == NOTIFICATION_EXIT_TREE) {
+		stop_room_search();
+	}
+	if (p_what == NOTIFICATION_EXIT_TREE && engine && !own_engine) {
 		engine->edit_config([](LiveRoomConfig &p_config) { p_config.has_room = false; });
 		engine.reset();
 		pushed.clear();
@@ -73,7 +94,10 @@ void CoarseRoomModel::_notification(int p_what) {
 void CoarseRoomModel::_process(double p_delta) {
 	(void)p_delta;
 	MainThreadTimer timer;
-	integrate_rig_frame();
+	take_room_search();
+	if (!Engine::get_singleton()->is_editor_hint()) {
+		integrate_rig_frame();
+	}
 }
 
 void CoarseRoomModel::set_floorplan(const PackedVector2Array &p_points) {
@@ -91,11 +115,16 @@ void CoarseRoomModel::set_ceiling_height(double p_metres) {
 double CoarseRoomModel::get_ceiling_height() const { return ceiling_height; }
 
 void CoarseRoomModel::set_floorplan_source(FloorplanSource p_source) {
-	if (!property_checks::enum_in_range("CoarseRoomModel.floorplan_source", p_source, 2)) {
+	if (!property_checks::enum_in_range("CoarseRoomModel.floorplan_source", p_source, 3)) {
 		return;
 	}
 	floorplan_source = p_source;
+	if (floorplan_source != FLOORPLAN_AUTOMATIC) {
+		found.reset();
+		wall_confidence.clear();
+	}
 	take_recording_room();
+	push_room(); // the engine finds the room only for Automatic
 	update_configuration_warnings();
 }
 
@@ -283,13 +312,23 @@ void CoarseRoomModel::connect_engine() {
 	push_room();
 }
 
+Pose CoarseRoomModel::world_from_room() const {
+	Pose pose;
+	if (is_inside_tree() && !pose_from_transform(get_global_transform(), &pose)) {
+		return Pose(); // get_warnings() names the degenerate transform
+	}
+	return pose;
+}
+
 // The room and the texturing options into the engine (applied by RigCapture before the next
-// frame; at once for a room-only engine).
+// frame; at once for a room-only engine). A new floorplan or pose alone, on an engine already
+// running its configuration, replaces only the room (LiveRoom::set_room): the dense model and the
+// tracking go on, and the texture carries over where the walls stayed.
 void CoarseRoomModel::push_room() {
 	if (!engine) {
 		return;
 	}
-	const glm::dvec3 origin = is_inside_tree() ? to_glm(get_global_position()) : glm::dvec3(0.0);
+	const Pose placed = world_from_room();
 	char key[512];
 	// The atlas layout: what set_atlas_image's texture belongs to.
 	std::snprintf(key, sizeof(key), "%d %.9g %.9g|", int(result.ok), ceiling_height, texel_size);
@@ -298,9 +337,12 @@ void CoarseRoomModel::push_room() {
 		std::snprintf(key, sizeof(key), "%.9g,%.9g;", double(floorplan[i].x), double(floorplan[i].y));
 		layout += key;
 	}
-	std::snprintf(key, sizeof(key), "%d %d %d %.9g %.9g %.9g|", int(inpainting), int(lighting_compensation), int(pose_source), origin.x, origin.y,
-			origin.z);
-	const std::string state = layout + key;
+	const bool find_room = floorplan_source == FLOORPLAN_AUTOMATIC;
+	std::snprintf(key, sizeof(key), "%d %d %d %d|", int(inpainting), int(lighting_compensation), int(pose_source), int(find_room));
+	const std::string options = key;
+	std::snprintf(key, sizeof(key), "%.9g %.9g %.9g %.9g %.9g %.9g %.9g|", placed.translation.x, placed.translation.y, placed.translation.z, placed.rotation.w,
+			placed.rotation.x, placed.rotation.y, placed.rotation.z);
+	const std::string state = layout + options + key;
 	pushed_layout = layout;
 	if (state == pushed) {
 		return; // the same room again (entering the tree, a value set twice): keep the texture
@@ -308,12 +350,25 @@ void CoarseRoomModel::push_room() {
 	if (layout != hook_layout) {
 		hook_atlas.release(); // a new layout: the texture put in no longer fits
 	}
+	const bool room_only = !pushed.empty() && options == pushed_options && !own_engine && engine->is_configured() && !engine->config_pending();
 	pushed = state;
+	pushed_options = options;
 	const Floorplan plan = core_floorplan();
+	if (room_only) {
+		const std::string error = engine->set_room(result.ok, plan, placed);
+		if (!error.empty()) {
+			ERR_PRINT(String(("CoarseRoomModel: the engine kept its old room: " + error).c_str()));
+		}
+		shown.reset();
+		take_snapshot(); // the texture carried over, if any
+		apply_material();
+		return;
+	}
 	engine->edit_config([&](LiveRoomConfig &p_config) {
 		p_config.has_room = result.ok;
 		p_config.floorplan = plan;
-		p_config.room_origin_m = origin;
+		p_config.world_from_room = placed;
+		p_config.find_room = find_room;
 		p_config.coarse.texel_size_m = texel_size;
 		p_config.coarse.inpaint = inpainting;
 		p_config.coarse.inpaint_async = true; // off the frame's critical path
@@ -349,6 +404,8 @@ bool CoarseRoomModel::integrate_rig_frame() {
 		connect_engine(); // the RigCapture may have come later
 	}
 	take_recording_room();
+	take_found_room();
+	push_room(); // the node moved or turned: the room follows (nothing to do otherwise)
 	const uint64_t before = shown ? shown->frames : 0;
 	if (!take_snapshot() || shown->frames == before || shown->frames == 0) {
 		return false;
@@ -397,6 +454,222 @@ void CoarseRoomModel::finish_inpainting() {
 	}
 }
 
+// ---------------------------------------------------------------- the room from the sweep (issue #18)
+
+void CoarseRoomModel::take_found_room() {
+	if (floorplan_source != FLOORPLAN_AUTOMATIC || !engine || own_engine) {
+		return;
+	}
+	const std::shared_ptr<const FoundRoom> newest = engine->found_room();
+	if (!newest || newest->version == found_version) {
+		return;
+	}
+	found_version = newest->version;
+	const RoomEstimate &estimate = newest->result.estimate;
+	emit_signal("room_estimated", String(room_estimate_state_name(estimate.state)), String(estimate.message.c_str()));
+	if (newest->result.has_room && !worse_than_shown(*newest)) {
+		apply_found_room(*newest);
+		found = newest;
+	}
+	update_configuration_warnings();
+}
+
+// Whether p_candidate would replace the room shown with a lesser one: a partial room after a
+// complete one, or less wall seen (the walls' length times their seen share) by a tenth. A
+// sweep's later estimate can lose a wall (blocks evicted, a view that confused the fisheye).
+bool CoarseRoomModel::worse_than_shown(const FoundRoom &p_candidate) const {
+	if (!found) {
+		return false;
+	}
+	const auto seen_m = [](const RoomEstimate &p_estimate) {
+		const std::vector<Vec2> &points = p_estimate.floorplan.points;
+		double sum = 0.0;
+		for (size_t i = 0; i < points.size() && i < p_estimate.edge_confidence.size(); i++) {
+			const Vec2 &a = points[i], &b = points[(i + 1) % points.size()];
+			sum += std::hypot(b.x - a.x, b.y - a.y) * p_estimate.edge_confidence[i];
+		}
+		return sum;
+	};
+	const RoomEstimate &now = found->result.estimate, &next = p_candidate.result.estimate;
+	if (now.state == RoomEstimateState::Complete && next.state != RoomEstimateState::Complete) {
+		return true;
+	}
+	return seen_m(next) < 0.9 * seen_m(now);
+}
+
+// Shows the room found (and gives it to the engine) when it differs from the one shown by more
+// than the estimate's own noise: a corner 2 cm, the ceiling 1 cm, or another corner count.
+void CoarseRoomModel::apply_found_room(const FoundRoom &p_found, const Pose &p_world_from_model) {
+	const RoomEstimate &estimate = p_found.result.estimate;
+	const Pose placed = compose(p_world_from_model, inverse(estimate.world_from_model)); // the world from the room found
+	const std::vector<Vec2> &points = estimate.floorplan.points;
+	bool changed = !found || int64_t(points.size()) != floorplan.size() || std::abs(estimate.floorplan.ceiling_height_m - ceiling_height) > 0.01;
+	const Pose shown_pose = world_from_room();
+	for (size_t i = 0; !changed && i < points.size(); i++) {
+		const glm::dvec3 now = transform_point(placed, glm::dvec3(points[i].x, 0.0, points[i].y));
+		const glm::dvec3 before = transform_point(shown_pose, glm::dvec3(floorplan[int64_t(i)].x, 0.0, floorplan[int64_t(i)].y));
+		changed = glm::length(now - before) > 0.02;
+	}
+	wall_confidence.resize(int64_t(estimate.edge_confidence.size()));
+	for (size_t i = 0; i < estimate.edge_confidence.size(); i++) {
+		wall_confidence[int64_t(i)] = float(estimate.edge_confidence[i]);
+	}
+	if (!changed) {
+		return;
+	}
+	PackedVector2Array plan;
+	for (const Vec2 &p : points) {
+		plan.push_back(Vector2(real_t(p.x), real_t(p.y)));
+	}
+	floorplan = plan;
+	ceiling_height = estimate.floorplan.ceiling_height_m;
+	if (is_inside_tree()) {
+		set_global_transform(transform_from_pose(placed));
+	}
+	rebuild();
+	notify_property_list_changed();
+}
+
+PackedFloat32Array CoarseRoomModel::get_wall_confidence() const { return wall_confidence; }
+
+bool CoarseRoomModel::find_room_in_recording(const String &p_path) {
+	ERR_FAIL_COND_V_MSG(search != nullptr, false, "find_room_in_recording: a search is already running.");
+	String path = p_path;
+	if (path.is_empty()) {
+		std::string unused;
+		Node *capture = is_inside_tree() ? find_collaborator(*this, rig_capture_path, "RigCapture", "rig_capture", &unused) : nullptr;
+		ERR_FAIL_COND_V_MSG(capture == nullptr, false, "find_room_in_recording: no path given and no RigCapture to take its recording_path from.");
+		path = capture->get("recording_path");
+	}
+	std::string error;
+	const std::string folder = disk_path_for(path, &error);
+	ERR_FAIL_COND_V_MSG(!error.empty() || folder.empty(), false, String(("find_room_in_recording: " + (error.empty() ? std::string("the recording path is empty") : error)).c_str()));
+	search = std::make_unique<RoomSearch>();
+	search->recording = folder;
+	RoomSearch *job = search.get();
+	job->thread = std::thread([job] {
+		RoomSweepOptions options;
+		options.recording = job->recording;
+		options.cancel = &job->cancel;
+		try {
+			job->result = sweep_room(options);
+		} catch (const std::exception &e) {
+			job->result = RoomSweepResult();
+			job->result.error = job->recording + ": " + e.what();
+		}
+		job->done = true;
+	});
+	set_process(true); // in the editor too, until the room is taken
+	return true;
+}
+
+bool CoarseRoomModel::is_finding_room() const { return search != nullptr; }
+
+void CoarseRoomModel::stop_room_search() {
+	if (search) {
+		search->cancel = true;
+		if (search->thread.joinable()) {
+			search->thread.join();
+		}
+		search.reset();
+	}
+}
+
+bool CoarseRoomModel::finish_room_search() {
+	if (search && search->thread.joinable()) {
+		search->thread.join();
+	}
+	take_room_search();
+	return searched && searched->result.has_room;
+}
+
+void CoarseRoomModel::take_room_search() {
+	if (!search || !search->done) {
+		return;
+	}
+	if (search->thread.joinable()) {
+		search->thread.join();
+	}
+	const RoomSweepResult result = std::move(search->result);
+	search.reset();
+	if (Engine::get_singleton()->is_editor_hint()) {
+		set_process(false);
+	}
+	auto taken = std::make_shared<FoundRoom>();
+	taken->version = searched ? searched->version + 1 : 1;
+	taken->result.estimate = result.estimate;
+	taken->result.fisheye_ceiling = result.fisheye_ceiling;
+	taken->result.fisheye_walls = result.fisheye_walls;
+	taken->result.has_room = !result.room.floorplan.points.empty();
+	taken->result.initial_rgb_pose = result.room.initial_rgb_pose;
+	if (!result.ok) {
+		taken->result.estimate.message = result.error;
+	}
+	searched = taken;
+	const RoomEstimate &estimate = taken->result.estimate;
+	emit_signal("room_estimated", String(result.ok ? room_estimate_state_name(estimate.state) : "failed"), String(estimate.message.c_str()));
+	if (taken->result.has_room) {
+		// The scene's world is the recording's: its first camera at room.yaml's initial_rgb_pose.
+		apply_found_room(*taken, result.has_truth ? result.true_world_from_model : Pose());
+		found = taken;
+	}
+	update_configuration_warnings();
+}
+
+Dictionary CoarseRoomModel::get_room_estimate() const {
+	Dictionary d;
+	std::shared_ptr<const FoundRoom> newest = engine && !own_engine ? engine->found_room() : nullptr;
+	if (!newest) {
+		newest = searched;
+	}
+	if (!newest) {
+		return d;
+	}
+	const RoomEstimate &estimate = newest->result.estimate;
+	d.set("state", String(room_estimate_state_name(estimate.state)));
+	d.set("message", String(estimate.message.c_str()));
+	d.set("version", int64_t(newest->version));
+	d.set("has_room", newest->result.has_room);
+	d.set("ceiling_source", String(estimate.ceiling_source.c_str()));
+	d.set("fused_frames", int64_t(newest->fused_frames));
+	d.set("fisheye_views", int64_t(newest->fisheye_views));
+	d.set("seconds", newest->seconds);
+	return d;
+}
+
+bool CoarseRoomModel::estimate_room_now() {
+	ERR_FAIL_COND_V_MSG(floorplan_source != FLOORPLAN_AUTOMATIC, false, "estimate_room_now() needs floorplan_source Automatic.");
+	ERR_FAIL_COND_V_MSG(!engine || own_engine, false, "estimate_room_now() needs a RigCapture with DenseSLAM (the room is found in the dense model).");
+	engine->apply_config(); // find_room on before the estimate
+	engine->find_room_now();
+	take_found_room();
+	return found != nullptr;
+}
+
+Error CoarseRoomModel::save_room(const String &p_path, bool p_overwrite) {
+	ERR_FAIL_COND_V_MSG(!result.ok, ERR_UNCONFIGURED, String(("save_room: the room is not valid, so not saved: " + result.error).c_str()));
+	std::string error;
+	const std::string path = disk_path_for(p_path, &error);
+	ERR_FAIL_COND_V_MSG(!error.empty(), ERR_FILE_BAD_PATH, String(("save_room: " + error).c_str()));
+	std::error_code ec;
+	ERR_FAIL_COND_V_MSG(!p_overwrite && std::filesystem::exists(path, ec), ERR_ALREADY_EXISTS,
+			String(("save_room: " + path + " exists and is kept; pass overwrite = true to replace it").c_str()));
+	RoomInfo room;
+	room.floorplan = core_floorplan();
+	const Pose room_from_world = inverse(world_from_room());
+	if (engine && !own_engine) {
+		const Trajectory path_taken = engine->trajectory();
+		room.initial_rgb_pose = compose(room_from_world, path_taken.get_samples().empty() ? engine->config().initial_rgb_pose
+																						  : path_taken.get_samples().front().world_from_camera);
+		for (const glm::dvec3 &probe : engine->probe_positions()) {
+			room.probes.push_back(transform_point(room_from_world, probe));
+		}
+	}
+	error = save_room_file(path, room);
+	ERR_FAIL_COND_V_MSG(!error.empty(), ERR_FILE_CANT_WRITE, String(("save_room: " + error).c_str()));
+	return OK;
+}
+
 Array CoarseRoomModel::get_charts() const {
 	Array charts;
 	if (!result.ok) {
@@ -438,6 +711,30 @@ PackedStringArray CoarseRoomModel::get_warnings() const {
 		// A valid floorplan can still fail to build (e.g. an atlas beyond the size limit).
 		const char *phrase = check.ok ? "The room cannot be built" : floorplan_problem_summary(check.problem);
 		warnings.push_back(String((std::string(phrase) + ": " + result.error).c_str()));
+	}
+	if (is_inside_tree()) {
+		Pose unused_pose;
+		const glm::dmat3 axes = to_glm(get_global_transform().basis); // columns: the axes, their lengths the scale
+		const auto unscaled = [](const glm::dvec3 &p_axis) { return std::abs(glm::length(p_axis) - 1.0) <= 1e-3; };
+		if (!pose_from_transform(get_global_transform(), &unused_pose)) {
+			warnings.push_back("The node's transform is degenerate or mirrored: the room is placed at the world's origin instead.");
+		} else if (!unscaled(axes[0]) || !unscaled(axes[1]) || !unscaled(axes[2])) {
+			warnings.push_back("The node is scaled: the room is in metres, so the maps and placement ignore the scale while the mesh shows it.");
+		}
+	}
+	if (floorplan_source == FLOORPLAN_AUTOMATIC && engine && !own_engine) {
+		const std::shared_ptr<const FoundRoom> newest = engine->found_room();
+		if (newest && !newest->result.has_room) {
+			warnings.push_back(String(("No room found yet (" + std::string(room_estimate_state_name(newest->result.estimate.state)) + "): " +
+					newest->result.estimate.message).c_str()));
+		}
+		for (int64_t i = 0; i < wall_confidence.size(); i++) {
+			if (wall_confidence[i] < 0.3f) {
+				warnings.push_back(String(("Edge " + std::to_string(i) + " of the room found was never seen as a wall: the room ends there where the sweep's view did.").c_str()));
+			}
+		}
+	} else if (floorplan_source == FLOORPLAN_AUTOMATIC && is_inside_tree()) {
+		warnings.push_back("floorplan_source is Automatic, but there is no RigCapture: the room is found from a sweep's dense model (RigCapture and DenseSLAM).");
 	}
 	std::string warning;
 	const Node *capture = is_inside_tree() ? find_collaborator(*this, rig_capture_path, "RigCapture", "rig_capture", &warning) : nullptr;
@@ -497,9 +794,16 @@ void CoarseRoomModel::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_last_frame_stats"), &CoarseRoomModel::get_last_frame_stats);
 	ClassDB::bind_method(D_METHOD("reset_texture"), &CoarseRoomModel::reset_texture);
 	ClassDB::bind_method(D_METHOD("finish_inpainting"), &CoarseRoomModel::finish_inpainting);
+	ClassDB::bind_method(D_METHOD("get_wall_confidence"), &CoarseRoomModel::get_wall_confidence);
+	ClassDB::bind_method(D_METHOD("get_room_estimate"), &CoarseRoomModel::get_room_estimate);
+	ClassDB::bind_method(D_METHOD("estimate_room_now"), &CoarseRoomModel::estimate_room_now);
+	ClassDB::bind_method(D_METHOD("save_room", "path", "overwrite"), &CoarseRoomModel::save_room, false);
+	ClassDB::bind_method(D_METHOD("find_room_in_recording", "path"), &CoarseRoomModel::find_room_in_recording, String());
+	ClassDB::bind_method(D_METHOD("is_finding_room"), &CoarseRoomModel::is_finding_room);
+	ClassDB::bind_method(D_METHOD("finish_room_search"), &CoarseRoomModel::finish_room_search);
 
 	ADD_GROUP("Room", "");
-	ADD_PROPERTY(PropertyInfo(Variant::INT, "floorplan_source", PROPERTY_HINT_ENUM, "Manual,Recording"), "set_floorplan_source", "get_floorplan_source");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "floorplan_source", PROPERTY_HINT_ENUM, "Manual,Recording,Automatic"), "set_floorplan_source", "get_floorplan_source");
 	ADD_PROPERTY(PropertyInfo(Variant::PACKED_VECTOR2_ARRAY, "floorplan"), "set_floorplan", "get_floorplan");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "ceiling_height", PROPERTY_HINT_RANGE, "0.5,10,0.01,or_greater,suffix:m"), "set_ceiling_height", "get_ceiling_height");
 	ADD_GROUP("Sources", "");
@@ -520,9 +824,11 @@ void CoarseRoomModel::_bind_methods() {
 	BIND_ENUM_CONSTANT(LIGHTING_GAIN);
 	BIND_ENUM_CONSTANT(FLOORPLAN_MANUAL);
 	BIND_ENUM_CONSTANT(FLOORPLAN_RECORDING);
+	BIND_ENUM_CONSTANT(FLOORPLAN_AUTOMATIC);
 
 	ADD_SIGNAL(MethodInfo("mesh_changed"));
 	ADD_SIGNAL(MethodInfo("texture_updated", PropertyInfo(Variant::INT, "fisheye_frame")));
+	ADD_SIGNAL(MethodInfo("room_estimated", PropertyInfo(Variant::STRING, "state"), PropertyInfo(Variant::STRING, "message")));
 }
 
 } // namespace roomprobe

@@ -7,6 +7,7 @@
 
 #include "live_room_link.h"
 
+#include <engine/live_room.h>
 #include <room/floorplan.h>
 #include <room/room_mesh.h>
 
@@ -29,6 +30,7 @@ public:
 	enum FloorplanSource {
 		FLOORPLAN_MANUAL, // floorplan and ceiling_height as set
 		FLOORPLAN_RECORDING, // the recording's room.yaml, through the RigCapture (when it has one)
+		FLOORPLAN_AUTOMATIC, // found from the sweep by the live engine (issue #18), refined as it goes on
 	};
 	enum LightingCompensation {
 		LIGHTING_OFF,
@@ -66,6 +68,27 @@ public:
 	bool integrate_rig_frame();
 	int64_t get_integrated_frame_count() const;
 	godot::Dictionary get_last_frame_stats() const;
+	// The room found from the sweep (Automatic): per floorplan edge, the share seen as a wall (0: the
+	// room ends there only because the view did); empty in the other sources.
+	godot::PackedFloat32Array get_wall_confidence() const;
+	// The newest estimate: state, message, version, ceiling_source, fused_frames, fisheye_views, seconds.
+	godot::Dictionary get_room_estimate() const;
+	// Estimates the room now on the calling thread (seconds; tests, headless tools, a Step-paced
+	// RigCapture whose engine has no worker) and applies it as Automatic does. False: no room yet.
+	bool estimate_room_now();
+	// The editor's way to the room of a recording: finds the room of p_path (empty: the
+	// RigCapture's recording_path) on a worker thread (about a minute for a 10-s sweep; the
+	// pipeline/room_sweep.h of ./roomprobe room), then applies it as Automatic does, placed in the
+	// recording's world. False, with an error, when one is running or the path is unusable.
+	bool find_room_in_recording(const godot::String &p_path);
+	bool is_finding_room() const;
+	// Waits for the search and applies its room (tests, headless tools). False: no room found.
+	bool finish_room_search();
+
+	// Writes the room shown (floorplan, ceiling, the first camera's pose and the probes, in the
+	// room's frame) as a room.yaml. An existing file is kept unless p_overwrite.
+	godot::Error save_room(const godot::String &p_path, bool p_overwrite = false);
+
 	// Forgets every observation (the atlas starts empty again).
 	void reset_texture();
 	// Waits for the inpainting worker's newest result and shows it (end of a recording, tests).
@@ -132,6 +155,22 @@ private:
 	FloorplanSource floorplan_source = FLOORPLAN_MANUAL;
 	// FLOORPLAN_RECORDING: takes the rig's room when it differs from the one shown.
 	void take_recording_room();
+	// FLOORPLAN_AUTOMATIC: takes the engine's newest room estimate when it differs enough.
+	void take_found_room();
+	// p_world_from_model: the world's pose of the frame the room was found in (the engine's world:
+	// identity; a recording's first camera: its initial_rgb_pose).
+	void apply_found_room(const FoundRoom &p_found, const Pose &p_world_from_model = Pose());
+	void take_room_search(); // a finished search's room, applied (main thread)
+	bool worse_than_shown(const FoundRoom &p_candidate) const;
+	struct RoomSearch;
+	std::unique_ptr<RoomSearch> search;
+	void stop_room_search(); // cancels and joins
+	uint64_t found_version = 0; // the estimate last looked at
+	std::shared_ptr<const FoundRoom> found; // and last applied (its room shown)
+	std::shared_ptr<const FoundRoom> searched; // the last recording search's result
+	godot::PackedFloat32Array wall_confidence;
+	// The room's frame in the world: the node's global transform (rigid part).
+	Pose world_from_room() const;
 	uint32_t room_layers = 1u << 19; // layer 20: probes see it, the AR camera (DenseSLAM) not
 
 	std::shared_ptr<LiveRoom> engine;
@@ -141,6 +180,7 @@ private:
 	cv::Mat hook_atlas; // the last set_atlas_image texture (a room-only engine puts it back after a reconfigure)
 	std::string hook_layout; // the atlas layout it belongs to
 	std::string pushed_layout; // the atlas layout push_room last gave the engine
+	std::string pushed_options; // the options push_room last gave the engine
 };
 
 } // namespace roomprobe

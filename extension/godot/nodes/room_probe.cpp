@@ -350,24 +350,36 @@ void RoomProbe::drive_reflection_probe() {
 	ReflectionProbe *probe = cast_to<ReflectionProbe>(get_node_or_null(reflection_probe_path));
 	ERR_FAIL_NULL_MSG(probe, "reflection_probe does not lead to a ReflectionProbe.");
 	const RoomMesh *mesh = engine->room_mesh();
-	ERR_FAIL_NULL(mesh);
+	if (mesh == nullptr) {
+		return; // no room yet (an Automatic one not found so far): the ReflectionProbe stays as set
+	}
 	std::string warning;
 	const Node3D *room = cast_to<Node3D>(find_collaborator(*this, coarse_model_path, "CoarseRoomModel", "coarse_model", &warning));
 	ERR_FAIL_NULL(room);
 	// The room's box, for box projection: reflections of the walls then move with the viewer
-	// (parallax) instead of sitting at infinity.
+	// (parallax) instead of sitting at infinity. The box is the room's, turned as the room is (a
+	// room found from the sweep is turned in the world).
 	Vector3 lo(std::numeric_limits<real_t>::max(), std::numeric_limits<real_t>::max(), std::numeric_limits<real_t>::max());
 	Vector3 hi = -lo;
 	for (const Vec3f &v : mesh->positions) {
 		lo = Vector3(std::min(lo.x, real_t(v.x)), std::min(lo.y, real_t(v.y)), std::min(lo.z, real_t(v.z)));
 		hi = Vector3(std::max(hi.x, real_t(v.x)), std::max(hi.y, real_t(v.y)), std::max(hi.z, real_t(v.z)));
 	}
-	const Vector3 centre = room->get_global_position() + (lo + hi) * 0.5;
-	// Its local position (a global one cannot be put back once the probe has left the tree).
+	Pose world_from_room;
+	if (!pose_from_transform(room->get_global_transform(), &world_from_room)) {
+		world_from_room = Pose();
+	}
+	Pose world_from_box = world_from_room;
+	world_from_box.translation = transform_point(world_from_room, to_glm((lo + hi) * 0.5));
+	// Its local transform (a global one cannot be put back once the probe has left the tree).
 	const Node3D *parent = cast_to<Node3D>(probe->get_parent());
-	drive(probe, "position", parent != nullptr ? parent->to_local(centre) : centre);
+	Pose world_from_parent;
+	if (parent == nullptr || !pose_from_transform(parent->get_global_transform(), &world_from_parent)) {
+		world_from_parent = Pose();
+	}
+	drive(probe, "transform", transform_from_pose(compose(inverse(world_from_parent), world_from_box)));
 	drive(probe, "size", hi - lo);
-	drive(probe, "origin_offset", get_global_position() - centre);
+	drive(probe, "origin_offset", to_godot(transform_point(inverse(world_from_box), to_glm(get_global_position()))));
 	drive(probe, "box_projection", true);
 	drive(probe, "interior", true);
 	// Only the textured room: not the virtual objects, nor the rest of the scene.
