@@ -163,9 +163,21 @@ func test_turning_the_room_node_keeps_the_dense_model_and_the_texture() -> void:
 	var fused: int = s.slam.get_stats().integrated_frames
 	var frames: int = s.room.get_integrated_frame_count()
 	assert_true(fused > 0 and frames > 0, "fused %d, fisheye %d" % [fused, frames])
-	# The room turned about its own corner and put back: the same room in the world, so every
-	# observation carries over, and SLAM never starts again.
-	s.room.rotate_y(0.0001)
+	# The node turned 90 degrees about Y and its floorplan turned back: the same room in the world,
+	# so every observation carries over, and SLAM never starts again. (Local (x, z) shows at
+	# (z, -x) after the turn: the corner that was at (x, z) is now given as (-z, x).)
+	var before_world := []
+	for p in s.room.floorplan:
+		before_world.append(s.room.global_transform * Vector3(p.x, 0.0, p.y))
+	s.room.floorplan_source = 0  # FLOORPLAN_MANUAL: the floorplan as set from here on
+	var turned := PackedVector2Array()
+	for p in s.room.floorplan:
+		turned.append(Vector2(-p.y, p.x))
+	s.room.rotate_y(PI / 2.0)  # the room follows at the next push: the floorplan's, just below
+	s.room.floorplan = turned
+	for i in turned.size():
+		var now: Vector3 = s.room.global_transform * Vector3(turned[i].x, 0.0, turned[i].y)
+		assert_true(now.distance_to(before_world[i]) < 1e-4, "corner %d stays in the world" % i)
 	s.room.integrate_rig_frame()
 	assert_eq(s.room.get_integrated_frame_count(), frames, "the texture carried over")
 	assert_true(s.room.has_texture_data())

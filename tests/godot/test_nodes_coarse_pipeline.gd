@@ -219,6 +219,7 @@ func test_a_new_floorplan_carries_the_texture_where_the_walls_stayed() -> void:
 	assert_true(room.get_atlas_size() != old_size, "a new atlas layout")
 	assert_eq(room.get_integrated_frame_count(), 2, "the same surfaces in the new atlas: the observations carried over")
 	assert_true(room.has_texture_data())
+	assert_eq(room.get_atlas_image().get_size(), room.get_atlas_size(), "the engine's atlas is the node's new layout")
 	# A room 20 m away shares no surface with this one: its texture starts again.
 	var far := PackedVector2Array()
 	for p in room.floorplan:

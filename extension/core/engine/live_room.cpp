@@ -721,7 +721,8 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 
 // ---------------------------------------------------------------- the room: replaced, and found from the sweep
 
-std::string LiveRoom::set_room(bool p_has_room, const Floorplan &p_floorplan, const Pose &p_world_from_room, double p_carry_m, double *r_carried) {
+std::string LiveRoom::set_room(bool p_has_room, const Floorplan &p_floorplan, const Pose &p_world_from_room, double p_texel_size_m, double p_carry_m,
+		double *r_carried) {
 	if (r_carried != nullptr) {
 		*r_carried = 0.0;
 	}
@@ -732,32 +733,24 @@ std::string LiveRoom::set_room(bool p_has_room, const Floorplan &p_floorplan, co
 	if (!configured) {
 		return "the engine is not configured: " + config_error;
 	}
-	// A pending configuration (a node's edit not applied yet) gets the same room.
-	{
-		const std::lock_guard<std::mutex> lock(pending_mutex);
-		if (has_pending) {
-			pending.has_room = p_has_room;
-			pending.floorplan = p_floorplan;
-			pending.world_from_room = p_world_from_room;
-		}
-	}
 	const bool was_running = running;
 	stop_locked();
+	// The workers run again whatever happens below (an exception included).
+	struct Restart {
+		LiveRoom *engine;
+		bool run;
+		~Restart() {
+			if (run) {
+				engine->start_locked();
+			}
+		}
+	} restart{ this, was_running };
 	// The old room, kept to carry its texture over (and to go back to on failure).
 	const LiveRoomConfig old_cfg = cfg;
 	std::unique_ptr<CoarsePipeline> old_coarse = std::move(coarse);
 	std::unique_ptr<RoomMesh> old_own = std::move(own_room);
 	std::unique_ptr<CoarseCubemapRenderer> old_renderer = std::move(renderer);
-	cfg.has_room = p_has_room;
-	cfg.floorplan = p_floorplan;
-	cfg.world_from_room = p_world_from_room;
-	std::string error;
-	try {
-		error = build_room_locked();
-	} catch (const std::exception &e) {
-		error = std::string("building the room failed: ") + e.what();
-	}
-	if (!error.empty()) {
+	auto put_back = [&] {
 		cfg = old_cfg;
 		coarse = std::move(old_coarse);
 		own_room = std::move(old_own);
@@ -767,7 +760,19 @@ std::string LiveRoom::set_room(bool p_has_room, const Floorplan &p_floorplan, co
 		if (room_mesh() != nullptr) {
 			placer.set_coarse(*room_mesh(), cfg.world_from_room);
 		}
-	} else {
+	};
+	cfg.has_room = p_has_room;
+	cfg.floorplan = p_floorplan;
+	cfg.world_from_room = p_world_from_room;
+	if (p_texel_size_m > 0.0) {
+		cfg.coarse.texel_size_m = p_texel_size_m;
+	}
+	try {
+		const std::string error = build_room_locked();
+		if (!error.empty()) {
+			put_back();
+			return error;
+		}
 		std::shared_ptr<CoarseSnapshot> snapshot;
 		if (coarse && old_coarse && old_coarse->frame_count() > 0) {
 			// The new room's frame from the old one's, through the world.
@@ -800,18 +805,28 @@ std::string LiveRoom::set_room(bool p_has_room, const Floorplan &p_floorplan, co
 			const std::lock_guard<std::mutex> lock(publish_mutex);
 			last_coarse = snapshot;
 		}
-		const std::lock_guard<std::mutex> lock(probe_mutex);
-		for (auto &[id, probe] : probes) {
-			probe->dirty = true;
+	} catch (const std::exception &e) {
+		put_back();
+		return std::string("replacing the room failed: ") + e.what();
+	}
+	// A pending configuration (a node's edit not applied yet) gets the same room.
+	{
+		const std::lock_guard<std::mutex> lock(pending_mutex);
+		if (has_pending) {
+			pending.has_room = cfg.has_room;
+			pending.floorplan = cfg.floorplan;
+			pending.world_from_room = cfg.world_from_room;
+			pending.coarse.texel_size_m = cfg.coarse.texel_size_m;
 		}
-		inputs_changed = true;
-		input_generation++;
-		probes_dirty.notify_all();
 	}
-	if (was_running) {
-		start_locked();
+	const std::lock_guard<std::mutex> lock(probe_mutex);
+	for (auto &[id, probe] : probes) {
+		probe->dirty = true;
 	}
-	return error;
+	inputs_changed = true;
+	input_generation++;
+	probes_dirty.notify_all();
+	return "";
 }
 
 void LiveRoom::keep_room_view(const FisheyeFrame &p_frame) {
@@ -844,7 +859,17 @@ std::shared_ptr<const FoundRoom> LiveRoom::found_room() const {
 
 std::shared_ptr<const FoundRoom> LiveRoom::find_room_now(const std::vector<FisheyeFrame> *p_views) {
 	const std::shared_lock<std::shared_mutex> shared(lifecycle); // no configure meanwhile
-	return find_room_locked(p_views);
+	try {
+		return find_room_locked(p_views);
+	} catch (const std::exception &e) {
+		record_error("room estimation", e.what());
+		auto failed = std::make_shared<FoundRoom>();
+		failed->result.estimate.message = std::string("the room's estimation failed: ") + e.what();
+		const std::lock_guard<std::mutex> lock(room_mutex);
+		failed->version = last_found ? last_found->version + 1 : 1;
+		last_found = failed;
+		return failed;
+	}
 }
 
 // The room worker calls this without the lifecycle lock: stop_locked joins it before the

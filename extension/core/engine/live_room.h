@@ -67,7 +67,8 @@ struct LiveRoomConfig {
 	Pose initial_rgb_pose; // world_from_rgb at the first RGB-D frame (room.yaml's)
 	std::vector<glm::dvec3> keep_points; // the TSDF evicts blocks far from these last (the probes)
 	// Find the room from the sweep (issue #18; CoarseRoomModel's Automatic source): the engine
-	// keeps up to find_room_views fisheye frames spread over the sweep, and its room worker
+	// keeps fisheye frames spread over the sweep (at most 2 find_room_views - 1; thinned to
+	// find_room_views when more would be kept), and its room worker
 	// estimates the room from the dense model every find_room_interval_s while it runs (or at
 	// find_room_now()). Needs dense SLAM.
 	bool find_room = false;
@@ -241,13 +242,15 @@ public:
 	bool config_pending() const;
 	std::string apply_config();
 
-	// Replaces the room (floorplan and pose) and keeps everything else: the dense model, the
-	// tracking, the probes. Only the coarse model is built again; its texture carries over where
-	// the new room's surface lies within p_carry_m of the old one's (the same kind of surface
-	// facing the same way), the rest is observed anew. The error (empty on success) names the
-	// problem; the old room stays then. r_carried: the share of the new surface carried over.
-	std::string set_room(bool p_has_room, const Floorplan &p_floorplan, const Pose &p_world_from_room, double p_carry_m = 0.05,
-			double *r_carried = nullptr);
+	// Replaces the room (floorplan, pose and texel size; p_texel_size_m 0: kept) and keeps
+	// everything else: the dense model, the tracking, the probes. Only the coarse model is built
+	// again; its texture carries over where the new room's surface lies within p_carry_m of the
+	// old one's (the same kind of surface facing the same way), the rest is observed anew. The
+	// error (empty on success) names the problem; the old room stays then. r_carried: the share
+	// of the new surface that takes an observation over. The workers stop for it (joining the
+	// room worker waits for an estimate under way).
+	std::string set_room(bool p_has_room, const Floorplan &p_floorplan, const Pose &p_world_from_room, double p_texel_size_m = 0.0,
+			double p_carry_m = 0.05, double *r_carried = nullptr);
 
 	// The room from the sweep (LiveRoomConfig::find_room). found_room(): the newest estimate (null
 	// before the first). find_room_now(): estimates now on the calling thread from the dense model

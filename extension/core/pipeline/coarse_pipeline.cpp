@@ -183,7 +183,7 @@ double CoarsePipeline::carry_texture(const CoarsePipeline &p_old, const Pose &p_
 	const double reach_m = 4.0 * std::max(p_tolerance_m, 0.01);
 	const double same_direction = std::cos(10.0 * M_PI / 180.0);
 	const CoarseTexture &from = p_old.coarse;
-	size_t carried = 0;
+	size_t carried = 0; // texels that took an observation (fisheye or RGB)
 	for (int y = 0; y < geometry.height; y++) {
 		for (int x = 0; x < geometry.width; x++) {
 			const size_t i = size_t(y) * size_t(geometry.width) + size_t(x);
@@ -212,7 +212,7 @@ double CoarsePipeline::carry_texture(const CoarsePipeline &p_old, const Pose &p_
 			coarse.quality.at<float>(y, x) = from.quality.at<float>(oy, ox);
 			coarse.saturated.at<uint8_t>(y, x) = from.saturated.at<uint8_t>(oy, ox);
 			coarse.rgb_quality.at<float>(y, x) = from.rgb_quality.at<float>(oy, ox);
-			carried++;
+			carried += from.observed.at<uint8_t>(oy, ox) != 0 || from.rgb_quality.at<float>(oy, ox) > 0.0f ? 1 : 0;
 		}
 	}
 	if (carried > 0) {

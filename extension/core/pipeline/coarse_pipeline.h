@@ -121,7 +121,8 @@ public:
 	// room (p_new_from_old maps p_old's room frame into this one's), lies within p_tolerance_m of
 	// p_old's surface of the same kind facing the same way takes that texel's observation, and
 	// the frame count and lighting changes carry over. Returns the share of this room's surface
-	// texels carried (0 to 1). The completed texture follows at the next fisheye frame.
+	// texels that took an observation (0 to 1; 0: nothing carried, the frame count stays 0).
+	// The completed texture follows at the next fisheye frame.
 	double carry_texture(const CoarsePipeline &p_old, const Pose &p_new_from_old, double p_tolerance_m);
 
 	// Only observations (CoarseTexture::color keeps no inpainted values).

@@ -30,6 +30,14 @@ glm::dmat3 to_glm(const Basis &p_basis) {
 	return m;
 }
 
+Basis to_godot(const glm::dmat3 &p_matrix) {
+	Basis b;
+	for (int row = 0; row < 3; row++) {
+		b.rows[row] = Vector3(real_t(p_matrix[0][row]), real_t(p_matrix[1][row]), real_t(p_matrix[2][row]));
+	}
+	return b;
+}
+
 Transform3D camera_transform_from_pose(const Pose &p_world_from_camera) {
 	// Godot's basis columns are the camera's axes in the world: x, -y, -z of OpenCV's.
 	const glm::dmat3 r = glm::mat3_cast(p_world_from_camera.rotation); // glm: r[column][row]

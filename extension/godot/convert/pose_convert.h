@@ -24,6 +24,7 @@ godot::Vector3 to_godot(const glm::dvec3 &p_v);
 glm::dvec3 to_glm(const godot::Vector3 &p_v);
 // The basis as a matrix whose columns are its axes (glm's m[column][row]).
 glm::dmat3 to_glm(const godot::Basis &p_basis);
+godot::Basis to_godot(const glm::dmat3 &p_matrix); // the inverse of to_glm
 // The rotation of p_basis: its columns (the frame's axes in world coordinates) orthonormalised
 // (Gram-Schmidt), so scale and shear drop out. False for a degenerate or non-finite basis.
 bool rotation_from_basis(const godot::Basis &p_basis, glm::dmat3 *r_rotation);

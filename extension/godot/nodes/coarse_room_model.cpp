@@ -81,8 +81,6 @@ void CoarseRoomModel::_notification(int p_what) {
 	}
 	if (p_what == NOTIFICATION_READY) {
 		connect_engine();
-	} else if (p_what == NOTIFICATION_EXIT_TREE) {
-		stop_room_search();
 	}
 	if (p_what == NOTIFICATION_EXIT_TREE && engine && !own_engine) {
 		engine->edit_config([](LiveRoomConfig &p_config) { p_config.has_room = false; });
@@ -340,7 +338,8 @@ void CoarseRoomModel::push_room() {
 	const bool find_room = floorplan_source == FLOORPLAN_AUTOMATIC;
 	std::snprintf(key, sizeof(key), "%d %d %d %d|", int(inpainting), int(lighting_compensation), int(pose_source), int(find_room));
 	const std::string options = key;
-	std::snprintf(key, sizeof(key), "%.9g %.9g %.9g %.9g %.9g %.9g %.9g|", placed.translation.x, placed.translation.y, placed.translation.z, placed.rotation.w,
+	// The pose to 0.1 mm and about 0.01 degrees: a node that jitters by less does not rebuild the room.
+	std::snprintf(key, sizeof(key), "%.4f %.4f %.4f %.4f %.4f %.4f %.4f|", placed.translation.x, placed.translation.y, placed.translation.z, placed.rotation.w,
 			placed.rotation.x, placed.rotation.y, placed.rotation.z);
 	const std::string state = layout + options + key;
 	pushed_layout = layout;
@@ -355,7 +354,7 @@ void CoarseRoomModel::push_room() {
 	pushed_options = options;
 	const Floorplan plan = core_floorplan();
 	if (room_only) {
-		const std::string error = engine->set_room(result.ok, plan, placed);
+		const std::string error = engine->set_room(result.ok, plan, placed, texel_size);
 		if (!error.empty()) {
 			ERR_PRINT(String(("CoarseRoomModel: the engine kept its old room: " + error).c_str()));
 		}
@@ -364,6 +363,9 @@ void CoarseRoomModel::push_room() {
 		apply_material();
 		return;
 	}
+	// The engine starts again (a new configuration): its estimates start again too.
+	looked_at.reset();
+	found.reset();
 	engine->edit_config([&](LiveRoomConfig &p_config) {
 		p_config.has_room = result.ok;
 		p_config.floorplan = plan;
@@ -461,16 +463,17 @@ void CoarseRoomModel::take_found_room() {
 		return;
 	}
 	const std::shared_ptr<const FoundRoom> newest = engine->found_room();
-	if (!newest || newest->version == found_version) {
+	if (!newest || newest == looked_at) {
 		return;
 	}
-	found_version = newest->version;
-	const RoomEstimate &estimate = newest->result.estimate;
-	emit_signal("room_estimated", String(room_estimate_state_name(estimate.state)), String(estimate.message.c_str()));
+	looked_at = newest;
 	if (newest->result.has_room && !worse_than_shown(*newest)) {
 		apply_found_room(*newest);
 		found = newest;
 	}
+	const RoomEstimate &estimate = newest->result.estimate;
+	// After the room is applied: a handler sees the room of this estimate.
+	emit_signal("room_estimated", String(room_estimate_state_name(estimate.state)), String(estimate.message.c_str()));
 	update_configuration_warnings();
 }
 
@@ -607,12 +610,12 @@ void CoarseRoomModel::take_room_search() {
 	}
 	searched = taken;
 	const RoomEstimate &estimate = taken->result.estimate;
-	emit_signal("room_estimated", String(result.ok ? room_estimate_state_name(estimate.state) : "failed"), String(estimate.message.c_str()));
 	if (taken->result.has_room) {
 		// The scene's world is the recording's: its first camera at room.yaml's initial_rgb_pose.
 		apply_found_room(*taken, result.has_truth ? result.true_world_from_model : Pose());
 		found = taken;
 	}
+	emit_signal("room_estimated", String(result.ok ? room_estimate_state_name(estimate.state) : "failed"), String(estimate.message.c_str()));
 	update_configuration_warnings();
 }
 

@@ -164,8 +164,8 @@ private:
 	bool worse_than_shown(const FoundRoom &p_candidate) const;
 	struct RoomSearch;
 	std::unique_ptr<RoomSearch> search;
-	void stop_room_search(); // cancels and joins
-	uint64_t found_version = 0; // the estimate last looked at
+	void stop_room_search(); // cancels and joins (the node's destruction; leaving the tree keeps it running)
+	std::shared_ptr<const FoundRoom> looked_at; // the engine's estimate last looked at
 	std::shared_ptr<const FoundRoom> found; // and last applied (its room shown)
 	std::shared_ptr<const FoundRoom> searched; // the last recording search's result
 	godot::PackedFloat32Array wall_confidence;

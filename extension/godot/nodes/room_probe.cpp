@@ -4,6 +4,8 @@
 
 #include "../convert/image_convert.h"
 #include "../convert/pose_convert.h"
+
+#include <glm/matrix.hpp>
 #include "../convert/virtual_object_convert.h"
 
 #include <envmap/export.h>
@@ -372,12 +374,16 @@ void RoomProbe::drive_reflection_probe() {
 	Pose world_from_box = world_from_room;
 	world_from_box.translation = transform_point(world_from_room, to_glm((lo + hi) * 0.5));
 	// Its local transform (a global one cannot be put back once the probe has left the tree).
+	Transform3D box = transform_from_pose(world_from_box);
 	const Node3D *parent = cast_to<Node3D>(probe->get_parent());
-	Pose world_from_parent;
-	if (parent == nullptr || !pose_from_transform(parent->get_global_transform(), &world_from_parent)) {
-		world_from_parent = Pose();
+	if (parent != nullptr) { // in the parent's space, its scale included
+		const glm::dmat3 parent_axes = to_glm(parent->get_global_transform().basis);
+		if (std::abs(glm::determinant(parent_axes)) > 1e-12) {
+			box.basis = to_godot(glm::inverse(parent_axes) * to_glm(box.basis));
+			box.origin = parent->to_local(box.origin);
+		}
 	}
-	drive(probe, "transform", transform_from_pose(compose(inverse(world_from_parent), world_from_box)));
+	drive(probe, "transform", box);
 	drive(probe, "size", hi - lo);
 	drive(probe, "origin_offset", to_godot(transform_point(inverse(world_from_box), to_glm(get_global_position()))));
 	drive(probe, "box_projection", true);
