@@ -17,9 +17,9 @@ func after_each() -> void:
 	_scene = null
 
 
-## The 10-s sweep the runner renders for this test and the room suite.
+## The 10-s sweep the runner renders for this test and the room suite, beside the fixture.
 func _sweep_recording() -> String:
-	return repo_path("build/test-data/living_room_10s")
+	return fixture_recording().get_base_dir().path_join("living_room_10s")
 
 
 ## rig, slam, camera and an Automatic room on p_recording, wired; nothing stepped yet.
