@@ -37,11 +37,6 @@ var _ref := RegEx.create_from_string("\\[(member|method|signal|constant|enum|par
 var _class_ref := RegEx.create_from_string("\\[([A-Z@][A-Za-z0-9_]*)\\]")
 
 
-## An absolute path in the repository (godot_project/ is res://).
-static func repo_path(relative: String) -> String:
-	return (ProjectSettings.globalize_path("res://") + "../" + relative).simplify_path()
-
-
 static func doc_dir() -> String:
 	return repo_path("extension/godot/doc_classes")
 

@@ -140,10 +140,26 @@ func known_engine_leak(count: int, rid_type: String, reason: String) -> void:
 	print("[KNOWN-ENGINE-LEAK] %d %s: %s" % [count, rid_type, reason])
 
 
+## An absolute path in the repository. godot_project/ is res://, so the repository is its parent,
+## except for a scratch copy of the project elsewhere (the sanitizer runs of tools/run_tests.py
+## copy it under build/), whose runner names the repository in $ROOMPROBE_REPO.
+static func repo_path(relative: String) -> String:
+	var repo := OS.get_environment("ROOMPROBE_REPO")
+	if repo.is_empty():
+		repo = ProjectSettings.globalize_path("res://").path_join("..")
+	return repo.path_join(relative).simplify_path()
+
+
+## "thread" or "address" when the library under test is built with that sanitizer (the runner's
+## --sanitize sets $ROOMPROBE_SANITIZER), else "". Its workers then run several times slower.
+static func sanitizer() -> String:
+	return OS.get_environment("ROOMPROBE_SANITIZER")
+
+
 ## The synthetic recording the runner renders before the Godot suites (1 s of living_room,
 ## build/bin/roomprobe_synth), as an absolute path.
 func fixture_recording() -> String:
-	return ProjectSettings.globalize_path("res://").path_join("../build/test-data/living_room_1s").simplify_path()
+	return repo_path("build/test-data/living_room_1s")
 
 
 ## The same second with the fisheye bracketed (every other frame 5 stops shorter, each frame's
