@@ -218,10 +218,10 @@ def run(cmd, log_path=None, timeout=None, echo=None, cwd=REPO, env=None):
     return Result(rc, lines, seconds, timed_out.is_set())
 
 
-def godot_base_args(rendering=False):
+def godot_base_args(rendering=False, project=PROJECT):
     """Arguments every Godot run gets: the project, no audio (no ALSA noise), and for
     rendering runs Vulkan (the project's Forward+ renderer; lavapipe under Xvfb)."""
-    args = [godot(), "--path", PROJECT, "--audio-driver", "Dummy"]
+    args = [godot(), "--path", project, "--audio-driver", "Dummy"]
     if rendering:
         args += ["--rendering-driver", "vulkan"]
     else:

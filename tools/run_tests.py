@@ -21,8 +21,16 @@ Suites, in order (see tests/README.md):
 The last line printed is exactly "N passed, N failed" (", N skipped" appended when some were
 skipped); the exit status is 0 only when nothing failed. Raw logs: build/test-logs/.
 
---sanitize thread|address (address,undefined) builds with scons sanitize=... and runs only the core suite's
-build/debug-tsan|asan/tests/core_tests, under ThreadSanitizer or AddressSanitizer with UBSan.
+--sanitize thread|address (address,undefined) builds with scons sanitize=... into build/debug-tsan|asan/
+(apart from the normal build) and runs the core suite (the default) and/or the godot suite under
+ThreadSanitizer or AddressSanitizer with UBSan:
+  core   build/debug-tsan|asan/tests/core_tests
+  godot  scons sanitize_godot=yes also builds the library and the binding's test extension into
+         build/debug-tsan|asan/bin/; a scratch copy of godot_project/ in build/debug-tsan|asan/godot_project
+         loads them, is imported, and runs tests/godot/test_*.gd in the (uninstrumented) Godot with the
+         sanitizer's runtime in LD_PRELOAD
+A sanitizer report fails the run it ends (halt_on_error=1), named by its SUMMARY line. Logs go to
+build/test-logs/debug-tsan|asan/.
 """
 
 import argparse
@@ -67,9 +75,27 @@ SANITIZER_ENV = {
     "thread": {"TSAN_OPTIONS": "halt_on_error=1 second_deadlock_stack=1"},
     # detect_leaks=0: OpenNI2's driver plugins leak their static objects and are unloaded before
     # LeakSanitizer looks, so their leaks can be neither named nor suppressed (the rest is leak-free).
+    # The same holds in Godot, which loads the same drivers through our library; there Godot (not
+    # instrumented, and not ours) also keeps allocations to exit, and unloads our library before
+    # LeakSanitizer looks, so what it reported could not be told apart or named. Leaks of our code
+    # are checked elsewhere: the core's by ./roomprobe soak --sanitize address (LeakSanitizer on),
+    # objects left through the engine by the godot suite itself (ObjectDB, RIDs, orphan nodes).
     "address": {"ASAN_OPTIONS": "halt_on_error=1 detect_leaks=0", "UBSAN_OPTIONS": "halt_on_error=1 print_stacktrace=1"},
 }
+# Only in the godot suite's Godot. allow_user_segv_handler=0: Godot installs its own crash handler
+# over ASan's; ASan's report of a bad access (its stack, the memory's history) is the one wanted.
+# verify_asan_link_order=0: tests/sanitize/no_deepbind.c is preloaded before ASan's runtime (it must
+# come first to replace dlopen), which ASan would otherwise refuse.
+SANITIZER_GODOT_ENV = {"address": {"ASAN_OPTIONS": "allow_user_segv_handler=0 verify_asan_link_order=0"}}
+# Only in the editor import before it: the editor (Godot 4.6.3's, stripped) takes two of its own
+# mutexes in both orders, tens of thousands of lock-order reports with every frame in /usr/bin/godot,
+# which a suppression could only name by the module, and so every stack (each has a Godot frame).
+# The test run itself, where our code runs, keeps deadlock detection.
+SANITIZER_IMPORT_ENV = {"thread": {"TSAN_OPTIONS": "detect_deadlocks=0"}}
 TSAN_SUPPRESSIONS = os.path.join(rp.REPO, "tests", "tsan.supp")
+# The sanitizer runtimes Godot needs in LD_PRELOAD to load a sanitized library (read from the
+# library's DT_NEEDED): the runtime must be the first library in the process.
+SANITIZER_RUNTIME = re.compile(r"\[(lib(asan|ubsan|tsan)\.so[.\d]*)\]")
 DOCTEST = re.compile(r"\[doctest\] test cases:\s*(\d+)\s*\|\s*(\d+) passed\s*\|\s*(\d+) failed\s*\|\s*(\d+) skipped")
 
 
@@ -105,8 +131,9 @@ def main():
     ap.add_argument("--scons-args", metavar="ARGS",
                     help="arguments for scons instead of '-j<nproc> tests=yes' (also $ROOMPROBE_SCONS_ARGS)")
     ap.add_argument("--sanitize", choices=sorted(SANITIZER_ENV) + ["address,undefined"],
-                    help="build the core test program with -fsanitize=thread (or address,undefined) into "
-                         "build/<target>-tsan|asan/ and run only the core suite under it")
+                    help="build with -fsanitize=thread (or address,undefined) into build/<target>-tsan|asan/ and run "
+                         "the core suite (default) and/or, with --suite godot, the godot suite against the sanitized "
+                         "library (a scratch copy of the project; Godot with the runtime in LD_PRELOAD)")
     ap.add_argument("-v", "--verbose", action="store_true", help="show every output line of every step")
     ap.add_argument("--package-results", metavar="FILE",
                     help="the package suite's results, written by tests/host/test_package.sh (./roomprobe test passes it)")
@@ -115,8 +142,11 @@ def main():
     opts = ap.parse_args()
     if opts.sanitize == "address,undefined":
         opts.sanitize = "address"  # the address build is AddressSanitizer and UndefinedBehaviorSanitizer
-    if opts.sanitize and set(opts.suite or ["core"]) - {"build", "core"}:
-        ap.error("--sanitize runs only the core suite (and the build)")
+    if opts.sanitize and set(opts.suite or ["core"]) - {"build", "core", "godot"}:
+        ap.error("--sanitize runs only the core and godot suites (and the build)")
+    if opts.sanitize:
+        global LOGS
+        LOGS = os.path.join(LOGS, sanitized_build_dir(opts))  # the normal run's logs stay as they are
 
     os.makedirs(LOGS, exist_ok=True)
     selected = opts.suite or (["build", "core"] if opts.sanitize else SUITES)
@@ -149,7 +179,8 @@ def main():
     if counted("room"):
         results.append(suite_room(opts))
 
-    needs_import = any(counted(n) for n in ("editor", "godot", "rendering"))
+    # A sanitized godot suite imports its own scratch copy of the project instead.
+    needs_import = not opts.sanitize and any(counted(n) for n in ("editor", "godot", "rendering"))
     if needs_import:
         s = suite_editor(opts, judged=counted("editor"))
         if counted("editor") or s.failed:
@@ -294,7 +325,12 @@ def suite_host(opts, name="host"):
 def suite_build(opts):
     s = Suite("build")
     s.logs.append(os.path.join(LOGS, "build.log"))
-    cmd = rp.scons_command(["tests=yes"], opts.scons_args) + ([f"sanitize={opts.sanitize}"] if opts.sanitize else [])
+    selected = opts.suite or ["core"]
+    # A sanitizer build makes only what the chosen suites run: core_tests for core, the library for godot.
+    default = ["tests=yes"] if not opts.sanitize or "core" in selected else ["tests=no"]
+    cmd = rp.scons_command(default, opts.scons_args) + ([f"sanitize={opts.sanitize}"] if opts.sanitize else [])
+    if opts.sanitize and "godot" in selected:
+        cmd.append("sanitize_godot=yes")
     rp.header(f"build: {shlex.join(cmd)}")
     if rp.sconstruct_missing():
         s.fail("build")
@@ -396,18 +432,22 @@ def sanitized_build_dir(opts):
     return f"{target}-{'tsan' if opts.sanitize == 'thread' else 'asan'}"
 
 
-def sanitizer_env(opts):
-    """TSAN_OPTIONS etc.: ours first, then what the caller set, which wins where both set one."""
+def sanitizer_env(opts, *extra):
+    """TSAN_OPTIONS etc.: ours first (then those of the extra tables, e.g. SANITIZER_GODOT_ENV), then
+    what the caller set, which wins where both set one."""
     env = {}
     for var, value in SANITIZER_ENV[opts.sanitize].items():
         if var == "TSAN_OPTIONS" and os.path.exists(TSAN_SUPPRESSIONS):
             value += f" suppressions={TSAN_SUPPRESSIONS}"
+        for table in extra:
+            if var in table.get(opts.sanitize, {}):
+                value += " " + table[opts.sanitize][var]
         env[var] = f"{value} {os.environ.get(var, '')}".strip()
     return env
 
 
-def sanitizer_env_text(opts):
-    return " ".join(f"{k}={shlex.quote(v)}" for k, v in sanitizer_env(opts).items())
+def sanitizer_env_text(opts, env=None):
+    return " ".join(f"{k}={shlex.quote(v)}" for k, v in (env or sanitizer_env(opts)).items())
 
 
 def sanitizer_report(lines):
@@ -481,8 +521,7 @@ def suite_editor(opts, judged=True):
     checks = []
     scratch = os.path.join(rp.BUILD, "godot-fresh-import")
     if judged:
-        shutil.rmtree(scratch, ignore_errors=True)
-        shutil.copytree(rp.PROJECT, scratch, symlinks=False, ignore=shutil.ignore_patterns(".godot"))
+        fresh_project_copy(scratch)
         checks.insert(0, ("fresh-import", None, os.path.join(LOGS, "editor-fresh-import.log")))
         # Then the plain `godot --headless --editor --quit` on that freshly imported copy.
         checks.insert(1, ("fresh-reopen", None, os.path.join(LOGS, "editor-fresh-reopen.log")))
@@ -522,6 +561,13 @@ IDLE_CPU_POINTS = 5.0
 ROUNDTRIP_FORBIDDEN = [("an image", re.compile(r'type="Image"|\bImage\b')), ("a sky", re.compile(r'type="Sky"|\bsky = ')),
                        ("a cubemap", re.compile(r'Cubemap')), ("a driven box", re.compile(r'box_projection|interior = true|origin_offset'))]
 ROUNDTRIP_KEPT = ["size = Vector3(1, 2, 3)", "cull_mask = 5", "Transform3D(1, 0, 0, 0, 1, 0, 0, 0, 1, 0.5, 0.5, 0.5)"]
+
+
+def fresh_project_copy(dest, leave_out=()):
+    """A scratch copy of godot_project/ at dest, as on a fresh clone: no .godot/, the symlinked folders
+    (tests/, demo_scenes/, the shaders) copied; leave_out: more names (glob patterns) not copied."""
+    shutil.rmtree(dest, ignore_errors=True)
+    shutil.copytree(rp.PROJECT, dest, symlinks=False, ignore=shutil.ignore_patterns(".godot", *leave_out))
 
 
 def scene_roundtrip(s, scratch, log):
@@ -753,6 +799,13 @@ def suite_godot(opts, rendering, allow_empty):
         make_fixture_recording(FIXTURE_BRACKETED, ("--exposure", "bracket", "--no-calibration"))
         make_fixture_recording(ROOM_SWEEP, ("--no-calibration",), seconds=10, seed=1)  # test_nodes_auto_room.gd
         make_fixture_oni()
+    project, env = rp.PROJECT, None
+    if opts.sanitize:
+        if not os.path.exists(os.path.join(rp.BUILD, "bin", "roomprobe_synth")):
+            s.notes.append("no fixture recordings: their tools come from the normal build (./roomprobe build)")
+        project, env = sanitized_project(opts, s)
+        if project is None:
+            return s
     user = []
     if opts.filter:
         user += ["--filter", opts.filter]
@@ -768,20 +821,27 @@ def suite_godot(opts, rendering, allow_empty):
         user += ["--rendering", "--files", "test_rendering_*.gd", "--artifacts", artifacts]
         cmd = rp.xvfb_prefix() + rp.godot_base_args(rendering=True)
     else:
-        cmd = rp.godot_base_args(rendering=False)
+        cmd = rp.godot_base_args(rendering=False, project=project)
     cmd += ["-s", "res://tests/run_tests.gd"]
     if user:
         cmd += ["--"] + user
-    rp.header(f"{name}: {shlex.join(cmd)}")
+    rp.header(f"{name}: {shlex.join(cmd)}" + (f" ({sanitizer_env_text(opts, godot_env_shown(env))})" if env else ""))
 
     def echo(line):
         if opts.verbose or RESULT.match(line):
             print("    " + line, flush=True)
 
-    r = rp.run(cmd, s.logs[0], RENDERING_TIMEOUT if rendering else GODOT_TIMEOUT, echo=echo)
-    s.seconds = r.seconds
+    r = rp.run(cmd, s.logs[0], (RENDERING_TIMEOUT if rendering else GODOT_TIMEOUT) * (4 if env else 1), echo=echo, env=env)
+    s.seconds += r.seconds
     s.ran = True
     kept, dropped = rp.filter_noise(r.lines)
+    # A sanitizer's report fails the run on its own (it ends it: halt_on_error=1); its lines are
+    # not Godot's error lines.
+    start, report = sanitizer_report(kept)
+    if report:
+        s.fail(f"{name}: {sanitizer_summary(report)}")
+        print(f"FAILED: {rp.describe_exit(r)} on a sanitizer report; the report (all of it in {rp.relpath(s.logs[0])}):")
+        rp.tail(report, 80)
 
     summary = None
     for line in kept:
@@ -798,17 +858,20 @@ def suite_godot(opts, rendering, allow_empty):
         if m:
             summary = tuple(int(x) for x in m.groups())
 
-    if summary is None:
+    failed_tests = [f for f in s.failures if not f.startswith(f"{name}: ")]
+    if summary is None and not report:
         why = rp.describe_exit(r)
         s.fail(f"{name}: no GODOT_TESTS line ({why}; crashed or hung?)")
         print(f"FAILED: Godot ended without the GODOT_TESTS line ({why}); the end of its output:")
         rp.tail(kept, 30)
-    elif summary != (s.passed, len(s.failures), s.skipped):
-        s.fail(f"{name}: GODOT_TESTS says {summary}, the result lines say {(s.passed, len(s.failures), s.skipped)}")
-    elif r.rc != (0 if summary[1] == 0 else 1):
+    elif summary is None:
+        pass  # the report ended it, counted above
+    elif summary != (s.passed, len(failed_tests), s.skipped):
+        s.fail(f"{name}: GODOT_TESTS says {summary}, the result lines say {(s.passed, len(failed_tests), s.skipped)}")
+    elif r.rc != (0 if summary[1] == 0 else 1) and not report:
         s.fail(f"{name}: {rp.describe_exit(r)} with {summary[1]} failed")
 
-    bad, tolerated = unexpected_error_lines(kept)
+    bad, tolerated = unexpected_error_lines(kept[:start] + kept[start + len(report):])
     if bad:
         s.fail(f"{name}: error/leak lines in output")
         print(f"FAILED: {len(bad)} error/leak line(s) in Godot's output:")
@@ -823,6 +886,90 @@ def suite_godot(opts, rendering, allow_empty):
     status = "ok" if s.failed == 0 else "FAILED"
     print(f"{status}: {s.passed} passed, {s.failed} failed, {s.skipped} skipped ({rp.fmt_duration(r.seconds)})")
     return s
+
+
+def sanitized_project(opts, s):
+    """(the scratch copy of the project that loads the sanitized libraries, imported; the environment
+    Godot runs in), or (None, None) with a failure recorded in s.
+
+    build/<target>-asan|tsan/godot_project: a fresh copy of godot_project/ without its libraries
+    (fresh_project_copy, as the editor suite's), whose two .gdextension files name the sanitized
+    library and the binding's test extension from build/<target>-asan|tsan/bin/ (linked into their
+    bin/). Godot itself is not instrumented: the sanitizer's runtime goes in LD_PRELOAD, after
+    tests/sanitize/no_deepbind.c's library; the tests find the repository through $ROOMPROBE_REPO
+    (test_case.gd's repo_path). A report in the import fails the suite as one in the run does.
+    """
+    build = os.path.join(rp.BUILD, sanitized_build_dir(opts))
+    target = sanitized_build_dir(opts).split("-")[0]
+    libs = [os.path.join(build, "bin", f"{lib}.linux.{target}.x86_64.so") for lib in ("libroomprobe", "libroomprobe_binding_test")]
+    missing = [lib for lib in libs if not os.path.isfile(lib)]
+    if missing:
+        s.fail(f"godot: no sanitized {', '.join(rp.relpath(m) for m in missing)} (scons sanitize={opts.sanitize} sanitize_godot=yes)")
+        print(f"FAILED: {s.failures[-1]}")
+        return None, None
+    project = os.path.join(build, "godot_project")
+    fresh_project_copy(project, leave_out=("*.so",))
+    for gdextension, lib in zip(("addons/roomprobe/roomprobe.gdextension", "tests/binding/roomprobe_binding_test.gdextension"), libs):
+        folder = os.path.dirname(gdextension)
+        os.makedirs(os.path.join(project, folder, "bin"), exist_ok=True)
+        os.symlink(lib, os.path.join(project, folder, "bin", os.path.basename(lib)))
+        path = os.path.join(project, gdextension)
+        with open(path) as f:
+            text = f.read()
+        # Every Linux entry (debug and release) names the one sanitized library.
+        text, n = re.subn(r'^(linux\.\w+\.x86_64 = )"[^"]*"$', lambda m: f'{m.group(1)}"res://{folder}/bin/{os.path.basename(lib)}"', text, flags=re.M)
+        if n == 0:
+            s.fail(f"godot: {gdextension} names no linux.*.x86_64 library to replace")
+            print(f"FAILED: {s.failures[-1]}")
+            return None, None
+        with open(path, "w") as f:
+            f.write(text)
+    # ROOMPROBE_SANITIZER: tests that pace a recording by the scene's clock slow it (test_case.gd's sanitizer()).
+    env = dict(os.environ, **sanitizer_env(opts, SANITIZER_GODOT_ENV), ROOMPROBE_REPO=rp.REPO, ROOMPROBE_SANITIZER=opts.sanitize)
+    runtimes = sanitizer_runtimes(libs[0])
+    no_deepbind = os.path.join(build, "bin", "librp_no_deepbind.so")
+    if not runtimes or not os.path.isfile(no_deepbind):
+        s.fail(f"godot: {rp.relpath(libs[0])} needs no sanitizer runtime (built without sanitize=?)" if not runtimes else
+               f"godot: no {rp.relpath(no_deepbind)} (scons sanitize={opts.sanitize} sanitize_godot=yes)")
+        print(f"FAILED: {s.failures[-1]}")
+        return None, None
+    # Godot's GDExtension loader asks for RTLD_DEEPBIND, which the runtimes refuse: no_deepbind's
+    # dlopen drops it, so it comes before them (tests/sanitize/no_deepbind.c).
+    env["LD_PRELOAD"] = " ".join([no_deepbind] + runtimes + ([os.environ["LD_PRELOAD"]] if os.environ.get("LD_PRELOAD") else []))
+
+    # The import, under the sanitizer too: the editor loads both libraries and writes .godot/.
+    log = os.path.join(LOGS, "godot-import.log")
+    s.logs.append(log)
+    cmd = rp.import_command(project)
+    import_env = dict(env, **sanitizer_env(opts, SANITIZER_GODOT_ENV, SANITIZER_IMPORT_ENV))
+    rp.header(f"godot: import of the scratch copy: {shlex.join(cmd)} ({sanitizer_env_text(opts, godot_env_shown(import_env))})")
+    r = rp.run(cmd, log, IMPORT_TIMEOUT * 4, env=import_env)
+    s.seconds += r.seconds
+    kept, dropped = rp.filter_noise(r.lines)
+    start, report = sanitizer_report(kept)
+    bad = [line for line in kept[:start] if EDITOR_BAD.search(line)]
+    if report or r.rc != 0 or r.timed_out or bad:
+        why = sanitizer_summary(report) if report else rp.describe_exit(r) if r.rc or r.timed_out else f"{len(bad)} error line(s)"
+        s.fail(f"godot: the import of {rp.relpath(project)}: {why}")
+        print(f"FAILED: the import: {why} ({rp.fmt_duration(r.seconds)}); see {rp.relpath(log)}")
+        show_with_context(kept, bad)
+        rp.tail(report or ([] if bad else kept), 80)
+        return None, None
+    print(f"ok ({rp.fmt_duration(r.seconds)}){noise_note(dropped)}")
+    return project, env
+
+
+def sanitizer_runtimes(library):
+    """The sanitizer runtimes the library needs (readelf -d's NEEDED), ASan's first: it must be
+    loaded before any other library that allocates (UBSan's runtime does)."""
+    r = rp.run(["readelf", "-d", library])
+    found = [m.group(1) for m in map(SANITIZER_RUNTIME.search, r.lines) if m and "(NEEDED)" in m.string]
+    return sorted(found, key=lambda lib: not lib.startswith("libasan"))
+
+
+def godot_env_shown(env):
+    """The variables of env that the sanitized Godot run adds, for the header."""
+    return {k: env[k] for k in ("LD_PRELOAD", "ASAN_OPTIONS", "UBSAN_OPTIONS", "TSAN_OPTIONS", "ROOMPROBE_REPO", "ROOMPROBE_SANITIZER") if k in env}
 
 
 def unexpected_error_lines(lines):
