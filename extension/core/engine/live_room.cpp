@@ -696,14 +696,8 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 			coarse->add_rgb_frame(rgb->frame, cfg.rig.rgb, rgb->world_from_rgb, rgb_lut_active ? &rgb_lut : nullptr);
 		}
 		snapshot->last = coarse->add_fisheye_frame(frame, pose);
-		snapshot->frames = coarse->frame_count();
 		snapshot->fisheye_sequence = p_sequence;
-		// A copy the pipeline will never write: probes read it while the next frame goes in.
-		snapshot->atlas = coarse->completed_color().clone();
-		if (cfg.coarse_shell_first) {
-			snapshot->observed = observed_mask(coarse->texture());
-		}
-		snapshot->cumulative = coarse->cumulative_lighting();
+		take_coarse_state(snapshot.get());
 		snapshot->timings = coarse->last_timings();
 		{
 			const std::lock_guard<std::mutex> lock(publish_mutex);
@@ -720,6 +714,18 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 }
 
 // ---------------------------------------------------------------- the room: replaced, and found from the sweep
+
+// The coarse pipeline's state as a snapshot holds it: the frame count, the completed atlas (a
+// copy the pipeline will never write: probes read it while the next frame goes in), the observed
+// mask the dense pass needs, and the lighting changes so far.
+void LiveRoom::take_coarse_state(CoarseSnapshot *r_snapshot) const {
+	r_snapshot->frames = coarse->frame_count();
+	r_snapshot->atlas = coarse->completed_color().clone();
+	if (cfg.coarse_shell_first) {
+		r_snapshot->observed = observed_mask(coarse->texture());
+	}
+	r_snapshot->cumulative = coarse->cumulative_lighting();
+}
 
 std::string LiveRoom::set_room(bool p_has_room, const Floorplan &p_floorplan, const Pose &p_world_from_room, double p_texel_size_m, double p_carry_m,
 		double *r_carried) {
@@ -788,13 +794,8 @@ std::string LiveRoom::set_room(bool p_has_room, const Floorplan &p_floorplan, co
 					before = last_coarse;
 				}
 				snapshot = std::make_shared<CoarseSnapshot>();
-				snapshot->frames = coarse->frame_count();
 				snapshot->fisheye_sequence = before ? before->fisheye_sequence : 0;
-				snapshot->atlas = coarse->completed_color().clone();
-				if (cfg.coarse_shell_first) {
-					snapshot->observed = observed_mask(coarse->texture());
-				}
-				snapshot->cumulative = coarse->cumulative_lighting();
+				take_coarse_state(snapshot.get());
 			}
 		}
 		{

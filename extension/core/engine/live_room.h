@@ -336,6 +336,7 @@ private:
 	void room_worker();
 	std::shared_ptr<const FoundRoom> find_room_locked(const std::vector<FisheyeFrame> *p_views);
 	std::string build_room_locked(); // the coarse model, its renderer and placement from cfg
+	void take_coarse_state(CoarseSnapshot *r_snapshot) const; // coarse must exist
 	void keep_room_view(const FisheyeFrame &p_frame);
 	void record_error(const std::string &p_stage, const std::string &p_what);
 	// Counts a pushed frame and keeps its push time for the latency figures.
