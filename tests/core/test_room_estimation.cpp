@@ -17,6 +17,7 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -174,6 +175,81 @@ TEST_CASE("room estimation: a partition counts as a wall, and a wardrobe's front
 	CHECK(result.comparison.corners == truth.points.size());
 	CHECK(result.comparison.corner_error_max_m <= CORNER_TOLERANCE_M);
 	CHECK(result.comparison.up_error_deg <= UP_TOLERANCE_DEG);
+}
+
+TEST_CASE("room estimation: floor hidden behind a sofa is room when the wall behind it was seen; not when it was not") {
+	// The living room (5 x 4 m). A sofa along the wall z = 4 (its own surface left out: a sofa's
+	// front can pass for a wall when nothing stands behind it) hides the floor from z = 3.2 on,
+	// and the sofa's end hides the side wall x = 0 there: that wall is seen only to z = 3.2, and
+	// its seen end cuts the floor across at z = 3.2, leaving a strip where no floor was seen.
+	const Floorplan truth = living_room();
+	auto sweep = [&](bool p_back_wall_seen) {
+		TriangleMesh mesh;
+		for (double x = 0.0; x < 5.0 - 1e-9; x += FLOOR_CELL_M) {
+			add_quad(&mesh, { x, 0.0, 0.0 }, { FLOOR_CELL_M, 0.0, 0.0 }, { 0.0, 0.0, 3.2 }, { 0.0, 1.0, 0.0 }, FLOOR_CELL_M);
+		}
+		add_quad(&mesh, { 0.0, 0.0, 0.0 }, { 5.0, 0.0, 0.0 }, { 0.0, 1.5, 0.0 }, { 0.0, 0.0, 1.0 }); // z = 0
+		add_quad(&mesh, { 5.0, 0.0, 0.0 }, { 0.0, 0.0, 4.0 }, { 0.0, 1.5, 0.0 }, { -1.0, 0.0, 0.0 }); // x = 5
+		add_quad(&mesh, { 0.0, 0.0, 0.0 }, { 0.0, 0.0, 3.2 }, { 0.0, 1.5, 0.0 }, { 1.0, 0.0, 0.0 }); // x = 0, to the sofa
+		if (p_back_wall_seen) {
+			add_quad(&mesh, { 0.0, 0.9, 4.0 }, { 5.0, 0.0, 0.0 }, { 0.0, 0.6, 0.0 }, { 0.0, 0.0, -1.0 }); // z = 4, above the sofa
+		}
+		return estimate_from(mesh, truth, { { 2.5, 1.45, 1.5 } });
+	};
+	const Estimated seen = sweep(true);
+	CAPTURE(seen.estimate.message);
+	REQUIRE(seen.comparison.corners == 4); // partial only for the ceiling, not in this model
+	CHECK(seen.estimate.message.find("the ceiling was not in the dense model") != std::string::npos);
+	CHECK(seen.comparison.corner_error_max_m <= CORNER_TOLERANCE_M);
+	// The wall x = 0 was seen over 3.2 m of its 4.
+	const std::vector<double> &confidence = seen.estimate.edge_confidence;
+	CHECK(*std::min_element(confidence.begin(), confidence.end()) == doctest::Approx(0.8).epsilon(0.02));
+	// Without the wall behind the sofa nothing says the room goes on: it ends where the floor did,
+	// that edge marked unseen.
+	const Estimated unseen = sweep(false);
+	CAPTURE(unseen.estimate.message);
+	REQUIRE(unseen.estimate.state == RoomEstimateState::Partial);
+	double depth_m = 0.0;
+	for (const Vec2 &p : unseen.estimate.floorplan.points) {
+		depth_m = std::max(depth_m, p.y);
+	}
+	double width_m = 0.0;
+	for (const Vec2 &p : unseen.estimate.floorplan.points) {
+		width_m = std::max(width_m, p.x);
+	}
+	// The estimated world's axes may be either way round; the short side is the depth seen.
+	CHECK(std::min(depth_m, width_m) == doctest::Approx(3.2).epsilon(0.01));
+	CHECK(*std::min_element(unseen.estimate.edge_confidence.begin(), unseen.estimate.edge_confidence.end()) == 0.0);
+}
+
+TEST_CASE("room estimation: a step of a few centimetres between two pieces of one wall is merged") {
+	// An 8 x 4.5 m room whose wall z = 0 was placed at z = 0.013 over 7.44 m (the dense model) and
+	// at z = 0 over the last 0.57 m (the fisheye), and whose wall z = 4.5 the same, 2.2 cm apart.
+	std::vector<Vec2> points = { { 0.0, 0.013 }, { 7.442, 0.013 }, { 7.442, 0.0 }, { 8.0, 0.0 }, { 8.0, 4.49 }, { 7.442, 4.49 }, { 7.442, 4.512 }, { 0.0, 4.512 } };
+	std::vector<double> confidence = { 0.95, 0.0, 0.5, 0.3, 0.5, 0.0, 1.0, 0.9 };
+	merge_floorplan_steps(&points, &confidence);
+	REQUIRE(points.size() == 4);
+	REQUIRE(confidence.size() == 4);
+	// The longer piece keeps its line; the edge's confidence is the pieces' length-weighted mean.
+	const std::vector<Vec2> expected = { { 0.0, 0.013 }, { 8.0, 0.013 }, { 8.0, 4.512 }, { 0.0, 4.512 } };
+	for (size_t i = 0; i < 4; i++) {
+		CAPTURE(i);
+		CHECK(points[i].x == doctest::Approx(expected[i].x));
+		CHECK(points[i].y == doctest::Approx(expected[i].y));
+	}
+	CHECK(confidence[0] == doctest::Approx((0.95 * 7.442 + 0.5 * 0.558) / 8.0));
+	CHECK(confidence[1] == doctest::Approx(0.3));
+	CHECK(confidence[2] == doctest::Approx((0.5 * 0.558 + 1.0 * 7.442) / 8.0));
+	CHECK(confidence[3] == doctest::Approx(0.9));
+	// A real step (a partition's 12 cm end) and an L's corner stay.
+	std::vector<Vec2> l_shape = { { 0.0, 0.0 }, { 6.0, 0.0 }, { 6.0, 3.0 }, { 3.0, 3.0 }, { 3.0, 5.0 }, { 0.0, 5.0 } };
+	std::vector<double> l_confidence(6, 1.0);
+	merge_floorplan_steps(&l_shape, &l_confidence);
+	CHECK(l_shape.size() == 6);
+	std::vector<Vec2> partition = figure4_two_rooms().points;
+	std::vector<double> p_confidence(partition.size(), 1.0);
+	merge_floorplan_steps(&partition, &p_confidence);
+	CHECK(partition.size() == figure4_two_rooms().points.size());
 }
 
 TEST_CASE("room estimation: walls at other than right angles keep their angles") {

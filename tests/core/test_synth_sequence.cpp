@@ -19,6 +19,7 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <filesystem>
@@ -166,6 +167,100 @@ TEST_CASE("synth: the hand-held trajectory orbits the table smoothly, looking at
 		CHECK(differs);
 		CHECK(largest_speed < 1.2);
 		CHECK(largest_speed > 0.2);
+		CHECK(largest_turn < 90.0);
+	}
+}
+
+TEST_CASE("synth: the room sweep walks its path turning round, and shows every wall, the floor and both rooms") {
+	for (const std::string name : { "two_rooms", "living_room" }) {
+		CAPTURE(name);
+		Scene scene = reference_scene(name);
+		scene.trajectory = TrajectoryKind::RoomSweep;
+		const RoomSweepParams &sweep = scene.room_sweep;
+		REQUIRE(sweep.path_xz.size() >= 2);
+		const HandheldTrajectory trajectory = make_handheld_trajectory(scene, 5);
+		const HandheldTrajectory other = make_handheld_trajectory(scene, 6);
+		const SynthRenderer renderer(scene);
+		REQUIRE(renderer.ok());
+		const std::vector<Vec2> &corners = scene.room.floorplan.points;
+		const double ceiling_m = scene.room.floorplan.ceiling_height_m;
+		std::vector<int> edge_hits(corners.size(), 0);
+		std::array<int, 8> headings = {};
+		int floor_hits = 0, rays = 0;
+		double largest_speed = 0.0, largest_turn = 0.0;
+		bool differs = false;
+		Pose previous = trajectory.world_from_rgb(0.0);
+		for (int i = 0; i <= 300; ++i) {
+			const double t = i / 30.0;
+			const Pose pose = trajectory.world_from_rgb(t);
+			const glm::dvec3 p = pose.translation;
+			differs = differs || angle_between(other.world_from_rgb(t).rotation, pose.rotation) > 0.2;
+			CHECK(p.y > 1.3);
+			CHECK(p.y < 1.6);
+			// Clear of walls and furniture: nothing within 30 cm in any horizontal direction.
+			for (const glm::dvec3 &d : { glm::dvec3(1, 0, 0), glm::dvec3(-1, 0, 0), glm::dvec3(0, 0, 1), glm::dvec3(0, 0, -1), glm::dvec3(0, -1, 0) }) {
+				const Hit hit = renderer.intersect(p, d);
+				CHECK(hit.hit);
+				CHECK(hit.distance > 0.3);
+			}
+			const glm::dmat3 rotation = glm::mat3_cast(pose.rotation);
+			const glm::dvec3 axis = rotation * glm::dvec3(0, 0, 1);
+			// Pitched down 3 to 30 degrees: the floor, then the walls.
+			const double pitch_deg = std::asin(axis.y) * 180.0 / 3.14159;
+			CHECK(pitch_deg < -3.0);
+			CHECK(pitch_deg > -30.0);
+			const double heading = std::atan2(axis.z, axis.x) + 3.14159265;
+			headings[std::min(7, static_cast<int>(heading / (2.0 * 3.14159265) * 8.0))]++;
+			// What the RGB-D camera sees (a grid over its 63 x 49 degree view, out to 6 m): each wall's stretch.
+			if (i % 3 == 0) {
+				for (int u = -3; u <= 3; ++u) {
+					for (int v = -3; v <= 3; ++v) {
+						const glm::dvec3 ray = rotation * glm::normalize(glm::dvec3(std::tan(u * 0.18), std::tan(v * 0.14), 1.0));
+						const Hit hit = renderer.intersect(p, ray);
+						if (!hit.hit || hit.distance > 6.0) {
+							continue;
+						}
+						++rays;
+						floor_hits += hit.point.y < 0.01 ? 1 : 0;
+						for (size_t e = 0; e < corners.size(); ++e) {
+							const Vec2 a = corners[e], b = corners[(e + 1) % corners.size()];
+							const glm::dvec2 ab(b.x - a.x, b.y - a.y), ap(hit.point.x - a.x, hit.point.z - a.y);
+							const double s = glm::dot(ap, ab) / glm::dot(ab, ab);
+							const double off = std::abs(ab.x * ap.y - ab.y * ap.x) / glm::length(ab);
+							if (s > 0.0 && s < 1.0 && off < 0.01 && hit.point.y > 0.05 && hit.point.y < ceiling_m - 0.05) {
+								edge_hits[e]++;
+							}
+						}
+					}
+				}
+			}
+			if (i > 0) {
+				largest_speed = std::max(largest_speed, glm::length(pose.translation - previous.translation) * 30.0);
+				largest_turn = std::max(largest_turn, angle_between(pose.rotation, previous.rotation) * 30.0 * 180.0 / 3.14159);
+			}
+			previous = pose;
+		}
+		// At rest at the path's ends: its first point at 0 s, its last at walk_s, within the hand's wobble.
+		const glm::dvec3 start = trajectory.world_from_rgb(0.0).translation, end = trajectory.world_from_rgb(sweep.walk_s).translation;
+		CHECK(glm::length(glm::dvec2(start.x, start.z) - sweep.path_xz.front()) < 0.1);
+		CHECK(glm::length(glm::dvec2(end.x, end.z) - sweep.path_xz.back()) < 0.1);
+		// Turned all round: every eighth of the compass faced.
+		for (int h = 0; h < 8; ++h) {
+			CAPTURE(h);
+			CHECK(headings[h] > 0);
+		}
+		// Every wall a metre or longer seen in twenty rays or more (of the 49 a view, every tenth of a
+		// second); the floor in one ray in twenty.
+		for (size_t e = 0; e < corners.size(); ++e) {
+			const Vec2 a = corners[e], b = corners[(e + 1) % corners.size()];
+			if (std::hypot(b.x - a.x, b.y - a.y) >= 1.0) {
+				CAPTURE(e);
+				CHECK(edge_hits[e] > 20);
+			}
+		}
+		CHECK(floor_hits > rays / 20);
+		CHECK(differs);
+		CHECK(largest_speed < 1.2);
 		CHECK(largest_turn < 90.0);
 	}
 }

@@ -4,7 +4,7 @@
 //                   [--rig calib/synthetic_rig.yaml] [--hdri PATH|none] [--cubemap-size 128]
 //                   [--fisheye-rate 12] [--rgbd-rate 30] [--fisheye-hdr] [--exr-float] [--no-calibration]
 //                   [--threads N] [--exposure fixed|auto|bracket] [--bracket-ev -5,0]
-//                   [--tone-curve srgb|log] [--fisheye-gains R,G,B] [--vignetting 0.5]
+//                   [--tone-curve srgb|log] [--fisheye-gains R,G,B] [--vignetting 0.5] [--room-sweep]
 
 #include <io/opencv.h>
 
@@ -37,6 +37,9 @@ void usage(std::FILE *p_out) {
 			"  --out DIR           the recording folder; must not exist or be empty\n"
 			"  --seconds S         length of the recording (default 10)\n"
 			"  --seed N            trajectory and noise seed, an unsigned integer (default 1)\n"
+			"  --room-sweep        carry the rig through the room (both rooms in two_rooms), turning\n"
+			"                      round, instead of the scene's own path: a sweep that shows\n"
+			"                      every wall and the floor, for ./roomprobe room\n"
 			"  --rig PATH          rig file (default calib/synthetic_rig.yaml)\n"
 			"  --hdri PATH|none    living_room's window view, panorama_room's walls (default %s;\n"
 			"                      none: a procedural sky in living_room's window)\n"
@@ -96,6 +99,7 @@ int run(int argc, char **argv) {
 	using namespace roomprobe;
 	std::string scene_name, out, rig_path = "calib/synthetic_rig.yaml", hdri;
 	bool hdri_given = false;
+	bool room_sweep = false;
 	synth::SequenceOptions options;
 	double cubemap_size = 128.0;
 	double threads = 0.0;
@@ -157,6 +161,8 @@ int run(int argc, char **argv) {
 			if (!value(&text) || !parse_double(text, &threads) || threads != std::floor(threads) || threads < 1 || threads > 1024) {
 				return fail("--threads needs a whole number in [1, 1024], got '" + text + "'");
 			}
+		} else if (arg == "--room-sweep") {
+			room_sweep = true;
 		} else if (arg == "--no-calibration") {
 			options.calibration_views = false;
 		} else if (arg == "--exposure") {
@@ -250,9 +256,12 @@ int run(int argc, char **argv) {
 	if (!scene_options.panorama_path.empty()) {
 		options.scene_panorama_path = fs::absolute(scene_options.panorama_path, ec).lexically_normal().string();
 	}
-	const synth::SceneResult scene = synth::make_scene(scene_name, scene_options);
+	synth::SceneResult scene = synth::make_scene(scene_name, scene_options);
 	if (!scene.ok) {
 		return fail(scene.error);
+	}
+	if (room_sweep) {
+		scene.scene.trajectory = synth::TrajectoryKind::RoomSweep;
 	}
 	options.progress = [](const std::string &p_line) {
 		std::printf("  %s\n", p_line.c_str());

@@ -151,6 +151,26 @@ std::vector<Vec2> drop_straight_corners(std::vector<Vec2> p_points) {
 	return p_points;
 }
 
+// The share of the segment a to b covered by a wall on its line facing its left side (or its
+// right, when p_left is false): what the sweep saw there as a wall, seen from that side.
+double wall_cover(const Vec2 &p_a, const Vec2 &p_b, bool p_left, const std::vector<WallEstimate> &p_walls) {
+	const double length = std::hypot(p_b.x - p_a.x, p_b.y - p_a.y);
+	if (!(length > 0.0)) {
+		return 0.0;
+	}
+	const Vec2 left = { -(p_b.y - p_a.y) / length, (p_b.x - p_a.x) / length };
+	const Vec2 facing = p_left ? left : Vec2{ -left.x, -left.y };
+	double cover = 0.0;
+	for (const WallEstimate &wall : p_walls) {
+		if (dot2(wall.normal, facing) > std::cos(2.0 * DEG) && std::abs(dot2(wall.normal, p_a) - wall.offset_m) < 0.05) {
+			const double ta = dot2(perp(wall.normal), p_a), tb = dot2(perp(wall.normal), p_b);
+			const double overlap = std::min(std::max(ta, tb), wall.to_m) - std::max(std::min(ta, tb), wall.from_m);
+			cover = std::max(cover, std::clamp(overlap / length, 0.0, 1.0));
+		}
+	}
+	return cover;
+}
+
 // Where the floor was seen, on a grid in the floor plane's 2-D coordinates.
 struct FloorGrid {
 	Vec2 origin;
@@ -256,7 +276,39 @@ std::vector<Vec2> room_polygon(const std::vector<WallEstimate> &p_walls, const F
 		}
 		inside[face] = in;
 	}
-	// The boundary: halfedges with an inside face on their left and an outside one on their right.
+	// A face whose floor stayed hidden (a sofa against the wall, the cut of a partition's seen end
+	// across it) is inside too when it opens onto the room, no wall between, and on its other
+	// sides the sweep saw walls facing into it, at least half their length and a metre: the camera
+	// looked across it at them. A face behind a wall seen from the room (a partition's inside), or
+	// bounded by walls never seen, stays out.
+	for (bool grew = true; grew;) {
+		grew = false;
+		for (Arrangement::Face_const_iterator face = arrangement.faces_begin(); face != arrangement.faces_end(); ++face) {
+			if (face->is_unbounded() || inside[face]) {
+				continue;
+			}
+			double open_m = 0.0, outer_m = 0.0, outer_walls_m = 0.0;
+			bool behind_wall = false;
+			Arrangement::Ccb_halfedge_const_circulator edge = face->outer_ccb(), first = edge;
+			do { // counter-clockwise: the face on the left
+				const Vec2 a = { CGAL::to_double(edge->source()->point().x()), CGAL::to_double(edge->source()->point().y()) };
+				const Vec2 b = { CGAL::to_double(edge->target()->point().x()), CGAL::to_double(edge->target()->point().y()) };
+				const double length = std::hypot(b.x - a.x, b.y - a.y);
+				if (inside[edge->twin()->face()]) {
+					const double wall = wall_cover(a, b, false, p_walls);
+					behind_wall = behind_wall || wall > 0.2; // the room sees a wall's face here: F is behind it (inside a partition)
+					open_m += length * (1.0 - wall);
+				} else {
+					outer_m += length;
+					outer_walls_m += length * wall_cover(a, b, true, p_walls);
+				}
+			} while (++edge != first);
+			if (!behind_wall && open_m >= 0.3 && outer_walls_m >= 1.0 && outer_walls_m >= 0.5 * outer_m) {
+				inside[face] = true;
+				grew = true;
+			}
+		}
+	}
 	// The boundary: halfedges with an inside face on their left and an outside one on their right,
 	// walked face by face: after a boundary halfedge, the next one turns around its target through
 	// the inside faces (so two regions meeting at one corner are walked apart, not mixed up).
@@ -338,22 +390,54 @@ std::vector<double> floorplan_edge_confidence(const std::vector<Vec2> &p_points,
 	std::vector<double> confidence(p_points.size(), 0.0);
 	const bool counter_clockwise = polygon_signed_area_m2(p_points) > 0.0;
 	for (size_t i = 0; i < p_points.size(); i++) {
-		const Vec2 &a = p_points[i], &b = p_points[(i + 1) % p_points.size()];
-		const double length = std::hypot(b.x - a.x, b.y - a.y);
-		if (!(length > 0.0)) {
-			continue;
-		}
-		const Vec2 left = { -(b.y - a.y) / length, (b.x - a.x) / length };
-		const Vec2 inward = counter_clockwise ? left : Vec2{ -left.x, -left.y };
-		for (const WallEstimate &wall : p_walls) {
-			if (dot2(wall.normal, inward) > std::cos(2.0 * DEG) && std::abs(dot2(wall.normal, a) - wall.offset_m) < 0.05) {
-				const double ta = dot2(perp(wall.normal), a), tb = dot2(perp(wall.normal), b);
-				const double overlap = std::min(std::max(ta, tb), wall.to_m) - std::max(std::min(ta, tb), wall.from_m);
-				confidence[i] = std::max(confidence[i], std::clamp(overlap / length, 0.0, 1.0));
-			}
-		}
+		confidence[i] = wall_cover(p_points[i], p_points[(i + 1) % p_points.size()], counter_clockwise, p_walls);
 	}
 	return confidence;
+}
+
+void merge_floorplan_steps(std::vector<Vec2> *io_points, std::vector<double> *io_confidence, double p_max_step_m) {
+	std::vector<Vec2> &points = *io_points;
+	std::vector<double> &confidence = *io_confidence;
+	if (confidence.size() != points.size()) {
+		return;
+	}
+	auto sub = [](const Vec2 &p_a, const Vec2 &p_b) { return Vec2{ p_a.x - p_b.x, p_a.y - p_b.y }; };
+	auto length_of = [](const Vec2 &p_v) { return std::hypot(p_v.x, p_v.y); };
+	for (bool merged = true; merged && points.size() > 4;) {
+		merged = false;
+		const size_t n = points.size();
+		for (size_t i = 0; i < n && !merged; i++) {
+			// Edges: before (P0 -> P1), the step (P1 -> P2), after (P2 -> P3), with P1 = points[i].
+			const size_t i0 = (i + n - 1) % n, i2 = (i + 1) % n, i3 = (i + 2) % n;
+			const Vec2 before = sub(points[i], points[i0]), step = sub(points[i2], points[i]), after = sub(points[i3], points[i2]);
+			const double before_m = length_of(before), step_m = length_of(step), after_m = length_of(after);
+			if (!(step_m < p_max_step_m) || !(before_m > step_m) || !(after_m > step_m) ||
+					dot2(before, after) < std::cos(2.0 * DEG) * before_m * after_m) {
+				continue;
+			}
+			// The shorter edge moves across onto the longer one's line.
+			const bool move_after = after_m <= before_m;
+			const Vec2 along = move_after ? Vec2{ after.x / after_m, after.y / after_m } : Vec2{ before.x / before_m, before.y / before_m };
+			const Vec2 gap = move_after ? sub(points[i], points[i2]) : sub(points[i2], points[i]);
+			const double a = dot2(gap, along);
+			const Vec2 shift = { gap.x - a * along.x, gap.y - a * along.y };
+			const size_t moved[2] = { move_after ? i2 : i0, move_after ? i3 : i };
+			for (const size_t k : moved) {
+				points[k] = { points[k].x + shift.x, points[k].y + shift.y };
+			}
+			const double joined = (confidence[i0] * before_m + confidence[i2] * after_m) / (before_m + after_m);
+			// P1 and P2 now lie on the joined edge P0 -> P3: both go, and the step's and after's confidences with them.
+			confidence[i0] = joined;
+			const size_t first = std::min(i, i2), second = std::max(i, i2);
+			points.erase(points.begin() + second);
+			points.erase(points.begin() + first);
+			// Edge k runs from point k: removing P1 and P2 removes the step (edge i) and after (edge i2).
+			const size_t c_second = std::max(i, i2), c_first = std::min(i, i2);
+			confidence.erase(confidence.begin() + c_second);
+			confidence.erase(confidence.begin() + c_first);
+			merged = true;
+		}
+	}
 }
 
 void rebase_room_origin(RoomEstimate *io_estimate) {

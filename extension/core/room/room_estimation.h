@@ -91,6 +91,11 @@ RoomEstimate estimate_room(const std::vector<SurfaceSample> &p_samples, const gl
 
 // Per floorplan edge, the share of it the walls cover (a wall on its line, facing into the room).
 std::vector<double> floorplan_edge_confidence(const std::vector<Vec2> &p_points, const std::vector<WallEstimate> &p_walls);
+// Removes the small steps where two pieces of one wall were placed a few centimetres apart (a
+// wall the fisheye extended next to the dense model's): an edge shorter than p_max_step_m between
+// two edges running the same way goes, the shorter of the two moved onto the longer's line; their
+// confidence becomes the length-weighted mean. io_confidence runs with the edges.
+void merge_floorplan_steps(std::vector<Vec2> *io_points, std::vector<double> *io_confidence, double p_max_step_m = 0.05);
 // Moves the estimated world's origin to the floorplan's bounding-box minimum (after its edges
 // moved), keeping the walls and world_from_model in step.
 void rebase_room_origin(RoomEstimate *io_estimate);

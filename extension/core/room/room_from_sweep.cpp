@@ -1,6 +1,7 @@
 #include "room_from_sweep.h"
 
 #include <algorithm>
+#include <cmath>
 #include <exception>
 
 namespace roomprobe {
@@ -49,6 +50,7 @@ void add_fisheye_evidence(const SweepObservations &p_observed, const RoomEstimat
 			}
 		}
 		estimate.edge_confidence = measured;
+		merge_floorplan_steps(&estimate.floorplan.points, &estimate.edge_confidence);
 		rebase_room_origin(&estimate);
 	}
 }
@@ -65,9 +67,15 @@ RoomFromSweep find_room_from_sweep(const SweepObservations &p_observed, const Ro
 			add_fisheye_evidence(p_observed, p_options, &found);
 		}
 		if (has_floorplan) { // the state and its sentence, after the fisheye's part
+			// An edge too short to be a wall (a partition's end) between two walls seen is not missing.
 			std::string unseen;
-			for (size_t i = 0; i < estimate.edge_confidence.size(); i++) {
-				unseen += estimate.edge_confidence[i] < 0.3 ? " " + std::to_string(i) : "";
+			const std::vector<double> &seen = estimate.edge_confidence;
+			const std::vector<Vec2> &corners = estimate.floorplan.points;
+			for (size_t i = 0; i < seen.size(); i++) {
+				const size_t n = seen.size(), next = (i + 1) % n;
+				const bool partition_end = std::hypot(corners[next].x - corners[i].x, corners[next].y - corners[i].y) < 0.3 &&
+						seen[(i + n - 1) % n] >= 0.3 && seen[next] >= 0.3;
+				unseen += seen[i] < 0.3 && !partition_end ? " " + std::to_string(i) : "";
 			}
 			const bool ceiling = estimate.floorplan.ceiling_height_m > 0.0;
 			estimate.state = unseen.empty() && ceiling ? RoomEstimateState::Complete : RoomEstimateState::Partial;

@@ -69,6 +69,19 @@ Pose motion_over(const Pose &p_delta, double p_dt_s, double p_last_dt_s) {
 
 } // namespace
 
+std::string DenseSlam::faster_than_a_hand(const TrackingResult &p_tracking, double p_time_s) const {
+	if (p_tracking.state == TrackingState::Lost || integrated_frames == 0 || !(opts.max_speed_m_s > 0.0)) {
+		return "";
+	}
+	const double dt_s = std::clamp(p_time_s - last_time_s, 0.0, 1.0);
+	const double moved_m = translation_difference_m(p_tracking.world_from_camera, last_pose);
+	if (!(moved_m > opts.max_speed_m_s * dt_s + 0.02)) {
+		return "";
+	}
+	return "the pose moved " + std::to_string(moved_m) + " m in " + std::to_string(dt_s) + " s since the last tracked frame, faster than " +
+			std::to_string(opts.max_speed_m_s) + " m/s: a slide along surfaces that do not fix the pose, not the rig";
+}
+
 DenseSlam::DenseSlam(const DenseSlamOptions &p_options) :
 		opts(p_options), tracker(p_options.icp), tsdf(p_options.tsdf) {}
 
@@ -278,14 +291,20 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 			guess = compose(last_pose, motion_over(compose(inverse(previous_pose), last_pose), p_frame.timestamp_s - last_time_s, last_time_s - previous_time_s));
 		}
 		out.tracking = track(depth, rgb, guess);
+		const std::string too_fast = faster_than_a_hand(out.tracking, p_frame.timestamp_s);
+		if (!too_fast.empty()) {
+			out.tracking.state = TrackingState::Lost;
+			out.tracking.reason = too_fast;
+		}
 		if (out.tracking.state == TrackingState::Lost && opts.relocalise && has_model(reference)) {
 			relocalise_attempts++;
 			TrackingResult found = relocalise(depth, rgb);
-			if (found.state == TrackingState::Good) {
+			const std::string found_too_fast = faster_than_a_hand(found, p_frame.timestamp_s);
+			if (found.state == TrackingState::Good && found_too_fast.empty()) {
 				out.tracking = found;
 				relocalised_frames++;
 			} else {
-				out.tracking.reason += "; " + found.reason;
+				out.tracking.reason += "; " + (found_too_fast.empty() ? found.reason : "relocalised, but " + found_too_fast);
 			}
 		}
 		if (out.tracking.state == TrackingState::Lost) {

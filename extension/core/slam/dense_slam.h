@@ -43,6 +43,11 @@ struct DenseSlamOptions {
 	IcpOptions icp; // tracking: pyramid, thresholds, colour term (units there)
 	bool integrate_poor = false; // also fuse frames whose tracking is Poor
 	bool constant_velocity = true; // predict each pose from the last two trusted ones (else: the last one)
+	// A hand-held rig moves slower than this. A pose that moved faster since the last tracked one
+	// (plus 2 cm for noise) slid along surfaces that do not fix it (a bare wall and its corner),
+	// and is Lost, not Good: else the constant-velocity guess carries the slide on, frame after
+	// frame (issue #18's room sweep: 9 m off in a second, every frame "good").
+	double max_speed_m_s = 3.0;
 	// The tracking reference is raycast at 1 / 2^raycast_level of the camera's size (160x120 from
 	// 640x480 at 2): ICP's projective association reads the model at any size, and a quarter-size
 	// reference cost 8 ms instead of 60 with the same ATE (1.3 mm on out/demo/recording). 0: full.
@@ -137,6 +142,8 @@ private:
 	TrackingResult relocalise(const cv::Mat &p_depth_m, const cv::Mat &p_rgb) const;
 	// Empty when p_frame fits the camera, else why not.
 	std::string check_frame(const RgbdFrame &p_frame) const;
+	// Empty when p_tracking's pose at p_time_s is within max_speed_m_s of the last tracked one, else why not.
+	std::string faster_than_a_hand(const TrackingResult &p_tracking, double p_time_s) const;
 
 	DenseSlamOptions opts;
 	bool configured = false;

@@ -383,6 +383,8 @@ SceneResult make_two_rooms(const SceneOptions &) {
 	scene.look_target = { tx, th + 0.1, tz };
 	scene.orbit_radius_m = 1.5;
 	scene.camera_height_m = 1.45;
+	// From beside the table in the left room, through the doorway (x = 4, z 3 to 4.5), into the right room.
+	scene.room_sweep.path_xz = { { 1.5, 3.3 }, { 4.0, 3.75 }, { 6.3, 2.7 } };
 	result.ok = true;
 	return result;
 }
@@ -477,6 +479,8 @@ SceneResult make_living_room(const SceneOptions &p_options) {
 	scene.look_target = { tx, th + 0.1, tz };
 	scene.orbit_radius_m = 1.5;
 	scene.camera_height_m = 1.45;
+	// Round the table (x 1.9 to 3.1, z 1.6 to 2.4), between it and the sofa, then the screen.
+	scene.room_sweep.path_xz = { { 1.4, 1.0 }, { 3.7, 1.1 }, { 3.6, 3.1 } };
 	result.ok = true;
 	return result;
 }
@@ -519,6 +523,7 @@ SceneResult make_panorama_room(const SceneOptions &p_options) {
 	scene.wall_sweep.normal = { 0.0, 0.0, 1.0 };
 	scene.wall_sweep.half_length_m = 0.9;
 	scene.wall_sweep.distance_m = 1.5;
+	scene.room_sweep.path_xz = { { 1.8, 1.5 }, { 3.2, 2.5 } };
 	result.ok = true;
 	return result;
 }
@@ -541,6 +546,18 @@ double panorama_exposure_scale(const Panorama &p_panorama) {
 		return 1.0;
 	}
 	return PANORAMA_KEY / std::exp(log_sum / weight_sum);
+}
+
+const char *trajectory_name(TrajectoryKind p_kind) {
+	switch (p_kind) {
+		case TrajectoryKind::WallSweep:
+			return "wall_sweep";
+		case TrajectoryKind::RoomSweep:
+			return "room_sweep";
+		case TrajectoryKind::Orbit:
+			break;
+	}
+	return "orbit";
 }
 
 std::vector<std::string> scene_names() {

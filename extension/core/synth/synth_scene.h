@@ -10,6 +10,7 @@
 
 #include <room/floorplan.h>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include <cstdint>
@@ -158,13 +159,25 @@ inline bool is_on(double p_from_s, double p_until_s, double p_time_s) {
 enum class TrajectoryKind {
 	Orbit, // round look_target (the table) at orbit_radius_m, looking at it
 	WallSweep, // facing one wall from about wall_sweep.distance_m, sweeping sideways along it
+	RoomSweep, // carried along room_sweep.path_xz, turning round: every wall, the floor and each room in view
 };
+const char *trajectory_name(TrajectoryKind p_kind); // "orbit", "wall_sweep", "room_sweep": synth.yaml's trajectory
 
 struct WallSweepParams {
 	glm::dvec3 wall_point = glm::dvec3(0.0); // on the wall, at the middle of the sweep (y unused)
 	glm::dvec3 normal = glm::dvec3(0.0, 0.0, 1.0); // the wall's horizontal unit normal, into the room
 	double half_length_m = 0.9; // the sweep goes this far either side of wall_point
 	double distance_m = 1.5; // the camera's mean distance from the wall
+};
+
+// What a user does to show the rig a room (issue #18): walks a path through it, turning round
+// all the time, the camera dipping to the floor and back up to the walls.
+struct RoomSweepParams {
+	// The floor points (x, z, metres) the rig is carried through, in order, clear of furniture
+	// taller than the camera; one point: turning on the spot. Through a doorway into the next room.
+	std::vector<glm::dvec2> path_xz;
+	double walk_s = 10.0; // from the first point to the last, at rest at both ends; then back
+	double turn_rad_s = 0.8; // the camera's yaw rate (about 1.3 turns in 10 s); its sign from the seed
 };
 
 struct Scene {
@@ -189,6 +202,7 @@ struct Scene {
 	double orbit_radius_m = 1.5; // Orbit: the hand-held camera's distance from look_target, horizontally
 	double camera_height_m = 1.45; // its mean height
 	WallSweepParams wall_sweep; // WallSweep: the wall and how far from it
+	RoomSweepParams room_sweep; // RoomSweep (any scene with a room: synth --room-sweep)
 	glm::dvec3 ceiling_light_center = glm::dvec3(0.0); // the switched light's panel (living_room)
 	double ceiling_light_half_size_m = 0.0; // its half width; 0: there is none
 	double light_switch_s = ALWAYS; // when it switches on

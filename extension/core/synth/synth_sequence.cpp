@@ -182,6 +182,7 @@ HandheldTrajectory make_handheld_trajectory(const Scene &p_scene, uint64_t p_see
 	trajectory.radius_m = p_scene.orbit_radius_m;
 	trajectory.height_m = p_scene.camera_height_m;
 	trajectory.wall = p_scene.wall_sweep;
+	trajectory.room = p_scene.room_sweep;
 	if (p_scene.trajectory == TrajectoryKind::WallSweep) {
 		// Draws of their own (indices 4, 5), so the orbit's draws stay what they were.
 		trajectory.sweep_period_s = 9.0 + 2.0 * uniform_from(p_seed, 4);
@@ -192,6 +193,9 @@ HandheldTrajectory make_handheld_trajectory(const Scene &p_scene, uint64_t p_see
 	trajectory.angular_speed_rad_s = uniform_from(p_seed, 3) < 0.5 ? speed : -speed;
 	for (size_t i = 0; i < trajectory.phases.size(); ++i) {
 		trajectory.phases[i] = 2.0 * PI * uniform_from(p_seed, 10 + i);
+	}
+	if (p_scene.trajectory == TrajectoryKind::RoomSweep && uniform_from(p_seed, 6) < 0.5) {
+		trajectory.room.turn_rad_s = -trajectory.room.turn_rad_s;
 	}
 	return trajectory;
 }
@@ -219,6 +223,9 @@ Pose HandheldTrajectory::world_from_rgb(double p_t_s) const {
 		pose.translation = position;
 		return pose;
 	}
+	if (kind == TrajectoryKind::RoomSweep) {
+		return room_sweep_pose(t);
+	}
 	const double angle = start_angle_rad + angular_speed_rad_s * t + 0.08 * wave(3.7, 0);
 	const double radius = radius_m + 0.08 * wave(5.3, 1);
 	const double height = height_m + 0.1 * wave(4.1, 2) + 0.015 * wave(1.3, 3);
@@ -228,6 +235,39 @@ Pose HandheldTrajectory::world_from_rgb(double p_t_s) const {
 	const double roll = 0.05 * wave(2.3, 7) + 0.004 * wave(0.29, 8);
 	Pose pose;
 	pose.rotation = look_rotation(look - position, roll);
+	pose.translation = position;
+	return pose;
+}
+
+Pose HandheldTrajectory::room_sweep_pose(double p_t_s) const {
+	const double t = p_t_s;
+	const auto &p = phases;
+	auto wave = [&](double p_period_s, int p_phase) { return std::sin(2.0 * PI * t / p_period_s + p[p_phase]); };
+	// Where along the path: a cosine over its length, at rest at both ends, there and back.
+	double length_m = 0.0;
+	for (size_t i = 1; i < room.path_xz.size(); ++i) {
+		length_m += glm::length(room.path_xz[i] - room.path_xz[i - 1]);
+	}
+	double along_m = 0.5 * length_m * (1.0 - std::cos(PI * t / room.walk_s));
+	glm::dvec2 on_path = room.path_xz.empty() ? glm::dvec2(0.0) : room.path_xz.front();
+	for (size_t i = 1; i < room.path_xz.size(); ++i) {
+		const double leg_m = glm::length(room.path_xz[i] - room.path_xz[i - 1]);
+		if (along_m <= leg_m || i + 1 == room.path_xz.size()) {
+			on_path = room.path_xz[i - 1] + (leg_m > 0.0 ? std::min(along_m / leg_m, 1.0) : 0.0) * (room.path_xz[i] - room.path_xz[i - 1]);
+			break;
+		}
+		along_m -= leg_m;
+	}
+	const glm::dvec3 position(on_path.x + 0.05 * wave(2.7, 0), height_m + 0.08 * wave(4.1, 2) + 0.012 * wave(1.3, 3), on_path.y + 0.05 * wave(3.1, 1));
+	// Turning round all the time; the camera dips to the floor and rises to the walls every 3.4 s
+	// (16 degrees down at t = 0: a hand-held start is roughly level).
+	const double yaw = start_angle_rad + room.turn_rad_s * t + 0.06 * wave(3.3, 4) + 0.006 * wave(0.37, 8);
+	const double pitch = -0.28 - 0.2 * std::sin(2.0 * PI * t / 3.4) + 0.005 * wave(0.41, 9);
+	const double roll = 0.05 * wave(2.3, 7) + 0.004 * wave(0.29, 8);
+	const glm::dvec3 up(0.0, 1.0, 0.0);
+	const glm::dvec3 level(std::cos(yaw), 0.0, std::sin(yaw));
+	Pose pose;
+	pose.rotation = look_rotation(std::cos(pitch) * level + std::sin(pitch) * up, roll);
 	pose.translation = position;
 	return pose;
 }
@@ -769,7 +809,7 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 		info << "roomprobe_synth" << 1;
 		info << "scene" << p_scene.name;
 		info << "scene_panorama" << (p_options.scene_panorama_path.empty() ? std::string("none") : p_options.scene_panorama_path);
-		info << "trajectory" << (p_scene.trajectory == TrajectoryKind::WallSweep ? "wall_sweep" : "orbit");
+		info << "trajectory" << trajectory_name(p_scene.trajectory);
 		info << "seed" << std::to_string(p_options.seed);
 		info << "duration_s" << p_options.duration_s;
 		info << "rgbd_rate_hz" << p_options.rgbd_rate_hz;

@@ -35,6 +35,12 @@ namespace roomprobe::synth {
 // (a cosine, at rest at the ends; one round trip in 9 to 11 s, drawn from the seed, as is which
 // end it starts from), with hand-held yaw (+- 5 degrees), pitch (+- 3) and roll (+- 3) wander
 // and tremor. The camera's view stays on the wall: the depth camera sees one plane.
+//
+// RoomSweep: carried along scene.room_sweep.path_xz (a cosine over the path's length: from the
+// first point to the last in walk_s, at rest at both ends, then back), at about
+// scene.camera_height_m, turning round at turn_rad_s (its sign from the seed) from a yaw drawn
+// from the seed, pitched 5 to 28 degrees down (every 3.4 s: the floor, then the walls), with
+// hand-held wander and tremor.
 struct HandheldTrajectory {
 	TrajectoryKind kind = TrajectoryKind::Orbit;
 	glm::dvec3 target = glm::dvec3(0.0); // Orbit
@@ -45,9 +51,13 @@ struct HandheldTrajectory {
 	WallSweepParams wall; // WallSweep
 	double sweep_period_s = 10.0; // WallSweep: one round trip
 	double sweep_sign = 1.0; // WallSweep: +1 starts at the -along end (along = up x normal), -1 at the other
+	RoomSweepParams room; // RoomSweep
 	std::array<double, 10> phases = {}; // of the wobbles, from the seed
 
 	Pose world_from_rgb(double p_t_s) const; // t on the RGB-D clock
+
+private:
+	Pose room_sweep_pose(double p_t_s) const;
 };
 
 HandheldTrajectory make_handheld_trajectory(const Scene &p_scene, uint64_t p_seed);
