@@ -107,6 +107,37 @@ TEST_CASE("dense SLAM: a jump is never tracked as good and never fused") {
 	CHECK(slam.integrated_count() == fused);
 }
 
+TEST_CASE("dense SLAM: a pose that moved faster than a hand is lost, the same move over its true time is tracked") {
+	// The frame 0.3 s along the orbit, given its true time, then the same frame stamped a frame
+	// after the last: the same images, the same ICP, only the speed differs.
+	const Pose truth = living_room().trajectory.world_from_rgb(0.3);
+	const double moved_m = glm::length(truth.translation - living_room().trajectory.world_from_rgb(2 * FRAME_S).translation);
+	REQUIRE(moved_m > 3.0 * FRAME_S + 0.02); // faster than 3 m/s if it took one frame
+	REQUIRE(moved_m < 3.0 * (0.3 - 2 * FRAME_S)); // a hand's speed over its true time
+	for (const bool squeezed : { false, true }) {
+		CAPTURE(squeezed);
+		DenseSlam slam;
+		start_slam(&slam, 0.0);
+		for (int i = 0; i < 3; i++) {
+			REQUIRE(slam.process(rgbd_at(i * FRAME_S)).tracking.state == TrackingState::Good);
+		}
+		const size_t fused = slam.integrated_count();
+		RgbdFrame frame = rgbd_at(0.3);
+		frame.timestamp_s = squeezed ? 3 * FRAME_S : 0.3;
+		const DenseSlamFrame out = slam.process(frame);
+		CAPTURE(out.tracking.reason);
+		if (squeezed) {
+			CHECK(out.tracking.state == TrackingState::Lost);
+			CHECK(out.tracking.reason.find("faster than 3.0") != std::string::npos);
+			CHECK_FALSE(out.integrated);
+			CHECK(slam.integrated_count() == fused);
+		} else {
+			CHECK(out.tracking.state == TrackingState::Good);
+			CHECK(glm::length(out.tracking.world_from_camera.translation - truth.translation) < 0.01);
+		}
+	}
+}
+
 TEST_CASE("dense SLAM: frames that do not fit the camera are refused with a reason") {
 	DenseSlam slam;
 	start_slam(&slam, 0.0);

@@ -32,7 +32,7 @@
 // its reason, as is a Poor frame's reason before its line.
 //
 // SLAM settings (--voxel-size-m, --colour-weight, --colour-always, --icp-depth-range, --tsdf-depth-range, --noise-reference-m,
-// --max-jump) change DenseSlamOptions for every mode; --intrinsics or --rig replace the RGB-D
+// --max-jump, --max-speed) change DenseSlamOptions for every mode; --intrinsics or --rig replace the RGB-D
 // camera's intrinsics. The effective settings are printed first.
 //
 // live --recording DIR: the engine threaded (start()), the recording played in real time (x
@@ -48,6 +48,7 @@
 // usage: roomprobe_bench slam (--recording DIR | --tum DIR | --7scenes DIR) [--frames N] [--threads N] [--probe-size N]
 //                             [--intrinsics FX,FY,CX,CY | --rig FILE] [--save-trajectory FILE] [--voxel-size-m V]
 //                             [--colour-weight W] [--icp-depth-range MIN,MAX] [--tsdf-depth-range MIN,MAX] [--max-jump M,DEG]
+//                             [--max-speed M_S]
 //        roomprobe_bench live --recording DIR [--speed X] [--frames N] [--threads N] [--probe-size N] [the same camera and SLAM options]
 //        roomprobe_bench soak --recording DIR [--frames N] [--threads N] [--probe-size N] [the same camera and SLAM options]
 
@@ -434,6 +435,8 @@ void print_usage(std::FILE *p_out) {
 			"  --icp-depth-range MIN,MAX   depth readings ICP uses, metres along z (default %.2f,%.2f)\n"
 			"  --tsdf-depth-range MIN,MAX  depth readings fused into the TSDF, metres along z (default %.2f,%.2f)\n"
 			"  --max-jump M,DEG      largest move from the predicted pose believed per frame, metres and degrees (default %.2f,%.0f)\n"
+			"  --max-speed M_S       a pose moved faster than this since the last tracked one (+ 2 cm) is Lost; 0: off\n"
+			"                        (default %.1f m/s)\n"
 			"  --colour-always       the photometric term at every level, not only where the geometry leaves a direction free\n"
 			"  --noise-reference-m R ICP weighs a depth reading by its noise relative to one at R metres (nearer ones weigh 1);\n"
 			"                        0: all readings weigh 1 (default %.2f)\n"
@@ -441,7 +444,7 @@ void print_usage(std::FILE *p_out) {
 			"'summary: mode=... key=value ...'.\n",
 			STEP_PROBE_SIZE, LIVE_PROBE_SIZE, double(TsdfOptions().voxel_size_m), DenseSlamOptions().icp.colour_weight, DenseSlamOptions().icp.min_depth_m,
 			DenseSlamOptions().icp.max_depth_m, double(TsdfOptions().min_depth_m), double(TsdfOptions().max_depth_m), DenseSlamOptions().icp.max_jump_m,
-			DenseSlamOptions().icp.max_jump_deg, DenseSlamOptions().icp.depth_noise.reference_m);
+			DenseSlamOptions().icp.max_jump_deg, DenseSlamOptions().max_speed_m_s, DenseSlamOptions().icp.depth_noise.reference_m);
 }
 
 int usage(const char *p_error) {
@@ -456,9 +459,9 @@ void print_settings(const DenseSlamOptions &p_slam) {
 	const TsdfOptions &tsdf = p_slam.tsdf;
 	const IcpOptions &icp = p_slam.icp;
 	std::printf("  SLAM settings: voxel %.1f mm, truncation %.0f mm, TSDF depth %.2f..%.2f m; ICP depth %.2f..%.2f m, colour weight %.3f, "
-				"colour %s, max jump %.3f m / %.1f deg, noise reference %.2f m, %d levels; raycast level %d, tracking level %d, fuse poor frames %s\n",
+				"colour %s, max jump %.3f m / %.1f deg, max speed %.1f m/s, noise reference %.2f m, %d levels; raycast level %d, tracking level %d, fuse poor frames %s\n",
 			1000.0 * tsdf.voxel_size_m, 1000.0 * tsdf.truncation_m, double(tsdf.min_depth_m), double(tsdf.max_depth_m), icp.min_depth_m, icp.max_depth_m,
-			icp.colour_weight, icp.colour_always ? "at every level" : "where the geometry is weak", icp.max_jump_m, icp.max_jump_deg, icp.depth_noise.b_per_m2 > 0.0 ? icp.depth_noise.reference_m : 0.0, icp.levels, p_slam.raycast_level, p_slam.tracking_level, p_slam.integrate_poor ? "yes" : "no");
+			icp.colour_weight, icp.colour_always ? "at every level" : "where the geometry is weak", icp.max_jump_m, icp.max_jump_deg, p_slam.max_speed_m_s, icp.depth_noise.b_per_m2 > 0.0 ? icp.depth_noise.reference_m : 0.0, icp.levels, p_slam.raycast_level, p_slam.tracking_level, p_slam.integrate_poor ? "yes" : "no");
 }
 
 // The RGB-D camera --rig or --intrinsics gives on top of p_base, the source's own (--intrinsics
@@ -1743,6 +1746,10 @@ int run(int argc, char **argv) {
 			args.peers = false;
 		} else if (arg == "--colour-always") {
 			args.slam.icp.colour_always = true;
+		} else if (arg == "--max-speed") {
+			if (!cursor.non_negative_number(&args.slam.max_speed_m_s)) {
+				return usage("--max-speed needs a speed in m/s >= 0 (0: no limit)");
+			}
 		} else if (arg == "--noise-reference-m") {
 			if (!cursor.non_negative_number(&args.slam.icp.depth_noise.reference_m)) {
 				return usage("--noise-reference-m needs a depth in metres >= 0 (0: every reading weighs 1)");
