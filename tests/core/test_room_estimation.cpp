@@ -5,6 +5,7 @@
 
 #include "room/reference_rooms.h"
 #include "room/room_estimation.h"
+#include "room/room_from_sweep.h"
 #include "slam/marching_cubes.h"
 #include "synth/synth_renderer.h"
 #include "synth/synth_scene.h"
@@ -15,6 +16,7 @@
 #include <doctest/doctest.h>
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 #include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
@@ -250,6 +252,30 @@ TEST_CASE("room estimation: a step of a few centimetres between two pieces of on
 	std::vector<double> p_confidence(partition.size(), 1.0);
 	merge_floorplan_steps(&partition, &p_confidence);
 	CHECK(partition.size() == figure4_two_rooms().points.size());
+}
+
+TEST_CASE("room from a sweep: with no room file the world starts upright, the fisheye's axis up and the view down -Z") {
+	auto check_upright = [](bool p_has_fisheye, const Pose &p_rgb_from_fisheye) {
+		const Pose pose = upright_first_rgb_pose(p_has_fisheye, p_rgb_from_fisheye);
+		const glm::dmat3 world_from_rgb = glm::mat3_cast(pose.rotation);
+		const glm::dvec3 hint = p_has_fisheye ? p_rgb_from_fisheye.rotation * glm::dvec3(0.0, 0.0, 1.0) : glm::dvec3(0.0, -1.0, 0.0);
+		const glm::dvec3 up = world_from_rgb * hint, view = world_from_rgb * glm::dvec3(0.0, 0.0, 1.0);
+		CHECK(glm::length(up - glm::dvec3(0.0, 1.0, 0.0)) < 1e-9);
+		CHECK(std::abs(view.x) < 1e-9); // levelled, the view is -Z
+		CHECK(view.z < 0.0);
+		CHECK(glm::length(pose.translation) == 0.0);
+		CHECK(std::abs(glm::determinant(world_from_rgb) - 1.0) < 1e-9);
+		return world_from_rgb;
+	};
+	// A camera without a fisheye, held level: its y (down) is -Y, its view -Z, its x +X.
+	const glm::dmat3 level = check_upright(false, Pose());
+	CHECK(glm::length(level * glm::dvec3(1.0, 0.0, 0.0) - glm::dvec3(1.0, 0.0, 0.0)) < 1e-9);
+	CHECK(glm::length(level * glm::dvec3(0.0, 1.0, 0.0) - glm::dvec3(0.0, -1.0, 0.0)) < 1e-9);
+	// The synthetic rig's upward fisheye, and one tilted 12 degrees forward and 5 sideways.
+	check_upright(true, test_rig().rgb_from_fisheye);
+	Pose tilted = test_rig().rgb_from_fisheye;
+	tilted.rotation = glm::angleAxis(glm::radians(12.0), glm::dvec3(1.0, 0.0, 0.0)) * glm::angleAxis(glm::radians(5.0), glm::dvec3(0.0, 0.0, 1.0)) * tilted.rotation;
+	check_upright(true, tilted);
 }
 
 TEST_CASE("room estimation: walls at other than right angles keep their angles") {

@@ -196,6 +196,71 @@ func test_without_a_recording_it_says_why() -> void:
 	assert_true(slam.get_stats().is_empty())
 
 
+## Copies the folder p_from into p_to (made), every file but those named in p_leave_out.
+func _copy_folder(p_from: String, p_to: String, p_leave_out: Array) -> void:
+	DirAccess.make_dir_recursive_absolute(p_to)
+	for file in DirAccess.get_files_at(p_from):
+		if not p_leave_out.has(file):
+			assert_eq(DirAccess.copy_absolute(p_from.path_join(file), p_to.path_join(file)), OK, "copy " + file)
+	for folder in DirAccess.get_directories_at(p_from):
+		if not p_leave_out.has(folder):
+			_copy_folder(p_from.path_join(folder), p_to.path_join(folder), p_leave_out)
+
+
+func _remove_folder(p_path: String) -> void:
+	if not DirAccess.dir_exists_absolute(p_path):
+		return
+	for file in DirAccess.get_files_at(p_path):
+		DirAccess.remove_absolute(p_path.path_join(file))
+	for folder in DirAccess.get_directories_at(p_path):
+		_remove_folder(p_path.path_join(folder))
+	DirAccess.remove_absolute(p_path)
+
+
+## Issue #18: with no room.yaml (a live rig's first run) the world starts at the first camera held
+## upright, the upward fisheye's axis +Y and the view levelled down -Z: before, it was the camera's
+## own frame, y down, and the AR camera looked at the room upside down.
+func test_without_a_room_file_the_world_starts_upright() -> void:
+	if not need_fixture_recording():
+		return
+	var copy := ProjectSettings.globalize_path("user://roomprobe/no_room_recording")
+	_remove_folder(copy)
+	_copy_folder(fixture_recording(), copy, ["room.yaml", "calibration"])
+	_scene = Node3D.new()
+	var rig = fixture_rig()
+	rig.recording_path = copy
+	_scene.add_child(rig)
+	var camera := Camera3D.new()
+	camera.name = "Camera"
+	_scene.add_child(camera)
+	var slam = ClassDB.instantiate("DenseSLAM")
+	slam.name = "SLAM"
+	slam.capture = NodePath("../Rig")
+	slam.camera = NodePath("../Camera")
+	_scene.add_child(slam)
+	add_to_tree(_scene)
+	assert_true(rig.open(), rig.get_last_error())
+	assert_true(rig.get_room_floorplan().is_empty(), "the copy has no room")
+	var processed := 0
+	while processed < 4 and rig.step():
+		if slam.process_rig_frame():
+			processed += 1
+			assert_eq(slam.get_tracking_state(), 1, "frame %d: %s" % [processed, slam.get_tracking_reason()])
+			if processed == 1:
+				var basis := camera.global_transform.basis
+				# The camera's up is within the rig's tilt of +Y (the orbit looks down at the table:
+				# its first pitch and the fisheye's mounting are well under 45 degrees), not -Y.
+				assert_true(basis.y.dot(Vector3.UP) > cos(deg_to_rad(45.0)), "the camera's up %s is near +Y" % basis.y)
+				# Its view, levelled about the fisheye's axis, is -Z: no sideways part.
+				assert_near(basis.z.x, 0.0, 1e-4, "the view levelled is -Z (basis.z %s)" % basis.z)
+				assert_true(basis.z.z > 0.0, "Camera3D looks down -Z: basis.z %s" % basis.z)
+				assert_near(camera.global_transform.origin, Vector3.ZERO, 1e-6, "the first camera at the origin")
+	assert_eq(processed, 4)
+	_scene.free()
+	_scene = null
+	_remove_folder(copy)
+
+
 func test_tracking_settings_reach_the_engine_and_bad_values_warn() -> void:
 	_scene = Node3D.new()
 	var rig = fixture_rig()

@@ -1,5 +1,9 @@
 #include "room_from_sweep.h"
 
+#include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/mat3x3.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -9,6 +13,21 @@ namespace roomprobe {
 glm::dvec3 sweep_up_hint(const Pose &p_model_from_first_rgb, bool p_has_fisheye, const Pose &p_rgb_from_fisheye) {
 	return p_has_fisheye ? p_model_from_first_rgb.rotation * (p_rgb_from_fisheye.rotation * glm::dvec3(0.0, 0.0, 1.0))
 						 : p_model_from_first_rgb.rotation * glm::dvec3(0.0, -1.0, 0.0);
+}
+
+Pose upright_first_rgb_pose(bool p_has_fisheye, const Pose &p_rgb_from_fisheye) {
+	// The world's axes in the camera's frame: Y the hint, Z against the view levelled, X = Y x Z.
+	const glm::dvec3 up = glm::normalize(sweep_up_hint(Pose(), p_has_fisheye, p_rgb_from_fisheye));
+	glm::dvec3 view = glm::dvec3(0.0, 0.0, 1.0) - up.z * up;
+	if (glm::length(view) < 1e-6) { // looking straight up or down: the camera's y sets the heading
+		view = glm::dvec3(0.0, up.z > 0.0 ? 1.0 : -1.0, 0.0) - up.y * up;
+	}
+	const glm::dvec3 z = -glm::normalize(view);
+	const glm::dvec3 x = glm::cross(up, z);
+	const glm::dmat3 camera_from_world(x, up, z); // columns
+	Pose pose;
+	pose.rotation = glm::normalize(glm::quat_cast(glm::transpose(camera_from_world)));
+	return pose;
 }
 
 namespace {

@@ -39,6 +39,13 @@ struct RoomFromSweep {
 // one (p_rgb_from_fisheye), else the RGB camera's -y (held upright).
 glm::dvec3 sweep_up_hint(const Pose &p_model_from_first_rgb, bool p_has_fisheye, const Pose &p_rgb_from_fisheye);
 
+// The first RGB camera's pose in a world no room file gives (a live rig's first run, a recording
+// without room.yaml): at the origin, held upright, so the world is Y up from the first frame to
+// within the rig's tilt: the hint above (the fisheye's axis) is +Y, and the camera's view,
+// levelled, looks down -Z, Godot's forward. Not the identity: that world is the camera's own,
+// y down, and Godot would show it upside down. The room found later places itself in it.
+Pose upright_first_rgb_pose(bool p_has_fisheye, const Pose &p_rgb_from_fisheye);
+
 // Steps 1 to 3 and the walls never seen (room_estimation.h). Throws nothing: CGAL's or OpenCV's
 // exceptions become a NoSurface estimate whose message names them.
 RoomFromSweep find_room_from_sweep(const SweepObservations &p_observed, const RoomEstimationOptions &p_options);

@@ -10,6 +10,7 @@
 
 #include <recording/room_file.h>
 #include <rig/photometry.h>
+#include <room/room_from_sweep.h>
 
 #include <cmath>
 
@@ -173,7 +174,8 @@ bool RigCapture::open() {
 		p_config.has_rig = true;
 		p_config.rig = opened->get_rig();
 		p_config.photometry = photometry;
-		p_config.initial_rgb_pose = opened->has_room() ? opened->get_room().initial_rgb_pose : Pose();
+		p_config.initial_rgb_pose = opened->has_room() ? opened->get_room().initial_rgb_pose
+														: upright_first_rgb_pose(opened->get_rig().has_fisheye(), opened->get_rig().rgb_from_fisheye);
 		p_config.keep_points = opened->has_room() ? opened->get_room().probes : std::vector<glm::dvec3>();
 		p_config.ground_truth = opened->has_ground_truth_trajectory(RecordingStream::Rgbd) ? opened->ground_truth_trajectory(RecordingStream::Rgbd) : Trajectory();
 	});
@@ -231,7 +233,7 @@ bool RigCapture::open_live() {
 		p_config.has_rig = true;
 		p_config.rig = live_rig;
 		p_config.photometry = live_rig.photometry; // unknown for a rig file without photometry (version 1)
-		p_config.initial_rgb_pose = has_live_room ? live_room.initial_rgb_pose : Pose();
+		p_config.initial_rgb_pose = has_live_room ? live_room.initial_rgb_pose : upright_first_rgb_pose(live_rig.has_fisheye(), live_rig.rgb_from_fisheye);
 		p_config.keep_points = has_live_room ? live_room.probes : std::vector<glm::dvec3>();
 		p_config.ground_truth.clear();
 	});
