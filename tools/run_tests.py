@@ -677,6 +677,11 @@ ROOM_EVAL_ROW = "+light (gain)"  # the coarse model as the live system runs it (
 ROOM_PSNR_LIMIT_DB = 0.5
 
 
+def room_figures_over_limits(p_figures):
+    """The figures of roomprobe_room's last line that are outside ROOM_LIMITS, each said with its limit."""
+    return [f"{k}={v} (at most {ROOM_LIMITS[k]})" for k, v in p_figures.items() if not (0.0 <= v <= ROOM_LIMITS[k])]
+
+
 def suite_room(opts):
     s = Suite("room")
     log = os.path.join(LOGS, "room.log")
@@ -699,7 +704,7 @@ def suite_room(opts):
     else:
         figures = dict(zip(["corner_error_max_m", "ceiling_error_m", "up_error_deg", "registration_error_m"], map(float, m.groups())))
         print(m.group(0))
-        over = [f"{k}={v} (at most {ROOM_LIMITS[k]})" for k, v in figures.items() if not (0.0 <= v <= ROOM_LIMITS[k])]
+        over = room_figures_over_limits(figures)
         if over:
             s.fail("room: the 10-s sweep: " + ", ".join(over))
         else:
@@ -737,7 +742,7 @@ def suite_room(opts):
         figures = dict(zip(["corner_error_max_m", "ceiling_error_m", "up_error_deg"], map(float, m.groups()[:3])))
         print("two rooms, room sweep: " + m.group(0))
         s.notes.append("two rooms, room sweep: " + m.group(0))
-        over = [f"{k}={v} (at most {ROOM_LIMITS[k]})" for k, v in figures.items() if not (0.0 <= v <= ROOM_LIMITS[k])]
+        over = room_figures_over_limits(figures)
         if corners != 8:
             over.append(f"{corners} corners, not the true room's 8")
         if over:

@@ -207,16 +207,6 @@ func _copy_folder(p_from: String, p_to: String, p_leave_out: Array) -> void:
 			_copy_folder(p_from.path_join(folder), p_to.path_join(folder), p_leave_out)
 
 
-func _remove_folder(p_path: String) -> void:
-	if not DirAccess.dir_exists_absolute(p_path):
-		return
-	for file in DirAccess.get_files_at(p_path):
-		DirAccess.remove_absolute(p_path.path_join(file))
-	for folder in DirAccess.get_directories_at(p_path):
-		_remove_folder(p_path.path_join(folder))
-	DirAccess.remove_absolute(p_path)
-
-
 ## Issue #18: with no room.yaml (a live rig's first run) the world starts at the first camera held
 ## upright, the upward fisheye's axis +Y and the view levelled down -Z: before, it was the camera's
 ## own frame, y down, and the AR camera looked at the room upside down.
@@ -224,7 +214,7 @@ func test_without_a_room_file_the_world_starts_upright() -> void:
 	if not need_fixture_recording():
 		return
 	var copy := ProjectSettings.globalize_path("user://roomprobe/no_room_recording")
-	_remove_folder(copy)
+	remove_folder(copy)
 	_copy_folder(fixture_recording(), copy, ["room.yaml", "calibration"])
 	_scene = Node3D.new()
 	var rig = fixture_rig()
@@ -258,7 +248,7 @@ func test_without_a_room_file_the_world_starts_upright() -> void:
 	assert_eq(processed, 4)
 	_scene.free()
 	_scene = null
-	_remove_folder(copy)
+	remove_folder(copy)
 
 
 func test_tracking_settings_reach_the_engine_and_bad_values_warn() -> void:

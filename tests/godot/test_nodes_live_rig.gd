@@ -25,19 +25,8 @@ func after_each() -> void:
 			player.free()
 	_players.clear()
 	if not _recorded.is_empty():
-		_remove_folder(_recorded)
+		remove_folder(_recorded)
 		_recorded = ""
-
-
-static func _remove_folder(p_path: String) -> void:
-	var dir := DirAccess.open(p_path)
-	if dir == null:
-		return
-	for sub in dir.get_directories():
-		_remove_folder(p_path.path_join(sub))
-	for file in dir.get_files():
-		DirAccess.remove_absolute(p_path.path_join(file))
-	DirAccess.remove_absolute(p_path)
 
 
 ## A RigCapture stepping through the recording at p_path, outside the tree.
@@ -178,7 +167,7 @@ func test_a_live_session_recorded_plays_back_frame_for_frame_through_source_reco
 	var streaming := await wait_until(func(): return s.rig.get_device_state(0) == 2 and s.rig.get_device_state(1) == 2, 30.0)
 	assert_true(streaming, "%s / %s" % [s.rig.get_device_state_reason(0), s.rig.get_device_state_reason(1)])
 	_recorded = OS.get_user_data_dir().path_join("live_rig_recording_%d" % OS.get_process_id())
-	_remove_folder(_recorded)
+	remove_folder(_recorded)
 	assert_true(s.rig.start_recording(_recorded), s.rig.get_last_error())
 	assert_true(s.rig.is_recording())
 	var enough := await wait_until(func():

@@ -30,6 +30,10 @@ using ExactKernel = CGAL::Exact_predicates_exact_constructions_kernel;
 using Traits = CGAL::Arr_segment_traits_2<ExactKernel>;
 using Arrangement = CGAL::Arrangement_2<Traits>;
 
+Vec2 to_vec2(const ExactKernel::Point_2 &p_point) {
+	return { CGAL::to_double(p_point.x()), CGAL::to_double(p_point.y()) };
+}
+
 // Up: the area-weighted mean of the normals near the hint (floor, table tops and ceiling all
 // share it), in narrowing windows.
 glm::dvec3 refine_up(const std::vector<SurfaceSample> &p_samples, glm::dvec3 p_up) {
@@ -270,7 +274,7 @@ std::vector<Vec2> room_polygon(const std::vector<WallEstimate> &p_walls, const F
 			std::vector<Vec2> polygon;
 			Arrangement::Ccb_halfedge_const_circulator edge = face->outer_ccb(), first = edge;
 			do {
-				polygon.push_back({ CGAL::to_double(edge->source()->point().x()), CGAL::to_double(edge->source()->point().y()) });
+				polygon.push_back(to_vec2(edge->source()->point()));
 			} while (++edge != first);
 			in = face_seen(polygon, p_grid, p_cameras) >= p_options.min_floor_seen;
 		}
@@ -291,8 +295,8 @@ std::vector<Vec2> room_polygon(const std::vector<WallEstimate> &p_walls, const F
 			bool behind_wall = false;
 			Arrangement::Ccb_halfedge_const_circulator edge = face->outer_ccb(), first = edge;
 			do { // counter-clockwise: the face on the left
-				const Vec2 a = { CGAL::to_double(edge->source()->point().x()), CGAL::to_double(edge->source()->point().y()) };
-				const Vec2 b = { CGAL::to_double(edge->target()->point().x()), CGAL::to_double(edge->target()->point().y()) };
+				const Vec2 a = to_vec2(edge->source()->point());
+				const Vec2 b = to_vec2(edge->target()->point());
 				const double length = std::hypot(b.x - a.x, b.y - a.y);
 				if (inside[edge->twin()->face()]) {
 					const double wall = wall_cover(a, b, false, p_walls);
@@ -324,7 +328,7 @@ std::vector<Vec2> room_polygon(const std::vector<WallEstimate> &p_walls, const F
 		Arrangement::Halfedge_const_handle edge = start;
 		do {
 			walked.insert(edge);
-			loop.push_back({ CGAL::to_double(edge->source()->point().x()), CGAL::to_double(edge->source()->point().y()) });
+			loop.push_back(to_vec2(edge->source()->point()));
 			Arrangement::Halfedge_const_handle next = edge->next();
 			for (size_t turns = 0; !on_boundary(next) && turns < arrangement.number_of_halfedges(); turns++) {
 				next = next->twin()->next();
@@ -425,16 +429,13 @@ void merge_floorplan_steps(std::vector<Vec2> *io_points, std::vector<double> *io
 			for (const size_t k : moved) {
 				points[k] = { points[k].x + shift.x, points[k].y + shift.y };
 			}
-			const double joined = (confidence[i0] * before_m + confidence[i2] * after_m) / (before_m + after_m);
-			// P1 and P2 now lie on the joined edge P0 -> P3: both go, and the step's and after's confidences with them.
-			confidence[i0] = joined;
-			const size_t first = std::min(i, i2), second = std::max(i, i2);
-			points.erase(points.begin() + second);
-			points.erase(points.begin() + first);
-			// Edge k runs from point k: removing P1 and P2 removes the step (edge i) and after (edge i2).
-			const size_t c_second = std::max(i, i2), c_first = std::min(i, i2);
-			confidence.erase(confidence.begin() + c_second);
-			confidence.erase(confidence.begin() + c_first);
+			// P1 and P2 now lie on the joined edge P0 -> P3: both go. Edge k runs from point k, so the
+			// step (edge i) and after (edge i2) go with them, and before carries the joined confidence.
+			confidence[i0] = (confidence[i0] * before_m + confidence[i2] * after_m) / (before_m + after_m);
+			for (const size_t k : { std::max(i, i2), std::min(i, i2) }) { // the higher index first
+				points.erase(points.begin() + ptrdiff_t(k));
+				confidence.erase(confidence.begin() + ptrdiff_t(k));
+			}
 			merged = true;
 		}
 	}

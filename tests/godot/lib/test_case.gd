@@ -150,6 +150,17 @@ static func repo_path(relative: String) -> String:
 	return repo.path_join(relative).simplify_path()
 
 
+## Removes the folder p_path and everything in it; nothing when it is not there.
+static func remove_folder(p_path: String) -> void:
+	if not DirAccess.dir_exists_absolute(p_path):
+		return
+	for sub in DirAccess.get_directories_at(p_path):
+		remove_folder(p_path.path_join(sub))
+	for file in DirAccess.get_files_at(p_path):
+		DirAccess.remove_absolute(p_path.path_join(file))
+	DirAccess.remove_absolute(p_path)
+
+
 ## "thread" or "address" when the library under test is built with that sanitizer (the runner's
 ## --sanitize sets $ROOMPROBE_SANITIZER), else "". Its workers then run several times slower.
 static func sanitizer() -> String:
