@@ -123,6 +123,6 @@ TEST_CASE("flat walls: with the colour term off, no frame that slid more than 2 
 	// The sweep does slide (the test means something), and the state says why, naming the direction.
 	CHECK(slid > 0);
 	CHECK(first_reason.find("flat geometry: translation along") != std::string::npos);
-	// Nothing untrusted is fused: only the first frame defines the model.
+	// Only frames that did not slide are Good.
 	CHECK(run.good <= 1 + int(run.frames.size()) - slid);
 }

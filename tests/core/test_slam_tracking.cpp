@@ -6,6 +6,7 @@
 #include <io/opencv.h>
 
 #include "camera/pinhole_camera.h"
+#include "slam/dense_slam.h"
 #include "slam/depth_pyramid.h"
 #include "slam/icp_kernels.h"
 #include "slam/icp_tracker.h"
@@ -25,6 +26,7 @@
 #include <memory>
 #include <numbers>
 #include <string>
+#include <utility>
 #include <vector>
 
 using namespace roomprobe;
@@ -230,8 +232,9 @@ TEST_CASE("slam: a frame from 1 m and 60 deg away is never tracked as Good") {
 	}
 }
 
-TEST_CASE("slam: a single plane leaves sliding free; without texture the pose is Poor and names the direction") {
-	// A wall 2 m in front of the camera: sliding along it and turning about its normal are free.
+// A textureless wall 2 m in front of the camera (at the origin, looking along +z), seen from a and
+// from b: sliding along it and turning about its normal are free.
+static std::pair<Frame, Frame> textureless_wall_frames(const Pose &p_a, const Pose &p_b) {
 	Scene scene;
 	Material material;
 	material.albedo.a = Color(0.5f);
@@ -244,11 +247,14 @@ TEST_CASE("slam: a single plane leaves sliding free; without texture the pose is
 	scene.quads.push_back(wall);
 	const SynthRenderer renderer(scene);
 	REQUIRE(renderer.ok());
+	return { render(renderer, half_camera(), p_a, 0.0, false, 1), render(renderer, half_camera(), p_b, 0.0, false, 2) };
+}
+
+TEST_CASE("slam: a single plane leaves sliding free; without texture the pose is Poor and names the direction") {
 	const PinholeIntrinsics camera = pinhole_intrinsics(half_camera());
 	const Pose a; // at the origin, looking along +z
 	const Pose b = moved(a, { 0.0, 0.0, 1.0 }, 1.0, { 0.01, 0.01, 0.0 });
-	const Frame reference = render(renderer, half_camera(), a, 0.0, false, 1);
-	const Frame current = render(renderer, half_camera(), b, 0.0, false, 2);
+	const auto [reference, current] = textureless_wall_frames(a, b);
 	const ModelMaps model = make_model_maps(reference.depth_m, reference.rgb, camera, a);
 	const TrackingResult result = IcpTracker().track(current.depth_m, current.rgb, camera, model, a);
 	CAPTURE(result.reason);
@@ -256,10 +262,40 @@ TEST_CASE("slam: a single plane leaves sliding free; without texture the pose is
 	CHECK(result.constraint < IcpOptions().min_constraint);
 	CHECK(result.reason.find("flat geometry") != std::string::npos);
 	CHECK(result.reason.find("unconstrained") != std::string::npos);
+	// Poor for the free direction alone: every pixel pairs, with no residual.
+	CHECK(result.unconstrained);
 	// The free directions are not moved: the estimate keeps the guess's slide (none here) while the
 	// constrained ones (distance to the wall, tilts) are measured.
 	CHECK(std::abs(result.world_from_camera.translation.x - a.translation.x) < 1e-6);
 	CHECK(std::abs(result.world_from_camera.translation.y - a.translation.y) < 1e-6);
+}
+
+TEST_CASE("slam: a frame Poor only for a free direction is fused (integrate_unconstrained), not when that is off") {
+	// Fused, the model grows while the camera turns along a bare wall (issue #18's sweeps); the
+	// frame's state stays Poor either way.
+	const Pose a;
+	const Pose b = moved(a, { 0.0, 0.0, 1.0 }, 1.0, { 0.01, 0.01, 0.0 }); // 1 cm in a frame: a hand's speed
+	const auto [first, second] = textureless_wall_frames(a, b);
+	for (const bool fuse : { true, false }) {
+		CAPTURE(fuse);
+		DenseSlamOptions options;
+		options.integrate_unconstrained = fuse;
+		DenseSlam slam(options);
+		REQUIRE(slam.configure(half_camera(), a) == "");
+		RgbdFrame frame;
+		frame.rgb = first.rgb;
+		frame.depth_m = first.depth_m;
+		REQUIRE(slam.process(frame).integrated);
+		frame.timestamp_s = 1.0 / 30.0;
+		frame.rgb = second.rgb;
+		frame.depth_m = second.depth_m;
+		const DenseSlamFrame out = slam.process(frame);
+		CAPTURE(out.tracking.reason);
+		CHECK(out.tracking.state == TrackingState::Poor);
+		CHECK(out.tracking.unconstrained);
+		CHECK(out.integrated == fuse);
+		CHECK(slam.integrated_count() == (fuse ? 2u : 1u));
+	}
 }
 
 TEST_CASE("slam: the colour term keeps ICP on the known pose") {

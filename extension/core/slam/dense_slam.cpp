@@ -321,7 +321,8 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 		last_pose = out.tracking.world_from_camera;
 		last_time_s = p_frame.timestamp_s;
 	}
-	const bool trusted = out.tracking.state == TrackingState::Good || (opts.integrate_poor && out.tracking.state == TrackingState::Poor);
+	const bool poor = out.tracking.state == TrackingState::Poor;
+	const bool trusted = out.tracking.state == TrackingState::Good || (poor && (opts.integrate_poor || (opts.integrate_unconstrained && out.tracking.unconstrained)));
 	if (trusted) {
 		start = Clock::now();
 		out.integration = integrate(depth, rgb, last_pose);

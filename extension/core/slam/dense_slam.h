@@ -9,7 +9,8 @@
 // and process(), which runs a frame through them in order.
 //
 // Tracking states (slam_types.h): Good frames are integrated; Poor ones move the pose but are not
-// integrated (unless integrate_poor); when Lost the last trusted pose is held, nothing is
+// integrated (unless integrate_poor), except those Poor only for a direction nothing constrains
+// (integrate_unconstrained); when Lost the last trusted pose is held, nothing is
 // integrated, and each new frame tries to re-track against the model from that pose and, failing
 // that, relocalises: a wider search from starting poses around it (DenseSlamOptions), so that
 // tracking resumes when the camera comes back near where it was lost. A pose the search cannot
@@ -42,6 +43,15 @@ struct DenseSlamOptions {
 	TsdfOptions tsdf; // the volume: voxel size, truncation, block cap (units there)
 	IcpOptions icp; // tracking: pyramid, thresholds, colour term (units there)
 	bool integrate_poor = false; // also fuse frames whose tracking is Poor
+	// Fuse the frames that are Poor only because a direction is unconstrained (TrackingResult::
+	// unconstrained: a bare corner, two parallel striped planes), at their pose, whose free
+	// direction the finest level left at the guess. Their error along it (the rig's real motion
+	// that way, a few centimetres over a second) goes into the model, but the model keeps growing
+	// while the camera turns, and tracking goes on once the view has structure again. Unfused, the
+	// model stopped where the view went flat, the camera turned past it, and the rest of the sweep
+	// was lost (issue #18: panorama_room's room sweep, a bare corner 2 s in, then 188 of 300
+	// frames lost; fused, 1).
+	bool integrate_unconstrained = true;
 	bool constant_velocity = true; // predict each pose from the last two trusted ones (else: the last one)
 	// A hand-held rig moves slower than this. A pose that moved faster since the last tracked one
 	// (plus 2 cm for noise) slid along surfaces that do not fix it (a bare wall and its corner),

@@ -478,6 +478,7 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 	if (!(result.constraint >= options.min_constraint)) {
 		// Nothing fixes this direction: the estimate along it is the guess, not a measurement.
 		result.state = TrackingState::Poor;
+		result.unconstrained = result.inlier_fraction >= options.good_inlier_fraction && result.rmse_m <= options.max_good_rmse_m;
 		result.reason = std::string("flat geometry: ") + (finest.ok ? weakest_direction(finest) : std::string("the pose")) +
 				" unconstrained (its share of the information " + format(result.constraint, 4) + " below " + format(options.min_constraint, 4) +
 				(colour ? ", even with the colour term)" : "; the colour term is off or has no colour)");

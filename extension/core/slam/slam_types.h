@@ -55,6 +55,9 @@ struct TrackingResult {
 	// whole, near 0 for a flat wall.
 	double constraint = 0.0;
 	bool colour_used = false; // the photometric rows took part at the finest level
+	// Poor only because a direction is unconstrained (kept at the guess, icp_tracker.h), the
+	// support otherwise good (inliers and residual within the Good limits).
+	bool unconstrained = false;
 	bool relocalised = false; // found by the wider search after a loss (dense_slam.h)
 };
 
