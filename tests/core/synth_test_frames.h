@@ -5,6 +5,7 @@
 
 #include "synth_test_rig.h"
 
+#include "recording/recording_types.h"
 #include "synth/synth_renderer.h"
 #include "synth/synth_scene.h"
 #include "synth/synth_sequence.h"
@@ -56,6 +57,15 @@ struct Frame {
 	cv::Mat depth_m; // CV_32FC1, NaN = none
 	cv::Mat rgb;
 };
+
+// The frame as DenseSlam takes it, stamped p_time_s on the RGB-D clock.
+inline RgbdFrame rgbd_frame(const Frame &p_frame, double p_time_s) {
+	RgbdFrame out;
+	out.timestamp_s = p_time_s;
+	out.rgb = p_frame.rgb;
+	out.depth_m = p_frame.depth_m;
+	return out;
+}
 
 // The frame the camera sees at a pose. Noise-free: the renderer's exact z where the sensor has a
 // reading (its holes kept, no 1 mm quantisation). Noisy: the sensor's depth with Kinect-like axial

@@ -24,12 +24,7 @@ namespace {
 constexpr double FRAME_S = 1.0 / 30.0;
 
 RgbdFrame rgbd_at(double p_t, bool p_noisy = true) {
-	const Frame frame = render_living_room(living_room().trajectory.world_from_rgb(p_t), p_t, p_noisy, uint64_t(p_t * 1000.0) + 3);
-	RgbdFrame out;
-	out.timestamp_s = p_t;
-	out.rgb = frame.rgb;
-	out.depth_m = frame.depth_m;
-	return out;
+	return rgbd_frame(render_living_room(living_room().trajectory.world_from_rgb(p_t), p_t, p_noisy, uint64_t(p_t * 1000.0) + 3), p_t);
 }
 
 // DenseSlam is not movable (it holds its volume's lock): configured in place.
@@ -209,12 +204,7 @@ TEST_CASE("dense SLAM: a jump of 0.5 m and 30 deg stays lost through relocalisat
 	const Pose jumped = compose(last, moved);
 	for (int i = 3; i < 8; i++) {
 		const double t = i * FRAME_S;
-		const Frame frame = render_living_room(jumped, t, true, uint64_t(i) + 40);
-		RgbdFrame rgbd;
-		rgbd.timestamp_s = t;
-		rgbd.rgb = frame.rgb;
-		rgbd.depth_m = frame.depth_m;
-		const DenseSlamFrame out = slam.process(rgbd);
+		const DenseSlamFrame out = slam.process(rgbd_frame(render_living_room(jumped, t, true, uint64_t(i) + 40), t));
 		CAPTURE(out.tracking.reason);
 		CHECK(out.tracking.state == TrackingState::Lost);
 		CHECK_FALSE(out.integrated);
@@ -244,12 +234,7 @@ TEST_CASE("dense SLAM: after a blackout the camera is found 15 cm and 8 deg from
 	moved.rotation = glm::angleAxis(glm::radians(8.0), glm::normalize(glm::dvec3(0.2, 1.0, 0.0)));
 	const Pose found_at = compose(last, moved);
 	// relocalised is set only when the plain re-track from the held pose failed and the search found it.
-	const Frame frame = render_living_room(found_at, 12 * FRAME_S, true, 77);
-	RgbdFrame rgbd;
-	rgbd.timestamp_s = 12 * FRAME_S;
-	rgbd.rgb = frame.rgb;
-	rgbd.depth_m = frame.depth_m;
-	const DenseSlamFrame out = slam.process(rgbd);
+	const DenseSlamFrame out = slam.process(rgbd_frame(render_living_room(found_at, 12 * FRAME_S, true, 77), 12 * FRAME_S));
 	CAPTURE(out.tracking.reason);
 	REQUIRE(out.tracking.state == TrackingState::Good);
 	CHECK(out.tracking.relocalised);

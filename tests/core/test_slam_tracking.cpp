@@ -282,14 +282,8 @@ TEST_CASE("slam: a frame Poor only for a free direction is fused (integrate_unco
 		options.integrate_unconstrained = fuse;
 		DenseSlam slam(options);
 		REQUIRE(slam.configure(half_camera(), a) == "");
-		RgbdFrame frame;
-		frame.rgb = first.rgb;
-		frame.depth_m = first.depth_m;
-		REQUIRE(slam.process(frame).integrated);
-		frame.timestamp_s = 1.0 / 30.0;
-		frame.rgb = second.rgb;
-		frame.depth_m = second.depth_m;
-		const DenseSlamFrame out = slam.process(frame);
+		REQUIRE(slam.process(rgbd_frame(first, 0.0)).integrated);
+		const DenseSlamFrame out = slam.process(rgbd_frame(second, 1.0 / 30.0));
 		CAPTURE(out.tracking.reason);
 		CHECK(out.tracking.state == TrackingState::Poor);
 		CHECK(out.tracking.unconstrained);
