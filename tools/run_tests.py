@@ -667,11 +667,16 @@ def show_with_context(lines, bad, limit=60):
 # 0.5 degrees, a given floorplan registered within 2 cm); on the 1-s fixture, which sees one wall,
 # a clear state and no file; and the tool's refusals.
 ROOM_SWEEP = os.path.join(rp.BUILD, "test-data", "living_room_10s")
-ROOM_LINE = re.compile(r"^corner_error_max_m=([\d.]+) ceiling_error_m=([\d.]+) up_error_deg=([\d.]+) registration_error_m=(-?[\d.]+) registration_rms_m=([\d.]+)$")
-ROOM_LIMITS = {"corner_error_max_m": 0.05, "ceiling_error_m": 0.03, "up_error_deg": 0.5, "registration_error_m": 0.02}
+ROOM_LINE = re.compile(r"^corner_error_max_m=([\d.]+) ceiling_error_m=([\d.]+) up_error_deg=([\d.]+) registration_error_m=(-?[\d.]+) "
+                       r"registration_rms_m=([\d.]+) corner_error_fitted_m=([\d.]+)$")
+ROOM_FIGURES = ["corner_error_max_m", "ceiling_error_m", "up_error_deg", "registration_error_m", "registration_rms_m", "corner_error_fitted_m"]
+ROOM_LIMITS = {"corner_error_max_m": 0.05, "ceiling_error_m": 0.03, "up_error_deg": 0.5, "registration_error_m": 0.02, "corner_error_fitted_m": 0.05}
 # The two rooms' 10-s room sweep (synth --room-sweep: through the doorway into the right room),
-# tracked: its corners (the partition's included), ceiling and up against the same limits. Its
-# registration (2.4 cm on the last run, the tracker's slide by the wardrobe) is reported, not judged.
+# tracked: its corners (the partition's included) after the found world is aligned to the true one
+# (the issue's measure), ceiling and up against the same limits. Through the first camera its corners
+# carry the tracker's slide by the wardrobe at 2.3 s (13 cm, README), as its registration does: both
+# are reported, not judged. The living room judges both corner figures.
+ROOM_TWO_ROOMS_JUDGED = ["corner_error_fitted_m", "ceiling_error_m", "up_error_deg"]
 ROOM_TWO_ROOMS_SWEEP = os.path.join(rp.BUILD, "test-data", "two_rooms_room_sweep_10s")
 ROOM_EVAL_ROW = "+light (gain)"  # the coarse model as the live system runs it (roomprobe_eval's table)
 ROOM_PSNR_LIMIT_DB = 0.5
@@ -702,7 +707,7 @@ def suite_room(opts):
         s.fail(f"room: the 10-s sweep: {rp.describe_exit(r)}, figures line {'found' if m else 'missing'} (see {rp.relpath(log)})")
         rp.tail(r.lines, 20)
     else:
-        figures = dict(zip(["corner_error_max_m", "ceiling_error_m", "up_error_deg", "registration_error_m"], map(float, m.groups())))
+        figures = {k: v for k, v in zip(ROOM_FIGURES, map(float, m.groups())) if k in ROOM_LIMITS}
         print(m.group(0))
         over = room_figures_over_limits(figures)
         if over:
@@ -739,7 +744,7 @@ def suite_room(opts):
         s.fail(f"room: the two rooms' room sweep: {rp.describe_exit(r)}, figures line {'found' if m else 'missing'} (see {rp.relpath(log)}.two-rooms)")
         rp.tail(r.lines, 20)
     else:
-        figures = dict(zip(["corner_error_max_m", "ceiling_error_m", "up_error_deg"], map(float, m.groups()[:3])))
+        figures = {k: v for k, v in zip(ROOM_FIGURES, map(float, m.groups())) if k in ROOM_TWO_ROOMS_JUDGED}
         print("two rooms, room sweep: " + m.group(0))
         s.notes.append("two rooms, room sweep: " + m.group(0))
         over = room_figures_over_limits(figures)

@@ -254,6 +254,26 @@ TEST_CASE("room estimation: a step of a few centimetres between two pieces of on
 	CHECK(partition.size() == figure4_two_rooms().points.size());
 }
 
+TEST_CASE("room comparison: a turned and shifted room is its shape once fitted; a wall out of place stays an error") {
+	const Floorplan truth = figure4_two_rooms();
+	// The same room seen from a frame turned 0.5 degrees and shifted 4 cm: through the frames its
+	// far corners miss by up to 8 m x 0.5 degrees + 4 cm; fitted, by nothing.
+	Pose turned;
+	turned.rotation = glm::angleAxis(glm::radians(0.5), glm::dvec3(0.0, 1.0, 0.0));
+	turned.translation = glm::dvec3(0.03, 0.0, -0.025);
+	const RoomComparison same = compare_rooms(truth, turned, truth, Pose());
+	CHECK(same.corner_error_max_m >= 0.06);
+	CHECK(same.corner_error_fitted_m <= 1e-6);
+	// The right room's end wall 0.66 m short: no turn or shift hides it (at least half of it stays).
+	Floorplan short_room = truth;
+	for (Vec2 &p : short_room.points) {
+		p.x = p.x > 7.9 ? 7.34 : p.x;
+	}
+	const RoomComparison shorter = compare_rooms(short_room, Pose(), truth, Pose());
+	CHECK(shorter.corner_error_max_m == doctest::Approx(0.66).epsilon(1e-9));
+	CHECK(shorter.corner_error_fitted_m >= 0.33);
+}
+
 TEST_CASE("room from a sweep: with no room file the world starts upright, the fisheye's axis up and the view down -Z") {
 	auto check_upright = [](bool p_has_fisheye, const Pose &p_rgb_from_fisheye) {
 		const Pose pose = upright_first_rgb_pose(p_has_fisheye, p_rgb_from_fisheye);
@@ -386,6 +406,17 @@ TEST_CASE("room estimation: the fisheye finds the ceiling over textured walls, a
 	CHECK(std::abs(partial.points[1].x - 5.0) <= 0.05);
 	CHECK(std::abs(partial.points[2].x - 5.0) <= 0.05);
 	CHECK(partial.points[1].y == 0.0);
+
+	// Wall 1 where it stands, but marked unseen: the search starts on the true wall, and the
+	// positions beyond it are behind it (the views see its stripes there). The wall is confirmed
+	// where it stands, not moved behind itself.
+	Floorplan whole = living_room();
+	whole.ceiling_height_m = ceiling.height_m;
+	std::vector<double> unseen = { 1.0, 0.0, 1.0, 1.0 };
+	const std::vector<std::string> beyond = complete_walls_from_fisheye(views, rig.fisheye, &whole, &unseen);
+	CAPTURE(beyond.size() == 1 ? beyond[0] : std::string());
+	CHECK(std::abs(whole.points[1].x - 5.0) <= 0.05);
+	CHECK(std::abs(whole.points[2].x - 5.0) <= 0.05);
 
 	// Views with no edges at all (a uniform sky): no ceiling, said so.
 	std::vector<FisheyeView> blank = views;

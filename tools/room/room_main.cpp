@@ -3,7 +3,9 @@
 // floorplan over the dense model seen from above. When the recording holds its true room, the
 // two are compared, and the true floorplan is registered to the reconstructed walls as a given
 // floorplan would be; the last line is
-//   corner_error_max_m=... ceiling_error_m=... up_error_deg=... registration_error_m=... registration_rms_m=...
+//   corner_error_max_m=... ceiling_error_m=... up_error_deg=... registration_error_m=... registration_rms_m=... corner_error_fitted_m=...
+// (corner_error_max_m through the first camera, so with the tracker's drift; corner_error_fitted_m
+// after the best turn and shift in the floor plane: the room's shape alone).
 //
 // roomprobe_room --recording DIR --out FILE [--picture FILE] [--true-poses] [--seconds S] [--force] [--quiet]
 
@@ -224,8 +226,10 @@ int run(int argc, char **argv) {
 			registration_error_m = compare_rooms(placed, result.world_from_model, result.truth.floorplan, result.true_world_from_model).corner_error_max_m;
 		}
 		std::printf("registration of the true floorplan: %s\n", registration.message.c_str());
-		std::printf("corner_error_max_m=%.4f ceiling_error_m=%.4f up_error_deg=%.3f registration_error_m=%.4f registration_rms_m=%.4f\n",
-				comparison.corner_error_max_m, comparison.ceiling_error_m, comparison.up_error_deg, registration_error_m, registration.residual_rms_m);
+		std::printf("corner_error_max_m=%.4f ceiling_error_m=%.4f up_error_deg=%.3f registration_error_m=%.4f registration_rms_m=%.4f "
+					"corner_error_fitted_m=%.4f\n",
+				comparison.corner_error_max_m, comparison.ceiling_error_m, comparison.up_error_deg, registration_error_m, registration.residual_rms_m,
+				comparison.corner_error_fitted_m);
 	}
 	return 0;
 }

@@ -23,11 +23,14 @@ constexpr double STEP_M = 0.01; // the heights and offsets searched
 constexpr double SAMPLE_SPACING_M = 0.05; // points along an edge
 constexpr double CORNER_CLEARANCE_M = 0.15; // kept clear of the corners (other walls' edges meet there)
 constexpr double MIN_CONTRAST = 1.5; // a ceiling edge stands this far above the median of the heights searched
-// A wall found beyond where the view ended stands this far above the median of the positions
-// searched. Stricter: a wrong wall moves the room's outline, where a wrong ceiling only lifts it.
-// Seen: true walls 14 and 18 times the median in the synthetic rooms, a false one (a room beyond
-// a partition the sweep never saw) 3.3.
-constexpr double MIN_WALL_CONTRAST = 6.0;
+// A wall found beyond where the view ended stands this many robust standard deviations above
+// the median of the positions searched (the 5-sigma of a detection). Measured against the
+// profile's own scatter, not its level: the positions behind the true wall see its texture, which
+// lifts the median and the scatter alike. Seen, tracked 10-s sweeps of two_rooms: true walls 8.4
+// (the right room's end, room sweep) and 9.4 (the wardrobe's side, orbit), a false one (the room
+// beyond a partition the orbit never passed) 3.3; as ratios to the median 5.4, 9.9 and 2.5, too
+// close to one threshold.
+constexpr double MIN_WALL_SIGMAS = 5.0;
 
 // A float image for edge measurements: log luminance, so that edges between surfaces of
 // different brightness weigh alike in dark and bright parts (8-bit and HDR frames alike).
@@ -64,14 +67,47 @@ double median_of(std::vector<double> p_values) {
 	return p_values[p_values.size() / 2];
 }
 
+// Whether the segments p-q and a-b cross at a point inside both (touching does not count).
+bool segments_cross(const Vec2 &p_p, const Vec2 &p_q, const Vec2 &p_a, const Vec2 &p_b) {
+	const auto side = [](const Vec2 &o, const Vec2 &u, const Vec2 &v) { return (u.x - o.x) * (v.y - o.y) - (u.y - o.y) * (v.x - o.x); };
+	const double d1 = side(p_a, p_b, p_p), d2 = side(p_a, p_b, p_q), d3 = side(p_p, p_q, p_a), d4 = side(p_p, p_q, p_b);
+	return ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0)) && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0));
+}
+
 struct EdgeViews {
 	struct View {
 		cv::Mat gray, gx, gy; // log luminance, blurred, and its gradient
 		cv::Mat detail; // gray less its local mean: the lens's vignetting and the exposure cancel
 		Pose fisheye_from_world;
+		Vec2 floor_position; // the fisheye's centre on the floorplan
 	};
 	std::vector<View> views;
 	const OmniParams *fisheye = nullptr;
+	// Walls known to stand floor to ceiling (edges seen as walls, less those being searched): a
+	// point behind one from a view is not in that view, which shows the wall there instead (the
+	// right room's edges from the left room, through the partition).
+	std::vector<std::pair<Vec2, Vec2>> occluders;
+
+	void set_occluders(const Floorplan &p_floorplan, const std::vector<double> &p_edge_confidence, size_t p_searched, size_t p_skip_neighbours) {
+		occluders.clear();
+		const size_t n = p_floorplan.points.size();
+		for (size_t j = 0; j < n && j < p_edge_confidence.size(); j++) {
+			const size_t distance = std::min((j + n - p_searched) % n, (p_searched + n - j) % n);
+			if (p_edge_confidence[j] >= 0.3 && distance > p_skip_neighbours) {
+				occluders.emplace_back(p_floorplan.points[j], p_floorplan.points[(j + 1) % n]);
+			}
+		}
+	}
+
+	bool hidden(const View &p_view, const glm::dvec3 &p_world) const {
+		const Vec2 to = { p_world.x, p_world.z };
+		for (const auto &[a, b] : occluders) {
+			if (segments_cross(p_view.floor_position, to, a, b)) {
+				return true;
+			}
+		}
+		return false;
+	}
 
 	EdgeViews(const std::vector<FisheyeView> &p_views, const OmniParams &p_fisheye) : fisheye(&p_fisheye) {
 		for (const FisheyeView &view : p_views) {
@@ -85,6 +121,7 @@ struct EdgeViews {
 			cv::Sobel(v.gray, v.gx, CV_32F, 1, 0, 3, 1.0 / 8.0);
 			cv::Sobel(v.gray, v.gy, CV_32F, 0, 1, 3, 1.0 / 8.0);
 			v.fisheye_from_world = inverse(view.world_from_fisheye);
+			v.floor_position = { view.world_from_fisheye.translation.x, view.world_from_fisheye.translation.z };
 			views.push_back(std::move(v));
 		}
 	}
@@ -96,6 +133,9 @@ struct EdgeViews {
 		int seen = 0;
 		for (const View &view : views) {
 			glm::dvec2 at, above;
+			if (hidden(view, p_world)) {
+				continue;
+			}
 			const glm::dvec3 p = transform_point(view.fisheye_from_world, p_world);
 			const glm::dvec3 q = transform_point(view.fisheye_from_world, p_world + glm::dvec3(0.0, 0.02, 0.0));
 			if (!project_omni(*fisheye, p, &at) || !project_omni(*fisheye, q, &above) || !omni_pixel_valid(*fisheye, at)) {
@@ -146,7 +186,7 @@ double EdgeViews::strip_spread(const Vec2 &p_a, const Vec2 &p_b, double p_height
 			values.clear();
 			for (const View &view : views) {
 				glm::dvec2 at;
-				if (project_omni(*fisheye, transform_point(view.fisheye_from_world, base + offset), &at) && omni_pixel_valid(*fisheye, at)) {
+				if (!hidden(view, base + offset) && project_omni(*fisheye, transform_point(view.fisheye_from_world, base + offset), &at) && omni_pixel_valid(*fisheye, at)) {
 					values.push_back(bilinear(view.detail, at));
 				}
 			}
@@ -201,6 +241,19 @@ double profile_peak(const std::vector<double> &p_profile, double *r_contrast, bo
 	return double(best) + (curvature < 0.0 ? std::clamp(0.5 * (a - c) / curvature, -0.5, 0.5) : 0.0);
 }
 
+// How far p_peak stands above a profile's median, in robust standard deviations (1.4826 times
+// the median absolute deviation); 0 for a flat profile.
+double peak_sigmas(const std::vector<double> &p_profile, double p_peak) {
+	const double median = median_of(p_profile);
+	std::vector<double> deviations;
+	deviations.reserve(p_profile.size());
+	for (const double v : p_profile) {
+		deviations.push_back(std::abs(v - median));
+	}
+	const double sigma = 1.4826 * median_of(std::move(deviations));
+	return sigma > 0.0 ? (p_peak - median) / sigma : 0.0;
+}
+
 } // namespace
 
 CeilingSearch ceiling_from_fisheye(const std::vector<FisheyeView> &p_views, const OmniParams &p_fisheye, const Floorplan &p_floorplan, double p_min_m,
@@ -211,7 +264,7 @@ CeilingSearch ceiling_from_fisheye(const std::vector<FisheyeView> &p_views, cons
 		result.message = p_views.empty() ? "no fisheye frames with a pose" : "no floorplan, or an empty height range";
 		return result;
 	}
-	const EdgeViews edges(p_views, p_fisheye);
+	EdgeViews edges(p_views, p_fisheye);
 	result.views_used = edges.views.size();
 	if (edges.views.empty()) {
 		result.message = "no fisheye frame has the rig's fisheye size";
@@ -232,6 +285,7 @@ CeilingSearch ceiling_from_fisheye(const std::vector<FisheyeView> &p_views, cons
 		// Two cues per height: the edge's strength (a texture's horizontal lines have it too) and
 		// how alike the views see the ceiling just inside (only the true height has that).
 		const std::vector<glm::dvec3> offsets = ceiling_offsets(inward);
+		edges.set_occluders(p_floorplan, p_edge_confidence, i, 0);
 		std::vector<double> edge(size_t(steps), 0.0), spread(size_t(steps), 0.0);
 		bool usable = true;
 		for (int k = 0; k < steps && usable; k++) {
@@ -277,7 +331,7 @@ std::vector<std::string> complete_walls_from_fisheye(const std::vector<FisheyeVi
 	if (n < 3 || io_edge_confidence->size() != n || !(height > 0.0)) {
 		return lines;
 	}
-	const EdgeViews edges(p_views, p_fisheye);
+	EdgeViews edges(p_views, p_fisheye);
 	if (edges.views.empty()) {
 		return lines;
 	}
@@ -304,7 +358,8 @@ std::vector<std::string> complete_walls_from_fisheye(const std::vector<FisheyeVi
 			*r_b = { b.x + slide_b.x * p_move_m / rate_b, b.y + slide_b.y * p_move_m / rate_b };
 		};
 		// The two cues, as for the ceiling, with the strip down the moved wall: the views agree
-		// on it only where a wall stands.
+		// on it only where a wall stands. Its neighbours grow with it, so they hide nothing.
+		edges.set_occluders(*io_floorplan, *io_edge_confidence, i, 1);
 		const int steps = int(std::floor(p_max_move_m / STEP_M)) + 1;
 		std::vector<double> edge(size_t(steps), 0.0), spread(size_t(steps), 0.0), profile(size_t(steps), 0.0);
 		for (int k = 0; k < steps; k++) {
@@ -319,12 +374,14 @@ std::vector<std::string> complete_walls_from_fisheye(const std::vector<FisheyeVi
 					? edge_cue(edge[size_t(k)], edge_median, spread[size_t(k)], spread_median)
 					: 0.0;
 		}
-		double contrast = 0.0;
+		double ratio = 0.0;
 		bool inside = false;
-		const double move_m = STEP_M * profile_peak(profile, &contrast, &inside);
-		if (!(contrast >= MIN_WALL_CONTRAST) || (!inside && move_m > 0.0)) {
-			lines.push_back("edge " + std::to_string(i) + format(": no clear top edge within %.1f m beyond it (best %.1f times the median); left where the view ended",
-												 p_max_move_m, contrast));
+		const double move_m = STEP_M * profile_peak(profile, &ratio, &inside);
+		const double sigmas = peak_sigmas(profile, *std::max_element(profile.begin(), profile.end()));
+		if (!(sigmas >= MIN_WALL_SIGMAS) || (!inside && move_m > 0.0)) {
+			lines.push_back("edge " + std::to_string(i) +
+					format(": no clear top edge within %.1f m beyond it (the best, %.2f m out, %.1f sigma above the median); left where the view ended", p_max_move_m,
+							move_m, sigmas));
 			continue;
 		}
 		Floorplan trial = *io_floorplan;
@@ -335,8 +392,8 @@ std::vector<std::string> complete_walls_from_fisheye(const std::vector<FisheyeVi
 		}
 		*io_floorplan = trial;
 		(*io_edge_confidence)[i] = FISHEYE_WALL_CONFIDENCE;
-		lines.push_back("edge " + std::to_string(i) + format(": a wall %.3f m beyond where the view ended, from the fisheye (%.1f times the median edge)",
-											 move_m, contrast));
+		lines.push_back("edge " + std::to_string(i) + format(": a wall %.3f m beyond where the view ended, from the fisheye (%.1f sigma above the median edge)",
+											 move_m, sigmas));
 	}
 	return lines;
 }

@@ -714,12 +714,48 @@ RoomComparison compare_rooms(const Floorplan &p_estimate, const Pose &p_estimate
 		}
 		return best;
 	};
-	for (const Vec2 &p : mapped) {
-		result.corner_error_max_m = std::max(result.corner_error_max_m, nearest(p, p_truth.points));
+	auto corner_error = [&](const std::vector<Vec2> &p_points) {
+		double error = 0.0;
+		for (const Vec2 &p : p_points) {
+			error = std::max(error, nearest(p, p_truth.points));
+		}
+		for (const Vec2 &p : p_truth.points) {
+			error = std::max(error, nearest(p, p_points));
+		}
+		return error;
+	};
+	result.corner_error_max_m = corner_error(mapped);
+	// The best turn and shift: each corner paired with its nearest true one, fitted in closed form
+	// (2-D Procrustes), three times over as the pairs settle.
+	std::vector<Vec2> fitted = mapped;
+	for (int round = 0; round < 3 && !fitted.empty() && !p_truth.points.empty(); round++) {
+		std::vector<std::pair<Vec2, Vec2>> pairs;
+		Vec2 mean_a, mean_b;
+		for (const Vec2 &p : fitted) {
+			const Vec2 *best = &p_truth.points.front();
+			for (const Vec2 &q : p_truth.points) {
+				best = std::hypot(p.x - q.x, p.y - q.y) < std::hypot(p.x - best->x, p.y - best->y) ? &q : best;
+			}
+			pairs.emplace_back(p, *best);
+			mean_a = { mean_a.x + p.x, mean_a.y + p.y };
+			mean_b = { mean_b.x + best->x, mean_b.y + best->y };
+		}
+		const double n = double(pairs.size());
+		mean_a = { mean_a.x / n, mean_a.y / n };
+		mean_b = { mean_b.x / n, mean_b.y / n };
+		double cross = 0.0, dot = 0.0;
+		for (const auto &[a, b] : pairs) {
+			const Vec2 u = { a.x - mean_a.x, a.y - mean_a.y }, v = { b.x - mean_b.x, b.y - mean_b.y };
+			cross += u.x * v.y - u.y * v.x;
+			dot += u.x * v.x + u.y * v.y;
+		}
+		const double angle = std::atan2(cross, dot), c = std::cos(angle), s = std::sin(angle);
+		for (Vec2 &p : fitted) {
+			const Vec2 u = { p.x - mean_a.x, p.y - mean_a.y };
+			p = { mean_b.x + c * u.x - s * u.y, mean_b.y + s * u.x + c * u.y };
+		}
 	}
-	for (const Vec2 &p : p_truth.points) {
-		result.corner_error_max_m = std::max(result.corner_error_max_m, nearest(p, mapped));
-	}
+	result.corner_error_fitted_m = corner_error(fitted);
 	result.corners = mapped.size();
 	result.true_corners = p_truth.points.size();
 	result.ceiling_error_m = std::abs(p_estimate.ceiling_height_m - p_truth.ceiling_height_m);

@@ -121,15 +121,18 @@ struct CeilingSearch {
 // the strongest image edges: the image gradient along the wall's vertical direction, averaged
 // over the views, its median along each wall (furniture along part of a wall does not count),
 // each wall's profile over its own median, then the walls' mean. Only the edges seen as walls
-// (confidence >= 0.3) are used when any is. Needs the floorplan and the views in one frame.
+// (confidence >= 0.3) are used when any is, and a view counts only where no other of them hides
+// the point from it. Needs the floorplan and the views in one frame.
 CeilingSearch ceiling_from_fisheye(const std::vector<FisheyeView> &p_views, const OmniParams &p_fisheye, const Floorplan &p_floorplan, double p_min_m,
 		double p_max_m, const std::vector<double> &p_edge_confidence = {});
 
 // Walls the RGB-D camera never saw, from the fisheye: each edge of io_floorplan with confidence
 // under 0.3 (where the sweep's view ended) is moved outward, up to p_max_move_m, to where its top
 // edge at the known ceiling height lines up with the strongest image edge, its corners sliding
-// along the neighbouring edges. An edge moved gets confidence FISHEYE_WALL_CONFIDENCE; one with
-// no clear edge stays. Returns one line per edge tried.
+// along the neighbouring edges. The edge must stand 5 robust standard deviations above the
+// positions searched, and a view counts only where no wall seen hides the point from it. An edge
+// moved gets confidence FISHEYE_WALL_CONFIDENCE; one with no clear edge stays. Returns one line
+// per edge tried.
 inline constexpr double FISHEYE_WALL_CONFIDENCE = 0.5;
 std::vector<std::string> complete_walls_from_fisheye(const std::vector<FisheyeView> &p_views, const OmniParams &p_fisheye, Floorplan *io_floorplan,
 		std::vector<double> *io_edge_confidence, double p_max_move_m = 3.0);
@@ -151,8 +154,13 @@ FloorplanRegistration register_floorplan(const Floorplan &p_given, const std::ve
 
 // An estimated room against the true one, both tied to the same dense-model frame (the true one by
 // the recording's initial pose): the estimated corners mapped into the true world.
+// A room found against the true one. Two corner errors, each corner to the nearest corner of the
+// other polygon, both ways: through the frames as given (for a tracked sweep, its first camera:
+// the room's shape plus the tracker's drift since), and after the best turn and shift in the floor
+// plane (the room's shape alone: the "after the world frame is aligned to the true one").
 struct RoomComparison {
-	double corner_error_max_m = 0.0; // each corner to the nearest corner of the other polygon, both ways
+	double corner_error_max_m = 0.0; // through the frames as given
+	double corner_error_fitted_m = 0.0; // after the best turn and shift
 	double ceiling_error_m = 0.0;
 	double up_error_deg = 0.0;
 	size_t corners = 0, true_corners = 0;
