@@ -707,13 +707,16 @@ RoomComparison compare_rooms(const Floorplan &p_estimate, const Pose &p_estimate
 		const glm::dvec3 q = transform_point(true_from_estimate, glm::dvec3(p.x, 0.0, p.y));
 		mapped.push_back({ q.x, q.z });
 	}
-	auto nearest = [](const Vec2 &p_point, const std::vector<Vec2> &p_set) {
-		double best = 1e9;
+	const auto distance = [](const Vec2 &p_a, const Vec2 &p_b) { return std::hypot(p_a.x - p_b.x, p_a.y - p_b.y); };
+	// The point of a non-empty p_set nearest p_point.
+	const auto closest = [&](const Vec2 &p_point, const std::vector<Vec2> &p_set) -> const Vec2 & {
+		const Vec2 *best = &p_set.front();
 		for (const Vec2 &q : p_set) {
-			best = std::min(best, std::hypot(p_point.x - q.x, p_point.y - q.y));
+			best = distance(p_point, q) < distance(p_point, *best) ? &q : best;
 		}
-		return best;
+		return *best;
 	};
+	const auto nearest = [&](const Vec2 &p_point, const std::vector<Vec2> &p_set) { return p_set.empty() ? 1e9 : distance(p_point, closest(p_point, p_set)); };
 	auto corner_error = [&](const std::vector<Vec2> &p_points) {
 		double error = 0.0;
 		for (const Vec2 &p : p_points) {
@@ -732,13 +735,10 @@ RoomComparison compare_rooms(const Floorplan &p_estimate, const Pose &p_estimate
 		std::vector<std::pair<Vec2, Vec2>> pairs;
 		Vec2 mean_a, mean_b;
 		for (const Vec2 &p : fitted) {
-			const Vec2 *best = &p_truth.points.front();
-			for (const Vec2 &q : p_truth.points) {
-				best = std::hypot(p.x - q.x, p.y - q.y) < std::hypot(p.x - best->x, p.y - best->y) ? &q : best;
-			}
-			pairs.emplace_back(p, *best);
+			const Vec2 &q = closest(p, p_truth.points);
+			pairs.emplace_back(p, q);
 			mean_a = { mean_a.x + p.x, mean_a.y + p.y };
-			mean_b = { mean_b.x + best->x, mean_b.y + best->y };
+			mean_b = { mean_b.x + q.x, mean_b.y + q.y };
 		}
 		const double n = double(pairs.size());
 		mean_a = { mean_a.x / n, mean_a.y / n };
