@@ -8,6 +8,8 @@
 
 #include <rp_godot/godot.h>
 
+#include <opencv2/core/utils/logger.hpp>
+
 namespace roomprobe {
 extern const char *const doc_xml[];
 extern const size_t doc_xml_count;
@@ -19,6 +21,11 @@ void initialize_roomprobe(GDExtensionInitializationLevel p_level) {
 	if (p_level != GDEXTENSION_INITIALIZATION_SCENE) {
 		return;
 	}
+	// OpenCV's own log lines go to std::cerr from inside a library Godot loads with
+	// RTLD_DEEPBIND, and there the stream's sentry crashed Godot (issue #38: a cv::FileStorage
+	// that could not open its file). Every error RoomProbe reports is its own message through
+	// Godot; OpenCV's log stays silent inside the engine.
+	cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
 	// In pipeline order: frames, tracking, the coarse room, and the probes that read them.
 	godot::ClassDB::register_class<roomprobe::RigCapture>();
 	godot::ClassDB::register_class<roomprobe::DenseSLAM>();

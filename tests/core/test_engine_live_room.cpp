@@ -478,6 +478,22 @@ TEST_CASE("engine: threaded mode, paced so that no frame is dropped, ends with s
 	engine.stop();
 	CHECK_FALSE(engine.is_running());
 	map = engine.probe_map(probe); // the worker's last map: nothing rendered after the matching one undid it
+	// The placement worker built its Embree scene from the mesh the SLAM worker published (frame
+	// 15): rays down onto its triangles meet the dense model (those on a wall may meet the room).
+	const std::shared_ptr<const DenseMeshSnapshot> dense = engine.dense_mesh();
+	REQUIRE(dense != nullptr);
+	REQUIRE(dense->mesh != nullptr);
+	const TriangleMesh &triangles = *dense->mesh;
+	REQUIRE(triangles.indices.size() >= 300);
+	int on_dense = 0;
+	for (size_t t = 0; t + 2 < triangles.indices.size(); t += triangles.indices.size() / 100 / 3 * 3) {
+		const glm::dvec3 a(triangles.vertices[triangles.indices[t]]), b(triangles.vertices[triangles.indices[t + 1]]), c(triangles.vertices[triangles.indices[t + 2]]);
+		const glm::dvec3 normal = glm::normalize(glm::cross(b - a, c - a));
+		const PlacementHit hit = engine.place_ray((a + b + c) / 3.0 + 0.05 * normal, -normal, 1.0);
+		on_dense += hit.surface == PlacementSurface::Dense && hit.distance_m <= 0.05 + 1e-4;
+	}
+	MESSAGE(on_dense, " of 100 rays onto the published mesh met the dense model");
+	CHECK(on_dense >= 50);
 	MESSAGE("threaded run: ", threaded_s, " s, ", stats.probe_renders, " probe renders; RGB-D latency p50 ", stats.rgbd_latency.p50_ms,
 			" ms, fisheye latency p50 ", stats.fisheye_latency.p50_ms, " ms");
 

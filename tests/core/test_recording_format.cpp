@@ -2,6 +2,7 @@
 // writer's refusals, and reading damaged recordings (issues naming file and line, playback of
 // the other frames going on; fatal errors only for an unusable rig, room or index).
 
+#include "io/raw_frame.h"
 #include "recording/cubemap_layout.h"
 #include "recording/recording_io.h"
 #include "recording/recording_reader.h"
@@ -9,6 +10,8 @@
 #include "recording/room_file.h"
 
 #include "recording_test_issues.h"
+
+#include "test_images.h"
 
 #include <doctest/doctest.h>
 
@@ -20,6 +23,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -191,10 +195,14 @@ cv::Vec3b face_colour_8bit(int p_face) {
 const cv::Vec3f CUBE_MARKER(1234.0f, 0.125f, 3.0f); // at pixel (u 5, v 2) of +Z
 
 // Writes the reference recording: p_rgbd_frames RGB-D frames, a gray and an HDR fisheye frame,
-// ground-truth trajectories of both cameras and one ground-truth cubemap.
-void write_recording(const fs::path &p_folder, int p_rgbd_frames = 3) {
+// ground-truth trajectories of both cameras and one ground-truth cubemap. PNG frames unless told:
+// the damaged-recording cases edit PNG files (recordings made before raw frames play on); the
+// raw-frame cases ask for FrameFormat::Zstd, the writer's default.
+void write_recording(const fs::path &p_folder, int p_rgbd_frames = 3, FrameFormat p_format = FrameFormat::Png) {
 	RecordingWriter writer;
-	const RecordingStatus opened = writer.open(p_folder.string(), make_rig(), make_room());
+	RecordingWriteOptions options;
+	options.frame_format = p_format;
+	const RecordingStatus opened = writer.open(p_folder.string(), make_rig(), make_room(), options);
 	REQUIRE_MESSAGE(opened.ok, opened.error);
 	// Interleaved as they would arrive; each stream keeps its own order.
 	CHECK(writer.add_fisheye(make_gray_fisheye()).ok);
@@ -262,129 +270,132 @@ void replace_line(const fs::path &p_path, int p_line, const std::string &p_text)
 
 // ------------------------------------------------------------------------------------ round trip
 
-TEST_CASE("recording round trip: rig, room, frames, timestamps and pixels read back exactly") {
-	const fs::path folder = scratch_folder("roundtrip");
-	write_recording(folder);
+TEST_CASE("recording round trip: rig, room, frames, timestamps and pixels read back exactly, PNG and raw frames") {
+	for (const FrameFormat format : { FrameFormat::Png, FrameFormat::Zstd }) {
+		CAPTURE(frame_format_name(format));
+		const fs::path folder = scratch_folder(std::string("roundtrip_") + frame_format_name(format));
+		write_recording(folder, 3, format);
 
-	RecordingReader reader;
-	const RecordingStatus opened = reader.open(folder.string());
-	REQUIRE_MESSAGE(opened.ok, opened.error);
-	CHECK_MESSAGE(reader.get_issues().empty(), all_issues(reader));
+		RecordingReader reader;
+		const RecordingStatus opened = reader.open(folder.string());
+		REQUIRE_MESSAGE(opened.ok, opened.error);
+		CHECK_MESSAGE(reader.get_issues().empty(), all_issues(reader));
 
-	// Rig and room.
-	const Rig &rig = reader.get_rig();
-	CHECK(rig.rgb.width == RGB_WIDTH);
-	CHECK(rig.rgb.fx == 50.0);
-	CHECK(rig.fisheye.width == FISHEYE_SIZE);
-	CHECK(rig.fisheye_time_offset_s == FISHEYE_OFFSET_S);
-	REQUIRE(reader.has_room());
-	const RoomInfo &room = reader.get_room();
-	const RoomInfo expected_room = make_room();
-	REQUIRE(room.floorplan.points.size() == 4);
-	CHECK(room.floorplan.points[2].x == 4.0);
-	CHECK(room.floorplan.points[2].y == 5.0);
-	CHECK(room.floorplan.ceiling_height_m == 2.5);
-	CHECK(room.initial_rgb_pose.rotation.w == doctest::Approx(expected_room.initial_rgb_pose.rotation.w).epsilon(1e-15));
-	CHECK(room.initial_rgb_pose.rotation.y == doctest::Approx(expected_room.initial_rgb_pose.rotation.y).epsilon(1e-15));
-	CHECK(room.initial_rgb_pose.translation.z == 2.0);
-	REQUIRE(room.probes.size() == 2);
-	CHECK(room.probes[1].y == 1.25);
+		// Rig and room.
+		const Rig &rig = reader.get_rig();
+		CHECK(rig.rgb.width == RGB_WIDTH);
+		CHECK(rig.rgb.fx == 50.0);
+		CHECK(rig.fisheye.width == FISHEYE_SIZE);
+		CHECK(rig.fisheye_time_offset_s == FISHEYE_OFFSET_S);
+		REQUIRE(reader.has_room());
+		const RoomInfo &room = reader.get_room();
+		const RoomInfo expected_room = make_room();
+		REQUIRE(room.floorplan.points.size() == 4);
+		CHECK(room.floorplan.points[2].x == 4.0);
+		CHECK(room.floorplan.points[2].y == 5.0);
+		CHECK(room.floorplan.ceiling_height_m == 2.5);
+		CHECK(room.initial_rgb_pose.rotation.w == doctest::Approx(expected_room.initial_rgb_pose.rotation.w).epsilon(1e-15));
+		CHECK(room.initial_rgb_pose.rotation.y == doctest::Approx(expected_room.initial_rgb_pose.rotation.y).epsilon(1e-15));
+		CHECK(room.initial_rgb_pose.translation.z == 2.0);
+		REQUIRE(room.probes.size() == 2);
+		CHECK(room.probes[1].y == 1.25);
 
-	// RGB-D frames: timestamps, exact RGB values in R, G, B order, depth in metres.
-	REQUIRE(reader.rgbd_count() == 3);
-	for (int i = 0; i < 3; i++) {
-		const RgbdFrameResult result = reader.read_rgbd(size_t(i));
-		REQUIRE_MESSAGE(result.ok, result.error);
-		const RgbdFrame &frame = result.frame;
-		CHECK(frame.timestamp_s == rgb_time(i));
-		CHECK(frame.depth_timestamp_s == (i == 2 ? rgb_time(i) + 0.004 : rgb_time(i)));
-		REQUIRE(frame.rgb.type() == CV_8UC3);
-		REQUIRE(frame.depth_m.type() == CV_32FC1);
-		REQUIRE(frame.rgb.size() == cv::Size(RGB_WIDTH, RGB_HEIGHT));
-		int rgb_mismatches = 0;
-		int depth_mismatches = 0;
-		for (int y = 0; y < RGB_HEIGHT; y++) {
-			for (int x = 0; x < RGB_WIDTH; x++) {
-				rgb_mismatches += frame.rgb.at<cv::Vec3b>(y, x) != rgb_pattern(i, x, y);
-				const int units = depth_units(i, x, y);
-				const float depth = frame.depth_m.at<float>(y, x);
-				depth_mismatches += units == 0 ? !std::isnan(depth) : depth != float(units * 0.001);
+		// RGB-D frames: timestamps, exact RGB values in R, G, B order, depth in metres.
+		REQUIRE(reader.rgbd_count() == 3);
+		for (int i = 0; i < 3; i++) {
+			const RgbdFrameResult result = reader.read_rgbd(size_t(i));
+			REQUIRE_MESSAGE(result.ok, result.error);
+			const RgbdFrame &frame = result.frame;
+			CHECK(frame.timestamp_s == rgb_time(i));
+			CHECK(frame.depth_timestamp_s == (i == 2 ? rgb_time(i) + 0.004 : rgb_time(i)));
+			REQUIRE(frame.rgb.type() == CV_8UC3);
+			REQUIRE(frame.depth_m.type() == CV_32FC1);
+			REQUIRE(frame.rgb.size() == cv::Size(RGB_WIDTH, RGB_HEIGHT));
+			int rgb_mismatches = 0;
+			int depth_mismatches = 0;
+			for (int y = 0; y < RGB_HEIGHT; y++) {
+				for (int x = 0; x < RGB_WIDTH; x++) {
+					rgb_mismatches += frame.rgb.at<cv::Vec3b>(y, x) != rgb_pattern(i, x, y);
+					const int units = depth_units(i, x, y);
+					const float depth = frame.depth_m.at<float>(y, x);
+					depth_mismatches += units == 0 ? !std::isnan(depth) : depth != float(units * 0.001);
+				}
+			}
+			CHECK(rgb_mismatches == 0);
+			CHECK(depth_mismatches == 0);
+			CHECK(frame.rgb.at<cv::Vec3b>(0, 1)[0] == uchar(4 + i)); // red first
+			CHECK(frame.depth_m.at<float>(3, 2) == doctest::Approx(0.505 + 0.1 * i).epsilon(1e-6));
+		}
+
+		// Fisheye: an 8-bit gray PNG and an HDR EXR, each on the fisheye clock.
+		REQUIRE(reader.fisheye_count() == 2);
+		const FisheyeFrameResult gray = reader.read_fisheye(0);
+		REQUIRE_MESSAGE(gray.ok, gray.error);
+		CHECK(gray.frame.timestamp_s == 9.99);
+		CHECK_FALSE(gray.frame.hdr);
+		REQUIRE(gray.frame.image.type() == CV_8UC1);
+		int gray_mismatches = 0;
+		for (int y = 0; y < FISHEYE_SIZE; y++) {
+			for (int x = 0; x < FISHEYE_SIZE; x++) {
+				gray_mismatches += gray.frame.image.at<uchar>(y, x) != gray_pattern(x, y);
 			}
 		}
-		CHECK(rgb_mismatches == 0);
-		CHECK(depth_mismatches == 0);
-		CHECK(frame.rgb.at<cv::Vec3b>(0, 1)[0] == uchar(4 + i)); // red first
-		CHECK(frame.depth_m.at<float>(3, 2) == doctest::Approx(0.505 + 0.1 * i).epsilon(1e-6));
-	}
-
-	// Fisheye: an 8-bit gray PNG and an HDR EXR, each on the fisheye clock.
-	REQUIRE(reader.fisheye_count() == 2);
-	const FisheyeFrameResult gray = reader.read_fisheye(0);
-	REQUIRE_MESSAGE(gray.ok, gray.error);
-	CHECK(gray.frame.timestamp_s == 9.99);
-	CHECK_FALSE(gray.frame.hdr);
-	REQUIRE(gray.frame.image.type() == CV_8UC1);
-	int gray_mismatches = 0;
-	for (int y = 0; y < FISHEYE_SIZE; y++) {
-		for (int x = 0; x < FISHEYE_SIZE; x++) {
-			gray_mismatches += gray.frame.image.at<uchar>(y, x) != gray_pattern(x, y);
-		}
-	}
-	CHECK(gray_mismatches == 0);
-	const FisheyeFrameResult hdr = reader.read_fisheye(1);
-	REQUIRE_MESSAGE(hdr.ok, hdr.error);
-	CHECK(hdr.frame.timestamp_s == 10.05);
-	CHECK(hdr.frame.hdr);
-	REQUIRE(hdr.frame.image.type() == CV_32FC3);
-	CHECK(reader.get_fisheye_ref(1).path == "fisheye/000001.exr");
-	double worst_relative = 0.0;
-	for (int y = 0; y < FISHEYE_SIZE; y++) {
-		for (int x = 0; x < FISHEYE_SIZE; x++) {
-			const cv::Vec3f expected = hdr_pattern(x, y);
-			const cv::Vec3f actual = hdr.frame.image.at<cv::Vec3f>(y, x);
-			for (int c = 0; c < 3; c++) {
-				const double relative = std::abs(double(actual[c]) - double(expected[c])) / std::max(1e-3, std::abs(double(expected[c])));
-				worst_relative = std::max(worst_relative, relative);
+		CHECK(gray_mismatches == 0);
+		const FisheyeFrameResult hdr = reader.read_fisheye(1);
+		REQUIRE_MESSAGE(hdr.ok, hdr.error);
+		CHECK(hdr.frame.timestamp_s == 10.05);
+		CHECK(hdr.frame.hdr);
+		REQUIRE(hdr.frame.image.type() == CV_32FC3);
+		CHECK(reader.get_fisheye_ref(1).path == "fisheye/000001.exr");
+		double worst_relative = 0.0;
+		for (int y = 0; y < FISHEYE_SIZE; y++) {
+			for (int x = 0; x < FISHEYE_SIZE; x++) {
+				const cv::Vec3f expected = hdr_pattern(x, y);
+				const cv::Vec3f actual = hdr.frame.image.at<cv::Vec3f>(y, x);
+				for (int c = 0; c < 3; c++) {
+					const double relative = std::abs(double(actual[c]) - double(expected[c])) / std::max(1e-3, std::abs(double(expected[c])));
+					worst_relative = std::max(worst_relative, relative);
+				}
 			}
 		}
-	}
-	CHECK(worst_relative <= 1.0 / 2048.0); // half: 11 significant bits, rounded to nearest
+		CHECK(worst_relative <= 1.0 / 2048.0); // half: 11 significant bits, rounded to nearest
 
-	// Playback order on the RGB-D clock: fisheye 9.99 + 0.005, rgbd 10.0, 10.033, fisheye 10.055, rgbd 10.066.
-	const std::vector<PlaybackEvent> &events = reader.get_events();
-	REQUIRE(events.size() == 5);
-	CHECK(events[0].stream == RecordingStream::Fisheye);
-	CHECK(events[0].index == 0);
-	CHECK(events[0].time_s == doctest::Approx(9.99 + FISHEYE_OFFSET_S).epsilon(1e-12));
-	CHECK(events[1].stream == RecordingStream::Rgbd);
-	CHECK(events[1].index == 0);
-	CHECK(events[2].stream == RecordingStream::Rgbd);
-	CHECK(events[2].index == 1);
-	CHECK(events[3].stream == RecordingStream::Fisheye);
-	CHECK(events[3].index == 1);
-	CHECK(events[4].stream == RecordingStream::Rgbd);
-	CHECK(events[4].index == 2);
-	for (size_t i = 1; i < events.size(); i++) {
-		CHECK(events[i - 1].time_s <= events[i].time_s);
-	}
+		// Playback order on the RGB-D clock: fisheye 9.99 + 0.005, rgbd 10.0, 10.033, fisheye 10.055, rgbd 10.066.
+		const std::vector<PlaybackEvent> &events = reader.get_events();
+		REQUIRE(events.size() == 5);
+		CHECK(events[0].stream == RecordingStream::Fisheye);
+		CHECK(events[0].index == 0);
+		CHECK(events[0].time_s == doctest::Approx(9.99 + FISHEYE_OFFSET_S).epsilon(1e-12));
+		CHECK(events[1].stream == RecordingStream::Rgbd);
+		CHECK(events[1].index == 0);
+		CHECK(events[2].stream == RecordingStream::Rgbd);
+		CHECK(events[2].index == 1);
+		CHECK(events[3].stream == RecordingStream::Fisheye);
+		CHECK(events[3].index == 1);
+		CHECK(events[4].stream == RecordingStream::Rgbd);
+		CHECK(events[4].index == 2);
+		for (size_t i = 1; i < events.size(); i++) {
+			CHECK(events[i - 1].time_s <= events[i].time_s);
+		}
 
-	// Ground-truth trajectories.
-	REQUIRE(reader.has_ground_truth_trajectory(RecordingStream::Rgbd));
-	REQUIRE(reader.has_ground_truth_trajectory(RecordingStream::Fisheye));
-	const std::vector<TimedPose> &rgb_poses = reader.ground_truth_trajectory(RecordingStream::Rgbd).get_samples();
-	REQUIRE(rgb_poses.size() == 3);
-	for (int i = 0; i < 3; i++) {
-		const Pose expected = gt_rgb_pose(i);
-		CHECK(rgb_poses[size_t(i)].t_s == rgb_time(i));
-		CHECK(rgb_poses[size_t(i)].world_from_camera.translation.x == doctest::Approx(expected.translation.x).epsilon(1e-12));
-		CHECK(rgb_poses[size_t(i)].world_from_camera.translation.z == doctest::Approx(expected.translation.z).epsilon(1e-12));
-		CHECK(rgb_poses[size_t(i)].world_from_camera.rotation.x == doctest::Approx(expected.rotation.x).epsilon(1e-12));
-		CHECK(rgb_poses[size_t(i)].world_from_camera.rotation.w == doctest::Approx(expected.rotation.w).epsilon(1e-12));
+		// Ground-truth trajectories.
+		REQUIRE(reader.has_ground_truth_trajectory(RecordingStream::Rgbd));
+		REQUIRE(reader.has_ground_truth_trajectory(RecordingStream::Fisheye));
+		const std::vector<TimedPose> &rgb_poses = reader.ground_truth_trajectory(RecordingStream::Rgbd).get_samples();
+		REQUIRE(rgb_poses.size() == 3);
+		for (int i = 0; i < 3; i++) {
+			const Pose expected = gt_rgb_pose(i);
+			CHECK(rgb_poses[size_t(i)].t_s == rgb_time(i));
+			CHECK(rgb_poses[size_t(i)].world_from_camera.translation.x == doctest::Approx(expected.translation.x).epsilon(1e-12));
+			CHECK(rgb_poses[size_t(i)].world_from_camera.translation.z == doctest::Approx(expected.translation.z).epsilon(1e-12));
+			CHECK(rgb_poses[size_t(i)].world_from_camera.rotation.x == doctest::Approx(expected.rotation.x).epsilon(1e-12));
+			CHECK(rgb_poses[size_t(i)].world_from_camera.rotation.w == doctest::Approx(expected.rotation.w).epsilon(1e-12));
+		}
+		const std::vector<TimedPose> &fisheye_poses = reader.ground_truth_trajectory(RecordingStream::Fisheye).get_samples();
+		REQUIRE(fisheye_poses.size() == 2);
+		CHECK(fisheye_poses[1].t_s == 10.05);
+		CHECK(fisheye_poses[1].world_from_camera.translation.x == doctest::Approx(6.0));
 	}
-	const std::vector<TimedPose> &fisheye_poses = reader.ground_truth_trajectory(RecordingStream::Fisheye).get_samples();
-	REQUIRE(fisheye_poses.size() == 2);
-	CHECK(fisheye_poses[1].t_s == 10.05);
-	CHECK(fisheye_poses[1].world_from_camera.translation.x == doctest::Approx(6.0));
 }
 
 TEST_CASE("recording round trip: a ground-truth cubemap keeps its faces in place") {
@@ -461,6 +472,200 @@ TEST_CASE("recording files: indexes are TUM-like text, room.yaml and rig.yaml lo
 	CHECK(contains(read_text(folder / "room.yaml"), "roomprobe_room: 1"));
 }
 
+// --------------------------------------------------------------------------------- raw frames
+
+namespace {
+
+FisheyeFrame make_colour_fisheye(double p_time_s) {
+	FisheyeFrame frame;
+	frame.timestamp_s = p_time_s;
+	frame.image = cv::Mat(FISHEYE_SIZE, FISHEYE_SIZE, CV_8UC3);
+	for (int y = 0; y < FISHEYE_SIZE; y++) {
+		for (int x = 0; x < FISHEYE_SIZE; x++) {
+			frame.image.at<cv::Vec3b>(y, x) = cv::Vec3b(uchar(x * 6), uchar(y * 6), uchar(200 - x - y));
+		}
+	}
+	return frame;
+}
+
+} // namespace
+
+TEST_CASE("raw frame recording: the writer's default; .zst frames play with the same frames as a PNG recording") {
+	CHECK(RecordingWriteOptions().frame_format == FrameFormat::Zstd);
+	const fs::path png = scratch_folder("same_frames_png");
+	const fs::path zst = scratch_folder("same_frames_zstd");
+	write_recording(png, 3, FrameFormat::Png);
+	write_recording(zst, 3, FrameFormat::Zstd);
+
+	// The files: raw frames for RGB, depth and the 8-bit fisheye; EXR for HDR and the ground truth.
+	const std::string rgb = read_text(zst / "rgb.txt");
+	CHECK(contains(rgb, "# RoomProbe recording: RGB images (8-bit R, G, B raw frames, zstd), RGB-D camera clock\n"));
+	CHECK(contains(rgb, "\n10 rgb/000000.zst\n10.033 rgb/000001.zst\n"));
+	CHECK(contains(read_text(zst / "depth.txt"), "\n10.07 depth/000002.zst\n"));
+	CHECK(contains(read_text(zst / "fisheye.txt"), "\n9.99 fisheye/000000.zst\n10.05 fisheye/000001.exr\n"));
+	CHECK(contains(read_text(zst / "groundtruth/cubemaps.txt"), "groundtruth/cubemaps/000000.exr"));
+	CHECK(fs::exists(zst / "groundtruth/cubemaps/000000.png"));
+	CHECK_FALSE(fs::exists(zst / "rgb/000000.png"));
+	for (const auto &[file, type] : { std::pair<const char *, int>{ "rgb/000001.zst", CV_8UC3 }, std::pair<const char *, int>{ "depth/000001.zst", CV_16UC1 },
+				 std::pair<const char *, int>{ "fisheye/000000.zst", CV_8UC1 } }) {
+		CAPTURE(file);
+		const std::string bytes = read_text(zst / file);
+		RawFrameHeader header;
+		REQUIRE(raw_frame_parse_header(reinterpret_cast<const uint8_t *>(bytes.data()), bytes.size(), &header) == "");
+		CHECK(header.cv_type() == type);
+		CHECK(header.width == (type == CV_8UC1 ? FISHEYE_SIZE : RGB_WIDTH));
+		CHECK(header.data_bytes + kRawFrameHeaderBytes == bytes.size());
+	}
+
+	// The same frames, sample for sample (depth's NaN included), through the same reader.
+	RecordingReader from_png;
+	RecordingReader from_zst;
+	REQUIRE(from_png.open(png.string()).ok);
+	const RecordingStatus opened = from_zst.open(zst.string());
+	REQUIRE_MESSAGE(opened.ok, opened.error);
+	CHECK_MESSAGE(from_zst.get_issues().empty(), all_issues(from_zst));
+	REQUIRE(from_zst.rgbd_count() == 3);
+	REQUIRE(from_png.rgbd_count() == 3);
+	for (size_t i = 0; i < 3; i++) {
+		CAPTURE(i);
+		const RgbdFrameResult a = from_png.read_rgbd(i);
+		const RgbdFrameResult b = from_zst.read_rgbd(i);
+		REQUIRE_MESSAGE(b.ok, b.error);
+		CHECK(same_samples(a.frame.rgb, b.frame.rgb));
+		CHECK(same_samples(a.frame.depth_m, b.frame.depth_m));
+		CHECK(b.frame.rgb.at<cv::Vec3b>(0, 1) == rgb_pattern(int(i), 1, 0)); // R, G, B
+		CHECK(std::isnan(b.frame.depth_m.at<float>(0, 0)));
+		CHECK(a.frame.timestamp_s == b.frame.timestamp_s);
+		CHECK(a.frame.depth_timestamp_s == b.frame.depth_timestamp_s);
+	}
+	REQUIRE(from_zst.fisheye_count() == 2);
+	for (size_t i = 0; i < 2; i++) {
+		const FisheyeFrameResult a = from_png.read_fisheye(i);
+		const FisheyeFrameResult b = from_zst.read_fisheye(i);
+		REQUIRE_MESSAGE(b.ok, b.error);
+		CHECK(a.frame.hdr == b.frame.hdr);
+		CHECK(same_samples(a.frame.image, b.frame.image));
+	}
+	CHECK(from_zst.get_events().size() == from_png.get_events().size());
+
+	// A colour fisheye frame keeps R, G, B in both formats.
+	for (const FrameFormat format : { FrameFormat::Png, FrameFormat::Zstd }) {
+		CAPTURE(frame_format_name(format));
+		const fs::path folder = scratch_folder(std::string("colour_fisheye_") + frame_format_name(format));
+		RecordingWriter writer;
+		RecordingWriteOptions options;
+		options.frame_format = format;
+		REQUIRE(writer.open_without_room(folder.string(), make_rig(), options).ok);
+		const FisheyeFrame colour = make_colour_fisheye(9.5);
+		REQUIRE(writer.add_fisheye(colour).ok);
+		REQUIRE(writer.close().ok);
+		RecordingReader reader;
+		REQUIRE(reader.open(folder.string()).ok);
+		REQUIRE(reader.fisheye_count() == 1);
+		const FisheyeFrameResult read = reader.read_fisheye(0);
+		REQUIRE_MESSAGE(read.ok, read.error);
+		CHECK_FALSE(read.frame.hdr);
+		CHECK(same_samples(read.frame.image, colour.image));
+	}
+
+	// A zstd level the library does not have is refused at open, naming the option.
+	RecordingWriter writer;
+	RecordingWriteOptions bad_level;
+	bad_level.zstd_level = 99;
+	const RecordingStatus refused = writer.open(scratch_folder("bad_level").string(), make_rig(), make_room(), bad_level);
+	CHECK_FALSE(refused.ok);
+	CHECK(contains(refused.error, "zstd level 99"));
+	CHECK(contains(refused.error, "zstd_level"));
+}
+
+TEST_CASE("raw frame recording: the reader goes by a file's first bytes, not its name") {
+	const fs::path folder = scratch_folder("by_first_bytes");
+	write_recording(folder, 3, FrameFormat::Zstd);
+	// A raw frame named .png and a PNG named .zst both play.
+	fs::rename(folder / "rgb/000000.zst", folder / "rgb/000000.png");
+	replace_line(folder / "rgb.txt", 3, "10 rgb/000000.png");
+	cv::Mat depth(RGB_HEIGHT, RGB_WIDTH, CV_16UC1, cv::Scalar(1234));
+	REQUIRE(recording_io::write_png((folder / "depth/000001.zst").string(), depth) == "");
+	RecordingReader reader;
+	REQUIRE(reader.open(folder.string()).ok);
+	CHECK_MESSAGE(reader.get_issues().empty(), all_issues(reader));
+	check_plays_on(reader, 3, 2);
+	const RgbdFrameResult first = reader.read_rgbd(0);
+	REQUIRE_MESSAGE(first.ok, first.error);
+	CHECK(first.frame.rgb.at<cv::Vec3b>(5, 7) == rgb_pattern(0, 7, 5));
+	const RgbdFrameResult second = reader.read_rgbd(1);
+	REQUIRE_MESSAGE(second.ok, second.error);
+	CHECK(second.frame.depth_m.at<float>(5, 7) == doctest::Approx(1.234));
+}
+
+TEST_CASE("damaged raw frame recording: cut short, foreign, wrong type, wrong or absurd size are issues at open; corrupt data fails at read") {
+	const fs::path folder = scratch_folder("damaged_zstd");
+	write_recording(folder, 6, FrameFormat::Zstd);
+	truncate_to_half(folder / "rgb/000000.zst");
+	write_text(folder / "depth/000001.zst", "not a frame at all");
+	REQUIRE(raw_frame_write((folder / "depth/000002.zst").string(), cv::Mat(RGB_HEIGHT, RGB_WIDTH, CV_8UC1, cv::Scalar(9))) == "");
+	REQUIRE(raw_frame_write((folder / "rgb/000003.zst").string(), cv::Mat(60, 80, CV_8UC3, cv::Scalar(1, 2, 3))) == "");
+	std::string absurd = read_text(folder / "rgb/000004.zst");
+	absurd[18] = char(0x01); // width 64 + 65536: past the 32768-pixel side
+	write_text(folder / "rgb/000004.zst", absurd);
+	std::string longer = read_text(folder / "fisheye/000000.zst");
+	write_text(folder / "fisheye/000000.zst", longer + "xyz");
+
+	RecordingReader reader;
+	const RecordingStatus opened = reader.open(folder.string());
+	REQUIRE_MESSAGE(opened.ok, opened.error);
+	const struct {
+		const char *file;
+		const char *index;
+		int line;
+		const char *says;
+	} expected[] = {
+		{ "rgb/000000.zst", "rgb.txt", 3, "truncated: the raw frame ends at byte" },
+		{ "depth/000001.zst", "depth.txt", 4, "neither a PNG nor a RoomProbe raw frame" },
+		{ "depth/000002.zst", "depth.txt", 5, "a depth image must be 16-bit with 1 channel; this raw frame is 8-bit 1-channel" },
+		{ "rgb/000003.zst", "rgb.txt", 6, "80x60 pixels, but the rig's RGB-D camera is 64x48" },
+		{ "rgb/000004.zst", "rgb.txt", 7, "65600x48 pixels, more than RoomProbe reads" },
+		{ "fisheye/000000.zst", "fisheye.txt", 3, "3 bytes after its zstd data" },
+	};
+	for (const auto &issue_expected : expected) {
+		CAPTURE(issue_expected.file);
+		const RecordingIssue *issue = find_issue(reader, std::string(issue_expected.file) + ": ");
+		REQUIRE_MESSAGE(issue, all_issues(reader));
+		CHECK(ends_with(issue->file, issue_expected.index));
+		CHECK(issue->line == issue_expected.line);
+		CHECK(contains(issue->message, issue_expected.says));
+		CHECK(contains(issue->message, (folder / issue_expected.file).string()));
+	}
+	CHECK(reader.get_issues().size() == 6);
+	check_plays_on(reader, 1, 1);
+
+	// Files that go bad after open: corrupt data of the same length, then a file cut short.
+	const std::string rgb_path = (folder / reader.get_rgbd_ref(0).rgb.path).string();
+	std::string bytes = read_text(rgb_path);
+	for (size_t i = kRawFrameHeaderBytes + 16; i < bytes.size() - 4; i += 5) {
+		bytes[i] = char(bytes[i] ^ 0x33);
+	}
+	write_text(rgb_path, bytes);
+	const RgbdFrameResult corrupt = reader.read_rgbd(0);
+	CHECK_FALSE(corrupt.ok);
+	CHECK(contains(corrupt.error, rgb_path + ": corrupt raw frame"));
+	CHECK_FALSE(contains(corrupt.error, "truncated"));
+	const std::string depth_path = (folder / reader.get_rgbd_ref(0).depth.path).string();
+	write_text(rgb_path, read_text(folder / "rgb/000002.zst"));
+	truncate_to_half(depth_path);
+	const RgbdFrameResult cut = reader.read_rgbd(0);
+	CHECK_FALSE(cut.ok);
+	CHECK(contains(cut.error, depth_path + ": truncated"));
+	// A raw frame whose zstd frame holds fewer samples than its header says: refused, not read past.
+	std::string fewer = read_text(folder / "rgb/000002.zst");
+	fewer[20] = char(RGB_HEIGHT + 1); // one row more than the data holds
+	write_text(rgb_path, fewer);
+	write_text(depth_path, read_text(folder / "depth/000005.zst"));
+	const RgbdFrameResult mismatch = reader.read_rgbd(0);
+	CHECK_FALSE(mismatch.ok);
+	CHECK(contains(mismatch.error, rgb_path + ": corrupt raw frame: its zstd frame holds 9216 bytes, but 64x49 pixels"));
+}
+
 // ------------------------------------------------------------------------------- writer refusals
 
 TEST_CASE("recording writer refuses a non-empty folder and overwrites nothing") {
@@ -510,7 +715,7 @@ TEST_CASE("recording writer rejects bad frames with errors naming the file, and 
 	cv::resize(small.rgb, small.rgb, cv::Size(32, 24));
 	RecordingStatus status = writer.add_rgbd(small);
 	CHECK_FALSE(status.ok);
-	CHECK(contains(status.error, "rgb/000001.png"));
+	CHECK(contains(status.error, "rgb/000001.zst")); // raw frames: the default
 	CHECK(contains(status.error, "32x24"));
 
 	RgbdFrame backwards = make_rgbd(1);
@@ -525,7 +730,7 @@ TEST_CASE("recording writer rejects bad frames with errors naming the file, and 
 	too_far.depth_m.at<float>(1, 1) = 70.0f; // 70000 mm does not fit 16 bits
 	status = writer.add_rgbd(too_far);
 	CHECK_FALSE(status.ok);
-	CHECK(contains(status.error, "depth/000001.png"));
+	CHECK(contains(status.error, "depth/000001.zst"));
 
 	FisheyeFrame mislabelled = make_gray_fisheye();
 	mislabelled.hdr = true;
@@ -554,7 +759,7 @@ TEST_CASE("recording writer rejects bad frames with errors naming the file, and 
 	REQUIRE(reader.open(folder.string()).ok);
 	CHECK_MESSAGE(reader.get_issues().empty(), all_issues(reader));
 	check_plays_on(reader, 2, 0);
-	CHECK(reader.get_rgbd_ref(1).rgb.path == "rgb/000001.png");
+	CHECK(reader.get_rgbd_ref(1).rgb.path == "rgb/000001.zst");
 }
 
 // ----------------------------------------------------------------------------- damaged recordings

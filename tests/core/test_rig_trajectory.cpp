@@ -264,7 +264,7 @@ TEST_CASE("trajectory: TumTrajectoryWriter's poses and comments read back throug
 	CHECK(saved.trajectory.size() == written.size());
 
 	TumTrajectoryWriter unwritable;
-	CHECK(contains(unwritable.open("/nonexistent_dir/x.txt"), "/nonexistent_dir/x.txt: cannot open"));
+	CHECK(contains(unwritable.open("/nonexistent_dir/x.txt"), "/nonexistent_dir/x.txt: cannot be opened for writing"));
 	CHECK(contains(unwritable.add_pose(samples[0]), "/nonexistent_dir/x.txt"));
 }
 

@@ -375,8 +375,8 @@ TEST_CASE("synth: the same seed writes the same bytes; another seed does not") {
 		CAPTURE(file);
 		CHECK(read_bytes(a.path / file) == read_bytes(b.path / file));
 	}
-	CHECK(read_bytes(a.path / "rgb/000000.png") != read_bytes(c.path / "rgb/000000.png"));
-	CHECK(read_bytes(a.path / "depth/000000.png") != read_bytes(c.path / "depth/000000.png"));
+	CHECK(read_bytes(a.path / "rgb/000000.zst") != read_bytes(c.path / "rgb/000000.zst"));
+	CHECK(read_bytes(a.path / "depth/000000.zst") != read_bytes(c.path / "depth/000000.zst"));
 }
 
 TEST_CASE("synth: a recording is not written into a folder that holds something") {

@@ -1,4 +1,4 @@
-// 16-bit depth PNGs as a recording reads them (recording_io::decode_png, then
+// 16-bit depth frames, PNG or raw, as a recording reads them (recording_io::decode_frame_file, then
 // depth_metres_from_raw at the rig's scale): every pixel is no reading (NaN) or a distance in
 // (0, 65534 x scale] metres, never 65.535 m nor a negative or infinite one.
 #include "fuzz_common.h"
@@ -12,9 +12,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *p_data, size_t p_size) {
 	const std::filesystem::path path = fuzz::scratch() / "depth.png";
 	fuzz::write_bytes(path, p_data, p_size);
 	cv::Mat raw;
-	const std::string error = recording_io::decode_png(path.string(), &raw);
+	const std::string error = recording_io::decode_frame_file(path.string(), &raw, nullptr);
 	if (!error.empty()) {
-		fuzz::require(error.find(path.string()) != std::string::npos, "a depth PNG error names the file:", error);
+		fuzz::require(error.find(path.string()) != std::string::npos, "a depth frame error names the file:", error);
 		return 0;
 	}
 	if (raw.type() != CV_16UC1) {

@@ -116,6 +116,13 @@ func test_automatic_finds_the_room_from_the_sweep_and_saves_it() -> void:
 	expect_error("exists and is kept; pass overwrite = true")
 	assert_eq(s.room.save_room(path), ERR_ALREADY_EXISTS)
 	assert_eq(s.room.save_room(path, true), OK)
+	# Paths it cannot write: an error naming the problem (these once crashed Godot inside
+	# OpenCV's log writer, issue #38), and the good file stays as it was.
+	expect_error("save_room")
+	assert_ne(s.room.save_room("/nonexistent/dir/room.yaml", true), OK)
+	expect_error("save_room")
+	assert_ne(s.room.save_room("", true), OK)
+	assert_eq(FileAccess.get_file_as_string(path), text)
 	# The file is a room: a RigCapture takes it as a live room file.
 	var check = ClassDB.instantiate("RigCapture")
 	check.source = 1  # SOURCE_LIVE: reads rig_file and room_file at open()

@@ -35,7 +35,7 @@ rp() { logged "$repo/roomprobe" "$@"; }
 no_files_in_root() { # nothing was written inside the toolchain root at the host path $1
 	[[ $kind == host ]] || [[ -z $(find "$RP_ROOT$1" ! -type d 2>/dev/null | head -n1) ]]
 }
-png_count() { find "$1" -maxdepth 1 -name '*.png' 2>/dev/null | wc -l; }
+frame_count() { find "$1" -maxdepth 1 -name '*.zst' 2>/dev/null | wc -l; } # raw frames, the writer's default
 frame_lines() { local n; n=$(grep -cv '^#' "$1" 2>/dev/null); echo "${n:-0}"; }
 
 # A TUM RGB-D sequence of 3 frames (tests/host/make_tum.py), made by the toolchain's Python in the
@@ -63,10 +63,10 @@ test_synth_out_outside_clone() {
 	for f in rig.yaml room.yaml synth.yaml rgb.txt depth.txt fisheye.txt groundtruth/rgb_trajectory.txt groundtruth/cubemaps.txt; do
 		check "no $dir/$f" test -s "$dir/$f"
 	done
-	check "rgb/ holds $(png_count "$dir/rgb") PNGs for $(frame_lines "$dir/rgb.txt") lines of rgb.txt" \
-		test "$(png_count "$dir/rgb")" -eq "$(frame_lines "$dir/rgb.txt")"
-	check "no RGB frames" test "$(png_count "$dir/rgb")" -gt 0
-	check "rgb/000000.png is not a PNG" grep -q PNG <(head -c 8 "$dir/rgb/000000.png" 2>/dev/null)
+	check "rgb/ holds $(frame_count "$dir/rgb") raw frames for $(frame_lines "$dir/rgb.txt") lines of rgb.txt" \
+		test "$(frame_count "$dir/rgb")" -eq "$(frame_lines "$dir/rgb.txt")"
+	check "no RGB frames" test "$(frame_count "$dir/rgb")" -gt 0
+	check "rgb/000000.zst is not a RoomProbe raw frame" grep -q RPRF <(head -c 12 "$dir/rgb/000000.zst" 2>/dev/null)
 	check "files written inside the toolchain root at $RP_ROOT$dir" no_files_in_root "$dir"
 }
 
@@ -82,6 +82,15 @@ test_eval_outside_clone() {
 	check "no $scratch/eval/ground_truth.exr" test -s "$scratch/eval/ground_truth.exr"
 	check "no $scratch/eval/coarse_inpaint.png" test -s "$scratch/eval/coarse_inpaint.png"
 	check "files written inside the toolchain root at $RP_ROOT$scratch/eval" no_files_in_root "$scratch/eval"
+	# Issue #38: maps already in --out are kept and nothing is evaluated, unless --force.
+	local kept
+	kept=$(cksum <"$scratch/eval/baseline.png")
+	rp eval --recording "$rec" --out "$scratch/eval" --cubemap-size 8 --max-cubemaps 1 --no-dense --quiet
+	check "eval into a folder holding its maps exited with status $rc, not 2" test "$rc" -eq 2
+	check "eval into a folder holding its maps did not say they are kept" says "$scratch/eval/baseline.exr exists: it is kept (give --force to replace it)"
+	check "eval without --force changed baseline.png" test "$(cksum <"$scratch/eval/baseline.png")" = "$kept"
+	rp eval --recording "$rec" --out "$scratch/eval" --cubemap-size 8 --max-cubemaps 1 --no-dense --quiet --force
+	check "eval --force exited with status $rc" test "$rc" -eq 0
 }
 
 test_bench_tum_outside_clone() {
@@ -96,6 +105,19 @@ test_bench_tum_outside_clone() {
 	check "$scratch/trajectories/T.txt does not hold 3 lines of 8 numbers" \
 		test "$(grep -cE '^[0-9.eE+-]+( [0-9.eE+-]+){7}$' "$scratch/trajectories/T.txt" 2>/dev/null)" -eq 3
 	check "files written inside the toolchain root at $RP_ROOT$scratch/trajectories" no_files_in_root "$scratch/trajectories"
+	# Issue #38: never into the sequence it reads (its rgb.txt was once overwritten), and an existing
+	# trajectory is kept unless --force.
+	local index
+	index=$(cksum <"$scratch/tum-seq/rgb.txt")
+	rp bench slam --tum "$scratch/tum-seq" --frames 3 --intrinsics 525,525,319.5,239.5 --save-trajectory "$scratch/tum-seq/rgb.txt" --force
+	check "bench --save-trajectory into the sequence exited with status $rc, not 2" test "$rc" -eq 2
+	check "bench --save-trajectory into the sequence: the message does not name the input" says "lies in the input $scratch/tum-seq"
+	check "bench --save-trajectory changed the sequence's rgb.txt" test "$(cksum <"$scratch/tum-seq/rgb.txt")" = "$index"
+	rp bench slam --tum "$scratch/tum-seq" --frames 3 --intrinsics 525,525,319.5,239.5 --save-trajectory "$scratch/trajectories/T.txt"
+	check "bench onto an existing trajectory exited with status $rc, not 2" test "$rc" -eq 2
+	check "bench onto an existing trajectory did not say it is kept" says "$scratch/trajectories/T.txt exists: it is kept (give --force to replace it)"
+	rp bench slam --tum "$scratch/tum-seq" --frames 3 --intrinsics 525,525,319.5,239.5 --save-trajectory "$scratch/trajectories/T.txt" --force
+	check "bench --save-trajectory onto an existing file with --force exited with status $rc" test "$rc" -eq 0
 	# Two sources (#17: --tum was once ignored beside --recording): a usage error naming both.
 	rp bench slam --recording "$scratch/tum-seq" --tum "$scratch/tum-seq" --frames 3
 	check "bench with --recording and --tum exited with status $rc, not 2" test "$rc" -eq 2
@@ -200,6 +222,47 @@ test_eval_refuses_bad_input() {
 	check "eval on a 100000-px fisheye: the message does not name the field" says "rig.yaml: fisheye.width: must be at most 16384 pixels"
 }
 
+# Issue #38: a number that sizes a pool, an allocation or a run is finite and within a range the
+# message names (roomprobe_bench --threads 100000 crashed; record --seconds inf never ended). Each is
+# refused while the arguments are read, status 2.
+test_numbers_out_of_range_refused() {
+	tum_sequence || { failures+=("could not make the TUM sequence (see the log)"); return; }
+	local c
+	local -a cases=("--threads 100000|--threads needs a whole number of threads in [1, 1024]"
+		"--voxel-size-m 1e-9|--voxel-size-m needs a voxel edge in metres in [0.001, 0.02]"
+		"--voxel-size-m nan|--voxel-size-m needs a voxel edge in metres in [0.001, 0.02]"
+		"--frames 99999999999999999999|--frames needs a whole number of frames in [1, 10000000]")
+	for c in "${cases[@]}"; do
+		# shellcheck disable=SC2086 # the option and its value are two words
+		rp bench slam --tum "$scratch/tum-seq" ${c%%|*}
+		check "bench ${c%%|*} exited with status $rc, not 2" test "$rc" -eq 2
+		check "bench ${c%%|*}: the message does not say '${c#*|}'" says "${c#*|}"
+	done
+	rp eval --recording "$scratch/tum-seq" --texel-size inf
+	check "eval --texel-size inf exited with status $rc, not 2" test "$rc" -eq 2
+	check "eval --texel-size inf: no bound in the message" says "--texel-size needs a texel edge in metres in [0.001, 1]"
+	rp record --rig calib/synthetic_rig.yaml --out "$scratch/record-inf" --seconds inf
+	check "record --seconds inf exited with status $rc, not 2" test "$rc" -eq 2
+	check "record --seconds inf: no bound in the message" says "--seconds needs a number of seconds in (0, 86400]"
+}
+
+# Issue #38: roomprobe_record run directly (./roomprobe makes paths absolute itself) with relative
+# paths records where it was started, though OpenNI2 changes the working directory to its drivers'
+# folder when it starts. The RGB-D stream is a 0.5-s synthetic recording played as an .oni.
+test_record_relative_out_run_directly() {
+	local dir=build/test-data/record-relative # inside the clone: the tool runs in the toolchain's root too
+	cd "$repo" || return
+	rm -rf "$dir" && mkdir -p "$dir"
+	rp synth --scene living_room --hdri none --out "$dir/recording" --seconds 0.5 --cubemap-size 8 --no-calibration --seed 3
+	check "synth exited with status $rc" test "$rc" -eq 0
+	rp oni --recording "$dir/recording" --out "$dir/recording.oni"
+	check "oni exited with status $rc" test "$rc" -eq 0
+	rp shell sh -c 'cd "$1" && ../../bin/roomprobe_record --rig recording/rig.yaml --rgbd recording.oni --no-fisheye --out rel-out --seconds 1' sh "$dir"
+	check "roomprobe_record exited with status $rc" test "$rc" -eq 0
+	check "no recording at $dir/rel-out (relative to where roomprobe_record started)" test -s "$dir/rel-out/rgb.txt"
+	check "no RGB-D frames in $dir/rel-out/rgb.txt" test "$(frame_lines "$dir/rel-out/rgb.txt")" -gt 0
+}
+
 # bake-prt bakes an OBJ given relative to the caller's folder, reuses the bake while the mesh is
 # unchanged, and refuses a bad option with its message.
 test_bake_prt_bakes_and_caches() {
@@ -253,12 +316,13 @@ test_editor_sees_the_callers_files() {
 }
 
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
-	calibrate_refuses_and_never_overwrites synth_photometric_options_refused eval_refuses_bad_input bake_prt_bakes_and_caches unknown_verb_is_named
-	editor_sees_the_callers_files)
+	calibrate_refuses_and_never_overwrites synth_photometric_options_refused eval_refuses_bad_input numbers_out_of_range_refused
+	record_relative_out_run_directly bake_prt_bakes_and_caches unknown_verb_is_named editor_sees_the_callers_files)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.
-echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench and roomprobe_calibrate"
+echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench, roomprobe_calibrate, roomprobe_record and roomprobe_oni"
 cd "$repo" || exit 1
-rp build -Q build/bin/roomprobe_synth build/bin/roomprobe_eval build/bin/roomprobe_bench build/bin/roomprobe_calibrate
+rp build -Q build/bin/roomprobe_synth build/bin/roomprobe_eval build/bin/roomprobe_bench build/bin/roomprobe_calibrate build/bin/roomprobe_record \
+	build/bin/roomprobe_oni
 blocked=
 ((rc == 0)) || blocked="the tools did not build (see $log)"
 run_host_tests host "$blocked" "${tests[@]}"

@@ -29,7 +29,8 @@
 // recordings only (those with synth.yaml, made by ./roomprobe synth), never for real data.
 // --save-trajectory FILE writes the tracked poses in TUM's format (TumTrajectoryWriter): one line
 // per frame tracked Good or Poor; a Lost frame, whose pose is not known, is a '#' comment with
-// its reason, as is a Poor frame's reason before its line.
+// its reason, as is a Poor frame's reason before its line. FILE must lie outside the inputs, and
+// an existing one is kept unless --force.
 //
 // SLAM settings (--voxel-size-m, --colour-weight, --colour-always, --icp-depth-range, --tsdf-depth-range, --noise-reference-m,
 // --max-jump, --max-speed) change DenseSlamOptions for every mode; --intrinsics or --rig replace the RGB-D
@@ -42,17 +43,22 @@
 // was pushed, processed and dropped per stream, the latency from a frame's push to the first probe
 // map that includes it, the probe renders, the real-time factor, the tracking states and ATE.
 //
+// decode --recording DIR: what reading the recording's frames costs, and each frame encoding (PNG,
+// zstd raw frames) on the same frames (bench_decode.h).
+//
 // Each benchmark ends with one line 'summary: mode=... key=value ...'. Prints figures; asserts
 // nothing (the targets are reported as met or not).
 //
 // usage: roomprobe_bench slam (--recording DIR | --tum DIR | --7scenes DIR) [--frames N] [--threads N] [--probe-size N]
-//                             [--intrinsics FX,FY,CX,CY | --rig FILE] [--save-trajectory FILE] [--voxel-size-m V]
+//                             [--intrinsics FX,FY,CX,CY | --rig FILE] [--save-trajectory FILE [--force]] [--voxel-size-m V]
 //                             [--colour-weight W] [--icp-depth-range MIN,MAX] [--tsdf-depth-range MIN,MAX] [--max-jump M,DEG]
 //                             [--max-speed M_S]
 //        roomprobe_bench live --recording DIR [--speed X] [--frames N] [--threads N] [--probe-size N] [the same camera and SLAM options]
 //        roomprobe_bench soak --recording DIR [--frames N] [--threads N] [--probe-size N] [the same camera and SLAM options]
+//        roomprobe_bench decode --recording DIR [--frames N] [--repeats K] [--levels L1,L2,...] [--threads N]
 
 #include "../common/cli.h"
+#include "bench_decode.h"
 #include "opencv_peers.h"
 
 #include <camera/pinhole_camera.h>
@@ -118,6 +124,15 @@ constexpr double TARGET_INTEGRATION_RATIO = 10.0, TARGET_RAYCAST_RATIO = 3.0, TA
 constexpr double TARGET_OPEN3D_INTEGRATION_RATIO = 10.0;
 // As the live nodes: DenseSLAM's mesh_update_interval.
 constexpr int MESH_INTERVAL = 15;
+// The command line's bounds (issue #38: every number that sizes memory, a pool or a run is bounded).
+// --voxel-size-m: 1 mm is finer than a depth camera's noise (several mm at 1 m), and each halving asks
+// 8x the blocks (1e-9 m asked 10^21x); 2 cm is half the truncation band (TsdfOptions, 4 cm), which
+// then spans two voxels either side of a surface.
+constexpr double VOXEL_MIN_M = 0.001, VOXEL_MAX_M = 0.02;
+// --frames, --warmup-frames: 10^7 RGB-D frames is over 3 days at 30 Hz; the soak's series grow with them.
+constexpr long MAX_FRAMES = 10000000;
+// --speed: 100x slower than real time (an event 1 s apart waits 100 s) to 1000x faster.
+constexpr double SPEED_MIN = 0.01, SPEED_MAX = 1000.0;
 // The probe's map size: RoomProbe's default in step mode, and the live benchmark's.
 constexpr int STEP_PROBE_SIZE = 128;
 constexpr int LIVE_PROBE_SIZE = 256;
@@ -389,6 +404,7 @@ struct Arguments {
 	bool has_intrinsics = false; // --intrinsics fx,fy,cx,cy
 	double intrinsics[4] = { 0.0, 0.0, 0.0, 0.0 };
 	std::string save_trajectory; // --save-trajectory FILE
+	bool force = false; // --force: --save-trajectory may replace an existing file
 	bool peers = true; // slam --recording: OpenCV's TSDF and ICP on the same frames (--no-peers: not)
 	std::string open3d_results; // --open3d-results FILE: Open3D's medians on the same frames (open3d_peer.py --out)
 	DenseSlamOptions slam; // the defaults, with --voxel-size-m, --colour-weight and the ranges applied
@@ -397,10 +413,11 @@ struct Arguments {
 void print_usage(std::FILE *p_out) {
 	std::fprintf(p_out,
 			"usage: roomprobe_bench slam (--recording DIR | --tum DIR | --7scenes DIR) [--frames N] [--threads N] [--probe-size N]\n"
-			"                            [--intrinsics FX,FY,CX,CY | --rig FILE] [--save-trajectory FILE] [SLAM settings]\n"
+			"                            [--intrinsics FX,FY,CX,CY | --rig FILE] [--save-trajectory FILE [--force]] [SLAM settings]\n"
 			"       roomprobe_bench live --recording DIR [--speed X] [--frames N] [--threads N] [--probe-size N]\n"
 			"                            [--intrinsics FX,FY,CX,CY | --rig FILE] [SLAM settings]\n"
 			"       roomprobe_bench soak --recording DIR [--frames N] [--warmup-frames N] [--threads N] [--probe-size N] [SLAM settings]\n"
+			"       roomprobe_bench decode --recording DIR [--frames N] [--repeats K] [--levels L1,L2,...] [--threads N]\n"
 			"  slam --recording DIR  a RoomProbe recording through the engine (LiveRoom) in step mode: SLAM, coarse model,\n"
 			"                        one probe's map after every RGB-D frame; per-stage timings, full frame, ATE, RPE. A SLAM-only\n"
 			"                        recording (no room.yaml or no fisheye stream) runs dense SLAM alone, saying what it skips\n"
@@ -412,16 +429,20 @@ void print_usage(std::FILE *p_out) {
 			"                        the warm-up (--warmup-frames N, default a fifth) and no growth in the time per frame, or status 1\n"
 			"  live --recording DIR  the recording played in real time into the threaded engine (start()), the probe map\n"
 			"                        polled at 60 Hz like Godot's main loop; frames dropped, latency, ATE\n"
-			"  --frames N            stop after N RGB-D frames (default: all)\n"
-			"  --threads N           worker threads for OpenCV and TBB (default: the libraries')\n"
+			"  decode --recording DIR  reading each frame as stored (RecordingReader: milliseconds and bytes per frame), then\n"
+			"                        every frame through PNG and zstd raw frames at --levels (default 1,2,3) in memory: encode\n"
+			"                        and decode milliseconds, bytes, bit-exactness; --frames N per stream, --repeats K passes (default 3)\n"
+			"  --frames N            stop after N RGB-D frames, 1 to 10000000 (default: all)\n"
+			"  --threads N           worker threads for OpenCV and TBB, 1 to 1024 (default: the libraries')\n"
 			"  --probe-size N        the probe's cubemap face size (default: slam %d, live %d)\n"
-			"  --speed X             live: playback speed (default 1: real time)\n"
+			"  --speed X             live: playback speed, 0.01 to 1000 (default 1: real time)\n"
 			"  --intrinsics FX,FY,CX,CY  the RGB-D camera's pinhole intrinsics, pixels, no distortion, instead of the source's\n"
 			"                        (TUM: the freiburg set its folder names, else ROS's default; 7-Scenes: camera-intrinsics.txt)\n"
 			"  --rig FILE            the RGB-D camera (rgb: intrinsics, distortion, size) of a rig file (calib/README.md)\n"
 			"                        instead of the source's; the depth scale and any fisheye stay the source's\n"
 			"  --save-trajectory FILE  slam: the tracked poses in TUM format (timestamp tx ty tz qx qy qz qw), one line per frame\n"
-			"                        tracked good or poor; lost frames (no pose known) and poor ones' reasons as '#' comments\n"
+			"                        tracked good or poor; lost frames (no pose known) and poor ones' reasons as '#' comments;\n"
+			"                        never inside an input; an existing FILE is kept unless --force\n"
 			"  --probes N            slam --recording: render N probes every frame, the first at the probe, the others on a\n"
 			"                        ring of 0.6 m around it (default 1); 'render_probes' times them all\n"
 			"  --no-peers            slam --recording: skip the peers (OpenCV contrib's HASHTSDF volume integrating and raycasting\n"
@@ -430,7 +451,7 @@ void print_usage(std::FILE *p_out) {
 			"  --open3d-results FILE slam --recording: Open3D VoxelBlockGrid's medians on the same frames (tools/bench/open3d_peer.py\n"
 			"                        --out FILE; ./roomprobe bench ... --open3d runs it first); adds open3d_*_ratio to the summary\n"
 			"SLAM settings (DenseSlamOptions; the effective ones are printed first):\n"
-			"  --voxel-size-m V      TSDF voxel edge, metres (default %.3f)\n"
+			"  --voxel-size-m V      TSDF voxel edge, metres, 0.001 to 0.02 (default %.3f)\n"
 			"  --colour-weight W     ICP's photometric term, metres per unit intensity; 0: geometry only (default %.2f)\n"
 			"  --icp-depth-range MIN,MAX   depth readings ICP uses, metres along z (default %.2f,%.2f)\n"
 			"  --tsdf-depth-range MIN,MAX  depth readings fused into the TSDF, metres along z (default %.2f,%.2f)\n"
@@ -445,6 +466,21 @@ void print_usage(std::FILE *p_out) {
 			STEP_PROBE_SIZE, LIVE_PROBE_SIZE, double(TsdfOptions().voxel_size_m), DenseSlamOptions().icp.colour_weight, DenseSlamOptions().icp.min_depth_m,
 			DenseSlamOptions().icp.max_depth_m, double(TsdfOptions().min_depth_m), double(TsdfOptions().max_depth_m), DenseSlamOptions().icp.max_jump_m,
 			DenseSlamOptions().icp.max_jump_deg, DenseSlamOptions().max_speed_m_s, DenseSlamOptions().icp.depth_noise.reference_m);
+}
+
+// Why --save-trajectory cannot be written, or "": it must not lie in what the benchmark reads (a
+// recording's rgb.txt was once overwritten), and an existing file is kept unless --force.
+std::string save_trajectory_problem(const Arguments &p_args) {
+	const std::string &path = p_args.save_trajectory;
+	if (path.empty()) {
+		return "";
+	}
+	for (const std::string *input : { &p_args.recording, &p_args.tum, &p_args.seven_scenes, &p_args.rig_file, &p_args.open3d_results }) {
+		if (cli::path_within(path, *input)) {
+			return "--save-trajectory " + path + " lies in the input " + *input + ", which it would overwrite: write it elsewhere";
+		}
+	}
+	return cli::output_file_problem("--save-trajectory", path, p_args.force);
 }
 
 int usage(const char *p_error) {
@@ -1660,6 +1696,53 @@ int bench_soak(const Arguments &p_args) {
 	return memory_flat && time_flat && failed == 0 ? 0 : 1;
 }
 
+// decode: its own few options.
+int run_decode(int argc, char **argv) {
+	bench::DecodeBenchOptions options;
+	cli::Arguments cursor(argc, argv, 2);
+	std::string arg;
+	while (cursor.next(&arg)) {
+		long n = 0;
+		if (arg == "--recording") {
+			if (!cursor.value(&options.recording)) {
+				return usage("--recording needs a folder");
+			}
+		} else if (arg == "--frames") {
+			if (!cursor.integer_in(1, MAX_FRAMES, &n)) {
+				return usage(("--frames needs a whole number of frames in " + cli::range_text(1, MAX_FRAMES)).c_str());
+			}
+			options.frames = n;
+		} else if (arg == "--repeats") {
+			if (!cursor.integer_in(1, 1000, &n)) {
+				return usage("--repeats needs a number of passes, 1 to 1000");
+			}
+			options.repeats = int(n);
+		} else if (arg == "--levels") {
+			std::string text;
+			std::vector<double> levels;
+			if (!cursor.value(&text) || !cli::parse_number_list(text, &levels) || levels.empty() || levels.size() > 16 ||
+					std::any_of(levels.begin(), levels.end(), [](double p_level) { return p_level != std::floor(p_level) || p_level < -7 || p_level > 22; })) {
+				return usage("--levels needs 1 to 16 zstd levels, whole numbers in [-7, 22], comma-separated (e.g. 1,2,3)");
+			}
+			options.levels.assign(levels.begin(), levels.end());
+		} else if (arg == "--threads") {
+			if (!cursor.integer_in(1, cli::MAX_THREADS, &n)) {
+				return usage(("--threads needs a whole number of threads in " + cli::range_text(1, cli::MAX_THREADS)).c_str());
+			}
+			cv::setNumThreads(int(n));
+		} else if (arg == "--help" || arg == "-h") {
+			print_usage(stdout);
+			return 0;
+		} else {
+			return usage(("unknown argument " + arg + " for decode").c_str());
+		}
+	}
+	if (options.recording.empty()) {
+		return usage("decode needs --recording");
+	}
+	return bench::bench_decode(options);
+}
+
 int run(int argc, char **argv) {
 	if (argc < 2) {
 		return usage(nullptr);
@@ -1669,8 +1752,11 @@ int run(int argc, char **argv) {
 		print_usage(stdout);
 		return 0;
 	}
-	if (verb != "slam" && verb != "live" && verb != "soak") {
-		return usage(("unknown benchmark '" + verb + "' (slam, live or soak)").c_str());
+	if (verb != "slam" && verb != "live" && verb != "soak" && verb != "decode") {
+		return usage(("unknown benchmark '" + verb + "' (slam, live, soak or decode)").c_str());
+	}
+	if (verb == "decode") {
+		return run_decode(argc, argv);
 	}
 	Arguments args;
 	args.mode = verb;
@@ -1687,27 +1773,27 @@ int run(int argc, char **argv) {
 				return usage("--tum needs a folder");
 			}
 		} else if (arg == "--frames") {
-			if (!cursor.positive_integer(&n)) {
-				return usage("--frames needs a positive integer");
+			if (!cursor.integer_in(1, MAX_FRAMES, &n)) {
+				return usage(("--frames needs a whole number of frames in " + cli::range_text(1, MAX_FRAMES)).c_str());
 			}
 			args.frames = n;
 		} else if (arg == "--threads") {
-			if (!cursor.positive_integer(&n)) {
-				return usage("--threads needs a positive integer");
+			if (!cursor.integer_in(1, cli::MAX_THREADS, &n)) {
+				return usage(("--threads needs a whole number of threads in " + cli::range_text(1, cli::MAX_THREADS)).c_str());
 			}
 			args.threads = int(n);
 		} else if (arg == "--probes" && args.mode == "slam") {
-			if (!cursor.positive_integer(&n) || n > 64) {
+			if (!cursor.integer_in(1, 64, &n)) {
 				return usage("--probes needs a probe count, 1 to 64");
 			}
 			args.probes = int(n);
 		} else if (arg == "--warmup-frames" && args.mode == "soak") {
-			if (!cursor.positive_integer(&n)) {
-				return usage("--warmup-frames needs a positive integer");
+			if (!cursor.integer_in(1, MAX_FRAMES, &n)) {
+				return usage(("--warmup-frames needs a whole number of frames in " + cli::range_text(1, MAX_FRAMES)).c_str());
 			}
 			args.warmup_frames = n;
 		} else if (arg == "--probe-size") {
-			if (!cursor.positive_integer(&n) || n > 4096) {
+			if (!cursor.integer_in(1, 4096, &n)) {
 				return usage("--probe-size needs a face size in texels, 1 to 4096");
 			}
 			args.probe_size = int(n);
@@ -1716,8 +1802,8 @@ int run(int argc, char **argv) {
 				return usage("--7scenes needs a folder");
 			}
 		} else if (arg == "--speed" && args.mode == "live") {
-			if (!cursor.positive_number(&args.speed)) {
-				return usage("--speed needs a number > 0");
+			if (!cursor.number_in(SPEED_MIN, SPEED_MAX, &args.speed)) {
+				return usage(("--speed needs a playback speed in " + cli::range_text(SPEED_MIN, SPEED_MAX)).c_str());
 			}
 		} else if (arg == "--rig") {
 			if (!cursor.value(&args.rig_file)) {
@@ -1732,10 +1818,12 @@ int run(int argc, char **argv) {
 			if (!cursor.value(&args.save_trajectory)) {
 				return usage("--save-trajectory needs a file");
 			}
+		} else if (arg == "--force" && args.mode == "slam") {
+			args.force = true;
 		} else if (arg == "--voxel-size-m") {
 			double v = 0.0;
-			if (!cursor.positive_number(&v) || v > 1.0) {
-				return usage("--voxel-size-m needs a voxel edge in metres, > 0 and <= 1");
+			if (!cursor.number_in(VOXEL_MIN_M, VOXEL_MAX_M, &v)) {
+				return usage(("--voxel-size-m needs a voxel edge in metres in " + cli::range_text(VOXEL_MIN_M, VOXEL_MAX_M)).c_str());
 			}
 			args.slam.tsdf.voxel_size_m = float(v);
 		} else if (arg == "--open3d-results" && args.mode == "slam") {
@@ -1800,6 +1888,10 @@ int run(int argc, char **argv) {
 	}
 	if (!args.rig_file.empty() && args.has_intrinsics) {
 		return usage("--rig and --intrinsics both give the RGB-D camera: take one");
+	}
+	const std::string unwritable = save_trajectory_problem(args);
+	if (!unwritable.empty()) {
+		return usage(unwritable.c_str());
 	}
 	// OpenCV's parallel_for_ (SLAM kernels) and TBB (coarse model, cubemaps) each have a pool.
 	std::unique_ptr<tbb::global_control> tbb_threads;

@@ -245,10 +245,15 @@ def main():
         return
     if not args.recording:
         parser.error("--recording DIR (or --setup) is needed")
-    if not (0 < args.voxel_size_m <= 1 and args.truncation_m > 0 and 0 <= args.min_depth_m < args.max_depth_m and 0 <= args.raycast_level <= 4):
-        parser.error("a voxel size in (0, 1] m, a truncation > 0 and a depth range min < max are needed")
-    if args.threads < 1:
-        parser.error("--threads needs a positive integer")
+    # roomprobe_bench's bounds (issue #38): ./roomprobe bench --open3d passes --threads and --voxel-size-m on.
+    if not 0.001 <= args.voxel_size_m <= 0.02:
+        parser.error("--voxel-size-m needs a voxel edge in metres in [0.001, 0.02]")
+    if not 1 <= args.threads <= 1024:
+        parser.error("--threads needs a whole number of threads in [1, 1024]")
+    if not (0 < args.truncation_m <= 1 and 0 <= args.min_depth_m < args.max_depth_m <= 100 and 0 <= args.raycast_level <= 4):
+        parser.error("a truncation in (0, 1] m, a depth range 0 <= min < max <= 100 m and a raycast level in [0, 4] are needed")
+    if not (0 <= args.frames <= 10000000 and 1 <= args.max_blocks <= 4194304):
+        parser.error("--frames needs [0, 10000000] (0: all) and --max-blocks [1, 4194304]")
     os.environ["OMP_NUM_THREADS"] = str(args.threads)
     try:
         import open3d  # noqa: F401

@@ -11,8 +11,8 @@
 // frames_dataset.h, recording/tum_dataset.h), undistorted first when the camera has distortion;
 // ends with one line 'summary: mode=tracking ... key=value ...'.
 //
-// usage: build/bin/roomprobe_bench_tracking [frames=30] [passes=3] [rig=calib/synthetic_rig.yaml]
-//        build/bin/roomprobe_bench_tracking (--7scenes DIR | --tum DIR) [--frames N] [--passes N]
+// usage: build/bin/roomprobe_bench_tracking [frames=30, 2 to 1000] [passes=3, 1 to 100] [rig=calib/synthetic_rig.yaml]
+//        build/bin/roomprobe_bench_tracking (--7scenes DIR | --tum DIR) [--frames N, 1 to 100000] [--passes N, 1 to 100]
 
 #include <io/opencv.h>
 
@@ -290,6 +290,25 @@ bool load_dataset(const std::string &p_kind, const std::string &p_folder, long p
 	return true;
 }
 
+// The bounds of the counts (issue #38): every frame is held in memory (about 2 MB at 640x480), and
+// every pass runs each tracker over all of them.
+constexpr long MAX_SYNTH_FRAMES = 1000, MAX_DATASET_FRAMES = 100000, MAX_PASSES = 100;
+
+// Positional argument p_index as a whole number in [p_min, p_max] into *r_value (left as it is when
+// absent); false, saying so, otherwise.
+bool positional(int p_argc, char **p_argv, int p_index, const char *p_name, long p_min, long p_max, long *r_value) {
+	if (p_index >= p_argc) {
+		return true;
+	}
+	long n = 0;
+	if (!cli::parse_integer(p_argv[p_index], &n) || n < p_min || n > p_max) {
+		std::fprintf(stderr, "%s needs a whole number in %s, got '%s'\n", p_name, cli::range_text(double(p_min), double(p_max)).c_str(), p_argv[p_index]);
+		return false;
+	}
+	*r_value = n;
+	return true;
+}
+
 int run_dataset(int p_argc, char **p_argv) {
 	std::string kind, folder;
 	long frames = 0, passes = 1;
@@ -307,8 +326,9 @@ int run_dataset(int p_argc, char **p_argv) {
 				return 2;
 			}
 		} else if (arg == "--frames" || arg == "--passes") {
-			if (!cursor.positive_integer(arg == "--frames" ? &frames : &passes)) {
-				std::fprintf(stderr, "%s needs a positive integer\n", arg.c_str());
+			const long most = arg == "--frames" ? MAX_DATASET_FRAMES : MAX_PASSES;
+			if (!cursor.integer_in(1, most, arg == "--frames" ? &frames : &passes)) {
+				std::fprintf(stderr, "%s needs a whole number in %s\n", arg.c_str(), cli::range_text(1, double(most)).c_str());
 				return 2;
 			}
 		} else {
@@ -351,8 +371,10 @@ int run(int p_argc, char **p_argv) {
 	if (p_argc > 1 && std::string(p_argv[1]).rfind("--", 0) == 0) {
 		return run_dataset(p_argc, p_argv);
 	}
-	const int count = p_argc > 1 ? std::max(2, std::atoi(p_argv[1])) : 30;
-	const int passes = p_argc > 2 ? std::max(1, std::atoi(p_argv[2])) : 3;
+	long count = 30, passes = 3;
+	if (!positional(p_argc, p_argv, 1, "frames", 2, MAX_SYNTH_FRAMES, &count) || !positional(p_argc, p_argv, 2, "passes", 1, MAX_PASSES, &passes)) {
+		return 2;
+	}
 	const synth::SceneResult scene = synth::make_scene("living_room", synth::SceneOptions());
 	if (!scene.ok) {
 		std::fprintf(stderr, "scene: %s\n", scene.error.c_str());
@@ -371,8 +393,8 @@ int run(int p_argc, char **p_argv) {
 		return 1;
 	}
 	const PinholeParams camera = rig.rig.rgb;
-	const std::vector<Frame> frames = render_frames(renderer, synth::make_handheld_trajectory(scene.scene, 1), camera, count);
-	std::printf("living_room, %d frames at 640x480 (30 Hz, noisy depth), frame-to-frame, %d passes, %d OpenCV threads\n", count, passes,
+	const std::vector<Frame> frames = render_frames(renderer, synth::make_handheld_trajectory(scene.scene, 1), camera, int(count));
+	std::printf("living_room, %ld frames at 640x480 (30 Hz, noisy depth), frame-to-frame, %ld passes, %d OpenCV threads\n", count, passes,
 			cv::getNumThreads());
 	double path_m = 0.0;
 	for (size_t i = 1; i < frames.size(); ++i) {
@@ -380,7 +402,7 @@ int run(int p_argc, char **p_argv) {
 	}
 	std::printf("  ground-truth path: %.1f mm\n", path_m * 1000.0);
 
-	compare(frames, passes, camera);
+	compare(frames, int(passes), camera);
 	return 0;
 }
 

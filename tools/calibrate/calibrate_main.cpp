@@ -42,14 +42,25 @@ int usage_error(const std::string &p_message) {
 	return 2;
 }
 
+// The command line's bounds (issue #38). A board's inner corners: OpenCV's search needs 2 or more
+// a side, and no printed board has 100. A square from 1 mm to 1 m; the depth unit from 1 um to
+// 1 m (0.001 for millimetres); the clock's search at most an hour of frames.
+constexpr int BOARD_MIN_CORNERS = 2, BOARD_MAX_CORNERS = 100;
+constexpr double SQUARE_MIN_M = 0.001, SQUARE_MAX_M = 1.0;
+constexpr double DEPTH_SCALE_MIN_M = 1e-6, DEPTH_SCALE_MAX_M = 1.0;
+constexpr double CLOCK_MAX_S = 3600.0;
+
 bool parse_board(const std::string &p_text, BoardSpec *r_board) {
-	int x = 0, y = 0;
-	char separator = 0, rest = 0;
-	if (std::sscanf(p_text.c_str(), "%d%c%d%c", &x, &separator, &y, &rest) != 3 || (separator != 'x' && separator != 'X')) {
+	const size_t x_at = p_text.find_first_of("xX");
+	long x = 0, y = 0;
+	if (x_at == std::string::npos || !cli::parse_integer(p_text.substr(0, x_at), &x) || !cli::parse_integer(p_text.substr(x_at + 1), &y)) {
 		return false;
 	}
-	r_board->inner_x = x;
-	r_board->inner_y = y;
+	if (x < BOARD_MIN_CORNERS || y < BOARD_MIN_CORNERS || x > BOARD_MAX_CORNERS || y > BOARD_MAX_CORNERS) {
+		return false;
+	}
+	r_board->inner_x = int(x);
+	r_board->inner_y = int(y);
 	return true;
 }
 
@@ -68,8 +79,8 @@ int run(int p_argc, char **p_argv) {
 			}
 			is_recording = arg == "--recording";
 		} else if (arg == "--clock-seconds") {
-			if (!args.positive_number(&clock_options.max_seconds)) {
-				return usage_error("--clock-seconds needs a number of seconds, > 0");
+			if (!args.positive_number(CLOCK_MAX_S, &clock_options.max_seconds)) {
+				return usage_error("--clock-seconds needs a number of seconds in (0, " + std::to_string(int(CLOCK_MAX_S)) + "]");
 			}
 		} else if (arg == "--out") {
 			if (!args.value(&out)) {
@@ -78,17 +89,19 @@ int run(int p_argc, char **p_argv) {
 		} else if (arg == "--board") {
 			std::string text;
 			if (!args.value(&text) || !parse_board(text, &view_options.board)) {
-				return usage_error("--board needs the inner corners as COLSxROWS, e.g. 9x6");
+				return usage_error("--board needs the inner corners as COLSxROWS, each " + std::to_string(BOARD_MIN_CORNERS) + " to " +
+						std::to_string(BOARD_MAX_CORNERS) + ", e.g. 9x6");
 			}
 			board_given = true;
 		} else if (arg == "--square-m") {
-			if (!args.positive_number(&view_options.board.square_m)) {
-				return usage_error("--square-m needs the side of a square in metres, > 0");
+			if (!args.number_in(SQUARE_MIN_M, SQUARE_MAX_M, &view_options.board.square_m)) {
+				return usage_error("--square-m needs the side of a square in metres in " + cli::range_text(SQUARE_MIN_M, SQUARE_MAX_M));
 			}
 			square_given = true;
 		} else if (arg == "--depth-scale-m") {
-			if (!args.positive_number(&options.depth_scale_m)) {
-				return usage_error("--depth-scale-m needs metres per depth unit, > 0 (0.001 for millimetres)");
+			if (!args.number_in(DEPTH_SCALE_MIN_M, DEPTH_SCALE_MAX_M, &options.depth_scale_m)) {
+				return usage_error("--depth-scale-m needs metres per depth unit in " + cli::range_text(DEPTH_SCALE_MIN_M, DEPTH_SCALE_MAX_M) +
+						" (0.001 for millimetres)");
 			}
 		} else if (arg == "--ocamcalib") {
 			if (!args.value(&ocamcalib_path)) {
@@ -105,6 +118,10 @@ int run(int p_argc, char **p_argv) {
 	}
 	if (board_given != square_given) {
 		return usage_error("--board and --square-m go together (the folder's board.yaml is used when both are left out)");
+	}
+	const std::string unwritable = check_replaceable(out); // a folder or a device, even with --force
+	if (!unwritable.empty()) {
+		return usage_error("--out " + unwritable);
 	}
 	std::error_code ec;
 	if (std::filesystem::exists(out, ec) && !force) {

@@ -1,13 +1,21 @@
 #pragma once
 // The command-line tools' argument walking (tools/<name>/*_main.cpp): one argument at a time,
-// with the value that follows an option checked where it is read.
+// with the value that follows an option checked where it is read. A number is finite and within a
+// range the option's message names (issue #38); an output file is checked by one policy
+// (output_file_problem).
 
+#include <io/replace_file.h>
+
+#include <cerrno>
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
+#include <limits>
 #include <string>
+#include <system_error>
 #include <vector>
 
 namespace roomprobe::cli {
@@ -47,6 +55,40 @@ inline bool parse_number_list(const std::string &p_text, std::vector<double> *r_
 	}
 }
 
+// p_text as a whole number that fits a long; false on anything else ("12x", "1e3", 99999999999999999999).
+inline bool parse_integer(const std::string &p_text, long *r_value) {
+	char *end = nullptr;
+	errno = 0;
+	const long n = std::strtol(p_text.c_str(), &end, 10);
+	if (end == p_text.c_str() || *end != '\0' || errno == ERANGE) {
+		return false;
+	}
+	*r_value = n;
+	return true;
+}
+
+// p_text as a finite number; false on anything else ("nan", "inf", "1e999", "0.3m").
+inline bool parse_number(const std::string &p_text, double *r_value) {
+	char *end = nullptr;
+	const double x = std::strtod(p_text.c_str(), &end);
+	if (end == p_text.c_str() || *end != '\0' || !std::isfinite(x)) {
+		return false;
+	}
+	*r_value = x;
+	return true;
+}
+
+// "[p_min, p_max]" as the messages name a range ("[0.001, 0.02]", "[1, 10000000]").
+inline std::string range_text(double p_min, double p_max) {
+	char text[64];
+	std::snprintf(text, sizeof(text), "[%.10g, %.10g]", p_min, p_max);
+	return text;
+}
+
+// The most threads a tool's pool is given: more than any machine here has cores, and each thread
+// reserves a stack (roomprobe_bench --threads 100000 segfaulted).
+inline constexpr long MAX_THREADS = 1024;
+
 class Arguments {
 public:
 	Arguments(int p_argc, char **p_argv, int p_first) :
@@ -68,49 +110,37 @@ public:
 		*r_value = argv[++index];
 		return true;
 	}
-	// The value as an integer > 0 (false otherwise).
-	bool positive_integer(long *r_value) {
+	// The value as a whole number in [p_min, p_max]; false otherwise (text, overflow, out of range).
+	bool integer_in(long p_min, long p_max, long *r_value) {
 		std::string v;
-		if (!value(&v)) {
-			return false;
-		}
-		char *end = nullptr;
-		const long n = std::strtol(v.c_str(), &end, 10);
-		if (end == v.c_str() || *end != '\0' || n <= 0) {
+		long n = 0;
+		if (!value(&v) || !parse_integer(v, &n) || n < p_min || n > p_max) {
 			return false;
 		}
 		*r_value = n;
 		return true;
 	}
-	// The value as a number > 0 (false otherwise).
-	bool positive_number(double *r_value) {
+	// The value as a finite number in [p_min, p_max]; false otherwise (text, NaN, infinity, out of range).
+	bool number_in(double p_min, double p_max, double *r_value) {
 		std::string v;
-		if (!value(&v)) {
-			return false;
-		}
-		char *end = nullptr;
-		const double x = std::strtod(v.c_str(), &end);
-		if (end == v.c_str() || *end != '\0' || !(x > 0.0)) {
+		double x = 0.0;
+		if (!value(&v) || !parse_number(v, &x) || !(x >= p_min && x <= p_max)) {
 			return false;
 		}
 		*r_value = x;
 		return true;
 	}
-
-	// The value as a number >= 0 (false otherwise).
-	bool non_negative_number(double *r_value) {
-		std::string v;
-		if (!value(&v)) {
-			return false;
-		}
-		char *end = nullptr;
-		const double x = std::strtod(v.c_str(), &end);
-		if (end == v.c_str() || *end != '\0' || !(x >= 0.0) || !std::isfinite(x)) {
+	// The value as a finite number in (0, p_max]; false otherwise.
+	bool positive_number(double p_max, double *r_value) {
+		double x = 0.0;
+		if (!number_in(0.0, p_max, &x) || !(x > 0.0)) {
 			return false;
 		}
 		*r_value = x;
 		return true;
 	}
+	// The value as a finite number >= 0 (false otherwise).
+	bool non_negative_number(double *r_value) { return number_in(0.0, std::numeric_limits<double>::max(), r_value); }
 	// The value as exactly p_count finite numbers separated by commas ("0.3,8"); false otherwise.
 	bool number_list(size_t p_count, double *r_values) {
 		std::string v;
@@ -129,5 +159,45 @@ private:
 	char **argv;
 	int index;
 };
+
+// True when p_path is p_input or lies inside it, both compared as canonical paths (links
+// followed; p_path need not exist yet). An output there would overwrite what the tool reads.
+inline bool path_within(const std::string &p_path, const std::string &p_input) {
+	if (p_input.empty()) {
+		return false;
+	}
+	std::error_code ec, path_ec;
+	std::filesystem::path input = std::filesystem::weakly_canonical(p_input, ec);
+	const std::filesystem::path path = std::filesystem::weakly_canonical(p_path, path_ec);
+	if (ec || path_ec) {
+		return false;
+	}
+	if (!input.has_filename()) { // "DIR/": its last part is empty
+		input = input.parent_path();
+	}
+	auto at = path.begin();
+	for (const std::filesystem::path &part : input) {
+		if (at == path.end() || *at != part) {
+			return false;
+		}
+		++at;
+	}
+	return true;
+}
+
+// Why p_path cannot be written as p_option's file, or "": a folder, something other than a regular
+// file (a device such as /dev/full), or, unless p_force, a file that exists. Every tool keeps an
+// existing output unless --force.
+inline std::string output_file_problem(const std::string &p_option, const std::string &p_path, bool p_force) {
+	const std::string problem = check_replaceable(p_path);
+	if (!problem.empty()) {
+		return p_option + " " + problem;
+	}
+	std::error_code ec;
+	if (!p_force && std::filesystem::exists(p_path, ec)) {
+		return p_option + " " + p_path + " exists: it is kept (give --force to replace it)";
+	}
+	return "";
+}
 
 } // namespace roomprobe::cli

@@ -3,9 +3,10 @@
 // lighting compensations, and the dense model over it, with true poses and tracked by SLAM
 // (eval/evaluate.h).
 //
-// roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame] [--texel-size M]
+// roomprobe_eval --recording DIR [--out DIR [--force]] [--cubemap-size N] [--per-frame] [--texel-size M]
 //                [--max-cubemaps K] [--no-dense] [--quiet] [--budget] [--rgb-texture]
 //                [--dense-range M]
+// Maps already in --out are kept, the evaluation refused, unless --force (as every tool's outputs).
 
 #include <eval/evaluate.h>
 
@@ -19,14 +20,32 @@
 
 namespace {
 
+// The command line's bounds (issue #38). A texel from 1 mm (CoarseRoomModel.texel_size's least: the
+// atlas grows with the inverse square) to 1 m; at most a million cubemaps scored.
+constexpr double TEXEL_MIN_M = 0.001, TEXEL_MAX_M = 1.0;
+constexpr long MAX_CUBEMAPS = 1000000;
+
+// Why the maps cannot be written into p_out, or "": one that exists, unless p_force.
+std::string out_problem(const std::string &p_out, bool p_force) {
+	for (const std::string &name : roomprobe::evaluation_output_files()) {
+		const std::string problem = roomprobe::cli::output_file_problem("--out", (std::filesystem::path(p_out) / name).string(), p_force);
+		if (!problem.empty()) {
+			return problem;
+		}
+	}
+	return "";
+}
+
 int run(int argc, char **argv) {
 	roomprobe::EvaluationOptions options;
-	bool per_frame = false, quiet = false, budget = false;
+	bool per_frame = false, quiet = false, budget = false, force = false;
 	auto usage = [](const char *p_error) {
 		std::fprintf(stderr,
-				"%s%susage: roomprobe_eval --recording DIR [--out DIR] [--cubemap-size N] [--per-frame]\n"
+				"%s%susage: roomprobe_eval --recording DIR [--out DIR [--force]] [--cubemap-size N] [--per-frame]\n"
 				"                      [--texel-size M] [--max-cubemaps K] [--no-dense] [--quiet] [--budget]\n"
 				"                      [--rgb-texture] [--dense-range M] [--room FILE]\n"
+				"  --out DIR: the last frame's maps of every variant, and the truth's, as NAME.exr and NAME.png;\n"
+				"    maps already there are kept and nothing is evaluated, unless --force replaces them\n"
 				"  --budget: the error budget, the live system with one stage at a time replaced by its oracle\n"
 				"  --dense-range M: fuse depth and draw the dense model up to M metres (default 4)\n"
 				"  --room FILE: the coarse model uses this room.yaml (one found by ./roomprobe room) instead of the\n"
@@ -48,29 +67,31 @@ int run(int argc, char **argv) {
 				return usage("--out needs a folder");
 			}
 		} else if (arg == "--cubemap-size") {
-			if (!cursor.positive_integer(&n) || n > 4096) {
+			if (!cursor.integer_in(1, 4096, &n)) {
 				return usage("--cubemap-size needs a whole number of pixels in [1, 4096]");
 			}
 			options.cubemap_size = int(n);
 		} else if (arg == "--texel-size") {
-			if (!cursor.positive_number(&x)) {
-				return usage("--texel-size needs a positive number of metres");
+			if (!cursor.number_in(TEXEL_MIN_M, TEXEL_MAX_M, &x)) {
+				return usage(("--texel-size needs a texel edge in metres in " + roomprobe::cli::range_text(TEXEL_MIN_M, TEXEL_MAX_M)).c_str());
 			}
 			options.texel_size_m = x;
 		} else if (arg == "--max-cubemaps") {
-			if (!cursor.positive_integer(&n)) {
-				return usage("--max-cubemaps needs a positive integer");
+			if (!cursor.integer_in(1, MAX_CUBEMAPS, &n)) {
+				return usage(("--max-cubemaps needs a whole number in " + roomprobe::cli::range_text(1, MAX_CUBEMAPS)).c_str());
 			}
 			options.max_cubemaps = size_t(n);
 		} else if (arg == "--dense-range") {
-			if (!cursor.positive_number(&x) || x > 20.0) {
-				return usage("--dense-range needs a distance in metres, at most 20");
+			if (!cursor.positive_number(20.0, &x)) {
+				return usage("--dense-range needs a distance in metres in (0, 20]");
 			}
 			options.dense_range_m = x;
 		} else if (arg == "--room") {
 			if (!cursor.value(&options.room_file)) {
 				return usage("--room needs a room.yaml (./roomprobe room writes one)");
 			}
+		} else if (arg == "--force") {
+			force = true;
 		} else if (arg == "--rgb-texture") {
 			options.rgb_texture = true;
 		} else if (arg == "--budget") {
@@ -94,6 +115,10 @@ int run(int argc, char **argv) {
 	std::error_code ec;
 	if (!options.out.empty() && std::filesystem::exists(options.out, ec) && !std::filesystem::is_directory(options.out, ec)) {
 		return usage(("--out " + options.out + " is a file, not a folder: the cubemaps are written into a folder").c_str());
+	}
+	const std::string kept = options.out.empty() || budget ? "" : out_problem(options.out, force); // --budget writes no maps
+	if (!kept.empty()) {
+		return usage(kept.c_str());
 	}
 	if (!quiet) {
 		options.progress = [](const std::string &p_line) { std::cerr << p_line << "\n"; };

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""./roomprobe fuzz TARGET|all [--runs N] [--seconds S]: the libFuzzer targets of tests/fuzz/.
+"""./roomprobe fuzz TARGET|all [--runs N] [--seconds S] [--replay]: the libFuzzer targets of tests/fuzz/.
 
 Runs inside the toolchain. Builds the targets (scons fuzz=yes: clang, the core instrumented,
 AddressSanitizer and UndefinedBehaviorSanitizer), makes each target's seed corpus when it has
@@ -41,6 +41,7 @@ LEDGER_HEADER = "utc\ttarget\texecutions\tseconds\tcrashes\twhere\n"
 # The recording target's bundle replaces these template files; the synthetic recording's own
 # text files go in under the same names.
 BUNDLE_TEXT = ["rig.yaml", "room.yaml", "rgb.txt", "depth.txt", "fisheye.txt"]
+REPLAY_TIMEOUT_S = 300  # a target's whole corpus replay; the seeds take a second or two
 INDEX_LINES = 40  # an index seed keeps its first lines: the fuzzer mutates, it need not read a whole sweep
 
 
@@ -118,12 +119,13 @@ def make_corpus(target, corpus):
                     seeds[rel] = first_lines(os.path.join(root, name), INDEX_LINES)
     elif target in ("png", "depth"):
         for kind in ("rgb", "depth") if target == "png" else ("depth",):
-            path = first_file(os.path.join(recording, kind), ".png")
-            if path:
-                seeds[f"synthetic_{kind}.png"] = open(path, "rb").read()
+            for suffix in (".png", ".zst"):  # PNG frames, raw frames (the writer's default)
+                path = first_file(os.path.join(recording, kind), suffix)
+                if path:
+                    seeds[f"synthetic_{kind}{suffix}"] = open(path, "rb").read()
         seeds.update(small_pngs() if target == "png" else {"depth16.png": small_pngs()["depth16.png"]})
         for name, body in template_files().items():
-            if name.endswith(".png") and (target == "png" or name.startswith("depth/")):
+            if name.endswith((".png", ".zst")) and (target == "png" or name.startswith("depth/")):
                 seeds["template_" + name.replace("/", "_")] = body
     elif target == "exr":
         for folder in ("fisheye", "groundtruth/cubemaps"):
@@ -249,6 +251,36 @@ def run_target(target, runs, seconds):
     return execs, (len(found) or 1) if failed else 0, elapsed
 
 
+def replay_target(target):
+    """The short form: build/tests/replay_TARGET (the normal build, no libFuzzer, no sanitizers) runs
+    each input of the target's corpus and of its kept failures once. Returns (inputs, failed)."""
+    corpus = os.path.join(FUZZ_DIR, "corpus", target)
+    if not os.path.isdir(corpus) or not os.listdir(corpus):
+        make_corpus(target, corpus)
+    folders = [corpus] + [f for f in [os.path.join(FUZZ_DIR, "crashes", target)] if os.path.isdir(f) and os.listdir(f)]
+    scratch = tempfile.mkdtemp(prefix="roomprobe-replay-", dir="/dev/shm" if os.access("/dev/shm", os.W_OK) else None)
+    start = time.monotonic()
+    try:
+        result = subprocess.run([os.path.join(rp.BUILD, "tests", f"replay_{target}")] + folders, cwd=REPO, env=dict(os.environ, TMPDIR=scratch),
+                                capture_output=True, text=True, errors="replace", timeout=REPLAY_TIMEOUT_S)
+        returncode, out, err = result.returncode, result.stdout, result.stderr
+    except subprocess.TimeoutExpired as e:
+        returncode, out, err = "timeout", "", (e.stderr or b"").decode(errors="replace") if isinstance(e.stderr, bytes) else (e.stderr or "")
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+    elapsed = time.monotonic() - start
+    m = re.search(r"replayed (\d+) inputs", out)
+    inputs = int(m.group(1)) if m else 0
+    if returncode != 0 or m is None:
+        named = [line for line in err.splitlines() if line.startswith("replay: ")]
+        print("\n".join(err.splitlines()[-20:]))
+        print(f"fuzz {target}: {inputs} executions in {elapsed:.1f} s (corpus replay), FAILED ({'a hang past ' + str(REPLAY_TIMEOUT_S) + ' s' if returncode == 'timeout' else f'status {returncode}'})"
+              f" at {named[-1][len('replay: '):] if named else 'the start'}", flush=True)
+        return inputs, True
+    print(f"fuzz {target}: {inputs} executions in {elapsed:.1f} s (corpus replay: {', '.join(os.path.relpath(f, REPO) for f in folders)}), no crash", flush=True)
+    return inputs, False
+
+
 def main():
     ap = argparse.ArgumentParser(prog="./roomprobe fuzz", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("target", nargs="?", choices=TARGETS + ["all"])
@@ -257,6 +289,9 @@ def main():
     ap.add_argument("--ledger", action="store_true", help="print the executions of every run so far (build/fuzz/ledger.tsv) and stop")
     ap.add_argument("--add-logs", nargs="+", metavar="LOG", help="count libFuzzer logs (TARGET*.log) of runs made on another machine, and stop")
     ap.add_argument("--where", default="elsewhere", help="with --add-logs: the machine the logs come from")
+    ap.add_argument("--replay", action="store_true",
+                    help="the short form (the test suite's): each target's corpus and kept failures run once through "
+                         "build/tests/replay_TARGET of the normal build (./roomprobe build); no libFuzzer, no sanitizers")
     opts = ap.parse_args()
     if opts.add_logs:
         add_logs(opts.add_logs, opts.where)
@@ -267,6 +302,12 @@ def main():
         return
     if opts.target is None:
         ap.error("name a target, or all")
+    if opts.replay:
+        targets = TARGETS if opts.target == "all" else [opts.target]
+        results = [replay_target(target) for target in targets]
+        failed = sum(1 for _, bad in results if bad)
+        print(f"summary: targets={len(targets)} replayed={sum(n for n, _ in results)} failed={failed}")
+        sys.exit(1 if failed else 0)
     if opts.runs < 0 or opts.seconds < 0 or (opts.runs == 0 and opts.seconds == 0):
         ap.error("give --runs N or --seconds S (or both), each > 0")
     build = subprocess.run(["scons", "-Q", f"-j{os.cpu_count() or 2}", "fuzz=yes"], cwd=REPO)

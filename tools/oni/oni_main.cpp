@@ -17,6 +17,10 @@ using namespace roomprobe;
 
 namespace {
 
+// --first and --frames (issue #38): up to an hour of frames at 30 Hz; the recording's own count
+// limits what is written.
+constexpr long MAX_FRAMES = 100000;
+
 int usage_error(const std::string &p_message) {
 	std::fprintf(stderr, "roomprobe_oni: %s\nusage: roomprobe_oni --recording DIR --out FILE.oni [--first K] [--frames N]\n", p_message.c_str());
 	return 2;
@@ -38,13 +42,13 @@ int run(int p_argc, char **p_argv) {
 			}
 		} else if (arg == "--first") {
 			long value = 0;
-			if (!args.positive_integer(&value)) {
-				return usage_error("--first needs a frame number > 0 (frames count from 0; leave it out to start at 0)");
+			if (!args.integer_in(1, MAX_FRAMES, &value)) {
+				return usage_error("--first needs a frame number in " + cli::range_text(1, MAX_FRAMES) + " (frames count from 0; leave it out to start at 0)");
 			}
 			first = value;
 		} else if (arg == "--frames") {
-			if (!args.positive_integer(&frames)) {
-				return usage_error("--frames needs a number of frames > 0");
+			if (!args.integer_in(1, MAX_FRAMES, &frames)) {
+				return usage_error("--frames needs a number of frames in " + cli::range_text(1, MAX_FRAMES));
 			}
 		} else {
 			return usage_error("unknown argument '" + arg + "'");
@@ -66,8 +70,7 @@ int run(int p_argc, char **p_argv) {
 	}
 	const std::string error = write_oni_from_recording(reader, out, size_t(first), size_t(frames));
 	if (!error.empty()) {
-		std::fprintf(stderr, "roomprobe_oni: %s\n", error.c_str());
-		std::filesystem::remove(out, ec);
+		std::fprintf(stderr, "roomprobe_oni: %s\n", error.c_str()); // the writer left nothing at --out
 		return 1;
 	}
 	const size_t written = frames > 0 ? std::min(size_t(frames), reader.rgbd_count() - size_t(first)) : reader.rgbd_count() - size_t(first);

@@ -4,7 +4,9 @@
 //
 // usage: roomprobe_record --rig FILE --out DIR [--seconds S] [--rgbd URI] [--fisheye ID]
 //          [--fisheye-backend aravis|uvc] [--no-rgbd] [--no-fisheye] [--fake]
-//          [--rgbd-latency-ms MS] [--fisheye-latency-ms MS]
+//          [--rgbd-latency-ms MS] [--fisheye-latency-ms MS] [--frame-format zstd|png]
+//   --frame-format    how RGB, depth and 8-bit fisheye frames are stored: zstd (default: raw frames,
+//                     zstd-compressed, fast to decode) or png (docs/recording-format.md)
 //   --*-latency-ms    override the rig file's rgbd_latency_s / fisheye_latency_s (calib/README.md)
 //   --rgbd URI        an OpenNI2 URI or an .oni file (default: the first depth camera found)
 //   --fisheye ID      an Aravis id or IP, or for uvc /dev/videoN, N or a video file (default: the first found)
@@ -12,6 +14,8 @@
 // A live progress line shows while it records; Ctrl-C stops it cleanly. Both streams are on one
 // clock, so the recording's rig.yaml has fisheye_time_offset_s 0. The last line is a summary; its
 // *_host_ms_p50/p95 are the host's part of the capture latency (driver hand-over to the sink).
+// Relative paths are relative to the folder it is started in: they are made absolute before any
+// driver starts (OpenNI2 changes the working directory to its drivers' folder).
 
 #include "../common/cli.h"
 
@@ -24,6 +28,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -40,9 +45,28 @@ void on_interrupt(int) {
 	interrupted = true;
 }
 
+// --seconds: finite, at most a day (issue #38: "inf" was taken); Ctrl-C stops sooner.
+constexpr double MAX_SECONDS = 86400.0;
+
+// p_path made absolute against the working directory now, before OpenNI2 changes it (a relative
+// --out once recorded into OpenNI2's drivers' folder).
+std::string absolute_path(const std::string &p_path) {
+	std::error_code ec;
+	const std::filesystem::path path = std::filesystem::absolute(p_path, ec);
+	return ec || p_path.empty() ? p_path : path.lexically_normal().string();
+}
+
+// --rgbd and --fisheye name a device or a file (an .oni, a video): only a file's path is made absolute.
+std::string absolute_if_file(const std::string &p_value) {
+	std::error_code ec;
+	return std::filesystem::is_regular_file(p_value, ec) ? absolute_path(p_value) : p_value;
+}
+
 int usage_error(const std::string &p_message) {
 	std::fprintf(stderr, "roomprobe_record: %s\nusage: roomprobe_record --rig FILE --out DIR [--seconds S] [--rgbd URI] [--fisheye ID] "
-						 "[--fisheye-backend aravis|uvc] [--no-rgbd] [--no-fisheye] [--fake] [--rgbd-latency-ms MS] [--fisheye-latency-ms MS]\n",
+						 "[--fisheye-backend aravis|uvc] [--no-rgbd] [--no-fisheye] [--fake] [--rgbd-latency-ms MS] [--fisheye-latency-ms MS]\n"
+						 "  [--frame-format zstd|png]  how RGB, depth and 8-bit fisheye frames are stored: zstd (default: raw frames,\n"
+						 "                             zstd-compressed, fast to decode) or png (docs/recording-format.md)\n",
 			p_message.c_str());
 	return 2;
 }
@@ -51,6 +75,7 @@ int run(int p_argc, char **p_argv) {
 	std::string rig_path, out, rgbd_uri, fisheye_id, backend = "aravis";
 	double seconds = 0.0, rgbd_latency_ms = -1.0, fisheye_latency_ms = -1.0; // < 0: the rig file's
 	bool use_rgbd = true, use_fisheye = true, fake = false;
+	RecordingQueueOptions recording_options;
 	cli::Arguments args(p_argc, p_argv, 1);
 	std::string arg;
 	while (args.next(&arg)) {
@@ -63,8 +88,8 @@ int run(int p_argc, char **p_argv) {
 				return usage_error("--out needs a folder");
 			}
 		} else if (arg == "--seconds") {
-			if (!args.positive_number(&seconds)) {
-				return usage_error("--seconds needs a number of seconds > 0");
+			if (!args.positive_number(MAX_SECONDS, &seconds)) {
+				return usage_error("--seconds needs a number of seconds in (0, " + std::to_string(long(MAX_SECONDS)) + "]");
 			}
 		} else if (arg == "--rgbd") {
 			if (!args.value(&rgbd_uri)) {
@@ -83,6 +108,11 @@ int run(int p_argc, char **p_argv) {
 			if (!args.non_negative_number(&latency) || latency > 1000.0) {
 				return usage_error(arg + " needs a number of milliseconds within 0 to 1000");
 			}
+		} else if (arg == "--frame-format") {
+			std::string format;
+			if (!args.value(&format) || !parse_frame_format(format, &recording_options.write.frame_format)) {
+				return usage_error("--frame-format needs zstd or png, got '" + format + "'");
+			}
 		} else if (arg == "--no-rgbd") {
 			use_rgbd = false;
 		} else if (arg == "--no-fisheye") {
@@ -96,6 +126,10 @@ int run(int p_argc, char **p_argv) {
 	if (rig_path.empty() || out.empty()) {
 		return usage_error("--rig and --out are needed");
 	}
+	rig_path = absolute_path(rig_path);
+	out = absolute_path(out);
+	rgbd_uri = absolute_if_file(rgbd_uri);
+	fisheye_id = absolute_if_file(fisheye_id);
 	RigLoadResult loaded = load_rig(rig_path);
 	if (!loaded.ok) {
 		std::fprintf(stderr, "roomprobe_record: %s\n", loaded.error.c_str());
@@ -131,7 +165,7 @@ int run(int p_argc, char **p_argv) {
 	if (!error.empty()) {
 		return usage_error(error);
 	}
-	const RecordingStatus opened = live.start_recording(out);
+	const RecordingStatus opened = live.start_recording(out, nullptr, recording_options);
 	if (!opened.ok) {
 		std::fprintf(stderr, "roomprobe_record: %s\n", opened.error.c_str());
 		return 1;

@@ -104,7 +104,7 @@ int run(int argc, char **argv) {
 				"%s%susage: roomprobe_room --recording DIR --out FILE [--picture FILE] [--true-poses] [--seconds S]\n"
 				"                      [--force] [--quiet]\n"
 				"  --out FILE: the room.yaml to write (an existing file is kept unless --force)\n"
-				"  --picture FILE: the top view (default: FILE with .png)\n"
+				"  --picture FILE: the top view (default: FILE with .png; the same rule); never a folder or a device\n"
 				"  --true-poses: fuse depth at the recording's true poses instead of tracking\n"
 				"  --seconds S: only the sweep's first S seconds\n",
 				p_error ? "roomprobe_room: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
@@ -127,8 +127,8 @@ int run(int argc, char **argv) {
 				return usage("--picture needs a file name");
 			}
 		} else if (arg == "--seconds") {
-			if (!cursor.positive_number(&x) || x > 36000.0) {
-				return usage("--seconds needs a positive number of seconds, at most 36000");
+			if (!cursor.positive_number(36000.0, &x)) {
+				return usage("--seconds needs a number of seconds in (0, 36000]");
 			}
 			options.max_seconds = x;
 		} else if (arg == "--true-poses") {
@@ -151,8 +151,9 @@ int run(int argc, char **argv) {
 	if (std::filesystem::is_directory(out, ec)) {
 		return usage(("--out " + out + " is a folder: name the room.yaml to write").c_str());
 	}
-	if (std::filesystem::exists(out, ec) && !force) {
-		return usage(("--out " + out + " exists: it is kept (give --force to replace it)").c_str());
+	std::string problem = cli::output_file_problem("--out", out, force);
+	if (!problem.empty()) {
+		return usage(problem.c_str());
 	}
 	if (picture_path.empty()) {
 		picture_path = std::filesystem::path(out).replace_extension(".png").string();
@@ -160,8 +161,10 @@ int run(int argc, char **argv) {
 	if (std::filesystem::path(picture_path).lexically_normal() == std::filesystem::path(out).lexically_normal()) {
 		return usage(("the picture and the room would both be " + out + ": give --picture another name").c_str());
 	}
-	if (std::filesystem::exists(picture_path, ec) && !force) {
-		return usage(("the picture " + picture_path + " exists: it is kept (give --force to replace it)").c_str());
+	// A device (/dev/full) is refused even with --force: it was once removed when the write failed.
+	problem = cli::output_file_problem("the picture", picture_path, force);
+	if (!problem.empty()) {
+		return usage(problem.c_str());
 	}
 	if (!quiet) {
 		options.progress = [](const std::string &p_line) { std::cerr << p_line << "\n"; };

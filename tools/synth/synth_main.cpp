@@ -5,6 +5,7 @@
 //                   [--fisheye-rate 12] [--rgbd-rate 30] [--fisheye-hdr] [--exr-float] [--no-calibration]
 //                   [--threads N] [--exposure fixed|auto|bracket] [--bracket-ev -5,0]
 //                   [--tone-curve srgb|log] [--fisheye-gains R,G,B] [--vignetting 0.5] [--room-sweep]
+//                   [--frame-format zstd|png]
 
 #include <io/opencv.h>
 
@@ -46,7 +47,10 @@ void usage(std::FILE *p_out) {
 			"  --cubemap-size N    ground-truth cubemap face size in pixels (default 128)\n"
 			"  --rgbd-rate HZ      RGB-D frame rate (default 30)\n"
 			"  --fisheye-rate HZ   fisheye frame rate (default 12)\n"
-			"  --fisheye-hdr       write fisheye frames as linear EXR instead of 8-bit PNG\n"
+			"  --frame-format F    how RGB, depth and 8-bit fisheye frames are stored: zstd (default: raw\n"
+			"                      frames, zstd-compressed, fast to decode) or png (as recordings were\n"
+			"                      before; image viewers open them); docs/recording-format.md\n"
+			"  --fisheye-hdr       write fisheye frames as linear EXR instead of 8-bit images\n"
 			"  --exr-float         write EXRs (cubemaps, HDR fisheye) as 32-bit float rather than half\n"
 			"  --no-calibration    skip the checkerboard and photometric views (calibration/)\n"
 			"  --exposure MODE     the fisheye's exposure: fixed (default), auto (auto-exposure) or bracket\n"
@@ -153,13 +157,17 @@ int run(int argc, char **argv) {
 			if (!value(&text) || !parse_double(text, &options.fisheye_rate_hz) || options.fisheye_rate_hz <= 0.0 || options.fisheye_rate_hz > 1000.0) {
 				return fail("--fisheye-rate needs a rate in (0, 1000] Hz, got '" + text + "'");
 			}
+		} else if (arg == "--frame-format") {
+			if (!value(&text) || !parse_frame_format(text, &options.frame_format)) {
+				return fail("--frame-format needs zstd or png, got '" + text + "'");
+			}
 		} else if (arg == "--fisheye-hdr") {
 			options.fisheye_hdr = true;
 		} else if (arg == "--exr-float") {
 			options.exr_full_float = true;
 		} else if (arg == "--threads") {
-			if (!value(&text) || !parse_double(text, &threads) || threads != std::floor(threads) || threads < 1 || threads > 1024) {
-				return fail("--threads needs a whole number in [1, 1024], got '" + text + "'");
+			if (!value(&text) || !parse_double(text, &threads) || threads != std::floor(threads) || threads < 1 || threads > double(cli::MAX_THREADS)) {
+				return fail("--threads needs a whole number in " + cli::range_text(1, double(cli::MAX_THREADS)) + ", got '" + text + "'");
 			}
 		} else if (arg == "--room-sweep") {
 			room_sweep = true;

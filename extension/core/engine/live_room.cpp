@@ -401,6 +401,8 @@ bool LiveRoom::start_locked() {
 	if (cfg.find_room && slam) {
 		room_thread = std::thread([this] { room_worker(); });
 	}
+	placement_meshes.open();
+	placement_thread = std::thread([this] { placement_worker(); });
 	return true;
 }
 
@@ -423,10 +425,15 @@ void LiveRoom::stop_locked() {
 		const std::lock_guard<std::mutex> lock(room_mutex);
 		room_wake.notify_all();
 	}
-	for (std::thread *t : { &slam_thread, &coarse_thread, &probe_thread, &room_thread }) {
+	placement_meshes.close();
+	for (std::thread *t : { &slam_thread, &coarse_thread, &probe_thread, &room_thread, &placement_thread }) {
 		if (t->joinable()) {
 			t->join();
 		}
+	}
+	// A mesh published after the placement worker's last take is placed on here.
+	if (std::optional<std::shared_ptr<const TriangleMesh>> mesh = placement_meshes.try_take()) {
+		place_on(**mesh);
 	}
 	running = false;
 }
@@ -485,6 +492,28 @@ void LiveRoom::probe_worker() {
 			arena.execute([&, id = id, position = position, size = size] { render_one(id, position, size, generation); });
 		}
 	}
+}
+
+// Builds the placement scene of each new dense mesh off the SLAM worker: an Embree build over
+// a room's mesh takes hundreds of milliseconds, and a frame waiting behind it would be dropped.
+void LiveRoom::placement_worker() {
+	while (!stopping) {
+		if (std::optional<std::shared_ptr<const TriangleMesh>> mesh = placement_meshes.take(WORKER_POLL)) {
+			place_on(**mesh);
+		}
+	}
+}
+
+// The placement scene from p_mesh, built outside placer_mutex so that cast never waits for it.
+void LiveRoom::place_on(const TriangleMesh &p_mesh) {
+	std::shared_ptr<const EmbreeTriangleScene> scene;
+	const std::string error = SurfacePlacer::build_dense(p_mesh, &scene);
+	if (!error.empty()) {
+		record_error("placement", error);
+		return;
+	}
+	const std::lock_guard<std::mutex> lock(placer_mutex);
+	placer.set_dense_scene(std::move(scene));
 }
 
 void LiveRoom::wake_probes() {
@@ -1247,13 +1276,10 @@ void LiveRoom::publish_mesh() {
 	for (const auto &[region, chunk] : mesh_chunks) {
 		snapshot->chunks.push_back(chunk);
 	}
-	std::string error;
-	{
-		const std::lock_guard<std::mutex> lock(placer_mutex);
-		error = placer.set_dense(*whole);
-	}
-	if (!error.empty()) {
-		record_error("placement", error);
+	if (running) {
+		placement_meshes.put(whole); // the placement worker builds it
+	} else {
+		place_on(*whole);
 	}
 	const std::lock_guard<std::mutex> lock(publish_mutex);
 	snapshot->version = last_mesh ? last_mesh->version + 1 : 1;

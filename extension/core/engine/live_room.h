@@ -334,6 +334,8 @@ private:
 	void coarse_worker();
 	void probe_worker();
 	void room_worker();
+	void placement_worker();
+	void place_on(const TriangleMesh &p_mesh);
 	std::shared_ptr<const FoundRoom> find_room_locked(const std::vector<FisheyeFrame> *p_views);
 	std::string build_room_locked(); // the coarse model, its renderer and placement from cfg
 	void take_coarse_state(CoarseSnapshot *r_snapshot) const; // coarse must exist
@@ -401,7 +403,9 @@ private:
 	std::atomic<bool> running{ false };
 	std::atomic<bool> stopping{ false };
 	std::unique_ptr<Frames> frames;
-	std::thread slam_thread, coarse_thread, probe_thread, room_thread;
+	std::thread slam_thread, coarse_thread, probe_thread, room_thread, placement_thread;
+	// The dense mesh the placement worker builds its Embree scene from next (the newest only).
+	Mailbox<std::shared_ptr<const TriangleMesh>> placement_meshes;
 
 	// The room from the sweep: fisheye frames kept for it (spread over time: when twice
 	// find_room_views are kept, every other one goes and the spacing doubles), and the estimate.

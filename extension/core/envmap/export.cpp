@@ -1,5 +1,6 @@
 #include "export.h"
 #include <io/image_codec.h>
+#include <io/exr_write.h>
 
 #include <math/srgb.h>
 
@@ -7,7 +8,6 @@
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
-#include <ImfOutputFile.h>
 
 #include <algorithm>
 #include <cmath>
@@ -31,26 +31,19 @@ std::string write_cubemap_exr(const std::string &p_path, const Cubemap &p_cubema
 	if (strip.empty() || !strip.isContinuous()) {
 		return p_path + ": not written, the faces do not form a strip";
 	}
-	try {
-		Imf::Header header(strip.cols, strip.rows);
-		header.compression() = Imf::ZIP_COMPRESSION;
-		for (const char *name : k_channels) {
-			header.channels().insert(name, Imf::Channel(Imf::FLOAT));
-		}
-		Imf::FrameBuffer buffer;
-		char *base = const_cast<char *>(reinterpret_cast<const char *>(strip.ptr<float>()));
-		const size_t x_stride = 3 * sizeof(float);
-		const size_t y_stride = x_stride * size_t(strip.cols);
-		for (int c = 0; c < 3; c++) {
-			buffer.insert(k_channels[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), x_stride, y_stride));
-		}
-		Imf::OutputFile file(p_path.c_str(), header);
-		file.setFrameBuffer(buffer);
-		file.writePixels(strip.rows);
-	} catch (const std::exception &e) {
-		return p_path + ": " + e.what();
+	Imf::Header header(strip.cols, strip.rows);
+	header.compression() = Imf::ZIP_COMPRESSION;
+	for (const char *name : k_channels) {
+		header.channels().insert(name, Imf::Channel(Imf::FLOAT));
 	}
-	return std::string();
+	Imf::FrameBuffer buffer;
+	char *base = const_cast<char *>(reinterpret_cast<const char *>(strip.ptr<float>()));
+	const size_t x_stride = 3 * sizeof(float);
+	const size_t y_stride = x_stride * size_t(strip.cols);
+	for (int c = 0; c < 3; c++) {
+		buffer.insert(k_channels[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), x_stride, y_stride));
+	}
+	return write_exr(p_path, header, buffer, strip.rows);
 }
 
 std::string read_cubemap_exr(const std::string &p_path, Cubemap *r_cubemap) {

@@ -13,7 +13,8 @@
 //   Tone mapping: each linear channel is clamped to [0, 1] (1.0 is the fisheye's white, see
 //   coarse_texture.h), encoded with the sRGB transfer function and scaled to 0..255, rounded.
 //
-// Nothing here throws: the functions return "" on success, else an error naming the file.
+// Nothing here throws: the functions return "" on success, else an error naming the file. A file
+// written replaces its path whole or leaves it as it was (io/replace_file.h).
 
 #include "cubemap.h"
 

@@ -239,7 +239,23 @@ void measure_mirrors(const synth::SynthRenderer &p_scene, const Cubemap &p_truth
 	}
 }
 
+// The stems of the maps written into EvaluationOptions::out, in EvaluationVariant order.
+const char *const MAP_FILES[VARIANT_COUNT] = { "baseline", "coarse", "coarse_inpaint", "coarse_light_additive", "coarse_light_gain", "dense_true_poses",
+	"dense_slam", "oracle_coarse_texture", "oracle_dense" };
+constexpr const char *TRUTH_FILE = "ground_truth";
+
 } // namespace
+
+std::vector<std::string> evaluation_output_files() {
+	std::vector<std::string> names;
+	for (const char *stem : MAP_FILES) {
+		names.push_back(std::string(stem) + ".exr");
+		names.push_back(std::string(stem) + ".png");
+	}
+	names.push_back(std::string(TRUTH_FILE) + ".exr");
+	names.push_back(std::string(TRUTH_FILE) + ".png");
+	return names;
+}
 
 EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	EvaluationResult result;
@@ -524,10 +540,8 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		}
 		if (c + 1 == count && !p_options.out.empty()) {
 			std::filesystem::create_directories(p_options.out);
-			const char *files[VARIANT_COUNT] = { "baseline", "coarse", "coarse_inpaint", "coarse_light_additive", "coarse_light_gain", "dense_true_poses",
-				"dense_slam", "oracle_coarse_texture", "oracle_dense" };
 			for (int v = 0; v < variant_count; v++) {
-				const std::string stem = (std::filesystem::path(p_options.out) / files[v]).string();
+				const std::string stem = (std::filesystem::path(p_options.out) / MAP_FILES[v]).string();
 				std::string error = write_cubemap_exr(stem + ".exr", estimates[v]);
 				if (error.empty()) {
 					error = write_cubemap_png_net(stem + ".png", estimates[v]);
@@ -536,7 +550,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 					say(error);
 				}
 			}
-			const std::string stem = (std::filesystem::path(p_options.out) / "ground_truth").string();
+			const std::string stem = (std::filesystem::path(p_options.out) / TRUTH_FILE).string();
 			write_cubemap_exr(stem + ".exr", gt);
 			write_cubemap_png_net(stem + ".png", gt);
 		}

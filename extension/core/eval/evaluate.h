@@ -185,6 +185,10 @@ struct EvaluationResult {
 };
 
 EvaluationResult evaluate_recording(const EvaluationOptions &p_options);
+// The names of the files evaluate_recording may write into EvaluationOptions::out, each variant's
+// last maps and the ground truth's as NAME.exr and NAME.png (roomprobe_eval keeps existing ones
+// unless --force).
+std::vector<std::string> evaluation_output_files();
 
 // The error budget (issue #16): the live system, then rows with one stage replaced by its oracle
 // (true poses; texels and maps at twice the resolution) or left out (the dense model; inpainting

@@ -8,8 +8,8 @@
 #include <png.h>
 
 #include "opencv.h"
+#include "replace_file.h"
 
-#include <cerrno>
 #include <csetjmp>
 #include <cstring>
 #include <fstream>
@@ -28,20 +28,9 @@ struct CodecError {
 	char message[200] = { 0 };
 };
 
-std::string size_problem(int64_t p_width, int64_t p_height) {
-	if (p_width <= 0 || p_height <= 0) {
-		return "has no pixels (" + std::to_string(p_width) + "x" + std::to_string(p_height) + ")";
-	}
-	if (p_width > kImageMaxSidePx || p_height > kImageMaxSidePx || p_width * p_height > kImageMaxPixels) {
-		return "is " + std::to_string(p_width) + "x" + std::to_string(p_height) + " pixels, more than RoomProbe reads (" +
-				std::to_string(kImageMaxSidePx) + " a side, " + std::to_string(kImageMaxPixels) + " in all)";
-	}
-	return "";
-}
-
 // No std::string may outlive a call in the frames that setjmp returns to: this one is gone here.
 bool size_ok(int64_t p_width, int64_t p_height, CodecError *r_error) {
-	const std::string problem = size_problem(p_width, p_height);
+	const std::string problem = image_size_problem(p_width, p_height);
 	std::snprintf(r_error->message, sizeof(r_error->message), "%s", problem.c_str());
 	return problem.empty();
 }
@@ -214,6 +203,17 @@ bool starts_with(const std::vector<uint8_t> &p_bytes, std::initializer_list<uint
 
 } // namespace
 
+std::string image_size_problem(int64_t p_width, int64_t p_height) {
+	if (p_width <= 0 || p_height <= 0) {
+		return "has no pixels (" + std::to_string(p_width) + "x" + std::to_string(p_height) + ")";
+	}
+	if (p_width > kImageMaxSidePx || p_height > kImageMaxSidePx || p_width * p_height > kImageMaxPixels) {
+		return "is " + std::to_string(p_width) + "x" + std::to_string(p_height) + " pixels, more than RoomProbe reads (" +
+				std::to_string(kImageMaxSidePx) + " a side, " + std::to_string(kImageMaxPixels) + " in all)";
+	}
+	return "";
+}
+
 std::string png_decode(const uint8_t *p_bytes, size_t p_size, cv::Mat *r_image) {
 	if (p_size < 8 || png_sig_cmp(p_bytes, 0, 8) != 0) {
 		return "not a PNG (no PNG signature)";
@@ -289,7 +289,19 @@ std::string read_file_bytes(const std::string &p_path, std::vector<uint8_t> *r_b
 	if (!file) {
 		return p_path + ": cannot be opened for reading";
 	}
-	r_bytes->assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+	// A file whose size is known is read in one call (a frame of a megabyte byte by byte took a
+	// millisecond); one that grew since is read to the size seen, one that shrank to its end.
+	file.seekg(0, std::ios::end);
+	const std::streamoff size = file.tellg();
+	file.seekg(0);
+	if (size >= 0 && file) {
+		r_bytes->resize(size_t(size));
+		file.read(reinterpret_cast<char *>(r_bytes->data()), std::streamsize(size));
+		r_bytes->resize(size_t(file.gcount()));
+	} else { // a pipe, say
+		file.clear();
+		r_bytes->assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+	}
 	if (file.bad()) {
 		return p_path + ": read error";
 	}
@@ -334,20 +346,8 @@ std::string png_write(const std::string &p_path, const cv::Mat &p_image) {
 	if (!error.empty()) {
 		return p_path + ": " + error;
 	}
-	// stdio rather than a stream: a full disk is named by errno ("No space left on device").
-	std::FILE *file = std::fopen(p_path.c_str(), "wb");
-	if (file == nullptr) {
-		return p_path + ": cannot be opened for writing: " + std::strerror(errno);
-	}
-	const bool written = std::fwrite(bytes.data(), 1, bytes.size(), file) == bytes.size();
-	const int write_errno = errno;
-	const bool closed = std::fclose(file) == 0;
-	if (!written || !closed) {
-		const int cause = written ? errno : write_errno;
-		std::remove(p_path.c_str()); // no half image left behind; the index never lists it
-		return p_path + ": could not be written: " + std::strerror(cause);
-	}
-	return "";
+	// Whole or not at all: no half image is left behind, and the index never lists one.
+	return replace_file(p_path, bytes.data(), bytes.size());
 }
 
 } // namespace roomprobe

@@ -19,6 +19,10 @@ namespace roomprobe {
 inline constexpr int kImageMaxSidePx = 32768;
 inline constexpr int64_t kImageMaxPixels = int64_t(1) << 28;
 
+// "" when an image of p_width x p_height is within those limits, else what is wrong ("is 40000x2
+// pixels, more than RoomProbe reads ..."), for a message that names the file first.
+std::string image_size_problem(int64_t p_width, int64_t p_height);
+
 // As cv::imdecode(IMREAD_UNCHANGED): 8 or 16 bits as stored, gray stays gray (gray with alpha
 // becomes B, G, R, A), colour is B, G, R(, A); palettes and 1-, 2- and 4-bit gray are expanded.
 std::string png_decode(const uint8_t *p_bytes, size_t p_size, cv::Mat *r_image);
@@ -38,7 +42,8 @@ enum class ImageReadMode {
 };
 // Errors name p_path.
 std::string image_read(const std::string &p_path, ImageReadMode p_mode, cv::Mat *r_image);
-// Writes png_encode's bytes to p_path (replacing it). Errors name p_path.
+// Writes png_encode's bytes to p_path, replacing it whole or leaving it as it was (io/replace_file.h):
+// a folder or a device there is refused. Errors name p_path.
 std::string png_write(const std::string &p_path, const cv::Mat &p_image);
 
 } // namespace roomprobe

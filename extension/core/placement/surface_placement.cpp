@@ -32,12 +32,26 @@ std::string SurfacePlacer::set_coarse(const RoomMesh &p_room, const Pose &p_worl
 }
 
 std::string SurfacePlacer::set_dense(const TriangleMesh &p_mesh) {
+	std::shared_ptr<const EmbreeTriangleScene> scene;
+	const std::string error = build_dense(p_mesh, &scene);
+	if (error.empty()) {
+		dense = std::move(scene);
+	}
+	return error;
+}
+
+std::string SurfacePlacer::build_dense(const TriangleMesh &p_mesh, std::shared_ptr<const EmbreeTriangleScene> *r_scene) {
 	std::vector<float> xyz;
 	xyz.reserve(p_mesh.vertices.size() * 3);
 	for (const glm::vec3 &v : p_mesh.vertices) {
 		xyz.insert(xyz.end(), { v.x, v.y, v.z });
 	}
-	return build_scene(xyz, p_mesh.indices, &dense);
+	std::unique_ptr<EmbreeTriangleScene> scene;
+	const std::string error = build_scene(xyz, p_mesh.indices, &scene);
+	if (error.empty()) {
+		*r_scene = std::move(scene);
+	}
+	return error;
 }
 
 PlacementHit SurfacePlacer::cast(const glm::dvec3 &p_origin, const glm::dvec3 &p_direction, double p_max_distance_m) const {

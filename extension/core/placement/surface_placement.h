@@ -36,6 +36,11 @@ public:
 	// or the room found from the sweep). Return "" or what Embree reported.
 	std::string set_coarse(const RoomMesh &p_room, const Pose &p_world_from_room = Pose());
 	std::string set_dense(const TriangleMesh &p_mesh);
+	// set_dense in two steps, so that the slow one (hundreds of milliseconds for a room's mesh)
+	// runs outside the lock that guards cast: build_dense makes the scene (null for an empty
+	// mesh; r_scene untouched on an error), set_dense_scene puts it in.
+	static std::string build_dense(const TriangleMesh &p_mesh, std::shared_ptr<const EmbreeTriangleScene> *r_scene);
+	void set_dense_scene(std::shared_ptr<const EmbreeTriangleScene> p_scene) { dense = std::move(p_scene); }
 	void clear_dense() { dense.reset(); }
 	void clear_coarse() { coarse.reset(); }
 
@@ -45,7 +50,7 @@ public:
 
 private:
 	std::unique_ptr<EmbreeTriangleScene> coarse;
-	std::unique_ptr<EmbreeTriangleScene> dense;
+	std::shared_ptr<const EmbreeTriangleScene> dense;
 };
 
 } // namespace roomprobe

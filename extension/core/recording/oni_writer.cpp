@@ -1,7 +1,8 @@
 #include "oni_writer.h"
 
+#include <io/replace_file.h>
+
 #include <cmath>
-#include <fstream>
 
 namespace roomprobe {
 
@@ -76,10 +77,8 @@ void OniWriter::add_frame(Node p_node, uint64_t p_timestamp_us, uint32_t p_frame
 std::string OniWriter::save(const std::string &p_path) {
 	record(END, 0, "");
 	const std::string header = std::string("NI10") + u8(1) + u8(0) + u16(1) + u32(0) + u64(max_timestamp_us) + u32(2);
-	std::ofstream file(p_path, std::ios::binary | std::ios::trunc);
-	file << header << bytes;
-	file.flush();
-	return file ? std::string() : p_path + ": cannot be written";
+	bytes.insert(0, header); // save() ends the records: it is the last call
+	return replace_file(p_path, bytes.data(), bytes.size()); // whole or not at all: no half .oni left
 }
 
 std::string write_oni_from_recording(const RecordingReader &p_recording, const std::string &p_path, size_t p_first, size_t p_count) {

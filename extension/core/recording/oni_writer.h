@@ -33,7 +33,8 @@ public:
 	void begin_data();
 	// One frame's pixels: 16-bit depth or 8-bit R, G, B, row by row; frame ids count from 1.
 	void add_frame(Node p_node, uint64_t p_timestamp_us, uint32_t p_frame_id, const std::string &p_pixels);
-	// Writes the file; an empty string, or the error naming it.
+	// Writes the file, replacing p_path whole or leaving it as it was (io/replace_file.h); an empty
+	// string, or the error naming it.
 	std::string save(const std::string &p_path);
 
 	template <class T>

@@ -1,11 +1,11 @@
 #include "recording_io.h"
 #include <io/image_codec.h>
+#include <io/exr_write.h>
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
-#include <ImfOutputFile.h>
 #include <ImathBox.h>
 #include <half.h>
 
@@ -296,44 +296,113 @@ std::string check_png_bytes(const std::vector<uint8_t> &p_bytes) {
 	});
 }
 
-std::string read_png_info(const std::string &p_path, PngInfo *r_info) {
-	if (!file_exists(p_path)) {
-		return not_a_file_error(p_path);
-	}
-	std::ifstream file(p_path, std::ios::binary);
-	if (!file) {
-		return p_path + ": cannot be opened for reading";
-	}
-	file.seekg(0, std::ios::end);
-	const std::streamoff size = file.tellg();
-	if (size < 0) {
-		return p_path + ": cannot be read";
-	}
-	file.seekg(0);
-	uint8_t header[PNG_HEADER_SIZE] = {};
-	file.read(reinterpret_cast<char *>(header), std::streamsize(std::min<std::streamoff>(size, PNG_HEADER_SIZE)));
-	std::string error = parse_png_header(header, size_t(std::min<std::streamoff>(size, PNG_HEADER_SIZE)), r_info);
+namespace {
+
+// An open file's size, with the stream back at its start; -1 when it cannot be told.
+std::streamoff stream_size(std::ifstream &p_file) {
+	p_file.seekg(0, std::ios::end);
+	const std::streamoff size = p_file.tellg();
+	p_file.seekg(0);
+	return size;
+}
+
+// read_png_info on an open file of p_size bytes whose first bytes (up to PNG_HEADER_SIZE) are read.
+std::string png_info_of(std::ifstream &p_file, std::streamoff p_size, const uint8_t *p_header, const std::string &p_path, PngInfo *r_info) {
+	std::string error = parse_png_header(p_header, size_t(std::min<std::streamoff>(p_size, PNG_HEADER_SIZE)), r_info);
 	if (!error.empty()) {
 		return p_path + ": " + error;
 	}
 	// The common case: the file ends with IEND. Otherwise walk the chunks, which tells data after
 	// IEND (allowed) from a file cut short.
 	uint8_t tail[12] = {};
-	if (size >= std::streamoff(PNG_HEADER_SIZE + 12)) {
-		file.seekg(size - 12);
-		file.read(reinterpret_cast<char *>(tail), 12);
-		if (file && std::memcmp(tail, PNG_IEND, 12) == 0) {
+	if (p_size >= std::streamoff(PNG_HEADER_SIZE + 12)) {
+		p_file.clear();
+		p_file.seekg(p_size - 12);
+		p_file.read(reinterpret_cast<char *>(tail), 12);
+		if (p_file && std::memcmp(tail, PNG_IEND, 12) == 0) {
 			return std::string();
 		}
 	}
-	file.clear();
-	error = walk_png_chunks(uint64_t(size), [&](uint64_t p_offset, uint8_t *r_header) {
-		file.clear();
-		file.seekg(std::streamoff(p_offset));
-		file.read(reinterpret_cast<char *>(r_header), 8);
-		return bool(file);
+	p_file.clear();
+	error = walk_png_chunks(uint64_t(p_size), [&](uint64_t p_offset, uint8_t *r_header) {
+		p_file.clear();
+		p_file.seekg(std::streamoff(p_offset));
+		p_file.read(reinterpret_cast<char *>(r_header), 8);
+		return bool(p_file);
 	});
 	return error.empty() ? error : p_path + ": " + error;
+}
+
+// Opens a frame file to read its header: "" or what is wrong, naming the file; r_size: its length.
+std::string open_for_header(const std::string &p_path, std::ifstream *r_file, std::streamoff *r_size) {
+	if (!file_exists(p_path)) {
+		return not_a_file_error(p_path);
+	}
+	r_file->open(p_path, std::ios::binary);
+	if (!*r_file) {
+		return p_path + ": cannot be opened for reading";
+	}
+	*r_size = stream_size(*r_file);
+	return *r_size < 0 ? p_path + ": cannot be read" : "";
+}
+
+} // namespace
+
+std::string read_png_info(const std::string &p_path, PngInfo *r_info) {
+	std::ifstream file;
+	std::streamoff size = 0;
+	const std::string error = open_for_header(p_path, &file, &size);
+	if (!error.empty()) {
+		return error;
+	}
+	uint8_t header[PNG_HEADER_SIZE] = {};
+	file.read(reinterpret_cast<char *>(header), std::streamsize(std::min<std::streamoff>(size, PNG_HEADER_SIZE)));
+	return png_info_of(file, size, header, p_path, r_info);
+}
+
+std::string read_frame_file_info(const std::string &p_path, FrameFileInfo *r_info) {
+	std::ifstream file;
+	std::streamoff size = 0;
+	const std::string open_error = open_for_header(p_path, &file, &size);
+	if (!open_error.empty()) {
+		return open_error;
+	}
+	constexpr size_t HEADER_BYTES = std::max(PNG_HEADER_SIZE, kRawFrameHeaderBytes);
+	uint8_t header[HEADER_BYTES] = {};
+	const size_t have = size_t(std::min<std::streamoff>(size, HEADER_BYTES));
+	file.read(reinterpret_cast<char *>(header), std::streamsize(have));
+	FrameFileInfo info;
+	if (have >= 8 && std::memcmp(header, PNG_SIGNATURE, 8) == 0) {
+		info.kind = FrameFileKind::Png;
+		const std::string error = png_info_of(file, size, header, p_path, &info.png);
+		if (!error.empty()) {
+			return error;
+		}
+		info.width = info.png.width;
+		info.height = info.png.height;
+		*r_info = info;
+		return std::string();
+	}
+	if (!zstd_magic(header, have)) {
+		return p_path + ": neither a PNG nor a RoomProbe raw frame" + (size == 0 ? std::string(" (empty file)") : std::string());
+	}
+	info.kind = FrameFileKind::RawFrame;
+	const std::string error = raw_frame_parse_header(header, have, &info.raw);
+	if (!error.empty()) {
+		return p_path + ": " + error;
+	}
+	const uint64_t needed = kRawFrameHeaderBytes + info.raw.data_bytes;
+	if (uint64_t(size) < needed) {
+		return p_path + ": truncated: the raw frame ends at byte " + std::to_string(size) + "; its header says " + std::to_string(needed) + " bytes";
+	}
+	if (uint64_t(size) > needed) {
+		return p_path + ": corrupt raw frame: " + std::to_string(uint64_t(size) - needed) + " bytes after its zstd data (the header says " +
+				std::to_string(needed) + " bytes in all)";
+	}
+	info.width = info.raw.width;
+	info.height = info.raw.height;
+	*r_info = info;
+	return std::string();
 }
 
 std::string decode_png(const std::string &p_path, cv::Mat *r_image) {
@@ -355,6 +424,39 @@ std::string decode_png(const std::string &p_path, cv::Mat *r_image) {
 		*r_image = image;
 		return std::string();
 	});
+}
+
+std::string decode_frame_file(const std::string &p_path, cv::Mat *r_image, FrameFileKind *r_kind) {
+	std::vector<uint8_t> bytes;
+	const std::string unreadable = read_whole_file(p_path, &bytes);
+	if (!unreadable.empty()) {
+		return unreadable;
+	}
+	const bool png = bytes.size() >= 8 && std::memcmp(bytes.data(), PNG_SIGNATURE, 8) == 0;
+	if (png) {
+		const std::string error = check_png_bytes(bytes);
+		if (!error.empty()) {
+			return p_path + ": " + error;
+		}
+	} else if (!zstd_magic(bytes.data(), bytes.size())) {
+		return p_path + ": neither a PNG nor a RoomProbe raw frame" + (bytes.empty() ? std::string(" (empty file)") : std::string());
+	}
+	return catch_all(p_path, [&]() -> std::string {
+		cv::Mat image;
+		const std::string problem = png ? png_decode(bytes.data(), bytes.size(), &image) : raw_frame_decode(bytes.data(), bytes.size(), &image);
+		if (!problem.empty()) {
+			return p_path + ": " + problem;
+		}
+		*r_image = image;
+		if (r_kind != nullptr) {
+			*r_kind = png ? FrameFileKind::Png : FrameFileKind::RawFrame;
+		}
+		return std::string();
+	});
+}
+
+std::string write_raw_frame(const std::string &p_path, const cv::Mat &p_image, int p_level) {
+	return raw_frame_write(p_path, p_image, p_level);
 }
 
 namespace {
@@ -504,10 +606,7 @@ std::string write_exr_rgb(const std::string &p_path, const cv::Mat &p_rgb, bool 
 		for (int c = 0; c < 3; c++) {
 			buffer.insert(names[c], Imf::Slice(stored, base + c * element, x_stride, y_stride));
 		}
-		Imf::OutputFile file(p_path.c_str(), header);
-		file.setFrameBuffer(buffer);
-		file.writePixels(rgb.rows);
-		return std::string();
+		return write_exr(p_path, header, buffer, rgb.rows);
 	});
 }
 

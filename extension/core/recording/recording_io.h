@@ -1,7 +1,7 @@
 #pragma once
 // Internal helpers shared by the recording reader, writer and the TUM reader: index files,
-// PNG checks and decoding, EXR files, timestamp association. Not an API for the rest of the
-// core: include recording_reader.h, recording_writer.h or tum_dataset.h instead.
+// PNG checks and decoding, raw frame files, EXR files, timestamp association. Not an API for the
+// rest of the core: include recording_reader.h, recording_writer.h or tum_dataset.h instead.
 //
 // Nothing here throws. Functions returning a std::string return an error (empty on success)
 // that names the file; check_png_bytes, which has no file, says only what is wrong.
@@ -9,6 +9,7 @@
 #include "recording_types.h"
 
 #include <io/opencv.h>
+#include <io/raw_frame.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -78,8 +79,33 @@ std::string decode_jpeg(const std::string &p_path, cv::Mat *r_image);
 // Writes a PNG (BGR or gray, as cv::imwrite takes it).
 std::string write_png(const std::string &p_path, const cv::Mat &p_image);
 
+// A frame image file of a recording, told apart by its first bytes: a PNG or a raw frame file
+// (io/raw_frame.h: zstd-compressed samples, colour as R, G, B).
+enum class FrameFileKind {
+	Png,
+	RawFrame,
+};
+struct FrameFileInfo {
+	FrameFileKind kind = FrameFileKind::Png;
+	int width = 0;
+	int height = 0;
+	PngInfo png; // kind Png
+	RawFrameHeader raw; // kind RawFrame
+};
+// Reads a frame file's header and checks that the file is complete, without decoding it: a PNG
+// as read_png_info does; a raw frame's header, and a length that is the header's. Errors:
+// missing, neither a PNG nor a raw frame, truncated, a corrupt header.
+std::string read_frame_file_info(const std::string &p_path, FrameFileInfo *r_info);
+// Reads and decodes a PNG (as decode_png: B, G, R) or a raw frame file (the samples as stored:
+// R, G, B), chosen by its first bytes; *r_kind (when not null) says which. Errors: missing, unreadable, neither,
+// truncated, corrupt.
+std::string decode_frame_file(const std::string &p_path, cv::Mat *r_image, FrameFileKind *r_kind);
+// Writes a raw frame file (the samples as stored: colour as R, G, B) at zstd level p_level.
+std::string write_raw_frame(const std::string &p_path, const cv::Mat &p_image, int p_level);
+
 // Writes a CV_32FC3 R, G, B image as an EXR with R, G, B channels (half, or float), ZIP
-// compressed. Values must be finite (and within half's range when half).
+// compressed. Values must be finite (and within half's range when half). Replaces p_path whole or
+// leaves it as it was (io/replace_file.h).
 std::string write_exr_rgb(const std::string &p_path, const cv::Mat &p_rgb, bool p_full_float);
 // The data window size of an EXR, from its header only.
 std::string read_exr_size(const std::string &p_path, int *r_width, int *r_height);

@@ -73,27 +73,39 @@ std::string check_rgb_image(const std::string &p_path, const Rig &p_rig) {
 		}
 		return size_problem(p_path, jpeg.width, jpeg.height, "RGB-D camera", p_rig.rgb.width, p_rig.rgb.height);
 	}
-	recording_io::PngInfo info;
-	const std::string error = recording_io::read_png_info(p_path, &info);
+	recording_io::FrameFileInfo info;
+	const std::string error = recording_io::read_frame_file_info(p_path, &info);
 	if (!error.empty()) {
 		return error;
 	}
-	if (info.bit_depth != 8 || (info.color_type != 2 && info.color_type != 3 && info.color_type != 6)) {
-		return p_path + ": an RGB image must be an 8-bit RGB PNG; this is " + describe_png(info);
+	if (info.kind == recording_io::FrameFileKind::RawFrame && info.raw.cv_type() != CV_8UC3) {
+		return p_path + ": an RGB image must be 8-bit with 3 channels (R, G, B); this raw frame is " + recording_io::describe_type(info.raw.cv_type());
+	}
+	if (info.kind == recording_io::FrameFileKind::Png &&
+			(info.png.bit_depth != 8 || (info.png.color_type != 2 && info.png.color_type != 3 && info.png.color_type != 6))) {
+		return p_path + ": an RGB image must be an 8-bit RGB PNG; this is " + describe_png(info.png);
 	}
 	return size_problem(p_path, info.width, info.height, "RGB-D camera", p_rig.rgb.width, p_rig.rgb.height);
 }
 
-std::string check_depth_png(const std::string &p_path, const Rig &p_rig) {
-	recording_io::PngInfo info;
-	const std::string error = recording_io::read_png_info(p_path, &info);
+std::string check_depth_image(const std::string &p_path, const Rig &p_rig) {
+	recording_io::FrameFileInfo info;
+	const std::string error = recording_io::read_frame_file_info(p_path, &info);
 	if (!error.empty()) {
 		return error;
 	}
-	if (info.bit_depth != 16 || info.color_type != 0) {
-		return p_path + ": a depth image must be a 16-bit gray PNG; this is " + describe_png(info);
+	if (info.kind == recording_io::FrameFileKind::RawFrame && info.raw.cv_type() != CV_16UC1) {
+		return p_path + ": a depth image must be 16-bit with 1 channel; this raw frame is " + recording_io::describe_type(info.raw.cv_type());
+	}
+	if (info.kind == recording_io::FrameFileKind::Png && (info.png.bit_depth != 16 || info.png.color_type != 0)) {
+		return p_path + ": a depth image must be a 16-bit gray PNG; this is " + describe_png(info.png);
 	}
 	return size_problem(p_path, info.width, info.height, "RGB-D camera", p_rig.rgb.width, p_rig.rgb.height);
+}
+
+// The raw frames a fisheye stream takes: 8-bit gray or R, G, B (HDR frames are EXR files).
+bool fisheye_raw_type(int p_cv_type) {
+	return p_cv_type == CV_8UC1 || p_cv_type == CV_8UC3;
 }
 
 std::string check_fisheye_file(const std::string &p_path, const Rig &p_rig) {
@@ -105,19 +117,21 @@ std::string check_fisheye_file(const std::string &p_path, const Rig &p_rig) {
 		if (!error.empty()) {
 			return error;
 		}
-	} else if (extension == ".png") {
-		recording_io::PngInfo info;
-		const std::string error = recording_io::read_png_info(p_path, &info);
+	} else {
+		recording_io::FrameFileInfo info;
+		const std::string error = recording_io::read_frame_file_info(p_path, &info);
 		if (!error.empty()) {
 			return error;
 		}
-		if (info.bit_depth != 8) {
-			return p_path + ": a fisheye PNG must be 8-bit (gray or RGB); this is " + describe_png(info);
+		if (info.kind == recording_io::FrameFileKind::RawFrame && !fisheye_raw_type(info.raw.cv_type())) {
+			return p_path + ": a fisheye raw frame must be 8-bit gray or R, G, B (HDR frames are EXR files); this is " +
+					recording_io::describe_type(info.raw.cv_type());
+		}
+		if (info.kind == recording_io::FrameFileKind::Png && info.png.bit_depth != 8) {
+			return p_path + ": a fisheye PNG must be 8-bit (gray or RGB); this is " + describe_png(info.png);
 		}
 		width = info.width;
 		height = info.height;
-	} else {
-		return p_path + ": a fisheye image must be a .png (8-bit) or an .exr (HDR)";
 	}
 	if (p_rig.fisheye.width <= 0) {
 		return std::string(); // a rig without a fisheye (datasets): nothing to compare with
@@ -262,12 +276,21 @@ void read_cubemap_index(const std::string &p_folder, const std::string &p_path, 
 	}
 }
 
-// Decodes an 8-bit colour PNG or a colour JPEG into CV_8UC3 R, G, B.
+// Decodes an 8-bit colour PNG, a colour JPEG or an 8-bit R, G, B raw frame into CV_8UC3 R, G, B.
 std::string decode_rgb8(const std::string &p_path, cv::Mat *r_rgb) {
 	cv::Mat image;
-	const std::string error = recording_io::is_jpeg_path(p_path) ? recording_io::decode_jpeg(p_path, &image) : recording_io::decode_png(p_path, &image);
+	recording_io::FrameFileKind kind = recording_io::FrameFileKind::Png;
+	const std::string error =
+			recording_io::is_jpeg_path(p_path) ? recording_io::decode_jpeg(p_path, &image) : recording_io::decode_frame_file(p_path, &image, &kind);
 	if (!error.empty()) {
 		return error;
+	}
+	if (kind == recording_io::FrameFileKind::RawFrame) {
+		if (image.type() != CV_8UC3) {
+			return p_path + ": must be an 8-bit RGB image; this raw frame is " + recording_io::describe_type(image.type());
+		}
+		*r_rgb = image; // stored as R, G, B
+		return std::string();
 	}
 	if (image.depth() != CV_8U || (image.channels() != 3 && image.channels() != 4)) {
 		return p_path + ": must be an 8-bit RGB image; this decodes as " + recording_io::describe_type(image.type());
@@ -331,7 +354,7 @@ void recording_io::pair_and_check_rgbd(const std::vector<FrameRef> &p_rgb, const
 		const FrameRef &rgb_ref = p_rgb[rgb];
 		const FrameRef &depth_ref = p_depth[depth];
 		const std::string rgb_problem = check_rgb_image(join(r_contents->folder, rgb_ref.path), r_contents->rig);
-		const std::string depth_problem = check_depth_png(join(r_contents->folder, depth_ref.path), r_contents->rig);
+		const std::string depth_problem = check_depth_image(join(r_contents->folder, depth_ref.path), r_contents->rig);
 		if (!rgb_problem.empty()) {
 			r_contents->issues.push_back({ p_rgb_index, rgb_ref.line, rgb_problem + "; RGB-D frame skipped" });
 		}
@@ -493,7 +516,7 @@ RgbdFrameResult RecordingReader::read_rgbd(size_t p_index) const {
 	}
 
 	cv::Mat raw;
-	error = recording_io::decode_png(depth_path, &raw);
+	error = recording_io::decode_frame_file(depth_path, &raw, nullptr); // 16 bits either way
 	if (error.empty() && raw.type() != CV_16UC1) {
 		error = depth_path + ": a depth image must be 16-bit single-channel; this decodes as " + recording_io::describe_type(raw.type());
 	}
@@ -539,13 +562,18 @@ FisheyeFrameResult RecordingReader::read_fisheye(size_t p_index) const {
 						" NaN or infinite; an HDR frame must hold finite radiance";
 			}
 		}
-	} else if (extension == ".png") {
+	} else {
 		cv::Mat decoded;
-		error = recording_io::decode_png(path, &decoded);
-		if (error.empty() && decoded.depth() != CV_8U) {
+		recording_io::FrameFileKind kind = recording_io::FrameFileKind::Png;
+		error = recording_io::decode_frame_file(path, &decoded, &kind);
+		if (error.empty() && kind == recording_io::FrameFileKind::RawFrame && !fisheye_raw_type(decoded.type())) {
+			error = path + ": a fisheye raw frame must be 8-bit gray or R, G, B (HDR frames are EXR files); this is " +
+					recording_io::describe_type(decoded.type());
+		} else if (error.empty() && kind == recording_io::FrameFileKind::RawFrame) {
+			image = decoded; // gray, or stored as R, G, B
+		} else if (error.empty() && decoded.depth() != CV_8U) {
 			error = path + ": a fisheye PNG must be 8-bit; this decodes as " + recording_io::describe_type(decoded.type());
-		}
-		if (error.empty()) {
+		} else if (error.empty()) {
 			switch (decoded.channels()) {
 				case 1:
 					image = decoded;
@@ -561,8 +589,6 @@ FisheyeFrameResult RecordingReader::read_fisheye(size_t p_index) const {
 					break;
 			}
 		}
-	} else {
-		error = path + ": a fisheye image must be a .png (8-bit) or an .exr (HDR)";
 	}
 	if (error.empty() && contents.rig.fisheye.width > 0) {
 		error = size_problem(path, image.cols, image.rows, "fisheye", contents.rig.fisheye.width, contents.rig.fisheye.height);

@@ -80,6 +80,18 @@ std::string depth_to_raw(const cv::Mat &p_depth, double p_scale_m, const std::st
 
 } // namespace
 
+const char *frame_format_name(FrameFormat p_format) {
+	return p_format == FrameFormat::Png ? "png" : "zstd";
+}
+
+bool parse_frame_format(const std::string &p_text, FrameFormat *r_format) {
+	if (p_text == "zstd" || p_text == "png") {
+		*r_format = p_text == "png" ? FrameFormat::Png : FrameFormat::Zstd;
+		return true;
+	}
+	return false;
+}
+
 RecordingWriter::~RecordingWriter() {
 	close();
 }
@@ -145,6 +157,13 @@ RecordingStatus RecordingWriter::open_folder(const std::string &p_folder, const 
 	if (!problem.empty()) {
 		return fail(path("room.yaml") + ": " + problem);
 	}
+	if (p_options.frame_format != FrameFormat::Png && p_options.frame_format != FrameFormat::Zstd) {
+		return fail(p_folder + ": unknown frame format " + std::to_string(int(p_options.frame_format)));
+	}
+	problem = p_options.frame_format == FrameFormat::Zstd ? raw_frame_level_problem(p_options.zstd_level) : std::string();
+	if (!problem.empty()) {
+		return fail(p_folder + ": " + problem + " (RecordingWriteOptions::zstd_level)");
+	}
 	std::error_code ec;
 	if (fs::exists(p_folder, ec)) {
 		if (!fs::is_directory(p_folder, ec)) {
@@ -190,12 +209,17 @@ RecordingStatus RecordingWriter::open_folder(const std::string &p_folder, const 
 		const char *name;
 		const char *header;
 	};
+	const bool raw = p_options.frame_format == FrameFormat::Zstd;
+	const std::string rgb_header = std::string("# RoomProbe recording: RGB images (") + (raw ? "8-bit R, G, B raw frames, zstd" : "8-bit RGB PNG") +
+			"), RGB-D camera clock\n# timestamp_s filename\n";
+	const std::string depth_header = std::string("# RoomProbe recording: depth images (") + (raw ? "16-bit raw frames, zstd" : "16-bit PNG") +
+			", value x rig depth_scale_m = metres, 0 = no reading), RGB-D camera clock\n# timestamp_s filename\n";
+	const std::string fisheye_header = std::string("# RoomProbe recording: fisheye images (") + (raw ? "8-bit raw frames, zstd," : "8-bit PNG") +
+			" or linear HDR EXR), fisheye camera clock\n# timestamp_s filename\n";
 	const Index indexes[3] = {
-		{ &rgb_index, "rgb.txt", "# RoomProbe recording: RGB images (8-bit RGB PNG), RGB-D camera clock\n# timestamp_s filename\n" },
-		{ &depth_index, "depth.txt",
-				"# RoomProbe recording: depth images (16-bit PNG, value x rig depth_scale_m = metres, 0 = no reading), RGB-D camera clock\n"
-				"# timestamp_s filename\n" },
-		{ &fisheye_index, "fisheye.txt", "# RoomProbe recording: fisheye images (8-bit PNG or linear HDR EXR), fisheye camera clock\n# timestamp_s filename\n" },
+		{ &rgb_index, "rgb.txt", rgb_header.c_str() },
+		{ &depth_index, "depth.txt", depth_header.c_str() },
+		{ &fisheye_index, "fisheye.txt", fisheye_header.c_str() },
 	};
 	for (const Index &index : indexes) {
 		index.stream->close();
@@ -236,8 +260,10 @@ RecordingStatus RecordingWriter::add_rgbd(const RgbdFrame &p_frame) {
 	if (!opened) {
 		return fail("RecordingWriter::add_rgbd: no recording is open");
 	}
-	const std::string rgb_name = numbered("rgb", rgbd_count, ".png");
-	const std::string depth_name = numbered("depth", rgbd_count, ".png");
+	const bool raw_frames = options.frame_format == FrameFormat::Zstd;
+	const char *extension = raw_frames ? ".zst" : ".png";
+	const std::string rgb_name = numbered("rgb", rgbd_count, extension);
+	const std::string depth_name = numbered("depth", rgbd_count, extension);
 	const std::string rgb_path = path(rgb_name);
 	const std::string depth_path = path(depth_name);
 	const double rgb_time = p_frame.timestamp_s;
@@ -268,11 +294,18 @@ RecordingStatus RecordingWriter::add_rgbd(const RgbdFrame &p_frame) {
 	if (!error.empty()) {
 		return fail(error);
 	}
-	cv::Mat bgr;
-	cv::cvtColor(p_frame.rgb, bgr, cv::COLOR_RGB2BGR);
-	error = recording_io::write_png(rgb_path, bgr);
-	if (error.empty()) {
-		error = recording_io::write_png(depth_path, raw);
+	if (raw_frames) {
+		error = recording_io::write_raw_frame(rgb_path, p_frame.rgb, options.zstd_level); // stored as R, G, B
+		if (error.empty()) {
+			error = recording_io::write_raw_frame(depth_path, raw, options.zstd_level);
+		}
+	} else {
+		cv::Mat bgr;
+		cv::cvtColor(p_frame.rgb, bgr, cv::COLOR_RGB2BGR);
+		error = recording_io::write_png(rgb_path, bgr);
+		if (error.empty()) {
+			error = recording_io::write_png(depth_path, raw);
+		}
 	}
 	if (error.empty()) {
 		error = append_line(rgb_index, "rgb.txt", format_number(rgb_time) + " " + rgb_name);
@@ -306,7 +339,8 @@ RecordingStatus RecordingWriter::add_fisheye(const FisheyeFrame &p_frame) {
 	const cv::Mat &image = p_frame.image;
 	const bool hdr_type = image.type() == CV_32FC3;
 	const bool ldr_type = image.type() == CV_8UC1 || image.type() == CV_8UC3;
-	const std::string name = numbered("fisheye", fisheye_count, hdr_type ? ".exr" : ".png");
+	const bool raw_frames = options.frame_format == FrameFormat::Zstd;
+	const std::string name = numbered("fisheye", fisheye_count, hdr_type ? ".exr" : raw_frames ? ".zst" : ".png");
 	const std::string file = path(name);
 	if (!std::isfinite(p_frame.timestamp_s)) {
 		return fail(path("fisheye.txt") + ": the frame's timestamp must be finite (got " + format_number(p_frame.timestamp_s) + ")");
@@ -322,6 +356,8 @@ RecordingStatus RecordingWriter::add_fisheye(const FisheyeFrame &p_frame) {
 	std::string error;
 	if (hdr_type) {
 		error = recording_io::write_exr_rgb(file, image, options.exr_full_float);
+	} else if (raw_frames) {
+		error = recording_io::write_raw_frame(file, image, options.zstd_level); // gray, or stored as R, G, B
 	} else if (image.channels() == 3) {
 		cv::Mat bgr;
 		cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);

@@ -8,6 +8,7 @@
 
 #include "recording_types.h"
 
+#include <io/raw_frame.h>
 #include <rig/rig.h>
 #include <rig/trajectory.h>
 
@@ -16,14 +17,29 @@
 
 namespace roomprobe {
 
+// How the writer stores RGB, depth and 8-bit fisheye frames (docs/recording-format.md, "Images").
+enum class FrameFormat {
+	Zstd, // raw frame files, NNNNNN.zst (io/raw_frame.h): the samples compressed by zstd; decode about ten times faster than PNG
+	Png, // PNG files, NNNNNN.png (zlib level 1): the format of recordings made before raw frames; image viewers open them
+};
+// "zstd" or "png".
+const char *frame_format_name(FrameFormat p_format);
+// "zstd" or "png" (as the tools' --frame-format takes it); false for anything else.
+bool parse_frame_format(const std::string &p_text, FrameFormat *r_format);
+
 struct RecordingWriteOptions {
 	// open() refuses a folder that exists and holds anything, so no one's data is overwritten.
 	// With this set it writes into such a folder, replacing files that have the recording's
-	// names (rig.yaml, rgb/000000.png, ...); other files are left as they are.
+	// names (rig.yaml, rgb/000000.zst, ...); other files are left as they are.
 	bool allow_non_empty_folder = false;
 	// EXR channels (HDR fisheye frames, ground-truth cubemaps) as 32-bit float rather than half.
 	// Half keeps 11 significant bits and values up to 65504; larger values are an error with half.
 	bool exr_full_float = false;
+	// RGB, depth and 8-bit fisheye frames as raw frames (the default) or PNG. HDR fisheye frames and
+	// ground-truth cubemaps are EXR either way.
+	FrameFormat frame_format = FrameFormat::Zstd;
+	// zstd's level for raw frames (ZSTD_minCLevel() to ZSTD_maxCLevel(); open() refuses others).
+	int zstd_level = kRawFrameDefaultLevel;
 };
 
 class RecordingWriter {
@@ -43,13 +59,13 @@ public:
 	RecordingStatus open_without_room(const std::string &p_folder, const Rig &p_rig, const RecordingWriteOptions &p_options = RecordingWriteOptions());
 	bool is_open() const { return opened; }
 
-	// Writes rgb/NNNNNN.png and depth/NNNNNN.png and their index lines. rgb: CV_8UC3 R, G, B, the
+	// Writes rgb/NNNNNN.zst and depth/NNNNNN.zst (.png with FrameFormat::Png) and their index lines. rgb: CV_8UC3 R, G, B, the
 	// rig's rgb size. depth_m: CV_32FC1 metres (NaN, infinite or <= 0: no reading; stored as
 	// round(metres / depth_scale_m), an error when beyond 65535 units) or CV_16UC1 raw units, same
 	// size. Timestamps must be finite and increase strictly within rgb.txt and within depth.txt.
 	// A frame whose capture is known (a live frame) also gets its line in capture.txt.
 	RecordingStatus add_rgbd(const RgbdFrame &p_frame);
-	// Writes fisheye/NNNNNN.png (CV_8UC1 or CV_8UC3 R, G, B) or fisheye/NNNNNN.exr (CV_32FC3,
+	// Writes fisheye/NNNNNN.zst or .png (CV_8UC1 or CV_8UC3 R, G, B) or fisheye/NNNNNN.exr (CV_32FC3,
 	// hdr set) and its index line; the rig's fisheye size; strictly increasing timestamps. An
 	// error when the rig has no fisheye.
 	RecordingStatus add_fisheye(const FisheyeFrame &p_frame);

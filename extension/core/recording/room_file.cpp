@@ -5,6 +5,7 @@
 #include <rig/trajectory.h>
 
 #include <io/opencv.h>
+#include <io/replace_file.h>
 #include <io/yaml_fields.h>
 
 #include <glm/gtc/quaternion.hpp>
@@ -186,47 +187,54 @@ RoomLoadResult load_room_file(const std::string &p_path) {
 	return result;
 }
 
+namespace {
+
+// The room as YAML text, built in memory so the file is written whole (io/replace_file.h).
+std::string room_yaml(const RoomInfo &p_room) {
+	const glm::dquat q = glm::normalize(p_room.initial_rgb_pose.rotation);
+	const glm::dvec3 &t = p_room.initial_rgb_pose.translation;
+	cv::FileStorage storage(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
+	storage.writeComment(" RoomProbe room; the fields are described in docs/recording-format.md.");
+	storage << KEY_VERSION << ROOM_FILE_VERSION;
+	storage.writeComment(" Floorplan corners [x, z], metres, on the floor (world y = 0); the room is this polygon extruded to the ceiling.");
+	storage << KEY_FLOORPLAN << "[";
+	for (const Vec2 &point : p_room.floorplan.points) {
+		storage << "[:" << point.x << point.y << "]";
+	}
+	storage << "]";
+	storage << KEY_CEILING << p_room.floorplan.ceiling_height_m;
+	storage.writeComment(" world_from_rgb at the first RGB-D frame (world: Y up, metres; camera: x right, y down, z forward).");
+	storage << KEY_POSE << "{";
+	storage << "rotation_xyzw" << "[:" << q.x << q.y << q.z << q.w << "]";
+	storage << "translation_m" << "[:" << t.x << t.y << t.z << "]";
+	storage << "}";
+	if (!p_room.probes.empty()) {
+		storage.writeComment(" Probe positions [x, y, z], world metres; groundtruth/cubemaps.txt refers to them by index.");
+		storage << KEY_PROBES << "[";
+		for (const glm::dvec3 &probe : p_room.probes) {
+			storage << "[:" << probe.x << probe.y << probe.z << "]";
+		}
+		storage << "]";
+	}
+	return storage.releaseAndGetString();
+}
+
+} // namespace
+
 std::string save_room_file(const std::string &p_path, const RoomInfo &p_room) {
 	const std::string problem = check_room(p_room);
 	if (!problem.empty()) {
 		return p_path + ": " + problem;
 	}
-	const glm::dquat q = glm::normalize(p_room.initial_rgb_pose.rotation);
-	const glm::dvec3 &t = p_room.initial_rgb_pose.translation;
+	std::string text;
 	try {
-		cv::FileStorage storage(p_path, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
-		if (!storage.isOpened()) {
-			return p_path + ": cannot open for writing";
-		}
-		storage.writeComment(" RoomProbe room; the fields are described in docs/recording-format.md.");
-		storage << KEY_VERSION << ROOM_FILE_VERSION;
-		storage.writeComment(" Floorplan corners [x, z], metres, on the floor (world y = 0); the room is this polygon extruded to the ceiling.");
-		storage << KEY_FLOORPLAN << "[";
-		for (const Vec2 &point : p_room.floorplan.points) {
-			storage << "[:" << point.x << point.y << "]";
-		}
-		storage << "]";
-		storage << KEY_CEILING << p_room.floorplan.ceiling_height_m;
-		storage.writeComment(" world_from_rgb at the first RGB-D frame (world: Y up, metres; camera: x right, y down, z forward).");
-		storage << KEY_POSE << "{";
-		storage << "rotation_xyzw" << "[:" << q.x << q.y << q.z << q.w << "]";
-		storage << "translation_m" << "[:" << t.x << t.y << t.z << "]";
-		storage << "}";
-		if (!p_room.probes.empty()) {
-			storage.writeComment(" Probe positions [x, y, z], world metres; groundtruth/cubemaps.txt refers to them by index.");
-			storage << KEY_PROBES << "[";
-			for (const glm::dvec3 &probe : p_room.probes) {
-				storage << "[:" << probe.x << probe.y << probe.z << "]";
-			}
-			storage << "]";
-		}
-		storage.release();
+		text = room_yaml(p_room);
 	} catch (const cv::Exception &e) {
 		return p_path + ": cannot write: " + e.err;
 	} catch (const std::exception &e) {
 		return p_path + ": cannot write: " + e.what();
 	}
-	return std::string();
+	return replace_file(p_path, text.data(), text.size());
 }
 
 } // namespace roomprobe

@@ -24,6 +24,7 @@ std::string check_room(const RoomInfo &p_room);
 
 RoomLoadResult load_room_file(const std::string &p_path);
 // Returns "" or the error naming the file; never writes a room that load_room_file would refuse.
+// Replaces p_path whole or leaves it as it was (io/replace_file.h): a folder or a device is refused.
 std::string save_room_file(const std::string &p_path, const RoomInfo &p_room);
 
 } // namespace roomprobe

@@ -1,6 +1,7 @@
 #include "rig.h"
 
 #include <io/opencv.h>
+#include <io/replace_file.h>
 #include <io/yaml_fields.h>
 
 #include <charconv>
@@ -399,17 +400,9 @@ RigLoadResult load_rig(const std::string &p_path) {
 
 namespace {
 
+// Whole or not at all: a rig file half written would pass for a rig (io/replace_file.h).
 std::string write_text(const std::string &p_path, const std::string &p_text) {
-	std::ofstream file(p_path, std::ios::binary | std::ios::trunc);
-	if (!file) {
-		return p_path + ": cannot open for writing";
-	}
-	file << p_text;
-	file.flush();
-	if (!file) {
-		return p_path + ": write error";
-	}
-	return std::string();
+	return replace_file(p_path, p_text.data(), p_text.size());
 }
 
 } // namespace

@@ -68,7 +68,8 @@ struct RigLoadResult {
 // out together) gives a rig without a fisheye.
 RigLoadResult load_rig(const std::string &p_path);
 // Writes the rig file (without the fisheye's three fields when the rig has no fisheye); returns an empty string, or the error naming the file.
-// With p_report, the calibration's report is written after the rig (calibration_report).
+// With p_report, the calibration's report is written after the rig (calibration_report). Replaces
+// p_path whole or leaves it as it was (io/replace_file.h).
 std::string save_rig(const std::string &p_path, const Rig &p_rig, const RigCalibrationReport *p_report = nullptr);
 
 // The version of the schema that save_rig writes (the roomprobe_rig field). Version 2 added the

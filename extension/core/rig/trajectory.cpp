@@ -252,9 +252,14 @@ std::string TumTrajectoryWriter::open(const std::string &p_path, const std::vect
 	error.clear();
 	has_last = false;
 	file.clear();
-	file.open(p_path, std::ios::out | std::ios::trunc | std::ios::binary);
+	error = replacement.begin(p_path);
+	if (!error.empty()) {
+		return error;
+	}
+	file.open(replacement.temp_path(), std::ios::out | std::ios::trunc | std::ios::binary);
 	if (!file) {
-		error = p_path + ": cannot open for writing";
+		error = p_path + ": cannot be opened for writing";
+		replacement.discard();
 		return error;
 	}
 	for (const std::string &line : p_header) {
@@ -316,11 +321,15 @@ std::string TumTrajectoryWriter::close() {
 	if (!file.is_open()) {
 		return error;
 	}
-	file.flush();
+	file.close();
 	if (!file && error.empty()) {
 		error = path + ": write error";
 	}
-	file.close();
+	if (!error.empty()) {
+		replacement.discard(); // the path stays as it was
+		return error;
+	}
+	error = replacement.commit();
 	return error;
 }
 

@@ -2,6 +2,7 @@
 // A camera's timed poses (the RGB-D camera's, from tracking or ground truth), the pose at any
 // instant between two of them (paper §4.3), and the TUM RGB-D trajectory format.
 
+#include <io/replace_file.h>
 #include <math/pose.h>
 
 #include <fstream>
@@ -64,7 +65,9 @@ std::string save_tum_trajectory(const std::string &p_path, const Trajectory &p_t
 
 // Writes a TUM trajectory file pose by pose, as a tracker gives them, with '#' comment lines
 // anywhere (load_tum_trajectory and TUM's own tools skip them). Each call returns an empty
-// string or the error naming the file; after an error the writer writes nothing more.
+// string or the error naming the file; after an error the writer writes nothing more. The lines
+// go to a temporary file beside the path, renamed over it by a close() without errors: the path
+// is replaced whole or left as it was (io/replace_file.h).
 class TumTrajectoryWriter {
 public:
 	TumTrajectoryWriter() = default;
@@ -72,8 +75,8 @@ public:
 	TumTrajectoryWriter &operator=(const TumTrajectoryWriter &) = delete;
 	~TumTrajectoryWriter() { close(); }
 
-	// Creates (or empties) p_path and writes p_header's lines as comments, then the column line
-	// '# timestamp tx ty tz qx qy qz qw'.
+	// Begins the file at p_path (a folder or a device there is refused) with p_header's lines as
+	// comments, then the column line '# timestamp tx ty tz qx qy qz qw'.
 	std::string open(const std::string &p_path, const std::vector<std::string> &p_header = {});
 	bool is_open() const { return file.is_open(); }
 	// One pose line; timestamps must increase strictly, poses be finite with a unit rotation.
@@ -85,7 +88,8 @@ public:
 private:
 	std::string write(const std::string &p_text);
 
-	std::ofstream file;
+	FileReplacement replacement;
+	std::ofstream file; // on the replacement's temporary file
 	std::string path;
 	std::string error;
 	bool has_last = false;

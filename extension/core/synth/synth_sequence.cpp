@@ -680,6 +680,7 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 	RecordingWriter writer;
 	RecordingWriteOptions write_options;
 	write_options.exr_full_float = p_options.exr_full_float;
+	write_options.frame_format = p_options.frame_format;
 	RecordingStatus status = writer.open(p_folder, p_rig, room, write_options);
 	if (!status.ok) {
 		result.error = status.error;

@@ -9,6 +9,7 @@
 #include "synth_scene.h"
 
 #include <math/pose.h>
+#include <recording/recording_writer.h>
 #include <rig/rig.h>
 
 #include <array>
@@ -109,7 +110,7 @@ struct SequenceOptions {
 	double rgbd_rate_hz = 30.0; // frame i at i / rate on the RGB-D clock
 	double fisheye_rate_hz = 12.0; // frame k at k / rate on the fisheye's clock
 	int cubemap_face_size = 128; // ground truth, every fisheye frame
-	bool fisheye_hdr = false; // fisheye frames as linear EXR instead of 8-bit PNG
+	bool fisheye_hdr = false; // fisheye frames as linear EXR instead of 8-bit images
 	bool calibration_views = true;
 	int calibration_samples_per_axis = 4; // antialiasing of the board views (sub-pixel corners)
 	RgbdOptions rgbd; // noise_seed is set per frame from seed
@@ -120,6 +121,7 @@ struct SequenceOptions {
 	bool photometric_views = true; // with calibration_views: an exposure sweep and a flat field (write_photometric_views)
 	double cubemap_ldr_exposure = 1.0; // of the 8-bit view next to each cubemap EXR
 	bool exr_full_float = false; // EXRs (cubemaps, HDR fisheye) as 32-bit float rather than half
+	FrameFormat frame_format = FrameFormat::Zstd; // RGB, depth and 8-bit fisheye frames: raw frames (zstd) or PNG
 	// The panorama the scene was made with (SceneOptions::panorama_path), written to synth.yaml as
 	// scene_panorama ("none" when empty) so that the evaluation can rebuild the true scene
 	// (eval/truth_scene.h).

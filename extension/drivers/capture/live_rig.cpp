@@ -111,7 +111,7 @@ void LiveRig::deliver(CapturedFrame &&p_frame) {
 	}
 }
 
-RecordingStatus LiveRig::start_recording(const std::string &p_folder, const RoomInfo *p_room) {
+RecordingStatus LiveRig::start_recording(const std::string &p_folder, const RoomInfo *p_room, const RecordingQueueOptions &p_options) {
 	RecordingStatus status;
 	if (!captures[0] && !captures[1]) {
 		status.error = p_folder + ": the live rig is not capturing; start it before recording";
@@ -122,7 +122,7 @@ RecordingStatus LiveRig::start_recording(const std::string &p_folder, const Room
 		return status;
 	}
 	auto queue = std::make_shared<RecordingQueue>();
-	status = queue->open(p_folder, rig, p_room);
+	status = queue->open(p_folder, rig, p_room, p_options);
 	if (status.ok) {
 		std::lock_guard lock(recording_mutex);
 		recording = queue;

@@ -63,8 +63,9 @@ public:
 	const Rig &get_rig() const { return rig; }
 
 	// Records the live streams into p_folder (new or empty; never overwritten), with p_room
-	// written as its room.yaml when given. Needs start() first.
-	RecordingStatus start_recording(const std::string &p_folder, const RoomInfo *p_room = nullptr);
+	// written as its room.yaml when given, and p_options' queue and frame format. Needs start() first.
+	RecordingStatus start_recording(const std::string &p_folder, const RoomInfo *p_room = nullptr,
+			const RecordingQueueOptions &p_options = RecordingQueueOptions());
 	// Writes what is queued and closes; the first error of the whole recording.
 	RecordingStatus stop_recording();
 	bool is_recording() const;

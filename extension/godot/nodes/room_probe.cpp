@@ -604,8 +604,11 @@ PackedStringArray RoomProbe::get_warnings() const {
 	if (target_material.is_null() && reflection_probe_path.is_empty() && world_environment_path.is_empty()) {
 		warnings.push_back("The map reaches nothing: set target_material, reflection_probe or world_environment (or read get_cubemap() from a script).");
 	}
-	if (!dense_slam_path.is_empty() && is_inside_tree() && cast_to<Node>(get_node_or_null(dense_slam_path)) == nullptr) {
-		warnings.push_back("dense_slam does not lead to a DenseSLAM node.");
+	if (!dense_slam_path.is_empty() && is_inside_tree()) {
+		const Node *slam = get_node_or_null(dense_slam_path);
+		if (slam == nullptr || !slam->is_class("DenseSLAM")) {
+			warnings.push_back("dense_slam does not lead to a DenseSLAM node.");
+		}
 	}
 	return warnings;
 }
