@@ -241,7 +241,7 @@ def suite_fuzz(opts):
 # The short soak (the long one: ./roomprobe soak --frames 50000): the fixture played back and
 # forth for SOAK_FRAMES RGB-D frames after SOAK_WARMUP frames of warm-up (resident memory climbs
 # for the first couple of thousand frames as the allocators' pools fill, then stays), 32² probe.
-SOAK_FRAMES = 1500
+SOAK_FRAMES = 3000
 SOAK_WARMUP = 2000
 SOAK_SUMMARY = re.compile(r"^summary: mode=soak .*rss_growth_pct=(-?[\d.]+) .*time_ratio=([\d.]+) lost=(\d+) unreadable=(\d+)")
 

@@ -2,6 +2,7 @@
 // writer's refusals, and reading damaged recordings (issues naming file and line, playback of
 // the other frames going on; fatal errors only for an unusable rig, room or index).
 
+#include "io/exr_write.h"
 #include "io/raw_frame.h"
 #include "recording/cubemap_layout.h"
 #include "recording/recording_io.h"
@@ -16,6 +17,8 @@
 #include <doctest/doctest.h>
 
 #include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
 #include <ImfHeader.h>
 #include <ImfOutputFile.h>
 #include <ImfRgbaFile.h>
@@ -396,6 +399,41 @@ TEST_CASE("recording round trip: rig, room, frames, timestamps and pixels read b
 		CHECK(fisheye_poses[1].t_s == 10.05);
 		CHECK(fisheye_poses[1].world_from_camera.translation.x == doctest::Approx(6.0));
 	}
+}
+
+// A float R, G, B EXR of any values, NaN and infinity included (write_exr_rgb refuses those).
+static void write_any_exr(const std::string &p_path, const cv::Mat &p_rgb) {
+	Imf::Header header(p_rgb.cols, p_rgb.rows);
+	Imf::FrameBuffer buffer;
+	const char *names[3] = { "R", "G", "B" };
+	for (int c = 0; c < 3; c++) {
+		header.channels().insert(names[c], Imf::Channel(Imf::FLOAT));
+		buffer.insert(names[c], Imf::Slice(Imf::FLOAT, const_cast<char *>(reinterpret_cast<const char *>(p_rgb.ptr<float>() + c)), sizeof(float) * 3, p_rgb.step[0]));
+	}
+	REQUIRE(write_exr(p_path, header, buffer, p_rgb.rows) == "");
+}
+
+TEST_CASE("damaged recording: a ground-truth cubemap holding NaN, infinity or negative radiance is refused, naming the file") {
+	// Issue #38: an all-NaN truth scored as a perfect map.
+	const fs::path folder = scratch_folder("cubemap_nan");
+	write_recording(folder);
+	const std::string exr = (folder / "groundtruth/cubemaps/000000.exr").string();
+	cv::Mat strip(6 * CUBE_SIZE, CUBE_SIZE, CV_32FC3, cv::Scalar::all(0.5));
+	for (const float bad : { std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(), -1.0f }) {
+		CAPTURE(bad);
+		strip.at<cv::Vec3f>(3, 2)[1] = bad;
+		write_any_exr(exr, strip);
+		RecordingReader reader;
+		REQUIRE(reader.open(folder.string()).ok);
+		const GroundTruthCubemapResult result = reader.ground_truth_cubemap(0);
+		CHECK_FALSE(result.ok);
+		CHECK(contains(result.error, exr + ": 1 values are NaN, infinite or negative"));
+	}
+	strip.setTo(cv::Scalar::all(std::numeric_limits<float>::quiet_NaN()));
+	write_any_exr(exr, strip);
+	RecordingReader reader;
+	REQUIRE(reader.open(folder.string()).ok);
+	CHECK(contains(reader.ground_truth_cubemap(0).error, std::to_string(6 * CUBE_SIZE * CUBE_SIZE * 3) + " values are NaN"));
 }
 
 TEST_CASE("recording round trip: a ground-truth cubemap keeps its faces in place") {
@@ -989,6 +1027,65 @@ TEST_CASE("damaged recording: bad index lines and a missing fisheye image are is
 	check_plays_on(reader, 3, 1);
 }
 
+TEST_CASE("damaged recording: impossible exposures and gains in capture.txt are issues, and the frames play") {
+	// Issue #38: zero or negative exposures and absurd gains were used.
+	const fs::path folder = scratch_folder("capture_bad");
+	write_recording(folder, 3);
+	std::istringstream rgb(read_text(folder / "rgb.txt"));
+	std::string line, stamp;
+	while (std::getline(rgb, line) && (line.empty() || line[0] == '#')) {
+	}
+	stamp = line.substr(0, line.find(' '));
+	write_text(folder / "capture.txt", "rgbd " + stamp + " 1.0 7 0 2.0\nrgbd " + stamp + " 1.0 7 -5 2.0\nrgbd " + stamp + " 1.0 7 5000 1e30\nrgbd " + stamp +
+			" 1.0 7 5000 nan\n");
+	RecordingReader reader;
+	REQUIRE(reader.open(folder.string()).ok);
+	CHECK_MESSAGE(find_issue(reader, "exposure_us 0 is not in (0, 10000000]"), all_issues(reader));
+	CHECK_MESSAGE(find_issue(reader, "exposure_us -5 is not in (0, 10000000]"), all_issues(reader));
+	CHECK_MESSAGE(find_issue(reader, "gain 1e30 is not in [0, 1000]"), all_issues(reader));
+	check_plays_on(reader, 3, 2);
+}
+
+TEST_CASE("damaged recording: timestamps in milliseconds are an issue that says so, and the frames play as stamped") {
+	// Issue #38: live playback ran 1000 times slower without a word.
+	const fs::path folder = scratch_folder("milliseconds");
+	write_recording(folder, 4);
+	for (const char *index : { "rgb.txt", "depth.txt" }) {
+		std::istringstream in(read_text(folder / index));
+		std::string line, out;
+		while (std::getline(in, line)) {
+			if (!line.empty() && line[0] != '#') {
+				const size_t space = line.find(' ');
+				line = std::to_string(std::stod(line.substr(0, space)) * 1000.0) + line.substr(space);
+			}
+			out += line + "\n";
+		}
+		write_text(folder / index, out);
+	}
+	RecordingReader reader;
+	REQUIRE(reader.open(folder.string()).ok);
+	CHECK_MESSAGE(find_issue(reader, "s apart (median): timestamps must be in seconds"), all_issues(reader));
+	CHECK(reader.rgbd_count() >= 3); // frame 2's depth, 4 ms after its colour, is now 4 s after it
+	const fs::path seconds = scratch_folder("seconds");
+	write_recording(seconds, 4);
+	RecordingReader plain;
+	REQUIRE(plain.open(seconds.string()).ok);
+	CHECK_FALSE(find_issue(plain, "timestamps must be in seconds"));
+}
+
+TEST_CASE("damaged recording: a ground-truth cubemap path out of the recording is an issue, and nothing outside is opened") {
+	// Issue #38: groundtruth/cubemaps.txt's paths were followed out of the recording.
+	const fs::path folder = scratch_folder("cubemap_escape");
+	write_recording(folder);
+	const std::string index = read_text(folder / "groundtruth/cubemaps.txt");
+	write_text(folder / "groundtruth/cubemaps.txt", index + "10.5 1 ../../outside.exr\n10.6 1 groundtruth/../../x.exr\n");
+	RecordingReader reader;
+	REQUIRE(reader.open(folder.string()).ok);
+	CHECK_MESSAGE(find_issue(reader, "'../../outside.exr' leaves the recording folder; paths stay inside it; cubemap skipped"), all_issues(reader));
+	CHECK_MESSAGE(find_issue(reader, "'groundtruth/../../x.exr' leaves the recording folder"), all_issues(reader));
+	CHECK(reader.ground_truth_cubemap_count() == 1);
+}
+
 TEST_CASE("damaged recording: malformed room.yaml fails open, naming the file and field") {
 	const fs::path folder = scratch_folder("bad_room");
 	write_recording(folder, 3);
@@ -1208,4 +1305,9 @@ TEST_CASE("SLAM-only recording: a rig with a fisheye, but no fisheye frames and 
 	REQUIRE(writer.close().ok);
 	REQUIRE(reader.open(reused.string()).ok);
 	CHECK_FALSE(reader.has_room());
+}
+
+TEST_CASE("recording issues: issue_lines lists each once, in the order met (what eval and bench print)") {
+	const std::vector<RecordingIssue> issues = { { "rgb.txt", 3, "a" }, { "rgb.txt", 3, "a" }, { "depth.txt", 0, "b" }, { "rgb.txt", 4, "a" } };
+	CHECK(issue_lines(issues) == std::vector<std::string>{ "rgb.txt:3: a", "depth.txt: b", "rgb.txt:4: a" });
 }

@@ -2,6 +2,10 @@
 // version 1 file), the save/load round trip (version 2, with photometry), and an error naming the
 // file and the field for each bad file.
 
+#include "calibration/photometric_calibration.h"
+#include "eval/truth_scene.h"
+#include "io/yaml_fields.h"
+#include "rig/photometry.h"
 #include "rig/rig.h"
 
 #include <doctest/doctest.h>
@@ -191,6 +195,9 @@ TEST_CASE("rig file: each bad file gives an error naming the file and the field"
 		{ "wrong_fisheye_model", replace_once(good, "model: unified_omni", "model: kannala_brandt"), "fisheye.model", "kannala_brandt" },
 		{ "wrong_rgb_model", replace_once(good, "model: pinhole_radtan", "model: pinhole"), "rgb.model", "pinhole_radtan" },
 		{ "negative_fx", replace_once(good, "  fx: 525.0", "  fx: -525.0"), "rgb.fx", "must be positive" },
+		// Issue #38: a principal point far off the image sent the raycast spinning.
+		{ "principal_point_off_the_image", replace_once(good, "  cx: 319.5", "  cx: 1000000.0"), "rgb.cx", "must lie on the image, in [0, 640] pixels" },
+		{ "fisheye_principal_point_negative", replace_once(good, "  cx: 511.5", "  cx: -3.0"), "fisheye.cx", "must lie on the image, in [0, 1024] pixels" },
 		{ "zero_fisheye_fy", replace_once(good, "  fy: 478.645871127404", "  fy: 0"), "fisheye.fy", "must be positive" },
 		{ "zero_width", replace_once(good, "  width: 640", "  width: 0"), "rgb.width", "must be positive" },
 		{ "fractional_height", replace_once(good, "  height: 1024", "  height: 1024.5"), "fisheye.height", "integer" },
@@ -416,4 +423,39 @@ TEST_CASE("rig file: version 2 keeps the photometry; version 1 files load withou
 	Rig first = rig;
 	first.photometry.fisheye.vignetting[0] = 0.9f;
 	CHECK(contains(save_rig((dir.path / "first.yaml").string(), first), "photometry.fisheye.vignetting[0]: must be 1"));
+}
+
+// Issue #38: the text that hung OpenCV's parser was screened for the rig and room files only; in a
+// recording's synth.yaml it hung eval, bench and RigCapture. Every YAML file a user may give now
+// opens through open_yaml_file.
+TEST_CASE("YAML files: synth.yaml and photometric.yaml go through the same screen, naming the file") {
+	TempDir dir("yaml_screen");
+	const std::string hang = "%YAML:1.0\n---J a: 1.\nx  - 1\n"; // OpenCV 4.10 never returned on it
+	const std::string synth = dir.write("synth.yaml", hang);
+	RigPhotometry photometry;
+	std::string error;
+	CHECK_FALSE(read_recording_photometry(dir.path.string(), RigPhotometry(), &photometry, &error));
+	CHECK(contains(error, synth + ": malformed YAML: line 2"));
+	const TruthSceneResult truth = load_truth_scene(dir.path.string());
+	CHECK(contains(truth.error, synth + ": malformed YAML"));
+	const std::string photometric = dir.write("photometric.yaml", hang);
+	const PhotometricViews views = load_photometric_views(dir.path.string(), cv::Size(64, 64));
+	CHECK(contains(views.error, photometric + ": malformed YAML: line 2"));
+
+	cv::FileStorage storage;
+	CHECK(contains(open_yaml_file((dir.path / "none.yaml").string(), &storage), "none.yaml: missing"));
+	CHECK(contains(open_yaml_file(dir.path.string(), &storage), ": not a regular file"));
+	const std::string good = dir.write("good.yaml", "%YAML:1.0\n---\nsquare_m: 0.025\nlist: [ 1, 2 ]\n");
+	CHECK(open_yaml_file(good, &storage) == "");
+	CHECK(double(storage["square_m"]) == doctest::Approx(0.025));
+	// photometric.yaml's list items are one-line maps: they pass, and malformed ones are named.
+	const std::string sweep = dir.write("sweep.yaml", "%YAML:1.0\nexposure_sweep:\n  - { image: exposure/000.png, exposure_us: 100 }\n  - { image: \"b c.png\", gains: [ 1, 2 ] }\n");
+	CHECK(open_yaml_file(sweep, &storage) == "");
+	CHECK(std::string(storage["exposure_sweep"][1]["image"]) == "b c.png");
+	for (const auto &[text, hint] : { std::pair<const char *, const char *>{ "  - { image: a.png, exposure_us: 100\n", "does not close on its line" },
+			 { "  - { image a.png }\n", "holds 'key: value' pairs" }, { "  - { a: { b: 1 } }\n", "a map inside" }, { "  - { a: [ 1, 2 }\n", "must close inside it" } }) {
+		CAPTURE(text);
+		const std::string bad = dir.write("bad.yaml", std::string("%YAML:1.0\nexposure_sweep:\n") + text);
+		CHECK(contains(open_yaml_file(bad, &storage), hint));
+	}
 }

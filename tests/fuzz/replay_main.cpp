@@ -13,8 +13,13 @@
 #include <vector>
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *p_data, size_t p_size);
+// Called first when a target has it, as libFuzzer does (the recording target's seed mode).
+extern "C" int LLVMFuzzerInitialize(int *p_argc, char ***p_argv) __attribute__((weak));
 
 int main(int argc, char **argv) {
+	if (LLVMFuzzerInitialize != nullptr) {
+		LLVMFuzzerInitialize(&argc, &argv);
+	}
 	std::vector<std::filesystem::path> inputs;
 	for (int i = 1; i < argc; i++) {
 		std::error_code ec;

@@ -166,6 +166,12 @@ func test_a_live_session_recorded_plays_back_frame_for_frame_through_source_reco
 	s.rig.play()
 	var streaming := await wait_until(func(): return s.rig.get_device_state(0) == 2 and s.rig.get_device_state(1) == 2, 30.0)
 	assert_true(streaming, "%s / %s" % [s.rig.get_device_state_reason(0), s.rig.get_device_state_reason(1)])
+	# No folder, or a relative one, would land where the process happens to be (issue #38).
+	for bad in ["", "relative_recording"]:
+		expect_error("name the folder to record into")
+		assert_false(s.rig.start_recording(bad))
+		assert_false(s.rig.is_recording())
+	assert_false(DirAccess.dir_exists_absolute("relative_recording"))
 	_recorded = OS.get_user_data_dir().path_join("live_rig_recording_%d" % OS.get_process_id())
 	remove_folder(_recorded)
 	assert_true(s.rig.start_recording(_recorded), s.rig.get_last_error())

@@ -165,6 +165,11 @@ func test_target_material_receives_cubemap_and_sh() -> void:
 	assert_eq(mat.get_shader_parameter("environment"), _probe.get_cubemap(), "environment uniform is the cubemap")
 	var sh = mat.get_shader_parameter("sh")
 	assert_eq(sh.size() if sh != null else 0, 25, "sh uniform holds 25 coefficients")
+	# A material that cannot read the map is named and refused; the good one stays (issue #38:
+	# a StandardMaterial3D became null without a word).
+	expect_error("RoomProbe.target_material: a StandardMaterial3D cannot read the map")
+	_probe.target_material = StandardMaterial3D.new()
+	assert_eq(_probe.target_material, mat)
 
 
 ## The editor saves the scene with the user's own values: before saving

@@ -231,7 +231,8 @@ test_numbers_out_of_range_refused() {
 	local -a cases=("--threads 100000|--threads needs a whole number of threads in [1, 1024]"
 		"--voxel-size-m 1e-9|--voxel-size-m needs a voxel edge in metres in [0.001, 0.02]"
 		"--voxel-size-m nan|--voxel-size-m needs a voxel edge in metres in [0.001, 0.02]"
-		"--frames 99999999999999999999|--frames needs a whole number of frames in [1, 10000000]")
+		"--frames 99999999999999999999|--frames needs a whole number of frames in [1, 10000000]"
+		"--probes 64 --probe-size 4096|--probes 64 x --probe-size 4096 need about 240.0 GiB of maps, more than 8 GiB")
 	for c in "${cases[@]}"; do
 		# shellcheck disable=SC2086 # the option and its value are two words
 		rp bench slam --tum "$scratch/tum-seq" ${c%%|*}

@@ -131,6 +131,8 @@ constexpr int MESH_INTERVAL = 15;
 constexpr double VOXEL_MIN_M = 0.001, VOXEL_MAX_M = 0.02;
 // --frames, --warmup-frames: 10^7 RGB-D frames is over 3 days at 30 Hz; the soak's series grow with them.
 constexpr long MAX_FRAMES = 10000000;
+// The probes' maps of one run together (--probes x --probe-size), bytes.
+constexpr double MAX_PROBE_BYTES = 8.0 * 1073741824.0;
 // --speed: 100x slower than real time (an event 1 s apart waits 100 s) to 1000x faster.
 constexpr double SPEED_MIN = 0.01, SPEED_MAX = 1000.0;
 // The probe's map size: RoomProbe's default in step mode, and the live benchmark's.
@@ -626,6 +628,13 @@ bool open_recording(const Arguments &p_args, int p_probe_size, RecordingSetup *r
 	return true;
 }
 
+// Every issue the reader met, each once (issue #38: they were counted, and five at most listed).
+void print_issues(FILE *p_out, const RecordingReader &p_reader) {
+	for (const std::string &line : issue_lines(p_reader.get_issues())) {
+		std::fprintf(p_out, "  issue: %s\n", line.c_str());
+	}
+}
+
 void print_recording_header(const char *p_mode, const Arguments &p_args, const RecordingSetup &p_setup, int p_probe_size) {
 	const Rig &rig = p_setup.config.rig;
 	const RecordingReader &reader = p_setup.reader;
@@ -634,6 +643,7 @@ void print_recording_header(const char *p_mode, const Arguments &p_args, const R
 	std::printf("roomprobe_bench %s --recording %s\n", p_mode, p_args.recording.c_str());
 	std::printf("  RGB-D %dx%d, %zu of %zu frames; fisheye %dx%d, %zu frames in the recording; %zu recording issues\n", rig.rgb.width, rig.rgb.height,
 			p_setup.rgbd_total, reader.rgbd_count(), rig.fisheye.width, rig.fisheye.height, reader.fisheye_count(), reader.get_issues().size());
+	print_issues(stdout, reader);
 	std::printf("  intrinsics (%s): fx %.3f fy %.3f cx %.3f cy %.3f%s; depth scale %.6f m per unit\n",
 			p_setup.camera_note.empty() ? "rig.yaml" : p_setup.camera_note.c_str(), rig.rgb.fx, rig.rgb.fy, rig.rgb.cx, rig.rgb.cy,
 			has_pinhole_distortion(rig.rgb) ? " (with distortion)" : "", rig.depth_scale_m);
@@ -1385,9 +1395,7 @@ int bench_dense(const Arguments &p_args, const DenseSource &p_source) {
 	const char *option = p_source.option.c_str();
 	if (reader.rgbd_count() == 0) {
 		std::fprintf(stderr, "roomprobe_bench: %s: no usable RGB-D frames\n", option);
-		for (size_t i = 0; i < reader.get_issues().size() && i < 5; i++) {
-			std::fprintf(stderr, "  issue: %s\n", to_string(reader.get_issues()[i]).c_str());
-		}
+		print_issues(stderr, reader);
 		return 1;
 	}
 	const Trajectory &truth = reader.ground_truth_trajectory(RecordingStream::Rgbd);
@@ -1431,9 +1439,7 @@ int bench_dense(const Arguments &p_args, const DenseSource &p_source) {
 			reader.rgbd_count(), total, first, reader.get_issues().size(), reader.get_rig().depth_scale_m);
 	std::printf("  intrinsics (%s): fx %.3f fy %.3f cx %.3f cy %.3f%s\n", p_source.camera_note.c_str(), rgb.fx, rgb.fy, rgb.cx, rgb.cy,
 			has_pinhole_distortion(rgb) ? " (with distortion)" : "");
-	for (size_t i = 0; i < reader.get_issues().size() && i < 5; i++) {
-		std::printf("  issue: %s\n", to_string(reader.get_issues()[i]).c_str());
-	}
+	print_issues(stdout, reader);
 	std::printf("  start: %s\n", start.c_str());
 	print_settings(p_args.slam);
 	std::printf("  threads: OpenCV %d, TBB %zu\n", cv::getNumThreads(), tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
@@ -1888,6 +1894,16 @@ int run(int argc, char **argv) {
 	}
 	if (!args.rig_file.empty() && args.has_intrinsics) {
 		return usage("--rig and --intrinsics both give the RGB-D camera: take one");
+	}
+	// Each bound holds alone; together they must fit too (issue #38: 64 probes of 4096^2 ran with no
+	// progress). A probe keeps its faces and their mips as floats and half floats, about 40 bytes
+	// a texel of the six faces.
+	const double probe_bytes = double(std::max(1, args.probes)) * 6.0 * 40.0 * std::pow(double(args.probe_size > 0 ? args.probe_size : 256), 2.0);
+	if (probe_bytes > MAX_PROBE_BYTES) {
+		char text[200];
+		std::snprintf(text, sizeof(text), "--probes %d x --probe-size %d need about %.1f GiB of maps, more than %.0f GiB: fewer probes or smaller faces",
+				std::max(1, args.probes), args.probe_size, probe_bytes / 1073741824.0, MAX_PROBE_BYTES / 1073741824.0);
+		return usage(text);
 	}
 	const std::string unwritable = save_trajectory_problem(args);
 	if (!unwritable.empty()) {

@@ -200,7 +200,13 @@ def add_logs(paths, where):
         print(f"fuzz: {path}: {target} {sum(units)} executions counted ({where})")
 
 
+# True for the short form: the targets are the normal build's replay programs, not libFuzzer's.
+REPLAY = False
+
+
 def binary(target):
+    if REPLAY:
+        return os.path.join(rp.BUILD, "tests", f"replay_{target}")
     return os.path.join(FUZZ_DIR, "bin", f"fuzz_{target}")
 
 
@@ -261,7 +267,7 @@ def replay_target(target):
     scratch = tempfile.mkdtemp(prefix="roomprobe-replay-", dir="/dev/shm" if os.access("/dev/shm", os.W_OK) else None)
     start = time.monotonic()
     try:
-        result = subprocess.run([os.path.join(rp.BUILD, "tests", f"replay_{target}")] + folders, cwd=REPO, env=dict(os.environ, TMPDIR=scratch),
+        result = subprocess.run([binary(target)] + folders, cwd=REPO, env=dict(os.environ, TMPDIR=scratch),
                                 capture_output=True, text=True, errors="replace", timeout=REPLAY_TIMEOUT_S)
         returncode, out, err = result.returncode, result.stdout, result.stderr
     except subprocess.TimeoutExpired as e:
@@ -303,6 +309,8 @@ def main():
     if opts.target is None:
         ap.error("name a target, or all")
     if opts.replay:
+        global REPLAY
+        REPLAY = True
         targets = TARGETS if opts.target == "all" else [opts.target]
         results = [replay_target(target) for target in targets]
         failed = sum(1 for _, bad in results if bad)

@@ -1,4 +1,6 @@
 #include "calibration_views.h"
+#include <io/yaml_fields.h>
+
 #include <io/image_codec.h>
 
 #include <recording/recording_reader.h>
@@ -40,7 +42,12 @@ bool read_board_file(const fs::path &p_folder, BoardSpec *r_board, std::string *
 			continue;
 		}
 		try {
-			cv::FileStorage file(path.string(), cv::FileStorage::READ);
+			cv::FileStorage file;
+			const std::string problem = open_yaml_file(path.string(), &file);
+			if (!problem.empty()) {
+				*r_error = problem;
+				return true;
+			}
 			cv::FileNode node = std::string(name) == "boards.yaml" ? file["board"] : file.root();
 			if (node.empty() || node["inner_corners_x"].empty() || node["inner_corners_y"].empty() || node["square_m"].empty()) {
 				*r_error = path.string() + ": needs inner_corners_x, inner_corners_y and square_m";

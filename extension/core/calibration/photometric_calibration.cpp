@@ -1,4 +1,6 @@
 #include "photometric_calibration.h"
+#include <io/yaml_fields.h>
+
 #include <io/image_codec.h>
 
 #include <camera/omni_camera.h>
@@ -57,9 +59,10 @@ PhotometricViews load_photometric_views(const std::string &p_folder, cv::Size p_
 	views.present = true;
 	const std::string name = path.string();
 	try {
-		cv::FileStorage file(name, cv::FileStorage::READ);
-		if (!file.isOpened()) {
-			views.error = name + ": cannot be read";
+		cv::FileStorage file;
+		const std::string problem = open_yaml_file(name, &file);
+		if (!problem.empty()) {
+			views.error = problem;
 			return views;
 		}
 		const auto positive = [&](const cv::FileNode &p_node, const std::string &p_field, double *r_value) {

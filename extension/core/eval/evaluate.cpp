@@ -1,6 +1,8 @@
 #include "evaluate.h"
 #include "truth_scene.h"
 
+#include <io/yaml_fields.h>
+
 #include <engine/live_room.h>
 #include <envmap/baseline.h>
 #include <envmap/coarse_render.h>
@@ -270,6 +272,10 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		result.error = status.error;
 		return result;
 	}
+	// Every problem the reader met, each once (issue #38: they were counted, not listed).
+	for (const std::string &line : issue_lines(reader.get_issues())) {
+		say("recording issue: " + line);
+	}
 	if (!reader.has_room()) {
 		result.error = p_options.recording + ": no room.yaml (the coarse model needs the floorplan)";
 		return result;
@@ -298,8 +304,13 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	// synth.yaml: the light switch, and the rig's photometry (a perfect photometric calibration).
 	const std::filesystem::path synth_yaml = std::filesystem::path(p_options.recording) / "synth.yaml";
 	if (std::filesystem::exists(synth_yaml)) {
-		cv::FileStorage info(synth_yaml.string(), cv::FileStorage::READ);
-		if (info.isOpened() && !info["light_switch_s"].empty()) {
+		cv::FileStorage info;
+		const std::string problem = open_yaml_file(synth_yaml.string(), &info);
+		if (!problem.empty()) {
+			result.error = problem;
+			return result;
+		}
+		if (!info["light_switch_s"].empty()) {
 			result.light_switch_s = double(info["light_switch_s"]);
 		}
 	}

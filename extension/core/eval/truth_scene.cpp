@@ -1,5 +1,7 @@
 #include "truth_scene.h"
 
+#include <io/yaml_fields.h>
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -19,8 +21,13 @@ TruthSceneResult load_truth_scene(const std::string &p_recording) {
 	synth::SceneOptions options;
 	std::string name;
 	try {
-		cv::FileStorage info(path, cv::FileStorage::READ);
-		if (!info.isOpened() || info["scene"].empty() || !info["scene"].isString()) {
+		cv::FileStorage info;
+		const std::string problem = open_yaml_file(path, &info);
+		if (!problem.empty()) {
+			result.error = problem;
+			return result;
+		}
+		if (info["scene"].empty() || !info["scene"].isString()) {
 			result.error = path + ": no `scene` (the synthetic scene's name)";
 			return result;
 		}

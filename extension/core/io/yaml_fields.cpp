@@ -1,10 +1,13 @@
 #include "yaml_fields.h"
 
+#include "image_codec.h"
+
 #include <algorithm>
 #include <charconv>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <set>
 #include <string_view>
 #include <vector>
@@ -32,8 +35,44 @@ bool is_key_char(char p_c) { return std::isalnum(static_cast<unsigned char>(p_c)
 // A plain scalar's characters: numbers (1e-3, .nan, -.inf), words (pinhole_radtan), dates.
 bool is_scalar_char(char p_c) { return is_key_char(p_c) || p_c == '.' || p_c == '+' || p_c == '-' || p_c == '/'; }
 
-// The flow part of a line: scalars, quoted strings, '[', ']', ',' and a trailing comment;
-// r_depth carries the open '[' count across lines. "" or what is wrong.
+std::string screen_values(std::string_view p_text, int *r_depth);
+
+// The inside of a one-line flow map, "key: value, key: value" (photometric.yaml's list items),
+// each value a scalar, a quoted string or a list closed within it. "" or what is wrong.
+std::string screen_flow_map(std::string_view p_inside) {
+	size_t start = 0;
+	while (start <= p_inside.size()) {
+		size_t end = start;
+		int depth = 0; // a comma inside a list separates the list's items, not the pairs
+		for (; end < p_inside.size() && (p_inside[end] != ',' || depth > 0); end++) {
+			if (p_inside[end] == '[') {
+				depth++;
+			} else if (p_inside[end] == ']' && depth > 0) {
+				depth--;
+			}
+		}
+		std::string_view pair = p_inside.substr(start, end - start);
+		pair.remove_prefix(std::min(pair.size(), pair.find_first_not_of(' ')));
+		size_t key = 0;
+		while (key < pair.size() && is_key_char(pair[key])) {
+			key++;
+		}
+		if (key == 0 || key + 1 >= pair.size() || pair[key] != ':' || pair[key + 1] != ' ') {
+			return "a '{ }' map holds 'key: value' pairs, got '" + std::string(pair) + "'";
+		}
+		const std::string_view value = pair.substr(key + 2);
+		int value_depth = 0;
+		const std::string problem = value.find_first_of("{}") != std::string_view::npos ? std::string("a map inside a '{ }' map") : screen_values(value, &value_depth);
+		if (!problem.empty() || value_depth != 0) {
+			return problem.empty() ? std::string("a list in a '{ }' map must close inside it") : problem;
+		}
+		start = end + 1;
+	}
+	return std::string();
+}
+
+// The flow part of a line: scalars, quoted strings, '[', ']', ',', a one-line '{ key: value }'
+// map and a trailing comment; r_depth carries the open '[' count across lines. "" or what is wrong.
 std::string screen_values(std::string_view p_text, int *r_depth) {
 	constexpr int MAX_DEPTH = 8; // RoomProbe's files nest lists two deep
 	for (size_t i = 0; i < p_text.size(); i++) {
@@ -46,6 +85,16 @@ std::string screen_values(std::string_view p_text, int *r_depth) {
 			if (--*r_depth < 0) {
 				return "']' without its '['";
 			}
+		} else if (c == '{') {
+			const size_t close = p_text.find('}', i + 1);
+			if (close == std::string_view::npos) {
+				return std::string("a '{' map that does not close on its line");
+			}
+			const std::string problem = screen_flow_map(p_text.substr(i + 1, close - i - 1));
+			if (!problem.empty()) {
+				return problem;
+			}
+			i = close;
 		} else if (c == '"' || c == '\'') {
 			const size_t close = p_text.find(c, i + 1);
 			if (close == std::string_view::npos) {
@@ -357,6 +406,35 @@ std::string check_yaml_text(const std::string &p_text) {
 	}
 	const std::string unsafe = screen_yaml_text(p_text);
 	return unsafe.empty() ? unsafe : "malformed YAML: " + unsafe;
+}
+
+std::string open_yaml_file(const std::string &p_path, cv::FileStorage *r_storage) {
+	std::error_code ec;
+	if (!std::filesystem::is_regular_file(p_path, ec)) {
+		return p_path + (std::filesystem::exists(p_path, ec) ? ": not a regular file" : ": missing");
+	}
+	const uintmax_t size = std::filesystem::file_size(p_path, ec);
+	if (ec || size > YAML_MAX_FILE_BYTES) {
+		return p_path + (ec ? ": cannot be read" : ": " + std::to_string(size) + " bytes, more than a YAML file RoomProbe reads (16 MiB)");
+	}
+	std::vector<uint8_t> bytes;
+	const std::string unreadable = read_file_bytes(p_path, &bytes);
+	if (!unreadable.empty()) {
+		return unreadable;
+	}
+	const std::string text(bytes.begin(), bytes.end());
+	const std::string malformed = check_yaml_text(text);
+	if (!malformed.empty()) {
+		return p_path + ": " + malformed;
+	}
+	try {
+		if (!r_storage->open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML)) {
+			return p_path + ": malformed YAML";
+		}
+	} catch (const cv::Exception &e) {
+		return p_path + ": " + describe_yaml_parse_error(e);
+	}
+	return "";
 }
 
 } // namespace roomprobe

@@ -37,6 +37,13 @@ inline constexpr double YAML_MAX_MAGNITUDE = 1e9;
 // FileStorage needs to tell YAML from XML and JSON, then screen_yaml_text. "" or "malformed YAML: why".
 std::string check_yaml_text(const std::string &p_text);
 
+// The largest YAML file RoomProbe reads: its own files are a few kilobytes.
+inline constexpr size_t YAML_MAX_FILE_BYTES = size_t(16) << 20;
+// The one way RoomProbe opens a YAML file that a user may give (synth.yaml, a board file,
+// photometric.yaml, ...): read whole (a regular file of at most YAML_MAX_FILE_BYTES), screened by
+// check_yaml_text, then parsed from memory. "" with r_storage open, or "PATH: what is wrong".
+std::string open_yaml_file(const std::string &p_path, cv::FileStorage *r_storage);
+
 // cv::FileStorage's parse error (text parsed from memory) as "line <line>: <what>"; other OpenCV
 // errors as OpenCV words them.
 std::string describe_yaml_parse_error(const cv::Exception &p_exception);

@@ -241,6 +241,17 @@ std::string read_index_lines(const std::string &p_path, std::vector<IndexLine> *
 	return std::string();
 }
 
+std::string path_leaves_recording(const std::string &p_path) {
+	if (fs::path(p_path).is_absolute()) {
+		return "'" + p_path + "' is an absolute path; paths are relative to the recording folder";
+	}
+	const fs::path normal = fs::path(p_path).lexically_normal();
+	if (normal.empty() || *normal.begin() == ".." || normal == ".") {
+		return "'" + p_path + "' leaves the recording folder; paths stay inside it";
+	}
+	return "";
+}
+
 std::string read_frame_index(const std::string &p_path, std::vector<FrameRef> *r_frames, std::vector<RecordingIssue> *r_issues) {
 	r_frames->clear();
 	std::vector<IndexLine> lines;
@@ -262,13 +273,9 @@ std::string read_frame_index(const std::string &p_path, std::vector<FrameRef> *r
 			r_issues->push_back({ p_path, line.line, "'" + std::string(stamp) + "' is not a finite timestamp in seconds; line skipped" });
 			continue;
 		}
-		if (fs::path(std::string(path)).is_absolute()) {
-			r_issues->push_back({ p_path, line.line, "'" + std::string(path) + "' is an absolute path; frame paths are relative to the recording folder; frame skipped" });
-			continue;
-		}
-		const fs::path normal = fs::path(std::string(path)).lexically_normal();
-		if (normal.empty() || *normal.begin() == ".." || normal == ".") {
-			r_issues->push_back({ p_path, line.line, "'" + std::string(path) + "' leaves the recording folder; frame paths stay inside it; frame skipped" });
+		const std::string outside = path_leaves_recording(std::string(path));
+		if (!outside.empty()) {
+			r_issues->push_back({ p_path, line.line, outside + "; frame skipped" });
 			continue;
 		}
 		if (!r_frames->empty() && !(timestamp > r_frames->back().timestamp_s)) {

@@ -42,6 +42,10 @@ struct IndexLine {
 };
 std::string read_index_lines(const std::string &p_path, std::vector<IndexLine> *r_lines);
 
+// "" when an index's path stays inside its recording, else what is wrong with it ("'../x' leaves
+// the recording folder ..."): absolute paths and paths climbing out are refused, for every index.
+std::string path_leaves_recording(const std::string &p_path);
+
 // Reads a frame index, 'timestamp_s relative/path' a line. Lines that do not parse, absolute
 // paths and timestamps that do not increase become issues and are skipped (a timestamp is
 // compared with the last accepted one). Only an unreadable file is an error.

@@ -202,6 +202,16 @@ void read_capture_list(const std::string &p_path, RecordingContents *r_contents)
 															  "(numbers, nan where unknown, frame id -1 where unknown), got '" + line.text + "'; line skipped" });
 			continue;
 		}
+		// What a device can have said (issue #38: zero or negative exposures, absurd gains were
+		// used): an exposure of at most 10 s (RigCapture.exposure_us's bound), a gain in [0, 1000].
+		if (!std::isnan(info.exposure_us) && !(info.exposure_us > 0.0 && info.exposure_us <= 1e7)) {
+			r_contents->issues.push_back({ p_path, line.line, "exposure_us " + exposure + " is not in (0, 10000000] (nan where unknown); line skipped" });
+			continue;
+		}
+		if (!std::isnan(info.gain) && !(info.gain >= 0.0 && info.gain <= 1000.0)) {
+			r_contents->issues.push_back({ p_path, line.line, "gain " + gain + " is not in [0, 1000] (nan where unknown); line skipped" });
+			continue;
+		}
 		const int s = stream == "rgbd" ? 0 : 1;
 		if (!frame_times[s].count(timestamp_s)) {
 			r_contents->issues.push_back({ p_path, line.line, "no " + stream + " frame has timestamp " + stamp + "; line skipped" });
@@ -216,6 +226,25 @@ CaptureInfo capture_of(const RecordingContents &p_contents, RecordingStream p_st
 	const std::map<double, CaptureInfo> &list = p_contents.capture[p_stream == RecordingStream::Rgbd ? 0 : 1];
 	const auto found = list.find(p_timestamp_s);
 	return found == list.end() ? CaptureInfo() : found->second;
+}
+
+// Issue #38: timestamps written in milliseconds played 1000 times slower without a word. A camera's
+// frames come a few milliseconds to a few seconds apart; a median spacing beyond 5 s (or below
+// 0.1 ms) means the index is in another unit. The frames still play, as stamped.
+void note_unlikely_frame_spacing(const std::string &p_index, const std::vector<FrameRef> &p_frames, std::vector<RecordingIssue> *r_issues) {
+	if (p_frames.size() < 3) {
+		return;
+	}
+	std::vector<double> spacing;
+	for (size_t i = 1; i < p_frames.size(); i++) {
+		spacing.push_back(p_frames[i].timestamp_s - p_frames[i - 1].timestamp_s);
+	}
+	std::nth_element(spacing.begin(), spacing.begin() + spacing.size() / 2, spacing.end());
+	const double median_s = spacing[spacing.size() / 2];
+	if (median_s > 5.0 || median_s < 1e-4) {
+		r_issues->push_back({ p_index, 0,
+				"frames are " + format_number(median_s) + " s apart (median): timestamps must be in seconds (milliseconds or nanoseconds?); played as stamped" });
+	}
 }
 
 // Reads groundtruth/cubemaps.txt: 'timestamp_s probe_index relative/path.exr' a line.
@@ -250,8 +279,9 @@ void read_cubemap_index(const std::string &p_folder, const std::string &p_path, 
 					"probe index '" + probe + "' is not one of room.yaml's " + std::to_string(p_room.probes.size()) + " probes; cubemap skipped" });
 			continue;
 		}
-		if (fs::path(path).is_absolute()) {
-			r_contents->issues.push_back({ p_path, line.line, "'" + path + "' is an absolute path; paths are relative to the recording folder; cubemap skipped" });
+		const std::string outside = recording_io::path_leaves_recording(path);
+		if (!outside.empty()) {
+			r_contents->issues.push_back({ p_path, line.line, outside + "; cubemap skipped" });
 			continue;
 		}
 		if (!r_contents->cubemaps.empty() && ref.timestamp_s < r_contents->cubemaps.back().timestamp_s) {
@@ -421,6 +451,9 @@ RecordingStatus RecordingReader::open(const std::string &p_folder, const Recordi
 	}
 
 	recording_io::pair_and_check_rgbd(rgb, rgb_index, depth, depth_index, p_options.max_rgb_depth_difference_s, false, &read);
+	for (const auto &[path, frames] : { std::pair{ &rgb_index, &rgb }, std::pair{ &fisheye_index, &fisheye } }) {
+		note_unlikely_frame_spacing(*path, *frames, &read.issues);
+	}
 
 	for (const FrameRef &frame : fisheye) {
 		const std::string problem = check_fisheye_file(join(p_folder, frame.path), read.rig);
@@ -618,6 +651,14 @@ GroundTruthCubemapResult RecordingReader::ground_truth_cubemap(size_t p_index) c
 	std::string error = recording_io::read_exr_rgb(path, &strip);
 	if (error.empty() && strip.rows != 6 * strip.cols) {
 		error = path + ": " + size_text(strip.cols, strip.rows) + " pixels is not a cubemap strip (N wide, 6N tall)";
+	}
+	if (error.empty()) {
+		// The truth maps are scored against: a NaN or infinite radiance (issue #38: an all-NaN
+		// cubemap once scored as a perfect map) or a negative one is not light.
+		const int bad = int(strip.total() * size_t(strip.channels())) - cv::countNonZero((strip.reshape(1) >= 0.0f) & (strip.reshape(1) < std::numeric_limits<float>::infinity()));
+		if (bad > 0) {
+			error = path + ": " + std::to_string(bad) + " values are NaN, infinite or negative: not a ground-truth radiance";
+		}
 	}
 	if (!error.empty()) {
 		result.error = error;

@@ -1,5 +1,6 @@
 #include "recording_types.h"
 
+#include <set>
 #include <cmath>
 
 namespace roomprobe {
@@ -48,6 +49,18 @@ std::string check_fisheye_image(const FisheyeFrame &p_frame, int p_width, int p_
 		}
 	}
 	return std::string();
+}
+
+std::vector<std::string> issue_lines(const std::vector<RecordingIssue> &p_issues) {
+	std::vector<std::string> lines;
+	std::set<std::string> seen;
+	for (const RecordingIssue &issue : p_issues) {
+		std::string line = to_string(issue);
+		if (seen.insert(line).second) {
+			lines.push_back(std::move(line));
+		}
+	}
+	return lines;
 }
 
 std::string to_string(const RecordingIssue &p_issue) {

@@ -104,6 +104,8 @@ struct RecordingIssue {
 
 // "file:line: message" (or "file: message" without a line).
 std::string to_string(const RecordingIssue &p_issue);
+// Every issue as to_string gives it, each once, in the order first met: what a tool lists.
+std::vector<std::string> issue_lines(const std::vector<RecordingIssue> &p_issues);
 
 // The six faces of a cubemap in the order +X, -X, +Y, -Y, +Z, -Z (the OpenGL and Godot layer
 // order), each square, all the same size. See cubemap_layout.h for how pixels map to directions.

@@ -1,5 +1,7 @@
 #include "photometry.h"
 
+#include <io/yaml_fields.h>
+
 #include <math/srgb.h>
 
 #include <algorithm>
@@ -182,9 +184,10 @@ bool read_recording_photometry(const std::string &p_recording_folder, const RigP
 	}
 	*r_photometry = RigPhotometry();
 	try {
-		cv::FileStorage info(path.string(), cv::FileStorage::READ);
-		if (!info.isOpened()) {
-			*r_error = path.string() + ": cannot be read";
+		cv::FileStorage info;
+		const std::string problem = open_yaml_file(path.string(), &info);
+		if (!problem.empty()) {
+			*r_error = problem;
 			return false;
 		}
 		double fisheye_exposure = 1.0, rgb_exposure = 1.0, edge_gain = 1.0, reference_us = std::numeric_limits<double>::quiet_NaN();

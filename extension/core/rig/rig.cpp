@@ -59,6 +59,14 @@ struct Checker {
 			fail(p_field, "must be at most " + std::to_string(RIG_MAX_IMAGE_SIDE) + " pixels (got " + std::to_string(p_value) + ")");
 		}
 	}
+	// A principal point: on the image (issue #38: one a million pixels off sent every ray of the
+	// raycast past the model, the march spinning through empty blocks).
+	void on_image(const std::string &p_field, double p_value, int p_side) {
+		finite(p_field, p_value);
+		if (std::isfinite(p_value) && !(p_value >= 0.0 && p_value <= double(p_side))) {
+			fail(p_field, "must lie on the image, in [0, " + std::to_string(p_side) + "] pixels (got " + format_double(p_value) + ")");
+		}
+	}
 	void non_negative(const std::string &p_field, double p_value) {
 		if (!(std::isfinite(p_value) && p_value >= 0.0)) {
 			fail(p_field, "must be zero or positive (got " + format_double(p_value) + ")");
@@ -80,8 +88,8 @@ std::string check_rig(const Rig &p_rig) {
 	c.image_side("rgb.height", rgb.height);
 	c.positive("rgb.fx", rgb.fx);
 	c.positive("rgb.fy", rgb.fy);
-	c.finite("rgb.cx", rgb.cx);
-	c.finite("rgb.cy", rgb.cy);
+	c.on_image("rgb.cx", rgb.cx, rgb.width);
+	c.on_image("rgb.cy", rgb.cy, rgb.height);
 	c.finite("rgb.k1", rgb.k1);
 	c.finite("rgb.k2", rgb.k2);
 	c.finite("rgb.p1", rgb.p1);
@@ -111,8 +119,8 @@ std::string check_rig(const Rig &p_rig) {
 	c.non_negative("fisheye.xi", fisheye.xi);
 	c.positive("fisheye.fx", fisheye.fx);
 	c.positive("fisheye.fy", fisheye.fy);
-	c.finite("fisheye.cx", fisheye.cx);
-	c.finite("fisheye.cy", fisheye.cy);
+	c.on_image("fisheye.cx", fisheye.cx, fisheye.width);
+	c.on_image("fisheye.cy", fisheye.cy, fisheye.height);
 	c.finite("fisheye.skew", fisheye.skew);
 	c.finite("fisheye.k1", fisheye.k1);
 	c.finite("fisheye.k2", fisheye.k2);

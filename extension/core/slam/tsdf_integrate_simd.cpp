@@ -86,6 +86,9 @@ RP_AVX2 bool tsdf_update_row_simd(const TsdfFrameView &p_frame, const glm::vec3 
 	const __m256i old_weight = _mm256_and_si256(_mm256_i32gather_epi32(reinterpret_cast<const int *>(r_voxels), _mm256_add_epi32(tsdf_index, _mm256_set1_epi32(1)), 4),
 			_mm256_set1_epi32(0xFFFF));
 	const int full_weight = int(p_frame.max_weight) * TSDF_WEIGHT_UNIT;
+	// Lanes in free space beyond the band whatever the bilinear depth: their tsdf goes to exactly
+	// +1 and they take no colour, so the four depth reads of the bilinear depth change nothing.
+	__m256 far_free = zero;
 	if (p_frame.early_exits) {
 		// tsdf_update_voxel_at's early exits, so that the same voxels count as changed.
 		const __m256 spread = _mm256_set1_ps(0.5f * p_frame.truncation_m + 1e-5f);
@@ -95,8 +98,8 @@ RP_AVX2 bool tsdf_update_row_simd(const TsdfFrameView &p_frame, const glm::vec3 
 		const __m256 saturated = _mm256_and_ps(_mm256_cmp_ps(old_tsdf, one, _CMP_EQ_OQ),
 				_mm256_castsi256_ps(_mm256_cmpeq_epi32(old_weight, _mm256_set1_epi32(full_weight))));
 		const __m256 eta_lo = _mm256_mul_ps(_mm256_sub_ps(_mm256_sub_ps(nearest, spread), z), factor);
-		const __m256 free_again = _mm256_and_ps(saturated, _mm256_and_ps(_mm256_cmp_ps(eta_lo, truncation, _CMP_GE_OQ),
-																   _mm256_cmp_ps(eta_lo, _mm256_set1_ps(p_frame.color_band_m), _CMP_GE_OQ)));
+		far_free = _mm256_and_ps(_mm256_cmp_ps(eta_lo, truncation, _CMP_GE_OQ), _mm256_cmp_ps(eta_lo, _mm256_set1_ps(p_frame.color_band_m), _CMP_GE_OQ));
+		const __m256 free_again = _mm256_and_ps(saturated, far_free);
 		live = _mm256_andnot_ps(_mm256_or_ps(hidden, free_again), live);
 		if (lanes(live) == 0) {
 			return false;
@@ -107,7 +110,7 @@ RP_AVX2 bool tsdf_update_row_simd(const TsdfFrameView &p_frame, const glm::vec3 
 	const __m256i last_u = _mm256_set1_epi32(camera.width - 1), last_v = _mm256_set1_epi32(camera.height - 1);
 	const __m256i inside = _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(u0, _mm256_set1_epi32(-1)), _mm256_cmpgt_epi32(v0, _mm256_set1_epi32(-1))),
 			_mm256_and_si256(_mm256_cmpgt_epi32(last_u, u0), _mm256_cmpgt_epi32(last_v, v0)));
-	const __m256 four = _mm256_and_ps(live, _mm256_castsi256_ps(inside));
+	const __m256 four = _mm256_andnot_ps(far_free, _mm256_and_ps(live, _mm256_castsi256_ps(inside)));
 	__m256 depth = nearest;
 	if (lanes(four) != 0) {
 		const __m256i i00 = _mm256_add_epi32(_mm256_mullo_epi32(v0, _mm256_set1_epi32(int(p_frame.depth_stride))), u0);

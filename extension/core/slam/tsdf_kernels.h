@@ -330,6 +330,7 @@ inline bool tsdf_update_voxel_at(const TsdfFrameView &p_frame, const glm::vec3 &
 	}
 	const float slope = p_frame.slope[size_t(v) * p_frame.slope_stride + size_t(u)];
 	const bool has_plane = slope >= p_frame.min_slope; // false for NaN
+	bool far_free = false;
 	if (p_frame.early_exits) {
 		// The same with this pixel's own slope factor: the bilinear depth lies within half the
 		// band (and a rounding margin) of this reading, so eta lies within [eta_lo, eta_hi].
@@ -339,17 +340,17 @@ inline bool tsdf_update_voxel_at(const TsdfFrameView &p_frame, const glm::vec3 &
 		if (eta_hi < -p_frame.truncation_m || (!has_plane && eta_hi < p_frame.truncation_m)) {
 			return false;
 		}
-		// Free space seen again by a voxel already at +1 with the full weight: the average stays
-		// exactly 1, the weight at its cap, and no colour is taken that far from the surface.
-		if (r_voxel->tsdf == 1.0f && r_voxel->weight == uint16_t(int(p_frame.max_weight) * TSDF_WEIGHT_UNIT)) {
-			const float eta_lo = (depth - spread - pc.z) * factor;
-			if (eta_lo >= p_frame.truncation_m && eta_lo >= p_frame.color_band_m) {
-				return false;
-			}
+		// Free space beyond the band whatever the bilinear depth: the tsdf goes to exactly +1 and
+		// no colour is taken, so the bilinear depth is not needed; and a voxel already at +1 with
+		// the full weight does not change at all.
+		const float eta_lo = (depth - spread - pc.z) * factor;
+		far_free = eta_lo >= p_frame.truncation_m && eta_lo >= p_frame.color_band_m;
+		if (far_free && r_voxel->tsdf == 1.0f && r_voxel->weight == uint16_t(int(p_frame.max_weight) * TSDF_WEIGHT_UNIT)) {
+			return false;
 		}
 	}
 	const int u0 = tsdf_floor(pixel.x), v0 = tsdf_floor(pixel.y); // pixel is within half a pixel of the image here
-	if (u0 >= 0 && v0 >= 0 && u0 + 1 < p_frame.camera.width && v0 + 1 < p_frame.camera.height) {
+	if (!far_free && u0 >= 0 && v0 >= 0 && u0 + 1 < p_frame.camera.width && v0 + 1 < p_frame.camera.height) {
 		const float *r0 = p_frame.depth + size_t(v0) * p_frame.depth_stride + size_t(u0);
 		const float *r1 = r0 + p_frame.depth_stride;
 		const float d00 = r0[0], d10 = r0[1], d01 = r1[0], d11 = r1[1];

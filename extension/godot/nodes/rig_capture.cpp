@@ -731,7 +731,13 @@ bool RigCapture::start_recording(const String &p_folder) {
 																"(a recording is played back, not recorded again)");
 		return false;
 	}
+	// An empty or relative path would land wherever the process's folder is (the project's, or
+	// OpenNI2's drivers folder, which it changes to): say where to record instead.
 	const std::string folder = ProjectSettings::get_singleton()->globalize_path(p_folder).utf8_string();
+	if (folder.empty() || folder.front() != '/') {
+		fail("start_recording(\"" + p_folder.utf8_string() + "\"): name the folder to record into, as an absolute path or under user://");
+		return false;
+	}
 	const RecordingStatus status = live->start_recording(folder, has_live_room ? &live_room : nullptr);
 	if (!status.ok) {
 		fail(status.error);

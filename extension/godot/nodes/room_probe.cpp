@@ -80,9 +80,18 @@ void RoomProbe::set_update_mode(UpdateMode p_mode) {
 
 RoomProbe::UpdateMode RoomProbe::get_update_mode() const { return update_mode; }
 
-void RoomProbe::set_target_material(const Ref<ShaderMaterial> &p_material) {
+void RoomProbe::set_target_material(const Ref<Material> &p_material) {
+	const Ref<ShaderMaterial> shader_material(p_material); // null unless it is one
+	if (p_material.is_valid() && shader_material.is_null()) {
+		// Issue #38: it used to become null without a word.
+		ERR_PRINT(String(("RoomProbe.target_material: a " + p_material->get_class().utf8_string() +
+				" cannot read the map: give a ShaderMaterial whose shader has the cubemap uniform (shaders/mirror.gdshader, "
+				"rough_metal.gdshader, ...), or set reflection_probe or world_environment for a StandardMaterial3D; kept as it was")
+								  .c_str()));
+		return;
+	}
 	restore_driven(); // the old material (and the other outputs, driven again below) as they were
-	target_material = p_material;
+	target_material = shader_material;
 	drive_outputs();
 }
 

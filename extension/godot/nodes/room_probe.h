@@ -35,7 +35,8 @@ public:
 	godot::NodePath get_dense_slam_path() const;
 	void set_update_mode(UpdateMode p_mode);
 	UpdateMode get_update_mode() const;
-	void set_target_material(const godot::Ref<godot::ShaderMaterial> &p_material);
+	// Takes any Material so that a wrong one is named (a StandardMaterial3D cannot read the map).
+	void set_target_material(const godot::Ref<godot::Material> &p_material);
 	godot::Ref<godot::ShaderMaterial> get_target_material() const;
 	void set_material_parameter(const godot::StringName &p_name);
 	godot::StringName get_material_parameter() const;
