@@ -412,27 +412,6 @@ std::string read_frame_file_info(const std::string &p_path, FrameFileInfo *r_inf
 	return std::string();
 }
 
-std::string decode_png(const std::string &p_path, cv::Mat *r_image) {
-	std::vector<uint8_t> bytes;
-	const std::string unreadable = read_whole_file(p_path, &bytes);
-	if (!unreadable.empty()) {
-		return unreadable;
-	}
-	const std::string error = check_png_bytes(bytes);
-	if (!error.empty()) {
-		return p_path + ": " + error;
-	}
-	return catch_all(p_path, [&]() -> std::string {
-		cv::Mat image;
-		const std::string problem = png_decode(bytes.data(), bytes.size(), &image);
-		if (!problem.empty()) {
-			return p_path + ": " + problem;
-		}
-		*r_image = image;
-		return std::string();
-	});
-}
-
 std::string decode_frame_file(const std::string &p_path, cv::Mat *r_image, FrameFileKind *r_kind) {
 	std::vector<uint8_t> bytes;
 	const std::string unreadable = read_whole_file(p_path, &bytes);
@@ -460,10 +439,6 @@ std::string decode_frame_file(const std::string &p_path, cv::Mat *r_image, Frame
 		}
 		return std::string();
 	});
-}
-
-std::string write_raw_frame(const std::string &p_path, const cv::Mat &p_image, int p_level) {
-	return raw_frame_write(p_path, p_image, p_level);
 }
 
 namespace {

@@ -63,9 +63,6 @@ struct PngInfo {
 std::string read_png_info(const std::string &p_path, PngInfo *r_info);
 // The chunks of a PNG held in memory, walked to IEND: "" or why it is not a complete PNG.
 std::string check_png_bytes(const std::vector<uint8_t> &p_bytes);
-// Reads and decodes a PNG (cv::IMREAD_UNCHANGED: BGR order, 16 bits kept) after checking it is
-// complete. Errors: missing, unreadable, truncated, corrupt.
-std::string decode_png(const std::string &p_path, cv::Mat *r_image);
 // The frame header of a JPEG (its SOFn segment).
 struct JpegInfo {
 	int width = 0;
@@ -100,12 +97,11 @@ struct FrameFileInfo {
 // as read_png_info does; a raw frame's header, and a length that is the header's. Errors:
 // missing, neither a PNG nor a raw frame, truncated, a corrupt header.
 std::string read_frame_file_info(const std::string &p_path, FrameFileInfo *r_info);
-// Reads and decodes a PNG (as decode_png: B, G, R) or a raw frame file (the samples as stored:
-// R, G, B), chosen by its first bytes; *r_kind (when not null) says which. Errors: missing, unreadable, neither,
+// Reads and decodes a PNG (cv::IMREAD_UNCHANGED: B, G, R, 16 bits kept; checked complete first)
+// or a raw frame file (the samples as stored: R, G, B; io/raw_frame.h writes them), chosen by its
+// first bytes; *r_kind (when not null) says which. Errors: missing, unreadable, neither,
 // truncated, corrupt.
 std::string decode_frame_file(const std::string &p_path, cv::Mat *r_image, FrameFileKind *r_kind);
-// Writes a raw frame file (the samples as stored: colour as R, G, B) at zstd level p_level.
-std::string write_raw_frame(const std::string &p_path, const cv::Mat &p_image, int p_level);
 
 // Writes a CV_32FC3 R, G, B image as an EXR with R, G, B channels (half, or float), ZIP
 // compressed. Values must be finite (and within half's range when half). Replaces p_path whole or

@@ -4,6 +4,8 @@
 #include "recording_io.h"
 #include "room_file.h"
 
+#include <io/raw_frame.h>
+
 
 #include <cmath>
 #include <cstdio>
@@ -295,9 +297,9 @@ RecordingStatus RecordingWriter::add_rgbd(const RgbdFrame &p_frame) {
 		return fail(error);
 	}
 	if (raw_frames) {
-		error = recording_io::write_raw_frame(rgb_path, p_frame.rgb, options.zstd_level); // stored as R, G, B
+		error = raw_frame_write(rgb_path, p_frame.rgb, options.zstd_level); // stored as R, G, B
 		if (error.empty()) {
-			error = recording_io::write_raw_frame(depth_path, raw, options.zstd_level);
+			error = raw_frame_write(depth_path, raw, options.zstd_level);
 		}
 	} else {
 		cv::Mat bgr;
@@ -357,7 +359,7 @@ RecordingStatus RecordingWriter::add_fisheye(const FisheyeFrame &p_frame) {
 	if (hdr_type) {
 		error = recording_io::write_exr_rgb(file, image, options.exr_full_float);
 	} else if (raw_frames) {
-		error = recording_io::write_raw_frame(file, image, options.zstd_level); // gray, or stored as R, G, B
+		error = raw_frame_write(file, image, options.zstd_level); // gray, or stored as R, G, B
 	} else if (image.channels() == 3) {
 		cv::Mat bgr;
 		cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);
