@@ -159,7 +159,7 @@ func _on_finished() -> void:
 		get_tree().quit(0)
 
 
-## The frame on screen, cropped to the figure's objects and doubled, into --out (README's pictures).
+## The frame on screen, cropped to the figure's objects and doubled, into --out (the pictures of README and docs/USAGE.md).
 func _save_picture(p_name: String) -> void:
 	if _out_dir.is_empty():
 		return

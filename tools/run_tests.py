@@ -673,7 +673,7 @@ ROOM_LIMITS = {"corner_error_max_m": 0.05, "ceiling_error_m": 0.03, "up_error_de
 # The two rooms' 10-s room sweep (synth --room-sweep: through the doorway into the right room),
 # tracked: its corners (the partition's included) after the found world is aligned to the true one
 # (the issue's measure), ceiling and up against the same limits. Through the first camera its corners
-# carry the tracker's slide by the wardrobe at 2.3 s (13 cm, README), as its registration does: both
+# carry the tracker's slide by the wardrobe at 2.3 s (13 cm, docs/FIGURES.md), as its registration does: both
 # are reported, not judged. The living room judges both corner figures.
 ROOM_TWO_ROOMS_JUDGED = ["corner_error_fitted_m", "ceiling_error_m", "up_error_deg"]
 ROOM_TWO_ROOMS_SWEEP = os.path.join(rp.BUILD, "test-data", "two_rooms_room_sweep_10s")

@@ -371,10 +371,9 @@ TEST_CASE("engine: step mode is the old sequential path (DenseSlam, fisheye_pose
 	dense_options.scale = cfg.dense_render_scale;
 	dense_options.lut = &rgb_lut;
 	// The shell first (dense_render.h): the texels the fisheye observed, rendered like the atlas.
-	cv::Mat observed_one, observed_atlas;
-	cv::Mat(coarse.texture().quality > 0.0f).convertTo(observed_one, CV_32F, 1.0 / 255.0);
-	cv::cvtColor(observed_one, observed_atlas, cv::COLOR_GRAY2RGB);
-	const Cubemap observed = renderer.render(observed_atlas, rec.probe, PROBE_SIZE);
+	cv::Mat observed_atlas;
+	cv::Mat(coarse.texture().quality > 0.0f).convertTo(observed_atlas, CV_32F, 1.0 / 255.0);
+	const std::array<cv::Mat, 6> observed = renderer.render_channel(observed_atlas, rec.probe, PROBE_SIZE);
 	dense_options.coarse_observed = &observed;
 	DenseLighting lighting;
 	const DenseRenderStats dense_stats =

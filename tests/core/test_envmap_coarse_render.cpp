@@ -230,3 +230,26 @@ TEST_CASE("a coarse render through kept rays equals the first render, follows th
 	// Another size at the same position is its own set of rays.
 	CHECK(renderer.render(atlas, origin, n / 2).size == n / 2);
 }
+
+TEST_CASE("a one-channel render of an atlas is that channel of the colour render") {
+	const RoomMesh mesh = build(l_room());
+	const cv::Mat atlas = position_atlas(mesh);
+	const CoarseCubemapRenderer renderer(mesh);
+	const glm::dvec3 origin(1.3, 1.1, 0.9);
+	const int n = 32;
+	std::vector<cv::Mat> channels;
+	cv::split(atlas, channels);
+	const Cubemap colour = renderer.render(atlas, origin, n);
+	for (int c = 0; c < 3; c++) {
+		const std::array<cv::Mat, 6> faces = renderer.render_channel(channels[size_t(c)], origin, n);
+		for (int f = 0; f < 6; f++) {
+			REQUIRE(faces[size_t(f)].type() == CV_32FC1);
+			cv::Mat expected;
+			cv::extractChannel(colour.faces[size_t(f)], expected, c);
+			CHECK(cv::norm(faces[size_t(f)], expected, cv::NORM_INF) == 0.0);
+		}
+	}
+	// A colour atlas, or one of another size, is refused: empty faces.
+	CHECK(renderer.render_channel(atlas, origin, n)[0].empty());
+	CHECK(renderer.render_channel(cv::Mat(4, 4, CV_32FC1, cv::Scalar(0.0)), origin, n)[0].empty());
+}

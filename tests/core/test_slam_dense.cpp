@@ -54,7 +54,9 @@ TEST_CASE("dense SLAM: one second of the living room tracked frame to model, ATE
 	CHECK(slam.integrated_count() == 30);
 	CHECK(slam.volume().stats().allocated_blocks > 100);
 	// The model's mesh exists and lies in the room (5 m x 4 m x 2.5 m).
-	const TriangleMesh &mesh = slam.update_mesh();
+	IncrementalMesher mesher;
+	mesher.update(slam.copy_changed_blocks());
+	const TriangleMesh mesh = mesher.mesh();
 	REQUIRE(!mesh.vertices.empty());
 	for (size_t v = 0; v < mesh.vertices.size(); v += 97) {
 		CHECK(mesh.vertices[v].x > -0.1f);
@@ -259,10 +261,10 @@ TEST_CASE("dense render: where the dense surface is the room's shell and the fis
 	const int size = 64;
 	const cv::Vec3f marker(-1.0f, -1.0f, -1.0f); // "coarse"
 	const cv::Mat atlas(mesh.mesh.atlas_height, mesh.mesh.atlas_width, CV_32FC3, cv::Scalar(marker[0], marker[1], marker[2]));
-	const Cubemap everywhere = renderer.render(cv::Mat(atlas.size(), CV_32FC3, cv::Scalar::all(1.0)), probe, size);
-	const Cubemap nowhere = renderer.render(cv::Mat(atlas.size(), CV_32FC3, cv::Scalar::all(0.0)), probe, size);
+	const std::array<cv::Mat, 6> everywhere = renderer.render_channel(cv::Mat(atlas.size(), CV_32FC1, cv::Scalar::all(1.0)), probe, size);
+	const std::array<cv::Mat, 6> nowhere = renderer.render_channel(cv::Mat(atlas.size(), CV_32FC1, cv::Scalar::all(0.0)), probe, size);
 	// Painted texels, and those painted with a surface on the prism (the tolerance's distance).
-	auto render = [&](const Cubemap *p_observed, int *r_painted, int *r_on_shell) {
+	auto render = [&](const std::array<cv::Mat, 6> *p_observed, int *r_painted, int *r_on_shell) {
 		Cubemap map = renderer.render(atlas, probe, size);
 		const Cubemap prism = clone_cubemap(map);
 		DenseRenderOptions options;

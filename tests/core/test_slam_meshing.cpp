@@ -57,7 +57,9 @@ std::vector<uint32_t> welded_indices(const TriangleMesh &p_mesh) {
 
 // The blocks a change must re-mesh: the changed blocks and the allocated blocks below them
 // (whose cubes reach one voxel into them).
-int expected_remesh(const TsdfVolume &p_volume, const std::vector<glm::ivec3> &p_changed) {
+// p_volume: a TsdfVolume or a TsdfBlockCopy.
+template <typename Blocks>
+int expected_remesh(const Blocks &p_volume, const std::vector<glm::ivec3> &p_changed) {
 	std::set<std::tuple<int, int, int>> expected;
 	for (const glm::ivec3 &b : p_changed) {
 		for (int c = 0; c < 8; c++) {
@@ -187,6 +189,19 @@ TEST_CASE("incremental meshing re-meshes only the changed blocks and equals a fr
 	CHECK(meshed == expected);
 	CHECK(meshed < volume.stats().allocated_blocks);
 	CHECK(meshes_equal(mesher.mesh(), mesh_volume(volume)));
+
+	SUBCASE("a copy of the changed blocks meshes as the volume was when it was taken") {
+		integrate_view(&volume, camera, 200.0, 15.0);
+		const TsdfBlockCopy copy(volume, volume.take_dirty_blocks());
+		const TriangleMesh then = mesh_volume(volume);
+		integrate_view(&volume, camera, 250.0, 25.0); // fused after the copy: not in it
+		CHECK(copy.block_count() >= copy.changed_blocks().size());
+		CHECK(mesher.update(copy) == expected_remesh(copy, copy.changed_blocks()));
+		CHECK(meshes_equal(mesher.mesh(), then));
+		// The next copy carries what changed since.
+		mesher.update(TsdfBlockCopy(volume, volume.take_dirty_blocks()));
+		CHECK(meshes_equal(mesher.mesh(), mesh_volume(volume)));
+	}
 
 	SUBCASE("evicted and reset blocks leave the mesh") {
 		volume.reset();

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The host suite: ./roomprobe's path arguments from outside the clone (tools/toolchain/paths.sh).
+# The host suite: ./roomprobe's path arguments from outside the clone (tools/toolchain/paths.sh),
+# and the paths the docs name (check_doc_paths.py).
 # These run on the host, where the paths live, not inside the toolchain like the other suites:
 # ./roomprobe test runs this first, and tools/run_tests.py reports its results as the 'host' suite.
 #
@@ -316,9 +317,22 @@ test_editor_sees_the_callers_files() {
 	check "the toolchain does not see the caller's file at its own path" test "$seen" = rig
 }
 
+# Issue #39: every repository path that README.md, docs/*.md and tests/README.md name exists
+# (tests/host/check_doc_paths.py; docs/ARCHITECTURE.md had drifted from the tree). The host's
+# Python when it has one, else the toolchain's.
+test_docs_name_existing_paths() {
+	if command -v python3 >/dev/null 2>&1; then
+		logged python3 tests/host/check_doc_paths.py
+	else
+		rp shell python3 tests/host/check_doc_paths.py
+	fi
+	check "tests/host/check_doc_paths.py exited with status $rc: $(grep -m3 'names no file' <<<"$out" | tr '\n' ' ')" test "$rc" -eq 0
+	check "tests/host/check_doc_paths.py did not say it checked the paths" says "files, all found"
+}
+
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
 	calibrate_refuses_and_never_overwrites synth_photometric_options_refused eval_refuses_bad_input numbers_out_of_range_refused
-	record_relative_out_run_directly bake_prt_bakes_and_caches unknown_verb_is_named editor_sees_the_callers_files)
+	record_relative_out_run_directly bake_prt_bakes_and_caches unknown_verb_is_named editor_sees_the_callers_files docs_name_existing_paths)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.
 echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench, roomprobe_calibrate, roomprobe_record and roomprobe_oni"
 cd "$repo" || exit 1

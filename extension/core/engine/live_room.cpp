@@ -80,9 +80,7 @@ cv::Mat observed_mask(const CoarseTexture &p_texture) {
 	if (p_texture.quality.empty()) {
 		return observed;
 	}
-	cv::Mat one_channel;
-	cv::Mat(p_texture.quality > 0.0f).convertTo(one_channel, CV_32F, 1.0 / 255.0); // 255 or 0 -> 1 or 0
-	cv::cvtColor(one_channel, observed, cv::COLOR_GRAY2RGB);
+	cv::Mat(p_texture.quality > 0.0f).convertTo(observed, CV_32F, 1.0 / 255.0); // 255 or 0 -> 1 or 0
 	return observed;
 }
 
@@ -339,8 +337,15 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 		last_coarse.reset();
 		last_mesh.reset();
 		fused_since_mesh = 0;
+		remesh_due = false;
+	}
+	{
+		const std::lock_guard<std::mutex> lock(mesh_mutex);
+		mesher.clear();
+		whole_mesh.reset();
 		mesh_chunks.clear();
 	}
+	mesh_inputs.reopen();
 	{
 		const std::lock_guard<std::mutex> lock(probe_mutex);
 		for (auto &[id, probe] : probes) {
@@ -401,8 +406,8 @@ bool LiveRoom::start_locked() {
 	if (cfg.find_room && slam) {
 		room_thread = std::thread([this] { room_worker(); });
 	}
-	placement_meshes.open();
-	placement_thread = std::thread([this] { placement_worker(); });
+	mesh_inputs.open();
+	mesh_thread = std::thread([this] { mesh_worker(); });
 	return true;
 }
 
@@ -425,15 +430,15 @@ void LiveRoom::stop_locked() {
 		const std::lock_guard<std::mutex> lock(room_mutex);
 		room_wake.notify_all();
 	}
-	placement_meshes.close();
-	for (std::thread *t : { &slam_thread, &coarse_thread, &probe_thread, &room_thread, &placement_thread }) {
+	mesh_inputs.close();
+	for (std::thread *t : { &slam_thread, &coarse_thread, &probe_thread, &room_thread, &mesh_thread }) {
 		if (t->joinable()) {
 			t->join();
 		}
 	}
-	// A mesh published after the placement worker's last take is placed on here.
-	if (std::optional<std::shared_ptr<const TriangleMesh>> mesh = placement_meshes.try_take()) {
-		place_on(**mesh);
+	// Blocks copied after the mesh worker's last take are meshed here.
+	if (std::optional<std::shared_ptr<MeshInput>> input = mesh_inputs.try_take()) {
+		mesh_and_publish(**input);
 	}
 	running = false;
 }
@@ -494,12 +499,13 @@ void LiveRoom::probe_worker() {
 	}
 }
 
-// Builds the placement scene of each new dense mesh off the SLAM worker: an Embree build over
-// a room's mesh takes hundreds of milliseconds, and a frame waiting behind it would be dropped.
-void LiveRoom::placement_worker() {
+// Meshes the blocks the SLAM worker copied, then builds the placement scene, off the SLAM
+// worker: on a room's mesh marching cubes take about 100 ms and the Embree build hundreds more,
+// and a frame waiting behind them would be dropped.
+void LiveRoom::mesh_worker() {
 	while (!stopping) {
-		if (std::optional<std::shared_ptr<const TriangleMesh>> mesh = placement_meshes.take(WORKER_POLL)) {
-			place_on(**mesh);
+		if (std::optional<std::shared_ptr<MeshInput>> input = mesh_inputs.take(WORKER_POLL)) {
+			mesh_and_publish(**input);
 		}
 	}
 }
@@ -649,12 +655,17 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence) {
 			const std::lock_guard<std::mutex> lock(publish_mutex);
 			last_tracked = out;
 			if (fused && ++fused_since_mesh >= cfg.mesh_interval_frames) {
+				remesh_due = true;
+			}
+			// While the mesh worker has not taken the last input, the changes wait in the volume.
+			if (remesh_due && !(running && mesh_inputs.pending())) {
+				remesh_due = false;
 				fused_since_mesh = 0;
 				remesh = true;
 			}
 		}
 		if (remesh) {
-			publish_mesh();
+			send_mesh_input();
 		}
 		if (fused) {
 			wake_probes();
@@ -1086,13 +1097,13 @@ Cubemap LiveRoom::render_map(const glm::dvec3 &p_position, int p_size, const Coa
 	Cubemap map;
 	LightingChange cumulative;
 	cumulative.valid = true;
-	Cubemap observed; // which texels the coarse model's fisheye observations show
+	std::array<cv::Mat, 6> observed; // which texels the coarse model's fisheye observations show
 	if (renderer && p_coarse != nullptr && !p_coarse->atlas.empty()) {
 		const Pose room_from_world = inverse(cfg.world_from_room);
 		const glm::dvec3 in_room = transform_point(room_from_world, p_position);
 		map = renderer->render(p_coarse->atlas, in_room, p_size, room_from_world.rotation);
 		if (p_with_dense && slam && cfg.coarse_shell_first && !p_coarse->observed.empty()) {
-			observed = renderer->render(p_coarse->observed, in_room, p_size, room_from_world.rotation);
+			observed = renderer->render_channel(p_coarse->observed, in_room, p_size, room_from_world.rotation);
 		}
 		cumulative = p_coarse->cumulative;
 	} else {
@@ -1109,7 +1120,7 @@ Cubemap LiveRoom::render_map(const glm::dvec3 &p_position, int p_size, const Coa
 		DenseRenderOptions options;
 		options.scale = cfg.dense_render_scale;
 		options.far_m = cfg.dense_render_far_m;
-		options.coarse_observed = is_valid_cubemap(observed) ? &observed : nullptr;
+		options.coarse_observed = observed[0].empty() ? nullptr : &observed;
 		options.lut = rgb_lut_active ? &rgb_lut : nullptr;
 		options.faces_per_render = cfg.dense_faces_per_render;
 		const auto reading = slam->read_lock(); // no frame half-fused
@@ -1252,45 +1263,76 @@ std::shared_ptr<const DenseMeshSnapshot> LiveRoom::dense_mesh() const {
 	return last_mesh;
 }
 
-void LiveRoom::publish_mesh() {
+void LiveRoom::send_mesh_input() {
 	if (!slam) {
 		return;
 	}
-	auto snapshot = std::make_shared<DenseMeshSnapshot>();
-	auto whole = std::make_shared<TriangleMesh>(slam->update_mesh());
-	snapshot->mesh = whole;
-	// Only the regions the mesher touched are cut again.
-	const IncrementalMesher &mesher = slam->mesher_state();
-	for (auto &[region, triangles] : mesher.region_meshes(DENSE_MESH_REGION_BLOCKS, mesher.changed_regions(DENSE_MESH_REGION_BLOCKS))) {
-		if (triangles.indices.empty()) {
-			mesh_chunks.erase(region);
-			continue;
-		}
-		DenseMeshChunk chunk;
-		chunk.region = region;
-		chunk.version = ++chunk_versions;
-		chunk.mesh = std::make_shared<const TriangleMesh>(std::move(triangles));
-		mesh_chunks[region] = std::move(chunk);
+	const auto start = std::chrono::steady_clock::now();
+	std::vector<TsdfVoxel> storage;
+	{
+		const std::lock_guard<std::mutex> lock(spare_mutex);
+		storage = std::move(spare_copy_storage);
 	}
-	snapshot->chunks.reserve(mesh_chunks.size());
-	for (const auto &[region, chunk] : mesh_chunks) {
-		snapshot->chunks.push_back(chunk);
-	}
+	auto input = std::make_shared<MeshInput>();
+	input->blocks = slam->copy_changed_blocks(std::move(storage));
+	input->copy_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 	if (running) {
-		placement_meshes.put(whole); // the placement worker builds it
+		mesh_inputs.put(std::move(input));
 	} else {
-		place_on(*whole);
+		mesh_and_publish(*input);
 	}
-	const std::lock_guard<std::mutex> lock(publish_mutex);
-	snapshot->version = last_mesh ? last_mesh->version + 1 : 1;
-	last_mesh = snapshot;
+}
+
+void LiveRoom::mesh_and_publish(MeshInput &p_input) {
+	const auto start = std::chrono::steady_clock::now();
+	auto snapshot = std::make_shared<DenseMeshSnapshot>();
+	bool changed = false;
+	{
+		const std::lock_guard<std::mutex> lock(mesh_mutex);
+		changed = mesher.update(p_input.blocks) > 0 || !whole_mesh;
+		if (changed) {
+			whole_mesh = std::make_shared<const TriangleMesh>(mesher.mesh());
+		}
+		// Only the regions the mesher touched are cut again.
+		for (auto &[region, triangles] : mesher.region_meshes(DENSE_MESH_REGION_BLOCKS, mesher.changed_regions(DENSE_MESH_REGION_BLOCKS))) {
+			if (triangles.indices.empty()) {
+				mesh_chunks.erase(region);
+				continue;
+			}
+			DenseMeshChunk chunk;
+			chunk.region = region;
+			chunk.version = ++chunk_versions;
+			chunk.mesh = std::make_shared<const TriangleMesh>(std::move(triangles));
+			mesh_chunks[region] = std::move(chunk);
+		}
+		snapshot->mesh = whole_mesh;
+		snapshot->chunks.reserve(mesh_chunks.size());
+		for (const auto &[region, chunk] : mesh_chunks) {
+			snapshot->chunks.push_back(chunk);
+		}
+	}
+	snapshot->copy_ms = p_input.copy_ms;
+	snapshot->copied_blocks = p_input.blocks.block_count();
+	snapshot->mesh_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+	{
+		const std::lock_guard<std::mutex> lock(spare_mutex);
+		spare_copy_storage = p_input.blocks.release_storage();
+	}
+	{
+		const std::lock_guard<std::mutex> lock(publish_mutex);
+		snapshot->version = last_mesh ? last_mesh->version + 1 : 1;
+		last_mesh = snapshot;
+	}
+	if (changed) {
+		place_on(*snapshot->mesh);
+	}
 }
 
 void LiveRoom::update_dense_mesh() {
 	if (running || !slam) {
-		return; // the SLAM worker meshes while running
+		return; // the SLAM and mesh workers mesh while running
 	}
-	publish_mesh();
+	send_mesh_input();
 }
 
 Trajectory LiveRoom::trajectory() const {

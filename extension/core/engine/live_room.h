@@ -14,7 +14,9 @@
 //   threaded (start() .. stop()): push_* only post the frame into a latest-value mailbox
 //     (engine/mailbox.h) and return; a SLAM worker, a coarse worker and a probe worker take the
 //     newest frame each (a slow stage drops frames and counts them), and readers take immutable
-//     results: probe maps, the tracked frame, the dense mesh, the coarse atlas. Probes render
+//     results: probe maps, the tracked frame, the dense mesh, the coarse atlas. A mesh worker
+//     meshes the blocks the SLAM worker copies every mesh_interval_frames, then builds the
+//     placement scene (TsdfBlockCopy: the volume fuses on meanwhile). Probes render
 //     while the next frame is tracked; only fusing a frame into the TSDF excludes the dense pass
 //     (DenseSlam::read_lock). stop() joins within about one stage.
 // Workers never call Godot and never throw out: a stage's exception is counted and reported in
@@ -84,7 +86,9 @@ struct LiveRoomConfig {
 	Trajectory ground_truth; // RGB-D clock; needed by either GroundTruth
 	DenseSlamOptions slam;
 	CoarsePipelineOptions coarse; // inpaint_async: the nodes turn it on (live), the evaluation off (deterministic)
-	int mesh_interval_frames = 15; // re-mesh the dense model every this many fused frames
+	// Re-mesh the dense model every this many fused frames (threaded: or later, when the mesh
+	// worker is still busy with the last ones).
+	int mesh_interval_frames = 15;
 	// A fisheye frame may come a little after the newest tracked RGB-D frame: the tracked
 	// trajectory is extrapolated this far (seconds). Ground truth is never extrapolated.
 	double fisheye_extrapolation_s = 0.1;
@@ -130,7 +134,7 @@ struct CoarseSnapshot {
 	uint64_t frames = 0; // fisheye frames integrated
 	uint64_t fisheye_sequence = 0; // the last one
 	cv::Mat atlas; // completed colour (CV_32FC3), never written after publishing
-	// CV_32FC3, the atlas's size: 1 where the fisheye observed the texel (quality > 0), else 0; the
+	// CV_32FC1, the atlas's size: 1 where the fisheye observed the texel (quality > 0), else 0; the
 	// dense pass leaves those texels of the room's shell to the coarse model (dense_render.h).
 	// Empty: none (set_atlas).
 	cv::Mat observed;
@@ -154,6 +158,11 @@ struct DenseMeshSnapshot {
 	uint64_t version = 0;
 	std::shared_ptr<const TriangleMesh> mesh; // the whole mesh, world metres
 	std::vector<DenseMeshChunk> chunks; // every non-empty region
+	// What making it cost: copying the changed blocks on the SLAM thread, and marching cubes plus
+	// the whole mesh and the regions on the mesh worker (both on the caller in step mode).
+	double copy_ms = 0.0;
+	double mesh_ms = 0.0;
+	size_t copied_blocks = 0;
 };
 
 // One environment map at one probe (§4.7): the float faces, 25 SH coefficients, and the faces
@@ -291,8 +300,8 @@ public:
 	std::shared_ptr<const TrackedFrame> tracked_frame() const;
 	std::shared_ptr<const CoarseSnapshot> coarse_snapshot() const;
 	std::shared_ptr<const DenseMeshSnapshot> dense_mesh() const;
-	// Re-meshes the dense model now (step mode; threaded, the SLAM worker does it every
-	// mesh_interval_frames) and publishes it.
+	// Re-meshes the dense model now and publishes it (step mode; threaded, the SLAM worker copies
+	// the changed blocks every mesh_interval_frames and the mesh worker meshes them).
 	void update_dense_mesh();
 	// The tracked RGB-D trajectory (the ground truth's in GroundTruth mode).
 	Trajectory trajectory() const;
@@ -329,12 +338,18 @@ private:
 	// io_faces: the probe's dense faces (null: all six raycast now).
 	Cubemap render_map(const glm::dvec3 &p_position, int p_size, const CoarseSnapshot *p_coarse, bool p_with_dense, DenseRenderStats *r_dense,
 			double *r_coarse_ms, double *r_dense_ms, DenseFaceCache *io_faces = nullptr);
-	void publish_mesh();
+	// The changed blocks copied on the SLAM thread (the mesh worker's input).
+	struct MeshInput {
+		TsdfBlockCopy blocks;
+		double copy_ms = 0.0;
+	};
+	void send_mesh_input();
+	void mesh_and_publish(MeshInput &p_input); // gives the copy's storage back for the next one
 	void slam_worker();
 	void coarse_worker();
 	void probe_worker();
 	void room_worker();
-	void placement_worker();
+	void mesh_worker();
 	void place_on(const TriangleMesh &p_mesh);
 	std::shared_ptr<const FoundRoom> find_room_locked(const std::vector<FisheyeFrame> *p_views);
 	std::string build_room_locked(); // the coarse model, its renderer and placement from cfg
@@ -384,7 +399,13 @@ private:
 	std::shared_ptr<const CoarseSnapshot> last_coarse;
 	std::shared_ptr<const DenseMeshSnapshot> last_mesh;
 	int fused_since_mesh = 0;
-	std::map<glm::ivec3, DenseMeshChunk, IvecLess> mesh_chunks; // the SLAM thread's (or step mode's)
+	bool remesh_due = false; // waiting for the mesh worker to take the last input
+
+	// The mesh stage: the mesh worker's (or, stopped, the caller's) state.
+	std::mutex mesh_mutex;
+	IncrementalMesher mesher;
+	std::shared_ptr<const TriangleMesh> whole_mesh;
+	std::map<glm::ivec3, DenseMeshChunk, IvecLess> mesh_chunks;
 	uint64_t chunk_versions = 0;
 
 	mutable std::mutex placer_mutex;
@@ -403,9 +424,12 @@ private:
 	std::atomic<bool> running{ false };
 	std::atomic<bool> stopping{ false };
 	std::unique_ptr<Frames> frames;
-	std::thread slam_thread, coarse_thread, probe_thread, room_thread, placement_thread;
-	// The dense mesh the placement worker builds its Embree scene from next (the newest only).
-	Mailbox<std::shared_ptr<const TriangleMesh>> placement_meshes;
+	std::thread slam_thread, coarse_thread, probe_thread, room_thread, mesh_thread;
+	// The blocks the mesh worker meshes next. The SLAM thread puts one only when the last was
+	// taken (the blocks changed meanwhile stay marked in the volume), so none is overwritten.
+	Mailbox<std::shared_ptr<MeshInput>> mesh_inputs;
+	std::mutex spare_mutex;
+	std::vector<TsdfVoxel> spare_copy_storage; // the last copy's, reused (its pages stay mapped)
 
 	// The room from the sweep: fisheye frames kept for it (spread over time: when twice
 	// find_room_views are kept, every other one goes and the spacing doubles), and the estimate.

@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -141,24 +142,31 @@ CoarseCubemapRenderer::Taps CoarseCubemapRenderer::texel_taps(int p_chart, const
 	const int ys[4] = { y0, y0, y1, y1 };
 	const double ws[4] = { (1.0 - ax) * (1.0 - ay), ax * (1.0 - ay), (1.0 - ax) * ay, ax * ay };
 	const auto index = [&](int p_x, int p_y) { return uint32_t(p_y) * uint32_t(mesh.atlas_width) + uint32_t(p_x); };
-	Taps taps;
+	// The used taps: on the surface, with a weight.
+	int used[4];
+	int count = 0;
 	double weight = 0.0;
 	for (int i = 0; i < 4; i++) {
-		taps.index[i] = index(xs[i], ys[i]);
 		if (ws[i] > 0.0 && texel_on_surface(xs[i], ys[i])) {
+			used[count++] = i;
 			weight += ws[i];
 		}
 	}
-	if (weight <= 0.0) {
+	Taps taps;
+	taps.hit = 1.0f;
+	if (count == 0) {
 		// No surface texel among the taps (a sliver of floor or ceiling between texel centres):
 		// the nearest tap.
-		taps.index[0] = index(ax < 0.5 ? x0 : x1, ay < 0.5 ? y0 : y1);
-		taps.weight[0] = 1.0f;
+		taps.index[0] = taps.index[1] = taps.index[2] = taps.index[3] = index(ax < 0.5 ? x0 : x1, ay < 0.5 ? y0 : y1);
 		return taps;
 	}
-	for (int i = 0; i < 4; i++) {
-		if (ws[i] > 0.0 && texel_on_surface(xs[i], ys[i])) {
-			taps.weight[i] = std::max(float(ws[i]), std::numeric_limits<float>::min()); // > 0: the tap is used
+	// The first used tap, then the others' share of the weight; unused ones repeat the first
+	// (weight 0: texels off the surface are never read).
+	for (int k = 0; k < 4; k++) {
+		const int i = used[k < count ? k : 0];
+		taps.index[k] = index(xs[i], ys[i]);
+		if (k > 0 && k < count) {
+			taps.weight[k - 1] = float(ws[i] / weight);
 		}
 	}
 	return taps;
@@ -173,24 +181,39 @@ cv::Mat continuous(const cv::Mat &p_atlas_color) {
 
 } // namespace
 
-cv::Vec3f CoarseCubemapRenderer::gather(const cv::Vec3f *p_atlas, const Taps &p_taps) {
-	// In double, divided by the weights' own sum: where the taps agree the result is their value
-	// exactly (a chart id, a flat colour), as float weights normalised beforehand would not give.
-	double sum[3] = { 0.0, 0.0, 0.0 }, weight = 0.0;
-	for (int i = 0; i < 4; i++) {
-		if (p_taps.weight[i] > 0.0f) { // unused taps are never read: texels off the surface may hold anything
-			const cv::Vec3f &c = p_atlas[p_taps.index[i]];
-			const double w = p_taps.weight[i];
-			sum[0] += w * c[0];
-			sum[1] += w * c[1];
-			sum[2] += w * c[2];
-			weight += w;
+// The taps' weighted mean of an atlas of N-channel float texels, as the first tap plus the
+// others' weighted differences from it: where the taps agree the result is their value exactly
+// (a chart id, a mask, a flat colour), and no branch but the miss.
+template <int N>
+cv::Vec<float, N> CoarseCubemapRenderer::gather(const cv::Vec<float, N> *p_atlas, const Taps &p_taps) {
+	cv::Vec<float, N> out = cv::Vec<float, N>::all(0.0f);
+	if (p_taps.hit == 0.0f) {
+		return out; // the ray hit nothing
+	}
+	const cv::Vec<float, N> &c0 = p_atlas[p_taps.index[0]];
+	const cv::Vec<float, N> &c1 = p_atlas[p_taps.index[1]];
+	const cv::Vec<float, N> &c2 = p_atlas[p_taps.index[2]];
+	const cv::Vec<float, N> &c3 = p_atlas[p_taps.index[3]];
+	for (int k = 0; k < N; k++) {
+		out[k] = c0[k] + p_taps.weight[0] * (c1[k] - c0[k]) + p_taps.weight[1] * (c2[k] - c0[k]) + p_taps.weight[2] * (c3[k] - c0[k]);
+	}
+	return out;
+}
+
+template <int N>
+void CoarseCubemapRenderer::gather_faces(const Lookup &p_lookup, const cv::Mat &p_atlas, std::array<cv::Mat, 6> *r_faces) {
+	const int size = p_lookup.size;
+	const cv::Mat whole = continuous(p_atlas); // held: it may be a copy
+	const cv::Vec<float, N> *atlas = whole.ptr<cv::Vec<float, N>>();
+	tbb::parallel_for(tbb::blocked_range<int>(0, 6 * size), [&](const tbb::blocked_range<int> &p_rows) {
+		for (int row = p_rows.begin(); row != p_rows.end(); row++) {
+			cv::Vec<float, N> *out = (*r_faces)[size_t(row / size)].ptr<cv::Vec<float, N>>(row % size);
+			const Taps *in = &p_lookup.taps[size_t(row) * size_t(size)];
+			for (int u = 0; u < size; u++) {
+				out[u] = gather(atlas, in[u]);
+			}
 		}
-	}
-	if (!(weight > 0.0)) {
-		return cv::Vec3f(0.0f, 0.0f, 0.0f); // the ray hit nothing
-	}
-	return cv::Vec3f(float(sum[0] / weight), float(sum[1] / weight), float(sum[2] / weight));
+	});
 }
 
 std::shared_ptr<const CoarseCubemapRenderer::Lookup> CoarseCubemapRenderer::lookup(const glm::dvec3 &p_position, int p_size,
@@ -239,25 +262,29 @@ Cubemap CoarseCubemapRenderer::render(const cv::Mat &p_atlas_color, const glm::d
 		return Cubemap();
 	}
 	const std::shared_ptr<const Lookup> taps = lookup(p_position, p_size, p_room_from_world);
-	const cv::Mat atlas = continuous(p_atlas_color);
-	Cubemap cubemap = make_cubemap(p_size);
+	Cubemap cubemap;
+	cubemap.size = p_size;
 	for (int f = 0; f < 6; f++) {
+		cubemap.faces[size_t(f)].create(p_size, p_size, CV_32FC3); // every texel is gathered below
 		// A copy: the lookup is shared between maps, and the dense pass writes into the distances.
 		cubemap.distance_m[size_t(f)] =
 				cv::Mat(p_size, p_size, CV_32FC1, const_cast<float *>(taps->distance_m.data()) + size_t(f) * size_t(p_size) * size_t(p_size)).clone();
 	}
-	tbb::parallel_for(tbb::blocked_range<int>(0, 6 * p_size), [&](const tbb::blocked_range<int> &p_rows) {
-		for (int row = p_rows.begin(); row != p_rows.end(); row++) {
-			const int face = row / p_size;
-			const int v = row % p_size;
-			cv::Vec3f *out = cubemap.faces[size_t(face)].ptr<cv::Vec3f>(v);
-			const Taps *in = &taps->taps[size_t(row) * size_t(p_size)];
-			for (int u = 0; u < p_size; u++) {
-				out[u] = gather(atlas.ptr<cv::Vec3f>(), in[u]);
-			}
-		}
-	});
+	gather_faces<3>(*taps, p_atlas_color, &cubemap.faces);
 	return cubemap;
+}
+
+std::array<cv::Mat, 6> CoarseCubemapRenderer::render_channel(const cv::Mat &p_atlas, const glm::dvec3 &p_position, int p_size,
+		const glm::dquat &p_room_from_world) const {
+	std::array<cv::Mat, 6> faces;
+	if (p_size <= 0 || p_atlas.type() != CV_32FC1 || p_atlas.cols != mesh.atlas_width || p_atlas.rows != mesh.atlas_height) {
+		return faces;
+	}
+	for (cv::Mat &face : faces) {
+		face.create(p_size, p_size, CV_32FC1);
+	}
+	gather_faces<1>(*lookup(p_position, p_size, p_room_from_world), p_atlas, &faces);
+	return faces;
 }
 
 } // namespace roomprobe

@@ -55,13 +55,19 @@ public:
 	// their rays are turned into the room's frame. p_position is then in the room's frame too.
 	// Parallel over face rows (TBB).
 	// The rays and taps depend only on the position and size, not on the atlas: they are kept for
-	// the last MAX_CACHED_LOOKUPS (position, size) pairs (28 bytes a texel: 11 MiB at 256^2), so a
+	// the last MAX_CACHED_LOOKUPS (position, size) pairs (36 bytes a texel with the distance: 14 MiB at 256^2), so a
 	// probe that does not move costs a gather of four taps a texel. Safe to call from any thread.
 	Cubemap render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size = 256,
 			const glm::dquat &p_room_from_world = glm::dquat(1.0, 0.0, 0.0, 0.0)) const;
 	Cubemap render(const CoarseTexture &p_texture, const glm::dvec3 &p_position, int p_size = 256) const {
 		return render(p_texture.color, p_position, p_size);
 	}
+
+	// The same rays and taps over a one-channel atlas (CV_32FC1, the mesh's atlas size: a mask):
+	// one CV_32FC1 image per face, 0 where a ray hits nothing. Empty images when the atlas does
+	// not fit.
+	std::array<cv::Mat, 6> render_channel(const cv::Mat &p_atlas, const glm::dvec3 &p_position, int p_size,
+			const glm::dquat &p_room_from_world = glm::dquat(1.0, 0.0, 0.0, 0.0)) const;
 
 	// Whether atlas texel (x, y) lies on the room surface (texel_to_world succeeds).
 	bool texel_on_surface(int p_x, int p_y) const;
@@ -71,10 +77,12 @@ public:
 private:
 	// The taps of one cubemap texel: the atlas at continuous atlas position (texel units, see
 	// RoomRayHit) on its chart, bilinear over the chart's surface texels, clamped to the chart:
-	// up to four atlas texels with their bilinear weights (gather divides by their sum).
+	// up to four atlas texels, the first a used one, the others with their share of the used
+	// taps' weight (0 for the unused, which repeat the first texel).
 	struct Taps {
 		uint32_t index[4] = { 0, 0, 0, 0 }; // atlas texels, row-major
-		float weight[4] = { 0.0f, 0.0f, 0.0f, 0.0f }; // > 0 for used taps; all 0 where the ray hits nothing
+		float hit = 0.0f; // 1 where the ray hit the room, else 0 (the texel is black)
+		float weight[3] = { 0.0f, 0.0f, 0.0f }; // of taps 1..3, normalised
 	};
 	struct Lookup {
 		glm::dvec3 position = glm::dvec3(0.0);
@@ -84,7 +92,11 @@ private:
 		std::vector<float> distance_m; // the same order: the ray's hit distance (0: none)
 	};
 	Taps texel_taps(int p_chart, const glm::dvec2 &p_atlas) const;
-	static cv::Vec3f gather(const cv::Vec3f *p_atlas, const Taps &p_taps);
+	template <int N>
+	static cv::Vec<float, N> gather(const cv::Vec<float, N> *p_atlas, const Taps &p_taps);
+	// Every texel of every face of p_lookup from p_atlas (N float channels) into r_faces (made).
+	template <int N>
+	static void gather_faces(const Lookup &p_lookup, const cv::Mat &p_atlas, std::array<cv::Mat, 6> *r_faces);
 	std::shared_ptr<const Lookup> lookup(const glm::dvec3 &p_position, int p_size, const glm::dquat &p_room_from_world) const;
 
 	const RoomMesh &mesh;

@@ -65,8 +65,10 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 	}
 	const std::array<float, 256> &lut = p_options.lut != nullptr ? *p_options.lut : identity;
 	const bool has_distances = roomprobe::has_distances(*io_cubemap);
-	const Cubemap *observed_faces =
-			has_distances && p_options.coarse_observed != nullptr && p_options.coarse_observed->size == size ? p_options.coarse_observed : nullptr;
+	const std::array<cv::Mat, 6> *observed_faces = has_distances && p_options.coarse_observed != nullptr &&
+					(*p_options.coarse_observed)[0].rows == size && (*p_options.coarse_observed)[0].type() == CV_32FC1
+			? p_options.coarse_observed
+			: nullptr;
 	// Which faces are raycast now: all without a cache (or after a move); else the next ones.
 	std::unique_lock<std::mutex> cache_lock;
 	std::array<bool, 6> raycast_now;
@@ -113,7 +115,7 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 			const float *depth = maps.depth.ptr<float>(lv);
 			const cv::Vec3b *color = maps.colors.ptr<cv::Vec3b>(lv);
 			cv::Vec3f *out = face.ptr<cv::Vec3f>(v);
-			const cv::Vec3f *observed = observed_faces != nullptr ? observed_faces->faces[size_t(f)].ptr<cv::Vec3f>(v) : nullptr;
+			const float *observed = observed_faces != nullptr ? (*observed_faces)[size_t(f)].ptr<float>(v) : nullptr;
 			const float dy = (float(v) - 0.5f * float(size - 1)) / (0.5f * float(size));
 			for (int u = 0; u < size; u++) {
 				const int lu = low - 1 - std::min(low - 1, u * low / size); // mirrored
@@ -127,7 +129,7 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 					const float dx = (float(u) - 0.5f * float(size - 1)) / (0.5f * float(size)); // mirrored: the sign does not matter
 					const float distance = depth[lu] * std::sqrt(1.0f + dx * dx + dy * dy);
 					float &prism = distances[size_t(v) * size_t(size) + size_t(u)];
-					if (observed != nullptr && observed[u][0] >= 0.5f && on_coarse_shell(distance, prism, p_options)) {
+					if (observed != nullptr && observed[u] >= 0.5f && on_coarse_shell(distance, prism, p_options)) {
 						continue; // the shell the fisheye saw: the coarse model's texel stays
 					}
 					prism = distance;

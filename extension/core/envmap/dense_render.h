@@ -37,14 +37,14 @@ struct DenseRenderOptions {
 	cv::Vec3f gain = cv::Vec3f(1.0f, 1.0f, 1.0f); // lighting change applied after the lut
 	cv::Vec3f offset = cv::Vec3f(0.0f, 0.0f, 0.0f);
 	// The room's shell first (issue #16's error budget): where the coarse render's texel was
-	// observed by the fisheye (this map's channel 0 >= 0.5: CoarseSnapshot::observed rendered
-	// like the atlas) and the dense surface lies on the coarse prism (its distance within
+	// observed by the fisheye (these faces >= 0.5, CV_32FC1: CoarseSnapshot::observed rendered
+	// like the atlas, CoarseCubemapRenderer::render_channel) and the dense surface lies on the coarse prism (its distance within
 	// shell_tolerance_m + shell_tolerance_relative x the prism's, io_cubemap's distance_m), the
 	// coarse model's texel stays. On the living room's 10-s sweep the dense model showed those
 	// directions at 14.9 dB and the coarse model the rest of the shell at 22.1 dB: its colours of
 	// walls and floor are fused from 8-bit RGB over a few frames and keep older light. Null: the
 	// paper's dense-over-all.
-	const Cubemap *coarse_observed = nullptr;
+	const std::array<cv::Mat, 6> *coarse_observed = nullptr;
 	float shell_tolerance_m = 0.05f;
 	float shell_tolerance_relative = 0.02f;
 	// With a DenseFaceCache: faces raycast per render (1..6, round robin); the others are the

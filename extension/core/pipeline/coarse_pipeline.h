@@ -57,7 +57,7 @@ struct CoarsePipelineOptions {
 	LightingOptions lighting_options; // §4.6 settings (model overridden by lighting_model)
 	InpaintingOptions inpainting; // §4.5 settings
 	// Texels the fisheye never saw taken from the RGB camera (add_rgb_frame; issue #16). Off by
-	// default: the texels are right (README, the error budget), but the maps did not gain, since
+	// default: the texels are right (docs/FIGURES.md, the error budget), but the maps did not gain, since
 	// the dense model already shows what the RGB-D camera saw, and a map without the dense model
 	// then shows the real floor where furniture stands.
 	bool rgb_texture = false;

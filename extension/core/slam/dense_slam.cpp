@@ -104,8 +104,7 @@ std::string DenseSlam::configure(const PinholeParams &p_camera, const Pose &p_in
 		cv::initUndistortRectifyMap(k, d, cv::Mat(), k, cv::Size(p_camera.width, p_camera.height), CV_32FC1, undistort_map_x, undistort_map_y);
 	}
 	tsdf.reset();
-	mesher.clear();
-	mesh = TriangleMesh();
+	tsdf.take_dirty_blocks(); // a fresh model: nothing of the old one is re-meshed
 	reference = ModelMaps();
 	last_pose = p_initial_world_from_camera;
 	has_previous = false;
@@ -250,11 +249,8 @@ void DenseSlam::raycast(const Pose &p_world_from_camera, ModelMaps *r_maps) cons
 	tsdf.raycast(intrinsics, p_world_from_camera, r_maps);
 }
 
-const TriangleMesh &DenseSlam::update_mesh() {
-	if (mesher.update(tsdf, tsdf.take_dirty_blocks()) > 0 || mesh.vertices.empty()) {
-		mesh = mesher.mesh();
-	}
-	return mesh;
+TsdfBlockCopy DenseSlam::copy_changed_blocks(std::vector<TsdfVoxel> p_storage) {
+	return TsdfBlockCopy(tsdf, tsdf.take_dirty_blocks(), std::move(p_storage));
 }
 
 DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {

@@ -71,7 +71,7 @@ struct DenseSlamOptions {
 	// that); integration always takes the full frame. 0, the default: full size. Level 1 tracks
 	// 2.5x faster (14 to 18 ms against 37 on the 10-s living room) without the drift once seen,
 	// but costs ATE: 1.70 -> 5.61 mm on the flat-wall panorama_room, 4.43 -> 5.05 on living_room,
-	// 44.4 -> 47.2 mm on 7-Scenes (README, the speed section), so it is not the default.
+	// 44.4 -> 47.2 mm on 7-Scenes (docs/FIGURES.md, speed on two CPU cores), so it is not the default.
 	int tracking_level = 0;
 	// Relocalisation: when a frame is Lost and the model exists, it is tracked again from 13
 	// starting poses: the held pose, and the held pose moved by +-relocalise_step_m along each
@@ -116,10 +116,12 @@ public:
 	TrackingResult track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_initial_world_from_camera) const;
 	IntegrationStats integrate(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_world_from_camera);
 	void raycast(const Pose &p_world_from_camera, ModelMaps *r_maps) const;
-	// Re-meshes the blocks changed since the last call; returns the whole mesh.
-	const TriangleMesh &update_mesh();
-	// The incremental mesher behind update_mesh (its per-region meshes, for viewers).
-	const IncrementalMesher &mesher_state() const { return mesher; }
+	// The blocks changed since the last call, with the voxels re-meshing them reads, copied: an
+	// IncrementalMesher fed these copies in order keeps the model's mesh, on any thread. Call it
+	// on the fusing thread (a copy of the order of 100 MB takes tens of milliseconds; meshing it
+	// takes ten times that).
+	// p_storage: an earlier copy's storage to reuse (TsdfBlockCopy::release_storage), or empty.
+	TsdfBlockCopy copy_changed_blocks(std::vector<TsdfVoxel> p_storage = {});
 
 	// One RGB-D frame: undistort, track (the first frame is taken at the initial pose), integrate
 	// when trusted, raycast the reference for the next frame.
@@ -162,8 +164,6 @@ private:
 	cv::Mat undistort_map_x, undistort_map_y; // empty when the camera has no distortion
 	IcpTracker tracker;
 	TsdfVolume tsdf;
-	IncrementalMesher mesher;
-	TriangleMesh mesh;
 	ModelMaps reference; // the model raycast from last_pose
 	Pose last_pose;
 	Pose previous_pose; // the trusted pose before last_pose (constant-velocity prediction)

@@ -123,11 +123,13 @@ struct BlockNeighbourhood {
 	const TsdfVoxel *at(const glm::ivec3 &p_local) const { return voxels[size_t((p_local.z * GRID + p_local.y) * GRID + p_local.x)]; }
 };
 
-BlockNeighbourhood gather(const TsdfVolume &p_volume, const glm::ivec3 &p_block) {
+// p_blocks: a TsdfVolume or a TsdfBlockCopy (find_block).
+template <typename Blocks>
+BlockNeighbourhood gather(const Blocks &p_blocks, const glm::ivec3 &p_block) {
 	BlockNeighbourhood n;
 	const TsdfVoxel *blocks[8];
 	for (int c = 0; c < 8; c++) {
-		blocks[c] = p_volume.find_block(p_block + corner_offset(c));
+		blocks[c] = p_blocks.find_block(p_block + corner_offset(c));
 	}
 	for (int z = 0; z < GRID; z++) {
 		for (int y = 0; y < GRID; y++) {
@@ -175,15 +177,18 @@ const std::array<std::array<uint8_t, 2>, 12> &mc_edge_corners() {
 	return topology().edge_corners;
 }
 
-TriangleMesh mesh_block(const TsdfVolume &p_volume, const glm::ivec3 &p_block) {
+namespace {
+
+template <typename Blocks>
+TriangleMesh mesh_block_of(const Blocks &p_blocks, const glm::ivec3 &p_block, float p_voxel_size_m) {
 	TriangleMesh mesh;
-	if (p_volume.find_block(p_block) == nullptr) {
+	if (p_blocks.find_block(p_block) == nullptr) {
 		return mesh;
 	}
-	const BlockNeighbourhood n = gather(p_volume, p_block);
+	const BlockNeighbourhood n = gather(p_blocks, p_block);
 	const std::array<McCase, 256> &table = mc_case_table();
 	const CubeTopology &t = topology();
-	const float vs = p_volume.options().voxel_size_m;
+	const float vs = p_voxel_size_m;
 	const glm::ivec3 base = p_block * TSDF_BLOCK_SIDE;
 	// A vertex per crossed grid edge, shared by the cubes around it: (start voxel, axis).
 	std::vector<int32_t> vertex_of(size_t(GRID * GRID * GRID * 3), -1);
@@ -244,6 +249,66 @@ TriangleMesh mesh_block(const TsdfVolume &p_volume, const glm::ivec3 &p_block) {
 	return mesh;
 }
 
+} // namespace
+
+TriangleMesh mesh_block(const TsdfVolume &p_volume, const glm::ivec3 &p_block) {
+	return mesh_block_of(p_volume, p_block, p_volume.options().voxel_size_m);
+}
+
+TriangleMesh mesh_block(const TsdfBlockCopy &p_blocks, const glm::ivec3 &p_block) {
+	return mesh_block_of(p_blocks, p_block, p_blocks.voxel_size_m());
+}
+
+// ---- the copy a mesher works on ----
+
+TsdfBlockCopy::TsdfBlockCopy(const TsdfVolume &p_volume, std::vector<glm::ivec3> p_changed_blocks, std::vector<TsdfVoxel> p_storage) :
+		m_voxel_size_m(p_volume.options().voxel_size_m), m_changed(std::move(p_changed_blocks)), m_voxels(std::move(p_storage)) {
+	// The blocks within one block of a changed one, each once (a bit per pool slot).
+	const TsdfView view = p_volume.view();
+	std::vector<uint64_t> taken((size_t(p_volume.stats().capacity_blocks) + 63) / 64, 0);
+	std::vector<std::pair<uint64_t, int32_t>> found; // (block key, slot)
+	found.reserve(m_changed.size() * 2);
+	for (const glm::ivec3 &block : m_changed) {
+		for (int dz = -1; dz <= 1; dz++) {
+			for (int dy = -1; dy <= 1; dy++) {
+				for (int dx = -1; dx <= 1; dx++) {
+					const glm::ivec3 b = block + glm::ivec3(dx, dy, dz);
+					const int32_t slot = tsdf_find_slot(view, b);
+					if (slot >= 0 && !(taken[size_t(slot) / 64] >> (slot % 64) & 1u)) {
+						taken[size_t(slot) / 64] |= uint64_t(1) << (slot % 64);
+						found.emplace_back(tsdf_block_key(b), slot);
+					}
+				}
+			}
+		}
+	}
+	std::sort(found.begin(), found.end());
+	// Appended, not resized: no voxel is written twice. Storage recycled from an earlier copy
+	// keeps its pages (tens of megabytes: page faults on fresh memory cost as much as copying),
+	// so it is reserved with room to grow.
+	const size_t needed = found.size() * TSDF_BLOCK_VOXELS;
+	m_voxels.clear();
+	if (m_voxels.capacity() < needed) {
+		m_voxels = std::vector<TsdfVoxel>();
+		m_voxels.reserve(needed + needed / 4);
+	}
+	m_index.reserve(found.size());
+	for (size_t i = 0; i < found.size(); i++) {
+		m_index.emplace_back(found[i].first, uint32_t(i));
+		const TsdfVoxel *voxels = view.voxels + size_t(found[i].second) * TSDF_BLOCK_VOXELS;
+		m_voxels.insert(m_voxels.end(), voxels, voxels + TSDF_BLOCK_VOXELS);
+	}
+}
+
+const TsdfVoxel *TsdfBlockCopy::find_block(const glm::ivec3 &p_block) const {
+	const uint64_t key = tsdf_block_key(p_block);
+	const auto it = std::lower_bound(m_index.begin(), m_index.end(), key, [](const auto &p_entry, uint64_t p_key) { return p_entry.first < p_key; });
+	if (it == m_index.end() || it->first != key) {
+		return nullptr;
+	}
+	return &m_voxels[size_t(it->second) * TSDF_BLOCK_VOXELS];
+}
+
 void append_mesh(const TriangleMesh &p_piece, TriangleMesh *r_mesh) {
 	const uint32_t offset = uint32_t(r_mesh->vertices.size());
 	r_mesh->vertices.insert(r_mesh->vertices.end(), p_piece.vertices.begin(), p_piece.vertices.end());
@@ -263,9 +328,13 @@ TriangleMesh mesh_volume(const TsdfVolume &p_volume) {
 }
 
 int IncrementalMesher::update(const TsdfVolume &p_volume, const std::vector<glm::ivec3> &p_changed_blocks) {
+	return update(TsdfBlockCopy(p_volume, p_changed_blocks));
+}
+
+int IncrementalMesher::update(const TsdfBlockCopy &p_blocks) {
 	std::vector<glm::ivec3> affected;
-	affected.reserve(p_changed_blocks.size() * 8);
-	for (const glm::ivec3 &block : p_changed_blocks) {
+	affected.reserve(p_blocks.changed_blocks().size() * 8);
+	for (const glm::ivec3 &block : p_blocks.changed_blocks()) {
 		for (int c = 0; c < 8; c++) {
 			affected.push_back(block - corner_offset(c));
 		}
@@ -276,11 +345,11 @@ int IncrementalMesher::update(const TsdfVolume &p_volume, const std::vector<glm:
 	m_last_touched = affected;
 	int meshed = 0;
 	for (const glm::ivec3 &block : affected) {
-		if (p_volume.find_block(block) == nullptr) {
+		if (p_blocks.find_block(block) == nullptr) {
 			m_pieces.erase(block);
 			continue;
 		}
-		TriangleMesh piece = mesh_block(p_volume, block);
+		TriangleMesh piece = mesh_block(p_blocks, block);
 		meshed++;
 		if (piece.indices.empty()) {
 			m_pieces.erase(block);

@@ -34,17 +34,46 @@ struct McCase {
 const std::array<McCase, 256> &mc_case_table();
 const std::array<std::array<uint8_t, 2>, 12> &mc_edge_corners();
 
+// The voxels that re-meshing a set of changed blocks reads, copied out of a volume at one
+// moment: the changed blocks and every allocated block next to them (a cube reads one voxel into
+// the blocks above it, and the blocks below a changed one are re-meshed too). A mesher works on
+// the copy on its own thread while the volume goes on fusing frames.
+class TsdfBlockCopy {
+public:
+	TsdfBlockCopy() = default;
+	// p_changed_blocks: sorted, each once (TsdfVolume::take_dirty_blocks). p_storage: the voxel
+	// storage of an earlier copy to reuse (release_storage), or empty.
+	TsdfBlockCopy(const TsdfVolume &p_volume, std::vector<glm::ivec3> p_changed_blocks, std::vector<TsdfVoxel> p_storage = {});
+	// Gives the voxel storage back for the next copy (this copy is empty afterwards).
+	std::vector<TsdfVoxel> release_storage() {
+		m_index.clear();
+		m_changed.clear();
+		return std::move(m_voxels);
+	}
+	// The 512 voxels of a copied block, or nullptr (not allocated, or not near a changed block).
+	const TsdfVoxel *find_block(const glm::ivec3 &p_block) const;
+	const std::vector<glm::ivec3> &changed_blocks() const { return m_changed; }
+	float voxel_size_m() const { return m_voxel_size_m; }
+	size_t block_count() const { return m_voxels.size() / TSDF_BLOCK_VOXELS; }
+
+private:
+	float m_voxel_size_m = 0.01f;
+	std::vector<glm::ivec3> m_changed;
+	std::vector<std::pair<uint64_t, uint32_t>> m_index; // packed block key -> block of m_voxels, sorted
+	std::vector<TsdfVoxel> m_voxels;
+};
+
 // The mesh of the cubes whose lowest corner lies in one block (they reach one voxel into the
 // blocks above it). Cubes with an unobserved corner, or whose sign change is between two
 // saturated (+-1) values, give nothing.
 TriangleMesh mesh_block(const TsdfVolume &p_volume, const glm::ivec3 &p_block);
+TriangleMesh mesh_block(const TsdfBlockCopy &p_blocks, const glm::ivec3 &p_block);
 // The mesh of the whole volume from scratch (blocks in sorted order), as IncrementalMesher::mesh().
 TriangleMesh mesh_volume(const TsdfVolume &p_volume);
 
 // Appends p_piece to r_mesh (indices shifted).
 void append_mesh(const TriangleMesh &p_piece, TriangleMesh *r_mesh);
 
-// Keeps one mesh piece per block and re-meshes only what changed.
 // Orders block and region indices (std::map keys).
 struct IvecLess {
 	bool operator()(const glm::ivec3 &p_a, const glm::ivec3 &p_b) const {
@@ -52,11 +81,14 @@ struct IvecLess {
 	}
 };
 
+// Keeps one mesh piece per block and re-meshes only what changed.
 class IncrementalMesher {
 public:
 	// Re-meshes the blocks whose cubes touch a changed block: each changed block and its 7
 	// neighbours below (-x, -y, -z and combinations), whose cubes reach into it. Pieces of blocks
 	// that are no longer allocated are dropped. Returns the number of blocks meshed.
+	int update(const TsdfBlockCopy &p_blocks);
+	// The same, copying from p_volume first.
 	int update(const TsdfVolume &p_volume, const std::vector<glm::ivec3> &p_changed_blocks);
 	// The whole mesh: the pieces concatenated in sorted block order.
 	TriangleMesh mesh() const;

@@ -47,6 +47,12 @@ inline uint32_t tsdf_block_hash(const glm::ivec3 &p_block) {
 	return (uint32_t(p_block.x) * 73856093u) ^ (uint32_t(p_block.y) * 19349669u) ^ (uint32_t(p_block.z) * 83492791u);
 }
 
+// Block coordinates packed into 63 bits, 21 each (a block is 8 voxels: far beyond any room), for
+// one-word compares and sorting.
+inline uint64_t tsdf_block_key(const glm::ivec3 &p_block) {
+	return (uint64_t(uint32_t(p_block.x) & 0x1FFFFFu)) | (uint64_t(uint32_t(p_block.y) & 0x1FFFFFu) << 21) | (uint64_t(uint32_t(p_block.z) & 0x1FFFFFu) << 42);
+}
+
 inline int tsdf_local_index(const glm::ivec3 &p_local) {
 	return p_local.x + TSDF_BLOCK_SIDE * (p_local.y + TSDF_BLOCK_SIDE * p_local.z);
 }

@@ -35,12 +35,9 @@ struct RecentBlocks {
 	int next = 0;
 	bool used[SIZE] = {};
 
-	static uint64_t key(const glm::ivec3 &p_block) {
-		return (uint64_t(uint32_t(p_block.x) & 0x1FFFFFu)) | (uint64_t(uint32_t(p_block.y) & 0x1FFFFFu) << 21) | (uint64_t(uint32_t(p_block.z) & 0x1FFFFFu) << 42);
-	}
 	// True when p_block was among the last SIZE; else remembers it.
 	bool seen_or_add(const glm::ivec3 &p_block) {
-		const uint64_t k = key(p_block);
+		const uint64_t k = tsdf_block_key(p_block);
 		for (int i = 0; i < SIZE; i++) {
 			if (used[i] && keys[i] == k) {
 				return true;
