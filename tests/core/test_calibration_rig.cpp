@@ -194,7 +194,9 @@ TEST_CASE("calibration: degenerate input is refused with its reason") {
 		const CalibrationViews none = load_calibration_views(empty.string(), CalibrationViewsOptions());
 		CHECK(contains(none.error, "no views"));
 		CHECK(contains(none.error, empty.string()));
-		CHECK(contains(load_calibration_views((empty / "missing").string(), CalibrationViewsOptions()).error, "not a folder"));
+		CHECK(contains(load_calibration_views((empty / "missing").string(), CalibrationViewsOptions()).error, "missing: no such folder"));
+		// Issue #38: a device is named for what it is.
+		CHECK(contains(load_calibration_views("/dev/zero", CalibrationViewsOptions()).error, "/dev/zero: not a folder (a character device)"));
 		fs::remove_all(empty);
 	}
 }
@@ -336,7 +338,7 @@ TEST_CASE("calibration: photometric views that cannot be fitted are refused with
 	write("%YAML:1.0\nexposure_sweep: []\n");
 	CHECK(contains(load_photometric_views(folder.string(), size).error, "reference_exposure_us: missing"));
 	write("%YAML:1.0\nreference_exposure_us: 100\nexposure_sweep:\n  - { image: exposure/000.png, exposure_us: 100 }\n");
-	CHECK(contains(load_photometric_views(folder.string(), size).error, "exposure/000.png: cannot be opened for reading"));
+	CHECK(contains(load_photometric_views(folder.string(), size).error, "exposure/000.png: missing"));
 	cv::imwrite((folder / "exposure/000.png").string(), cv::Mat(16, 16, CV_8UC3, cv::Scalar::all(100)));
 	CHECK(contains(load_photometric_views(folder.string(), size).error, "16x16, the fisheye's images are"));
 	// Too few exposures, or too narrow a sweep.
@@ -423,4 +425,36 @@ TEST_CASE("calibration: a recording of the board held before the rig gives the s
 	CHECK(glm::length(rig.rgb_from_fisheye.translation - truth.rgb_from_fisheye.translation) < 0.002);
 	CHECK(angle_deg(rig.rgb_from_fisheye.rotation, truth.rgb_from_fisheye.rotation) < 0.2);
 	CHECK(calibrated.report.depth_checked); // the pairs' depth came through the recording
+}
+
+// Issue #38: board sizes were echoed as numbers the user never typed ("%g mm" of --square-m, a
+// count of 9.7 in board.yaml read as 10, "nine" as 0). The board is echoed as given: the counts,
+// and the square's side in metres as the shortest text that reads back as the same number.
+TEST_CASE("calibration board: echoed as the user gave it; a board file's wrong counts are refused, naming the field and what it holds") {
+	CHECK(board_text(BoardSpec{ 9, 6, 0.035 }) == "9x6 inner corners, 0.035 m squares");
+	CHECK(board_text(BoardSpec{ 9, 6, 0.0254 }) == "9x6 inner corners, 0.0254 m squares");
+	CHECK(board_text(BoardSpec{ 9, 6, 0.0123456789 }) == "9x6 inner corners, 0.0123456789 m squares");
+	CHECK(check_board(BoardSpec{ 7, 7, 0.03 }) ==
+			"board 7x7 inner corners, 0.03 m squares: as many across as down, so the corners' order is ambiguous; use a board with one more square "
+			"one way (e.g. 9x6)");
+	CHECK(check_board(BoardSpec{ 9, 6, 12.5 }) == "board 9x6 inner corners, 12.5 m squares: the square's side must be within 0 and 10 m");
+	CHECK(check_board(BoardSpec{ 200, 6, 0.035 }) == "board 200x6 inner corners, 0.035 m squares: at most 100 inner corners a side");
+
+	const fs::path folder = fs::temp_directory_path() / ("roomprobe_test_board_file_" + std::to_string(::getpid()));
+	fs::remove_all(folder);
+	fs::create_directories(folder);
+	const std::string board = (folder / "board.yaml").string();
+	auto error_with = [&](const std::string &p_fields) {
+		std::ofstream(board, std::ios::trunc) << "%YAML:1.0\n---\n" << p_fields;
+		return load_calibration_views(folder.string(), CalibrationViewsOptions()).error;
+	};
+	CHECK(error_with("inner_corners_x: 9.7\ninner_corners_y: 6\nsquare_m: 0.035\n") ==
+			board + ": inner_corners_x: must be a whole number of inner corners (got 9.7)");
+	CHECK(error_with("inner_corners_x: 9\ninner_corners_y: nine\nsquare_m: 0.035\n") == board + ": inner_corners_y: must be an integer");
+	CHECK(contains(error_with("inner_corners_x: 9\ninner_corners_y: 6\nsquare_m: .nan\n"), board + ": square_m: must be finite (got "));
+	CHECK(error_with("inner_corners_x: 200\ninner_corners_y: 6\nsquare_m: 0.035\n") ==
+			board + ": board 200x6 inner corners, 0.035 m squares: at most 100 inner corners a side");
+	// A good board file is taken as written: the folder then has no views, and says so.
+	CHECK(contains(error_with("inner_corners_x: 9\ninner_corners_y: 6\nsquare_m: 0.0254\n"), "no views"));
+	fs::remove_all(folder);
 }

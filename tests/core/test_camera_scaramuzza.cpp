@@ -421,5 +421,8 @@ TEST_CASE("scaramuzza: a malformed calib_results.txt gives an error naming the f
 	const std::string missing = temp_path("roomprobe_test_camera_no_such_calib.txt");
 	loaded = load_ocamcalib(missing);
 	CHECK_FALSE(loaded.ok);
-	CHECK(contains(loaded.error, missing + ": cannot open"));
+	CHECK(contains(loaded.error, missing + ": no such file"));
+	// Issue #38: a device is named for what it is, and never read (/dev/zero has no end).
+	loaded = load_ocamcalib("/dev/zero");
+	CHECK(contains(loaded.error, "/dev/zero: not a regular file (a character device)"));
 }

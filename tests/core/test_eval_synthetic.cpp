@@ -121,6 +121,50 @@ TEST_CASE("eval: a recording with no fisheye or no RGB-D frames is refused, not 
 	}
 }
 
+// Issue #38: "see the messages above" with no messages above (the tool's --quiet, the nodes), and a
+// --out that could not be written while the evaluation still succeeded (status 0, nothing written).
+TEST_CASE("eval: why no frame could be used is in the error itself, and maps that could not be written are reported") {
+	EvalTempFolder folder;
+	write_living_room(folder, 0.5);
+	EvaluationOptions options = options_for(folder, 0.08);
+	options.dense = false;
+
+	// --out a file: the maps cannot be written; the scores stand, and out_error says why.
+	const fs::path file = folder.path / "a_file";
+	std::ofstream(file) << "not a folder";
+	options.out = file.string();
+	EvaluationResult result = evaluate_recording(options);
+	REQUIRE_MESSAGE(result.ok, result.error);
+	CHECK(result.out_error.find(file.string() + ": cannot create the folder") != std::string::npos);
+	// A folder where one map goes: that map is named, the others are written.
+	options.out = (folder.path / "maps").string();
+	fs::create_directories(folder.path / "maps" / "coarse.exr");
+	result = evaluate_recording(options);
+	REQUIRE_MESSAGE(result.ok, result.error);
+	CHECK(result.out_error.find("coarse.exr: is a folder, not a file") != std::string::npos);
+	CHECK(fs::exists(folder.path / "maps" / "baseline.exr"));
+	options.out = (folder.path / "fine").string();
+	result = evaluate_recording(options);
+	CHECK(result.out_error.empty());
+
+	// Every fisheye frame's data overwritten (its length and header kept, so that it passes the
+	// reader's checks at open and fails when read): the error says how many were skipped and why
+	// the first was.
+	options.out.clear();
+	for (const fs::directory_entry &entry : fs::directory_iterator(folder.path / "fisheye")) {
+		std::fstream frame(entry.path(), std::ios::in | std::ios::out | std::ios::binary);
+		const std::streamoff size = std::streamoff(fs::file_size(entry.path()));
+		frame.seekp(size / 2);
+		frame << std::string(size_t(size - size / 2), '\x5a');
+	}
+	result = evaluate_recording(options);
+	CAPTURE(result.error);
+	CHECK_FALSE(result.ok);
+	CHECK(result.error.find("fisheye frames could be used: ") != std::string::npos);
+	CHECK(result.error.find(" skipped; the first: ") != std::string::npos);
+	CHECK(result.error.find("see the messages above") == std::string::npos);
+}
+
 TEST_CASE("eval: the error budget has the live system and each oracle's row, scored at the sweep's moments") {
 	EvalTempFolder folder;
 	write_living_room(folder, 1.0);

@@ -107,7 +107,10 @@ TEST_CASE("image codec: broken, truncated and oversized files are refused with t
 	std::filesystem::create_directories(dir);
 	std::ofstream((dir / "text.png").string()) << "hello";
 	CHECK(image_read((dir / "text.png").string(), ImageReadMode::Unchanged, &out).find("neither a PNG nor a JPEG") != std::string::npos);
-	CHECK(image_read((dir / "missing.png").string(), ImageReadMode::Unchanged, &out).find("missing.png: cannot be opened") != std::string::npos);
+	CHECK(image_read((dir / "missing.png").string(), ImageReadMode::Unchanged, &out).find("missing.png: missing") != std::string::npos);
+	// Issue #38: a device or a folder is named for what it is, never read (/dev/zero was "(empty file)").
+	CHECK(image_read("/dev/zero", ImageReadMode::Unchanged, &out) == "/dev/zero: not a regular file (a character device)");
+	CHECK(image_read(dir.string(), ImageReadMode::Unchanged, &out) == dir.string() + ": a folder, not a file");
 	REQUIRE(png_write((dir / "c.png").string(), image) == "");
 	REQUIRE(image_read((dir / "c.png").string(), ImageReadMode::Gray8, &out) == "");
 	cv::Mat gray;

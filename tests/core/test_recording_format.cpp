@@ -2,6 +2,7 @@
 // writer's refusals, and reading damaged recordings (issues naming file and line, playback of
 // the other frames going on; fatal errors only for an unusable rig, room or index).
 
+#include "eval/evaluate.h"
 #include "io/exr_write.h"
 #include "io/raw_frame.h"
 #include "recording/cubemap_layout.h"
@@ -705,6 +706,85 @@ TEST_CASE("damaged raw frame recording: cut short, foreign, wrong type, wrong or
 }
 
 // ------------------------------------------------------------------------------- writer refusals
+
+// Issue #38: two writers on one output. Each holds WRITING_MARKER, locked, while its recording is
+// open: the second is refused (another process or this one), and their frames never mix.
+TEST_CASE("recording writer: one writer a folder; a second at once is refused, and the frames never mix") {
+	const fs::path folder = scratch_folder("two_writers");
+	const fs::path marker = folder / recording_io::WRITING_MARKER;
+	RecordingWriter first, second;
+	REQUIRE(first.open(folder.string(), make_rig(), make_room()).ok);
+	CHECK(fs::exists(marker));
+	RecordingReader live;
+	REQUIRE(live.open(folder.string()).ok);
+	CHECK(contains(recording_test::all_issues(live), "a writer is adding to this recording now"));
+	RecordingStatus refused = second.open(folder.string(), make_rig(), make_room());
+	CHECK_FALSE(refused.ok);
+	CHECK(contains(refused.error, folder.string() + ": another writer is recording into this folder now"));
+	RecordingWriteOptions into_used;
+	into_used.allow_non_empty_folder = true; // not even when told it may write into a used folder
+	refused = second.open(folder.string(), make_rig(), make_room(), into_used);
+	CHECK(contains(refused.error, "another writer is recording into this folder now"));
+	CHECK(fs::exists(marker)); // the first's, kept
+	for (int i = 0; i < 3; i++) {
+		REQUIRE(first.add_rgbd(make_rgbd(i)).ok);
+	}
+	REQUIRE(first.close().ok);
+	CHECK_FALSE(fs::exists(marker)); // closed: no marker left
+
+	RecordingReader reader;
+	REQUIRE(reader.open(folder.string()).ok);
+	CHECK(reader.rgbd_count() == 3);
+	CHECK_FALSE(contains(recording_test::all_issues(reader), "writer"));
+	// Afterwards the folder is a recording: the second is refused as ever, and leaves no marker.
+	refused = second.open(folder.string(), make_rig(), make_room());
+	CHECK(contains(refused.error, "the folder is not empty"));
+	CHECK_FALSE(fs::exists(marker));
+}
+
+// Issue #38: SIGKILL of synth midway, then the partial recording played. What a killed writer
+// leaves: its marker, no longer locked, and nothing of what it writes on closing (the ground-truth
+// trajectories). tests/host/test_paths.sh kills a real synth; this stands in for one here.
+TEST_CASE("recording never closed (its writer killed midway): the frames its indexes list play, and every reader says why the rest is missing") {
+	const fs::path folder = scratch_folder("abandoned");
+	{
+		RecordingWriter writer;
+		REQUIRE(writer.open(folder.string(), make_rig(), make_room()).ok);
+		for (int i = 0; i < 3; i++) {
+			REQUIRE(writer.add_rgbd(make_rgbd(i)).ok);
+			REQUIRE(writer.add_ground_truth_pose(RecordingStream::Rgbd, rgb_time(i), Pose()).ok);
+		}
+		REQUIRE(writer.close().ok);
+	}
+	fs::remove_all(folder / "groundtruth");
+	write_text(folder / recording_io::WRITING_MARKER, "pid 1\n");
+
+	RecordingReader reader;
+	const RecordingStatus opened = reader.open(folder.string());
+	REQUIRE_MESSAGE(opened.ok, opened.error);
+	CHECK(contains(recording_test::all_issues(reader), "the recording was never closed"));
+	REQUIRE(reader.rgbd_count() == 3);
+	for (size_t i = 0; i < 3; i++) {
+		const RgbdFrameResult frame = reader.read_rgbd(i);
+		CHECK_MESSAGE(frame.ok, frame.error);
+	}
+	CHECK_FALSE(reader.has_ground_truth_trajectory(RecordingStream::Rgbd));
+	// The evaluation refuses, saying why by itself (with --quiet no recording issue is shown).
+	EvaluationOptions options;
+	options.recording = folder.string();
+	const EvaluationResult evaluated = evaluate_recording(options);
+	CHECK_FALSE(evaluated.ok);
+	CHECK(contains(evaluated.error, "no ground-truth RGB-D trajectory"));
+	CHECK(contains(evaluated.error, "the recording was never closed"));
+	// A new writer takes the folder only when told it may write into a used one, and leaves no marker.
+	RecordingWriter again;
+	CHECK(contains(again.open(folder.string(), make_rig(), make_room()).error, "the folder is not empty"));
+	RecordingWriteOptions into_used;
+	into_used.allow_non_empty_folder = true;
+	REQUIRE(again.open(folder.string(), make_rig(), make_room(), into_used).ok);
+	REQUIRE(again.close().ok);
+	CHECK_FALSE(fs::exists(folder / recording_io::WRITING_MARKER));
+}
 
 TEST_CASE("recording writer refuses a non-empty folder and overwrites nothing") {
 	const fs::path folder = scratch_folder("non_empty");

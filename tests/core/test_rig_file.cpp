@@ -444,7 +444,8 @@ TEST_CASE("YAML files: synth.yaml and photometric.yaml go through the same scree
 
 	cv::FileStorage storage;
 	CHECK(contains(open_yaml_file((dir.path / "none.yaml").string(), &storage), "none.yaml: missing"));
-	CHECK(contains(open_yaml_file(dir.path.string(), &storage), ": not a regular file"));
+	CHECK(contains(open_yaml_file(dir.path.string(), &storage), ": a folder, not a file"));
+	CHECK(open_yaml_file("/dev/zero", &storage) == "/dev/zero: not a regular file (a character device)");
 	const std::string good = dir.write("good.yaml", "%YAML:1.0\n---\nsquare_m: 0.025\nlist: [ 1, 2 ]\n");
 	CHECK(open_yaml_file(good, &storage) == "");
 	CHECK(double(storage["square_m"]) == doctest::Approx(0.025));

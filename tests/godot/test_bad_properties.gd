@@ -85,6 +85,23 @@ func test_numbers_out_of_range_are_clamped_with_a_warning() -> void:
 	assert_eq(prt.surface, 0)
 
 
+## Issue #38: max_blocks at the top of its range (4194304 blocks, a 24.2 GiB model when full) gave a
+## bare std::bad_alloc when the model was made. A cap whose full model needs more than the machine's
+## memory is refused at once, naming the memory it needs; one that fits is taken.
+func test_max_blocks_beyond_the_machines_memory_is_refused_naming_the_memory() -> void:
+	var slam = _make("DenseSLAM")
+	slam.max_blocks = 50000
+	# 6164 bytes a block (voxels and bookkeeping) and a hash table of 2^23 slots of 16 bytes.
+	var needed := 4194304 * 6164 + (1 << 23) * 16
+	if int(OS.get_memory_info()["physical"]) < needed:
+		expect_error("DenseSLAM.max_blocks 4194304 needs 24.2 GiB of memory when the model is full")
+		slam.max_blocks = 4194304
+		assert_eq(slam.max_blocks, 50000, "refused: the property keeps its value")
+	else:
+		slam.max_blocks = 4194304
+		assert_eq(slam.max_blocks, 4194304, "fits this machine's memory")
+
+
 func test_layer_masks_keep_the_20_render_layers() -> void:
 	var room = _make("CoarseRoomModel")
 	expect_warning("CoarseRoomModel.room_layers has bits above the 20 render layers")

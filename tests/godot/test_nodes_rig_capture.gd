@@ -190,3 +190,30 @@ func test_zipped_recording_plays_and_zip_slip_is_refused() -> void:
 	assert_true(_rig.get_last_error().contains("living/../../escaped.txt"), "names the entry: %s" % _rig.get_last_error())
 	assert_false(FileAccess.file_exists(OS.get_user_data_dir().path_join("roomprobe/escaped.txt")), "nothing written outside")
 	DirAccess.remove_absolute(evil)
+
+
+## Issue #38: a zip bomb inflated without limit into user://. An entry that would inflate more than
+## 100-fold (64 MiB of zeros, some 64 KiB zipped) is refused before a byte is inflated, naming the
+## zip and the entry; nothing is left in user://roomprobe/unpacked/, whole or partial.
+func test_a_zip_bomb_is_refused_before_anything_is_unpacked() -> void:
+	var bomb := OS.get_user_data_dir().path_join("roomprobe_test_bomb.zip")
+	var packer := ZIPPacker.new()
+	assert_eq(packer.open(bomb), OK, "writes the test zip")
+	packer.start_file("living/rig.yaml")
+	packer.write_file(FileAccess.get_file_as_bytes(repo_path("calib/synthetic_rig.yaml")))
+	packer.close_file()
+	packer.start_file("living/rgb/000000.zst")
+	var zeros := PackedByteArray()
+	zeros.resize(64 << 20)
+	packer.write_file(zeros)
+	packer.close_file()
+	packer.close()
+	expect_error("inflates")
+	_rig.recording_path = bomb
+	assert_false(_rig.open(), "refused")
+	var error: String = _rig.get_last_error()
+	assert_true(error.contains("roomprobe_test_bomb.zip: entry 'living/rgb/000000.zst' inflates") and error.contains("more than the 100-fold"), error)
+	var unpacked := OS.get_user_data_dir().path_join("roomprobe/unpacked")
+	for name in DirAccess.get_directories_at(unpacked):
+		assert_false(name.begins_with("roomprobe_test_bomb"), "nothing unpacked: " + name)
+	DirAccess.remove_absolute(bomb)

@@ -246,6 +246,13 @@ test_numbers_out_of_range_refused() {
 	rp record --rig calib/synthetic_rig.yaml --out "$scratch/record-inf" --seconds inf
 	check "record --seconds inf exited with status $rc, not 2" test "$rc" -eq 2
 	check "record --seconds inf: no bound in the message" says "--seconds needs a number of seconds in (0, 86400]"
+	# Issue #38: the top of --max-blocks' range is 40 GiB of Open3D's blocks (DenseSLAM.max_blocks's
+	# 24 GiB is test_bad_properties.gd's): refused, naming the memory, where the machine has less.
+	if (($(awk '/^MemTotal:/ { print $2 }' /proc/meminfo) * 1024 < 4194304 * 10240)); then
+		rp shell python3 tools/bench/open3d_peer.py --recording "$scratch/tum-seq" --max-blocks 4194304
+		check "open3d_peer.py --max-blocks 4194304 exited with status $rc, not 2" test "$rc" -eq 2
+		check "open3d_peer.py --max-blocks 4194304: the memory is not named" says "--max-blocks 4194304 needs 40.0 GiB for Open3D's voxel blocks"
+	fi
 }
 
 # Issue #38: roomprobe_record run directly (./roomprobe makes paths absolute itself) with relative
@@ -330,14 +337,205 @@ test_docs_name_existing_paths() {
 	check "tests/host/check_doc_paths.py did not say it checked the paths" says "files, all found"
 }
 
+# ---------------------------------------------------------------- issue #38: faults and odd inputs
+# Each runs the tools directly inside the toolchain (rp shell), on folders under build/test-data
+# (the toolchain sees the clone at its own path), and takes a few seconds.
+
+# A 0.2-s recording (8-px cubemaps, no calibration views) at build/test-data/faults/rec, made once.
+faults_recording() {
+	local rec=build/test-data/faults/rec
+	[[ -s $rec/rgb.txt && ! -e $rec/.roomprobe-writing ]] && return 0
+	rm -rf "$rec" && mkdir -p build/test-data/faults
+	rp shell build/bin/roomprobe_synth --scene living_room --hdri none --out "$rec" --seconds 0.2 --cubemap-size 8 --no-calibration --seed 3
+	((rc == 0))
+}
+
+# read_only DIR CMD...: CMD run in the toolchain with DIR read-only. As root a read-only bind mount
+# (chmod does not stop root), in the toolchain's own mount namespace or, with the host's toolchain,
+# a new one (unshare), so that it ends with the command; otherwise the folder made unwritable.
+read_only() {
+	local dir=$1
+	shift
+	if [[ $(id -u) != 0 ]]; then
+		chmod a-w "$dir"
+		rp shell "$@"
+		chmod u+w "$dir"
+		return
+	fi
+	local -a wrap=()
+	[[ $kind == host ]] && wrap=(unshare -m)
+	rp shell "${wrap[@]}" sh -c 'mount --bind "$1" "$1" && mount -o remount,bind,ro "$1" && shift && exec "$@"' sh "$dir" "$@"
+}
+
+# A device or a pipe named as an input is said to be one ("/dev/zero" was "no such file"), and
+# never read: /dev/zero has no end, a pipe blocks.
+test_input_devices_named() {
+	local dir=build/test-data/faults/devices
+	cd "$repo" || return
+	rm -rf "$dir" && mkdir -p "$dir" && mkfifo "$dir/pipe"
+	rp synth --scene living_room --hdri "$dir/pipe" --out "$dir/out" --seconds 0.1
+	check "synth --hdri PIPE exited with status $rc" test "$rc" -ne 0
+	check "./roomprobe did not say the pipe is not a regular file" says "synth --hdri $repo/$dir/pipe: not a regular file or folder (fifo)"
+	rp shell timeout 60 build/bin/roomprobe_synth --scene living_room --hdri /dev/zero --out "$dir/out" --seconds 0.1
+	check "roomprobe_synth --hdri /dev/zero exited with status $rc" test "$rc" -ne 0
+	check "roomprobe_synth --hdri /dev/zero: not said to be a device" says "/dev/zero: not a regular file (a character device), so the panorama cannot be read"
+	rp shell timeout 60 build/bin/roomprobe_synth --scene living_room --hdri "$dir/pipe" --out "$dir/out" --seconds 0.1
+	check "roomprobe_synth --hdri PIPE: not said to be a pipe" says "pipe: not a regular file (a named pipe (FIFO))"
+	rp shell timeout 60 build/bin/roomprobe_calibrate --images "$dir" --ocamcalib /dev/zero --out build/test-data/faults/rig.yaml
+	check "roomprobe_calibrate --ocamcalib /dev/zero exited with status $rc" test "$rc" -eq 1
+	check "roomprobe_calibrate --ocamcalib /dev/zero: not said to be a device" says "/dev/zero: not a regular file (a character device)"
+	rp shell timeout 60 build/bin/roomprobe_eval --recording /dev/zero
+	check "roomprobe_eval --recording /dev/zero: not said to be a device" says "/dev/zero: not a folder (a character device)"
+	rp shell timeout 60 build/bin/roomprobe_bench slam --recording "$dir" --open3d-results /dev/zero
+	check "roomprobe_bench --open3d-results /dev/zero exited with status $rc, not 2" test "$rc" -eq 2
+	check "roomprobe_bench --open3d-results /dev/zero: not said to be a device" says "--open3d-results /dev/zero: not a regular file (a character device)"
+	rp shell timeout 60 build/bin/roomprobe_bench slam --tum "$dir" --open3d-results "$dir/pipe"
+	check "roomprobe_bench --tum --open3d-results exited with status $rc, not 2" test "$rc" -eq 2
+	check "roomprobe_bench --tum --open3d-results: not said to go with --recording" says "it goes with --recording"
+}
+
+# A read-only output folder: refused before any work with the system's reason, status 2, nothing
+# written, --quiet or not (eval --quiet once exited 0 having written nothing); synth says it too.
+test_read_only_output_refused() {
+	local ro=build/test-data/faults/read-only rec=build/test-data/faults/rec
+	cd "$repo" || return
+	faults_recording || { failures+=("could not make the recording (see the log)"); return; }
+	rm -rf "$ro" && mkdir -p "$ro"
+	read_only "$ro" build/bin/roomprobe_eval --recording "$rec" --out "$ro" --cubemap-size 8 --max-cubemaps 1 --no-dense --quiet
+	check "eval --quiet into a read-only --out exited with status $rc, not 2" test "$rc" -eq 2
+	check "eval --quiet into a read-only --out: the message does not say why" says "--out $ro: files cannot be written there"
+	read_only "$ro" build/bin/roomprobe_eval --recording "$rec" --out "$ro/maps" --cubemap-size 8 --max-cubemaps 1 --no-dense --quiet
+	check "eval --quiet into a folder it cannot make exited with status $rc, not 2" test "$rc" -eq 2
+	check "eval into a folder it cannot make: the message does not say why" says "--out $ro/maps: cannot create the folder"
+	read_only "$ro" build/bin/roomprobe_room --recording "$rec" --out "$ro/room.yaml" --quiet
+	check "room --quiet into a read-only folder exited with status $rc, not 2" test "$rc" -eq 2
+	check "room into a read-only folder: the message does not say why" says "--out $ro/room.yaml: cannot be opened for writing"
+	read_only "$ro" build/bin/roomprobe_calibrate --recording "$rec" --out "$ro/rig.yaml"
+	check "calibrate into a read-only folder exited with status $rc, not 2" test "$rc" -eq 2
+	check "calibrate into a read-only folder: the message does not say why" says "--out $ro/rig.yaml: cannot be opened for writing"
+	read_only "$ro" build/bin/roomprobe_synth --scene two_rooms --out "$ro/rec" --seconds 0.1 --cubemap-size 8 --no-calibration
+	check "synth into a read-only folder exited with status $rc" test "$rc" -ne 0
+	check "synth into a read-only folder: the message does not say why" says "$ro/rec: cannot create the folder"
+	check "something was written into the read-only folder" test -z "$(ls -A "$ro")"
+}
+
+# /dev/full (a link to it) as an output file: refused even with --force, never written or removed
+# (room's --picture is the room suite's).
+test_dev_full_outputs_refused() {
+	local dir=build/test-data/faults/full rec=build/test-data/faults/rec
+	cd "$repo" || return
+	faults_recording || { failures+=("could not make the recording (see the log)"); return; }
+	rm -rf "$dir" && mkdir -p "$dir/eval" "$dir/synth"
+	ln -s /dev/full "$dir/room.yaml" && ln -s /dev/full "$dir/eval/baseline.exr" && ln -s /dev/full "$dir/synth/rgb.txt" && ln -s /dev/full "$dir/synth-out"
+	rp shell build/bin/roomprobe_room --recording "$rec" --out "$dir/room.yaml" --force --quiet
+	check "room --out LINK-TO-/dev/full --force exited with status $rc, not 2" test "$rc" -eq 2
+	check "room --out /dev/full: not said to be a device" says "--out $dir/room.yaml: is not a regular file (a device, a pipe or a socket)"
+	rp shell build/bin/roomprobe_eval --recording "$rec" --out "$dir/eval" --cubemap-size 8 --max-cubemaps 1 --no-dense --quiet --force
+	check "eval with a map linked to /dev/full --force exited with status $rc, not 2" test "$rc" -eq 2
+	check "eval with a map linked to /dev/full: not said to be a device" says "$dir/eval/baseline.exr: is not a regular file"
+	rp shell build/bin/roomprobe_synth --scene two_rooms --out "$dir/synth" --seconds 0.1 --cubemap-size 8 --no-calibration
+	check "synth into a folder holding a link to /dev/full exited with status $rc" test "$rc" -ne 0
+	check "synth into a folder holding a link to /dev/full: not refused as not empty" says "$dir/synth: the output folder exists and is not empty"
+	rp shell build/bin/roomprobe_synth --scene two_rooms --out "$dir/synth-out" --seconds 0.1 --cubemap-size 8 --no-calibration
+	check "synth --out LINK-TO-/dev/full exited with status $rc" test "$rc" -ne 0
+	check "synth --out LINK-TO-/dev/full: not refused" says "$dir/synth-out: exists and is not a folder"
+	local link
+	for link in room.yaml eval/baseline.exr synth/rgb.txt synth-out; do
+		check "$dir/$link is no longer the link to /dev/full" test "$(readlink "$dir/$link")" = /dev/full
+	done
+	check "/dev/full is gone" test -c /dev/full
+}
+
+# SIGKILL of synth midway: the partial recording plays what its indexes list, and the tools say it
+# was never closed (its marker is left); eval, which needs the ground truth written on closing,
+# refuses saying so. No crash.
+test_synth_killed_midway() {
+	local rec=build/test-data/faults/killed
+	cd "$repo" || return
+	rm -rf "$rec"
+	rp shell sh -c 'build/bin/roomprobe_synth --scene two_rooms --out "$1" --seconds 5 --cubemap-size 8 --no-calibration --seed 1 >/dev/null 2>&1 &
+		pid=$!; i=0
+		while n=$(grep -cv "^#" "$1/depth.txt" 2>/dev/null); [ "${n:-0}" -lt 3 ] && [ $i -lt 600 ]; do sleep 0.05; i=$((i + 1)); done
+		kill -KILL $pid; wait $pid; echo "synth ended with status $?"' sh "$rec"
+	check "synth was not killed (status 137)" says "synth ended with status 137"
+	check "the killed synth left no marker $rec/.roomprobe-writing" test -e "$rec/.roomprobe-writing"
+	local frames
+	frames=$(frame_lines "$rec/depth.txt")
+	check "the killed synth listed $frames depth frames, fewer than 3" test "$frames" -ge 3
+	rp shell timeout 120 build/bin/roomprobe_bench slam --recording "$rec" --no-peers --probe-size 8
+	check "bench on the killed recording exited with status $rc" test "$rc" -eq 0
+	check "bench on the killed recording did not say it was never closed" says "the recording was never closed"
+	check "bench on the killed recording played no frame" grep -qE '^summary: mode=slam frames=[1-9]' <<<"$out"
+	rp shell timeout 120 build/bin/roomprobe_eval --recording "$rec" --no-dense --quiet
+	check "eval on the killed recording exited with status $rc, not 1" test "$rc" -eq 1
+	check "eval on the killed recording did not say why it refuses" says "no ground-truth RGB-D trajectory (PoseSource::GroundTruth needs it): the recording was never closed"
+}
+
+# Two writers on one output: of two synths started together into one folder, one writes it whole and
+# the other is refused (the writers' marker, or the folder no longer empty); of two benches saving
+# their trajectories to one file with --force, one file is whole (written beside, renamed).
+test_two_writers_one_output() {
+	local dir=build/test-data/faults/two-writers
+	cd "$repo" || return
+	tum_sequence || { failures+=("could not make the TUM sequence (see the log)"); return; }
+	rm -rf "$dir" && mkdir -p "$dir/rec"
+	rp shell sh -c 'for seed in 1 2; do build/bin/roomprobe_synth --scene two_rooms --out "$1/rec" --seconds 0.2 --cubemap-size 8 --no-calibration \
+		--seed $seed >"$1/synth-$seed.log" 2>&1 & done; wait' sh "$dir"
+	local won=0 refused=0 seed
+	for seed in 1 2; do
+		grep -q '^wrote ' "$dir/synth-$seed.log" && won=$((won + 1))
+		grep -qE 'another writer is recording into this folder now|the output folder exists and is not empty' "$dir/synth-$seed.log" && refused=$((refused + 1))
+	done
+	check "of two synths into one folder, $won wrote it and $refused was refused (see $dir/synth-*.log)" test "$won" -eq 1 -a "$refused" -eq 1
+	local stream
+	for stream in rgb depth fisheye; do # one writer's frames, each listed once: no mix
+		check "two synths: $stream/ holds $(frame_count "$dir/rec/$stream") frames for $(frame_lines "$dir/rec/$stream.txt") lines of $stream.txt" \
+			test "$(frame_count "$dir/rec/$stream")" -eq "$(frame_lines "$dir/rec/$stream.txt")"
+	done
+	check "two synths: the winner's count is not the folder's" grep -q "^wrote $(frame_lines "$dir/rec/rgb.txt") RGB-D frames, $(frame_lines "$dir/rec/fisheye.txt") fisheye" "$dir"/synth-*.log
+	check "two synths: the marker was left" test ! -e "$dir/rec/.roomprobe-writing"
+	cp -r "$scratch/tum-seq" "$dir/tum"
+	rp shell sh -c 'for n in 2 3; do build/bin/roomprobe_bench slam --tum "$1/tum" --frames $n --intrinsics 525,525,319.5,239.5 --no-peers \
+		--save-trajectory "$1/T.txt" --force >"$1/bench-$n.log" 2>&1 & done; wait' sh "$dir"
+	local lines
+	lines=$(grep -cE '^[0-9.eE+-]+( [0-9.eE+-]+){7}$' "$dir/T.txt" 2>/dev/null)
+	check "two benches' trajectory holds $lines poses and $(grep -cv '^#' "$dir/T.txt") lines, not one whole file of 2 or 3" \
+		test "$lines" -ge 2 -a "$lines" -le 3 -a "$(grep -cv '^#' "$dir/T.txt")" -eq "$lines"
+	check "two benches left a temporary file beside the trajectory" test -z "$(find "$dir" -maxdepth 1 -name '.T.txt.*')"
+}
+
+# An output inside the input it reads is refused, even with --force, as bench's --save-trajectory:
+# room's --out REC/room.yaml would replace the recording's own room, calibrate's --out REC/rig.yaml
+# its rig.
+test_outputs_inside_inputs_refused() {
+	local rec=$repo/build/test-data/faults/rec sums
+	cd "$repo" || return
+	faults_recording || { failures+=("could not make the recording (see the log)"); return; }
+	sums=$(cksum "$rec/room.yaml" "$rec/rig.yaml")
+	rp room --recording "$rec" --out "$rec/room.yaml" --force
+	check "room --out REC/room.yaml exited with status $rc, not 2" test "$rc" -eq 2
+	check "room --out REC/room.yaml: the message does not name the input" says "--out $rec/room.yaml lies in the input $rec, which it would overwrite"
+	rp room --recording "$rec" --out "$scratch/room.yaml" --picture "$rec/top.png"
+	check "room --picture inside the recording exited with status $rc, not 2" test "$rc" -eq 2
+	check "room --picture inside the recording: the message does not name the input" says "the picture $rec/top.png lies in the input $rec"
+	rp calibrate --recording "$rec" --out "$rec/rig.yaml" --force
+	check "calibrate --out REC/rig.yaml exited with status $rc, not 2" test "$rc" -eq 2
+	check "calibrate --out REC/rig.yaml: the message does not name the input" says "--out $rec/rig.yaml lies in the input $rec"
+	rp calibrate --images "$rec" --out "$rec/depth/rig.yaml"
+	check "calibrate --out inside --images exited with status $rc, not 2" test "$rc" -eq 2
+	check "the recording's room.yaml or rig.yaml changed" test "$(cksum "$rec/room.yaml" "$rec/rig.yaml")" = "$sums"
+	check "room or calibrate wrote into the recording" test ! -e "$rec/top.png" -a ! -e "$rec/depth/rig.yaml"
+}
+
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
 	calibrate_refuses_and_never_overwrites synth_photometric_options_refused eval_refuses_bad_input numbers_out_of_range_refused
-	record_relative_out_run_directly bake_prt_bakes_and_caches unknown_verb_is_named editor_sees_the_callers_files docs_name_existing_paths)
+	record_relative_out_run_directly bake_prt_bakes_and_caches unknown_verb_is_named editor_sees_the_callers_files docs_name_existing_paths
+	input_devices_named read_only_output_refused dev_full_outputs_refused synth_killed_midway two_writers_one_output outputs_inside_inputs_refused)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.
-echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench, roomprobe_calibrate, roomprobe_record and roomprobe_oni"
+echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench, roomprobe_calibrate, roomprobe_record, roomprobe_oni and roomprobe_room"
 cd "$repo" || exit 1
 rp build -Q build/bin/roomprobe_synth build/bin/roomprobe_eval build/bin/roomprobe_bench build/bin/roomprobe_calibrate build/bin/roomprobe_record \
-	build/bin/roomprobe_oni
+	build/bin/roomprobe_oni build/bin/roomprobe_room
 blocked=
 ((rc == 0)) || blocked="the tools did not build (see $log)"
 run_host_tests host "$blocked" "${tests[@]}"

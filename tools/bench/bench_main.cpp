@@ -67,6 +67,7 @@
 #include <envmap/dense_render.h>
 #include <envmap/ggx_prefilter.h>
 #include <eval/trajectory_metrics.h>
+#include <io/input_path.h>
 #include <pipeline/coarse_pipeline.h>
 #include <recording/frames_dataset.h>
 #include <recording/recording_reader.h>
@@ -478,12 +479,9 @@ std::string save_trajectory_problem(const Arguments &p_args) {
 	if (path.empty()) {
 		return "";
 	}
-	for (const std::string *input : { &p_args.recording, &p_args.tum, &p_args.seven_scenes, &p_args.rig_file, &p_args.open3d_results }) {
-		if (cli::path_within(path, *input)) {
-			return "--save-trajectory " + path + " lies in the input " + *input + ", which it would overwrite: write it elsewhere";
-		}
-	}
-	return cli::output_file_problem("--save-trajectory", path, p_args.force);
+	const std::string inside = cli::output_in_input_problem("--save-trajectory", path,
+			{ p_args.recording, p_args.tum, p_args.seven_scenes, p_args.rig_file, p_args.open3d_results });
+	return inside.empty() ? cli::output_file_problem("--save-trajectory", path, p_args.force) : inside;
 }
 
 int usage(const char *p_error) {
@@ -1899,6 +1897,16 @@ int run(int argc, char **argv) {
 	}
 	if (!args.rig_file.empty() && args.has_intrinsics) {
 		return usage("--rig and --intrinsics both give the RGB-D camera: take one");
+	}
+	if (!args.open3d_results.empty()) {
+		// Checked now, not after the benchmark: a device there (/dev/zero) was read without end.
+		if (args.recording.empty()) {
+			return usage("--open3d-results compares Open3D on a recording's frames: it goes with --recording (with --tum or --7scenes it was ignored)");
+		}
+		const std::string unreadable = input_file_problem(args.open3d_results);
+		if (!unreadable.empty()) {
+			return usage(("--open3d-results " + unreadable).c_str());
+		}
 	}
 	// Each bound holds alone; together they must fit too (issue #38: 64 probes of 4096^2 ran with no
 	// progress). A probe keeps its faces and their mips as floats and half floats, about 40 bytes

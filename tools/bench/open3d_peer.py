@@ -254,6 +254,15 @@ def main():
         parser.error("a truncation in (0, 1] m, a depth range 0 <= min < max <= 100 m and a raycast level in [0, 4] are needed")
     if not (0 <= args.frames <= 10000000 and 1 <= args.max_blocks <= 4194304):
         parser.error("--frames needs [0, 10000000] (0: all) and --max-blocks [1, 4194304]")
+    # Open3D's VoxelBlockGrid allocates its whole cap at once: 8^3 voxels of five float32 values (tsdf,
+    # weight, colour) a block, 10 KiB. A cap beyond the machine's memory is refused here, naming what
+    # it needs, rather than failing inside Open3D (issue #38: the top of the range needs 40 GiB).
+    block_bytes = 8 ** 3 * 5 * 4
+    memory = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    if args.max_blocks * block_bytes > memory:
+        parser.error("--max-blocks %d needs %.1f GiB for Open3D's voxel blocks (%d bytes a block), more than this machine's %.1f GiB "
+                     "of memory: give at most %d" % (args.max_blocks, args.max_blocks * block_bytes / 2 ** 30, block_bytes, memory / 2 ** 30,
+                                                     memory // block_bytes))
     os.environ["OMP_NUM_THREADS"] = str(args.threads)
     try:
         import open3d  # noqa: F401

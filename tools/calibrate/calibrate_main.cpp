@@ -45,7 +45,7 @@ int usage_error(const std::string &p_message) {
 // The command line's bounds (issue #38). A board's inner corners: OpenCV's search needs 2 or more
 // a side, and no printed board has 100. A square from 1 mm to 1 m; the depth unit from 1 um to
 // 1 m (0.001 for millimetres); the clock's search at most an hour of frames.
-constexpr int BOARD_MIN_CORNERS = 2, BOARD_MAX_CORNERS = 100;
+constexpr int BOARD_MIN_CORNERS = 2, BOARD_MAX_CORNERS = BOARD_MAX_INNER_CORNERS;
 constexpr double SQUARE_MIN_M = 0.001, SQUARE_MAX_M = 1.0;
 constexpr double DEPTH_SCALE_MIN_M = 1e-6, DEPTH_SCALE_MAX_M = 1.0;
 constexpr double CLOCK_MAX_S = 3600.0;
@@ -119,6 +119,12 @@ int run(int p_argc, char **p_argv) {
 	if (board_given != square_given) {
 		return usage_error("--board and --square-m go together (the folder's board.yaml is used when both are left out)");
 	}
+	// Never into what it reads (--recording REC --out REC/rig.yaml would replace the recording's own
+	// rig), even with --force, as bench's --save-trajectory.
+	const std::string inside = cli::output_in_input_problem("--out", out, { images, ocamcalib_path });
+	if (!inside.empty()) {
+		return usage_error(inside);
+	}
 	const std::string unwritable = check_replaceable(out); // a folder or a device, even with --force
 	if (!unwritable.empty()) {
 		return usage_error("--out " + unwritable);
@@ -127,6 +133,11 @@ int run(int p_argc, char **p_argv) {
 	if (std::filesystem::exists(out, ec) && !force) {
 		std::fprintf(stderr, "roomprobe_calibrate: %s: exists; it is not overwritten (remove it, or pass --force)\n", out.c_str());
 		return 1;
+	}
+	// A folder that cannot be written (read-only, say) is refused now, not after the fits.
+	const std::string cannot_write = cli::output_file_unwritable("--out", out);
+	if (!cannot_write.empty()) {
+		return usage_error(cannot_write);
 	}
 	ScaramuzzaModel ocamcalib;
 	if (!ocamcalib_path.empty()) {
@@ -152,9 +163,9 @@ int run(int p_argc, char **p_argv) {
 		std::fprintf(stderr, "roomprobe_calibrate: %s\n", views.error.c_str());
 		return 1;
 	}
-	std::printf("board %dx%d inner corners, %g mm squares%s: found in %zu RGB and %zu fisheye images, %zu pairs; not in %zu\n", views.board.inner_x,
-			views.board.inner_y, views.board.square_m * 1000.0, views.board_from_file ? " (from the folder)" : "", views.rgb.size(), views.fisheye.size(),
-			views.pairs.size(), views.missed.size());
+	// The board as given (issue #38: "%g mm" echoed sizes the user never typed).
+	std::printf("board %s%s: found in %zu RGB and %zu fisheye images, %zu pairs; not in %zu\n", board_text(views.board).c_str(),
+			views.board_from_file ? " (from the folder)" : "", views.rgb.size(), views.fisheye.size(), views.pairs.size(), views.missed.size());
 	for (const std::string &missed : views.missed) {
 		std::printf("  not used: %s\n", missed.c_str());
 	}

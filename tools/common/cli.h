@@ -185,6 +185,19 @@ inline bool path_within(const std::string &p_path, const std::string &p_input) {
 	return true;
 }
 
+// Why p_option's output p_path cannot be written because it lies in one of p_inputs (what the tool
+// reads: a recording folder, a rig file), or "". An output there could overwrite what it reads
+// (bench's --save-trajectory once overwrote a recording's rgb.txt; roomprobe_room --out REC/room.yaml
+// would replace the recording's own room).
+inline std::string output_in_input_problem(const std::string &p_option, const std::string &p_path, const std::vector<std::string> &p_inputs) {
+	for (const std::string &input : p_inputs) {
+		if (path_within(p_path, input)) {
+			return p_option + " " + p_path + " lies in the input " + input + ", which it would overwrite: write it elsewhere";
+		}
+	}
+	return "";
+}
+
 // Why p_path cannot be written as p_option's file, or "": a folder, something other than a regular
 // file (a device such as /dev/full), or, unless p_force, a file that exists. Every tool keeps an
 // existing output unless --force.
@@ -198,6 +211,30 @@ inline std::string output_file_problem(const std::string &p_option, const std::s
 		return p_option + " " + p_path + " exists: it is kept (give --force to replace it)";
 	}
 	return "";
+}
+
+// Why files cannot be written into the folder p_folder (p_option's), or "": it is made when missing
+// (its parent must exist), and a temporary file beside p_sample (a file the tool will write there) is
+// made and removed, so that a folder that cannot be written is refused before any work, naming the
+// system's reason ("Permission denied", "Read-only file system").
+inline std::string output_folder_problem(const std::string &p_option, const std::string &p_folder, const std::string &p_sample) {
+	std::error_code ec;
+	std::filesystem::create_directory(p_folder, ec);
+	if (ec) {
+		return p_option + " " + p_folder + ": cannot create the folder (" + ec.message() + ")";
+	}
+	FileReplacement probe;
+	const std::string problem = probe.begin((std::filesystem::path(p_folder) / p_sample).string());
+	return problem.empty() ? "" : p_option + " " + p_folder + ": files cannot be written there (" + problem + ")";
+}
+
+// Why p_option's file p_path cannot be written where it is, or "": a temporary file beside it is made
+// and removed (io/replace_file.h), so that a read-only folder is refused before any work, naming the
+// system's reason. Nothing at p_path is touched.
+inline std::string output_file_unwritable(const std::string &p_option, const std::string &p_path) {
+	FileReplacement probe;
+	const std::string problem = probe.begin(p_path);
+	return problem.empty() ? "" : p_option + " " + problem;
 }
 
 } // namespace roomprobe::cli

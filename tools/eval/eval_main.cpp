@@ -25,7 +25,10 @@ namespace {
 constexpr double TEXEL_MIN_M = 0.001, TEXEL_MAX_M = 1.0;
 constexpr long MAX_CUBEMAPS = 1000000;
 
-// Why the maps cannot be written into p_out, or "": one that exists, unless p_force.
+// Why the maps cannot be written into p_out, or "": one that exists, unless p_force; a folder that
+// cannot be made or written (issue #38: a read-only --out with --quiet ended with status 0 and
+// nothing written). Checked before the evaluation, which takes minutes: the folder is made, and a
+// temporary file is made and removed in it.
 std::string out_problem(const std::string &p_out, bool p_force) {
 	for (const std::string &name : roomprobe::evaluation_output_files()) {
 		const std::string problem = roomprobe::cli::output_file_problem("--out", (std::filesystem::path(p_out) / name).string(), p_force);
@@ -33,7 +36,7 @@ std::string out_problem(const std::string &p_out, bool p_force) {
 			return problem;
 		}
 	}
-	return "";
+	return roomprobe::cli::output_folder_problem("--out", p_out, roomprobe::evaluation_output_files().front());
 }
 
 int run(int argc, char **argv) {
@@ -138,6 +141,10 @@ int run(int argc, char **argv) {
 		return 1;
 	}
 	std::cout << roomprobe::format_evaluation(result, per_frame);
+	if (!result.out_error.empty()) { // the scores stand; the maps asked for are not all there
+		std::fprintf(stderr, "roomprobe_eval: --out %s: %s\n", options.out.c_str(), result.out_error.c_str());
+		return 1;
+	}
 	return 0;
 }
 

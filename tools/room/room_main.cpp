@@ -151,7 +151,12 @@ int run(int argc, char **argv) {
 	if (std::filesystem::is_directory(out, ec)) {
 		return usage(("--out " + out + " is a folder: name the room.yaml to write").c_str());
 	}
-	std::string problem = cli::output_file_problem("--out", out, force);
+	// Never into the recording it reads (--out REC/room.yaml would replace the recording's own room),
+	// even with --force, as bench's --save-trajectory.
+	std::string problem = cli::output_in_input_problem("--out", out, { options.recording });
+	if (problem.empty()) {
+		problem = cli::output_file_problem("--out", out, force);
+	}
 	if (!problem.empty()) {
 		return usage(problem.c_str());
 	}
@@ -162,7 +167,18 @@ int run(int argc, char **argv) {
 		return usage(("the picture and the room would both be " + out + ": give --picture another name").c_str());
 	}
 	// A device (/dev/full) is refused even with --force: it was once removed when the write failed.
-	problem = cli::output_file_problem("the picture", picture_path, force);
+	problem = cli::output_in_input_problem("the picture", picture_path, { options.recording });
+	if (problem.empty()) {
+		problem = cli::output_file_problem("the picture", picture_path, force);
+	}
+	if (!problem.empty()) {
+		return usage(problem.c_str());
+	}
+	// A folder that cannot be written (read-only, say) is refused now, not after the sweep.
+	problem = cli::output_file_unwritable("--out", out);
+	if (problem.empty()) {
+		problem = cli::output_file_unwritable("the picture", picture_path);
+	}
 	if (!problem.empty()) {
 		return usage(problem.c_str());
 	}

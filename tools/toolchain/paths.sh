@@ -60,6 +60,8 @@ rp_visible_path() {
 	case $kind in
 	in)
 		[[ -e $path ]] || rp_die "$name $path: no such file or folder"
+		# A device, a pipe or a socket is named for what it is (issue #38: /dev/zero was once "no such file").
+		[[ -f $path || -d $path ]] || rp_die "$name $path: not a regular file or folder ($(stat -L -c %F -- "$path" 2>/dev/null || echo unknown))"
 		bind=$path
 		[[ -d $path ]] || bind=$parent
 		;;

@@ -2,12 +2,15 @@
 #include <io/yaml_fields.h>
 
 #include <io/image_codec.h>
+#include <io/input_path.h>
 
 #include <recording/recording_reader.h>
 #include <recording/recording_types.h>
 
 #include <algorithm>
+#include <charconv>
 #include <filesystem>
+#include <utility>
 
 namespace roomprobe {
 
@@ -35,12 +38,13 @@ std::vector<fs::path> images_in(const fs::path &p_folder) {
 // The board of board.yaml (inner_corners_x, inner_corners_y, square_m) or of a synthetic
 // recording's boards.yaml (its board map); false when neither is there, error set when one is
 // there but unusable.
-bool read_board_file(const fs::path &p_folder, BoardSpec *r_board, std::string *r_error) {
+bool read_board_file(const fs::path &p_folder, BoardSpec *r_board, std::string *r_file, std::string *r_error) {
 	for (const char *name : { "board.yaml", "boards.yaml" }) {
 		const fs::path path = p_folder / name;
 		if (!fs::exists(path)) {
 			continue;
 		}
+		*r_file = path.string();
 		try {
 			cv::FileStorage file;
 			const std::string problem = open_yaml_file(path.string(), &file);
@@ -53,9 +57,28 @@ bool read_board_file(const fs::path &p_folder, BoardSpec *r_board, std::string *
 				*r_error = path.string() + ": needs inner_corners_x, inner_corners_y and square_m";
 				return true;
 			}
-			r_board->inner_x = int(node["inner_corners_x"]);
-			r_board->inner_y = int(node["inner_corners_y"]);
-			r_board->square_m = double(node["square_m"]);
+			// Taken as written, or refused naming the field and what it holds: a count of 9.7 was
+			// rounded to 10 and "nine" read as 0, and the board echoed with numbers never typed (#38).
+			const std::string prefix = std::string(name) == "boards.yaml" ? "board." : "";
+			YamlFieldReader reader(YamlFieldReader::NonFinite::Refuse);
+			for (const auto &[key, corners] : { std::pair<const char *, int *>{ "inner_corners_x", &r_board->inner_x }, { "inner_corners_y", &r_board->inner_y } }) {
+				const cv::FileNode count = node[key];
+				if (count.isReal()) {
+					char text[64];
+					const std::to_chars_result written = std::to_chars(text, text + sizeof(text), double(count));
+					reader.fail(prefix + key, "must be a whole number of inner corners (got " + std::string(text, written.ptr) + ")");
+				} else {
+					reader.integer(node, prefix, key, corners);
+				}
+				if (!reader.error.empty()) {
+					*r_error = path.string() + ": " + reader.error;
+					return true;
+				}
+			}
+			if (!reader.real(node, prefix, "square_m", &r_board->square_m)) {
+				*r_error = path.string() + ": " + reader.error;
+				return true;
+			}
 		} catch (const cv::Exception &e) {
 			*r_error = path.string() + ": cannot read it (" + e.err + ")";
 		}
@@ -195,8 +218,8 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 	CalibrationViews result;
 	fs::path root(p_folder);
 	std::error_code ec;
-	if (!fs::is_directory(root, ec)) {
-		result.error = p_folder + ": not a folder";
+	result.error = input_folder_problem(p_folder);
+	if (!result.error.empty()) {
 		return result;
 	}
 	// A recording keeps its views in calibration/ (its rgb/ holds the sequence's frames); one
@@ -208,9 +231,10 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 	const bool from_frames = recording && root == fs::path(p_folder);
 	result.folder = root.string();
 	result.board = p_options.board;
+	std::string board_file;
 	if (!p_options.board_given) {
 		std::string error;
-		result.board_from_file = read_board_file(root, &result.board, &error);
+		result.board_from_file = read_board_file(root, &result.board, &board_file, &error);
 		if (!error.empty()) {
 			result.error = error;
 			return result;
@@ -218,7 +242,7 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 	}
 	const std::string board_problem = check_board(result.board);
 	if (!board_problem.empty()) {
-		result.error = board_problem;
+		result.error = result.board_from_file ? board_file + ": " + board_problem : board_problem;
 		return result;
 	}
 	if (from_frames) {
@@ -270,8 +294,7 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 		}
 		BoardDetection found = detect_board(d.image, result.board);
 		if (!found.found) {
-			result.missed.push_back(d.view.name + ": the whole board (" + std::to_string(result.board.inner_x) + "x" + std::to_string(result.board.inner_y) +
-					" inner corners) was not found");
+			result.missed.push_back(d.view.name + ": the whole board (" + board_text(result.board) + ") was not found");
 			return d;
 		}
 		d.view.corners = std::move(found.corners);

@@ -1,20 +1,30 @@
 #include "checkerboard.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 
 namespace roomprobe {
 
+std::string board_text(const BoardSpec &p_board) {
+	char square[32];
+	const std::to_chars_result written = std::to_chars(square, square + sizeof(square), p_board.square_m);
+	return std::to_string(p_board.inner_x) + "x" + std::to_string(p_board.inner_y) + " inner corners, " + std::string(square, written.ptr) + " m squares";
+}
+
 std::string check_board(const BoardSpec &p_board) {
-	const std::string name = "board: " + std::to_string(p_board.inner_x) + "x" + std::to_string(p_board.inner_y) + " inner corners";
+	const std::string name = "board " + board_text(p_board);
 	if (p_board.inner_x < 2 || p_board.inner_y < 2) {
 		return name + ": needs at least 2x2 inner corners";
+	}
+	if (p_board.inner_x > BOARD_MAX_INNER_CORNERS || p_board.inner_y > BOARD_MAX_INNER_CORNERS) {
+		return name + ": at most " + std::to_string(BOARD_MAX_INNER_CORNERS) + " inner corners a side";
 	}
 	if (p_board.inner_x == p_board.inner_y) {
 		return name + ": as many across as down, so the corners' order is ambiguous; use a board with one more square one way (e.g. 9x6)";
 	}
 	if (!(p_board.square_m > 0.0 && p_board.square_m < 10.0)) {
-		return name + ": square size must be within 0 and 10 m (got " + std::to_string(p_board.square_m) + ")";
+		return name + ": the square's side must be within 0 and 10 m";
 	}
 	return "";
 }

@@ -21,7 +21,15 @@ struct BoardSpec {
 	double square_m = 0.035; // side of one square, metres
 };
 
-// Empty, or what is wrong with the board ("board: 7x7 inner corners: ...").
+// The board as the user gave it, for messages: "9x6 inner corners, 0.035 m squares" (the size in
+// metres, as --square-m and board.yaml take it, written as the shortest text that reads back as the
+// same number: never rounded, nor turned into millimetres).
+std::string board_text(const BoardSpec &p_board);
+
+// The most inner corners a side: no printed board has 100 (--board's bound too).
+constexpr int BOARD_MAX_INNER_CORNERS = 100;
+
+// Empty, or what is wrong with the board ("board 7x7 inner corners, 0.035 m squares: ...").
 std::string check_board(const BoardSpec &p_board);
 
 // The inner corners in the board frame, metres, i fastest.

@@ -543,9 +543,7 @@ RigCalibration calibrate_rig(const CalibrationViews &p_views, const RigCalibrati
 	RigCalibration result;
 	RigCalibrationReport &report = result.report;
 	Rig &rig = result.rig;
-	char board[96];
-	std::snprintf(board, sizeof(board), "%dx%d inner corners, %g mm squares", p_views.board.inner_x, p_views.board.inner_y, p_views.board.square_m * 1000.0);
-	report.board = board;
+	report.board = board_text(p_views.board); // as the user gave it (issue #38: "%g mm" rounded and converted it)
 	const PinholeCalibration rgb = calibrate_pinhole(p_views.board, p_views.rgb_size, p_views.rgb);
 	if (!rgb.error.empty()) {
 		result.error = rgb.error;

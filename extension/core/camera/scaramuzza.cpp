@@ -1,5 +1,6 @@
 #include "scaramuzza.h"
 
+#include "io/input_path.h"
 #include "least_squares.h"
 #include "omni_camera.h"
 
@@ -185,6 +186,10 @@ std::vector<Sample> sample_circle(const ScaramuzzaModel &p_model, const glm::dve
 
 ScaramuzzaLoadResult load_ocamcalib(const std::string &p_path) {
 	ScaramuzzaLoadResult result;
+	result.error = input_file_problem(p_path, "no such file");
+	if (!result.error.empty()) {
+		return result;
+	}
 	std::ifstream file(p_path);
 	if (!file) {
 		result.error = p_path + ": cannot open the file";

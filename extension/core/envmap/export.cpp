@@ -1,6 +1,7 @@
 #include "export.h"
 #include <io/image_codec.h>
 #include <io/exr_write.h>
+#include <io/input_path.h>
 
 #include <math/srgb.h>
 
@@ -47,9 +48,9 @@ std::string write_cubemap_exr(const std::string &p_path, const Cubemap &p_cubema
 }
 
 std::string read_cubemap_exr(const std::string &p_path, Cubemap *r_cubemap) {
-	std::error_code error;
-	if (!std::filesystem::is_regular_file(p_path, error)) {
-		return p_path + ": missing";
+	const std::string not_a_file = input_file_problem(p_path);
+	if (!not_a_file.empty()) {
+		return not_a_file;
 	}
 	cv::Mat strip;
 	try {

@@ -7,6 +7,7 @@
 #include <envmap/baseline.h>
 #include <envmap/coarse_render.h>
 #include <envmap/export.h>
+#include <recording/recording_io.h>
 #include <recording/recording_reader.h>
 #include <recording/room_file.h>
 #include <rig/fisheye_pose.h>
@@ -259,6 +260,39 @@ std::vector<std::string> evaluation_output_files() {
 	return names;
 }
 
+// Why a recording lacks what its writer writes on closing, when it was never closed (issue #38: a
+// synth killed midway), as a clause to end an error with; "" otherwise. Said in the error itself:
+// --quiet shows no recording issues.
+std::string unfinished_note(const RecordingReader &p_reader) {
+	for (const RecordingIssue &issue : p_reader.get_issues()) {
+		if (std::filesystem::path(issue.file).filename() == recording_io::WRITING_MARKER) {
+			return ": " + issue.message;
+		}
+	}
+	return "";
+}
+
+// The frames of one stream that were skipped: how many, and why the first was.
+struct SkippedFrames {
+	size_t count = 0;
+	std::string first;
+
+	void add(const std::string &p_why) {
+		if (count++ == 0) {
+			first = p_why;
+		}
+	}
+	// Why none was used: "3 skipped; the first: WHY", or, with none skipped, that none came in time.
+	std::string describe(double p_last_cubemap_s) const {
+		if (count == 0) {
+			char text[160];
+			std::snprintf(text, sizeof(text), "none is stamped at or before the last ground-truth cubemap scored (%.3f s)", p_last_cubemap_s);
+			return text;
+		}
+		return std::to_string(count) + " skipped; the first: " + first;
+	}
+};
+
 EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	EvaluationResult result;
 	auto say = [&](const std::string &p_line) {
@@ -281,7 +315,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		return result;
 	}
 	if (!reader.has_ground_truth_trajectory(RecordingStream::Rgbd)) {
-		result.error = p_options.recording + ": no ground-truth RGB-D trajectory (PoseSource::GroundTruth needs it)";
+		result.error = p_options.recording + ": no ground-truth RGB-D trajectory (PoseSource::GroundTruth needs it)" + unfinished_note(reader);
 		return result;
 	}
 	if (reader.ground_truth_cubemap_count() == 0) {
@@ -426,6 +460,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 	size_t next_event = 0;
 	double baseline_total_ms = 0.0, metrics_total_ms = 0.0;
 	size_t rgbd_frames_used = 0;
+	SkippedFrames fisheye_skipped, rgbd_skipped, cubemaps_skipped; // why, for an error that says so by itself
 	size_t comparisons = 0;
 	size_t count = reader.ground_truth_cubemap_count();
 	if (p_options.max_cubemaps > 0 && p_options.max_cubemaps < count) {
@@ -446,6 +481,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 						slam_figures.add(*engine_tracked.tracked_frame(), trajectory, &result.slam);
 					} else {
 						say("skipping RGB-D frame: " + rgbd.error);
+						rgbd_skipped.add(rgbd.error);
 					}
 				}
 				continue;
@@ -455,11 +491,13 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 			std::string pose_error;
 			if (!fisheye_pose_at(trajectory, rig, fref.timestamp_s, &pose, &pose_error)) {
 				say("skipping fisheye frame " + std::to_string(event.index) + ": " + pose_error);
+				fisheye_skipped.add("fisheye frame " + std::to_string(event.index) + ": " + pose_error);
 				continue;
 			}
 			FisheyeFrameResult frame = reader.read_fisheye(event.index);
 			if (!frame.ok) {
 				say("skipping fisheye frame: " + frame.error);
+				fisheye_skipped.add(frame.error);
 				continue;
 			}
 			const Clock::time_point start = Clock::now();
@@ -475,6 +513,7 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 		const GroundTruthCubemapResult truth = c == 0 ? first : reader.ground_truth_cubemap(c);
 		if (!truth.ok) {
 			say("skipping ground-truth cubemap: " + truth.error);
+			cubemaps_skipped.add(truth.error);
 			continue;
 		}
 		const Cubemap gt = to_cubemap(truth.cubemap.faces, size);
@@ -550,32 +589,51 @@ EvaluationResult evaluate_recording(const EvaluationOptions &p_options) {
 			say(line);
 		}
 		if (c + 1 == count && !p_options.out.empty()) {
-			std::filesystem::create_directories(p_options.out);
-			for (int v = 0; v < variant_count; v++) {
-				const std::string stem = (std::filesystem::path(p_options.out) / MAP_FILES[v]).string();
-				std::string error = write_cubemap_exr(stem + ".exr", estimates[v]);
-				if (error.empty()) {
-					error = write_cubemap_png_net(stem + ".png", estimates[v]);
-				}
-				if (!error.empty()) {
-					say(error);
-				}
+			// Every failure is kept, not only said: the caller reports it whether or not it shows
+			// the progress lines.
+			std::vector<std::string> failed;
+			std::error_code ec;
+			std::filesystem::create_directories(p_options.out, ec);
+			if (ec) {
+				failed.push_back(p_options.out + ": cannot create the folder (" + ec.message() + ")");
 			}
-			const std::string stem = (std::filesystem::path(p_options.out) / TRUTH_FILE).string();
-			write_cubemap_exr(stem + ".exr", gt);
-			write_cubemap_png_net(stem + ".png", gt);
+			auto write = [&](const char *p_stem, const Cubemap &p_map) {
+				const std::string stem = (std::filesystem::path(p_options.out) / p_stem).string();
+				for (const std::string &error : { write_cubemap_exr(stem + ".exr", p_map), write_cubemap_png_net(stem + ".png", p_map) }) {
+					if (!error.empty()) {
+						say(error);
+						failed.push_back(error);
+					}
+				}
+			};
+			for (int v = 0; !ec && v < variant_count; v++) {
+				write(MAP_FILES[v], estimates[v]);
+			}
+			if (!ec) {
+				write(TRUTH_FILE, gt);
+			}
+			if (!failed.empty()) {
+				result.out_error = failed.front() +
+						(failed.size() > 1 ? " (and " + std::to_string(failed.size() - 1) + " more of the maps could not be written)" : std::string());
+			}
 		}
 	}
 	if (result.cubemaps == 0) {
-		result.error = p_options.recording + ": no ground-truth cubemap could be evaluated";
+		result.error = p_options.recording + ": no ground-truth cubemap could be evaluated: " + std::to_string(cubemaps_skipped.count) + " skipped; the first: " +
+				cubemaps_skipped.first;
 		return result;
 	}
+	// The reason is in the message itself: "see the messages above" pointed at progress lines that
+	// --quiet and the nodes never show (issue #38).
+	const double last_cubemap_s = reader.get_ground_truth_cubemap_ref(count - 1).timestamp_s;
 	if (result.fisheye_frames_used == 0) {
-		result.error = p_options.recording + ": none of its " + std::to_string(reader.fisheye_count()) + " fisheye frames could be used (see the messages above)";
+		result.error = p_options.recording + ": none of its " + std::to_string(reader.fisheye_count()) + " fisheye frames could be used: " +
+				fisheye_skipped.describe(last_cubemap_s);
 		return result;
 	}
 	if (dense && rgbd_frames_used == 0) {
-		result.error = p_options.recording + ": none of its " + std::to_string(reader.rgbd_count()) + " RGB-D frames could be read (see the messages above)";
+		result.error = p_options.recording + ": none of its " + std::to_string(reader.rgbd_count()) + " RGB-D frames could be read: " +
+				rgbd_skipped.describe(last_cubemap_s);
 		return result;
 	}
 	for (VariantScores &v : result.variants) {

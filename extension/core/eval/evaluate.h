@@ -152,6 +152,10 @@ struct DirectionClassScores {
 struct EvaluationResult {
 	bool ok = false;
 	std::string error;
+	// With EvaluationOptions::out: "" when every map was written there, else what could not be
+	// (naming the file and the system's reason); the scores stand either way (issue #38: a read-only
+	// --out with --quiet ended with status 0 and nothing written).
+	std::string out_error;
 	// In EvaluationVariant order: all VARIANT_COUNT; up to DENSE_SLAM without the true scene;
 	// up to LIGHT_GAIN without dense.
 	std::vector<VariantScores> variants;

@@ -1,6 +1,7 @@
 #include "truth_scene.h"
 
 #include <io/yaml_fields.h>
+#include <io/input_path.h>
 
 #include <tbb/parallel_for.h>
 
@@ -13,9 +14,8 @@ namespace roomprobe {
 TruthSceneResult load_truth_scene(const std::string &p_recording) {
 	TruthSceneResult result;
 	const std::string path = (std::filesystem::path(p_recording) / "synth.yaml").string();
-	std::error_code ec;
-	if (!std::filesystem::is_regular_file(path, ec)) {
-		result.error = path + ": missing (the true scene is known only for recordings made by ./roomprobe synth)";
+	result.error = input_file_problem(path, "missing (the true scene is known only for recordings made by ./roomprobe synth)");
+	if (!result.error.empty()) {
 		return result;
 	}
 	synth::SceneOptions options;

@@ -7,6 +7,7 @@
 // clang-format on
 #include <png.h>
 
+#include "input_path.h"
 #include "opencv.h"
 #include "replace_file.h"
 
@@ -285,6 +286,11 @@ std::string png_encode(const cv::Mat &p_image, std::vector<uint8_t> *r_bytes) {
 }
 
 std::string read_file_bytes(const std::string &p_path, std::vector<uint8_t> *r_bytes) {
+	// A device or a pipe is named for what it is, never read (/dev/zero never ends, a pipe blocks).
+	const std::string not_a_file = input_file_problem(p_path);
+	if (!not_a_file.empty()) {
+		return not_a_file;
+	}
 	std::ifstream file(p_path, std::ios::binary);
 	if (!file) {
 		return p_path + ": cannot be opened for reading";

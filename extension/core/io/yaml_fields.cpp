@@ -1,6 +1,7 @@
 #include "yaml_fields.h"
 
 #include "image_codec.h"
+#include "input_path.h"
 
 #include <algorithm>
 #include <charconv>
@@ -410,8 +411,9 @@ std::string check_yaml_text(const std::string &p_text) {
 
 std::string open_yaml_file(const std::string &p_path, cv::FileStorage *r_storage) {
 	std::error_code ec;
-	if (!std::filesystem::is_regular_file(p_path, ec)) {
-		return p_path + (std::filesystem::exists(p_path, ec) ? ": not a regular file" : ": missing");
+	const std::string not_a_file = input_file_problem(p_path);
+	if (!not_a_file.empty()) {
+		return not_a_file;
 	}
 	const uintmax_t size = std::filesystem::file_size(p_path, ec);
 	if (ec || size > YAML_MAX_FILE_BYTES) {

@@ -2,6 +2,8 @@
 
 #include "recording_io.h"
 
+#include <io/input_path.h>
+
 #include <glm/mat3x3.hpp>
 #include <glm/mat4x4.hpp>
 
@@ -172,8 +174,8 @@ RecordingStatus open_frames_dataset(const std::string &p_folder, RecordingReader
 	RecordingStatus status;
 	r_reader->close();
 	std::error_code ec;
-	if (!fs::is_directory(p_folder, ec)) {
-		status.error = p_folder + ": " + (fs::exists(p_folder, ec) ? "not a folder" : "no such frames folder");
+	status.error = input_folder_problem(p_folder, "no such frames folder");
+	if (!status.error.empty()) {
 		return status;
 	}
 	if (!(p_options.depth_scale_m > 0.0) || !std::isfinite(p_options.depth_scale_m)) {

@@ -1,6 +1,7 @@
 #include "recording_io.h"
 #include <io/image_codec.h>
 #include <io/exr_write.h>
+#include <io/input_path.h>
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
@@ -18,6 +19,9 @@
 #include <fstream>
 #include <system_error>
 #include <tuple>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 namespace roomprobe {
 
@@ -130,13 +134,23 @@ std::string read_whole_file(const std::string &p_path, std::vector<uint8_t> *r_b
 // size is refused before anything is allocated).
 constexpr int64_t EXR_MAX_PIXELS = int64_t(1) << 26;
 
-std::string not_a_file_error(const std::string &p_path) {
-	std::error_code error;
-	const fs::file_status status = fs::status(p_path, error);
-	if (status.type() == fs::file_type::directory) {
-		return p_path + ": a folder, not a file";
+WritingState writing_state(const std::string &p_folder) {
+	const int fd = ::open(join(p_folder, WRITING_MARKER).c_str(), O_RDONLY | O_CLOEXEC);
+	if (fd < 0) {
+		return WritingState::Closed;
 	}
-	return p_path + (fs::exists(status) ? ": not a regular file" : ": missing");
+	// Asked, never taken: a writer starting now is not refused because of this look.
+	struct flock lock {};
+	lock.l_type = F_WRLCK;
+	lock.l_whence = SEEK_SET;
+	const bool held = ::fcntl(fd, F_OFD_GETLK, &lock) == 0 && lock.l_type != F_UNLCK;
+	::close(fd);
+	return held ? WritingState::BeingWritten : WritingState::Abandoned;
+}
+
+std::string not_a_file_error(const std::string &p_path) {
+	const std::string problem = input_file_problem(p_path);
+	return problem.empty() ? p_path + ": cannot be read" : problem; // a regular file that could not be read after all
 }
 
 std::string format_number(double p_value) {

@@ -25,6 +25,18 @@ std::string format_number(double p_value);
 bool parse_number(std::string_view p_text, double *r_value);
 bool parse_int(std::string_view p_text, int *r_value);
 
+// The file a RecordingWriter keeps in its folder while the recording is open, locked (an open file
+// description lock) while its writer lives, and removes when the recording is closed (issue #38):
+// a second writer into the same folder is refused, and a recording whose writer was killed is
+// known by the marker left behind.
+inline constexpr const char *WRITING_MARKER = ".roomprobe-writing";
+enum class WritingState {
+	Closed, // no marker: the writer closed the recording
+	BeingWritten, // the marker is locked: a writer is adding to it now
+	Abandoned, // the marker without its lock: the writer stopped (killed) before closing it
+};
+WritingState writing_state(const std::string &p_folder);
+
 // p_relative joined onto p_folder, as a path string for messages and opening.
 std::string join(const std::filesystem::path &p_folder, const std::string &p_relative);
 

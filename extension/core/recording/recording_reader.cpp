@@ -4,6 +4,8 @@
 #include "recording_io.h"
 #include "room_file.h"
 
+#include <io/input_path.h>
+
 
 #include <algorithm>
 #include <cctype>
@@ -401,12 +403,27 @@ RecordingStatus RecordingReader::open(const std::string &p_folder, const Recordi
 	close();
 	RecordingStatus status;
 	std::error_code ec;
-	if (!fs::is_directory(p_folder, ec)) {
-		status.error = p_folder + ": " + (fs::exists(p_folder, ec) ? "not a folder" : "no such recording folder");
+	status.error = input_folder_problem(p_folder, "no such recording folder");
+	if (!status.error.empty()) {
 		return status;
 	}
 	RecordingContents read;
 	read.folder = p_folder;
+	// A recording whose writer has not closed it (issue #38: synth killed midway): what its indexes
+	// list plays; the reader says why the rest, and the ground truth written at the end, is missing.
+	switch (recording_io::writing_state(p_folder)) {
+		case recording_io::WritingState::BeingWritten:
+			read.issues.push_back({ join(p_folder, recording_io::WRITING_MARKER), 0,
+					"a writer is adding to this recording now: the frames its indexes list so far play, later ones are not seen" });
+			break;
+		case recording_io::WritingState::Abandoned:
+			read.issues.push_back({ join(p_folder, recording_io::WRITING_MARKER), 0,
+					"the recording was never closed (its writer was stopped midway, or the machine went down): the frames its indexes list "
+					"play; what a writer writes on closing (the ground-truth trajectories) is missing" });
+			break;
+		case recording_io::WritingState::Closed:
+			break;
+	}
 
 	const RigLoadResult rig = load_rig(join(p_folder, "rig.yaml"));
 	if (!rig.ok) {

@@ -7,10 +7,15 @@
 #include <io/raw_frame.h>
 
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <utility>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 namespace roomprobe {
 
@@ -167,17 +172,37 @@ RecordingStatus RecordingWriter::open_folder(const std::string &p_folder, const 
 		return fail(p_folder + ": " + problem + " (RecordingWriteOptions::zstd_level)");
 	}
 	std::error_code ec;
-	if (fs::exists(p_folder, ec)) {
-		if (!fs::is_directory(p_folder, ec)) {
-			return fail(p_folder + ": exists and is not a folder");
+	if (fs::exists(p_folder, ec) && !fs::is_directory(p_folder, ec)) {
+		return fail(p_folder + ": exists and is not a folder");
+	}
+	std::string error;
+	if (!create_folder(p_folder, &error)) {
+		return fail(error);
+	}
+	// One writer a folder (issue #38): the marker is claimed before the folder is found empty, so
+	// that of two writers started together, one is refused, and never do their frames mix.
+	problem = claim_folder(p_folder);
+	if (!problem.empty()) {
+		return fail(problem);
+	}
+	struct ReleaseUnlessOpened {
+		RecordingWriter *writer;
+		~ReleaseUnlessOpened() {
+			if (!writer->opened) {
+				writer->release_claim(writer->claim_made);
+			}
 		}
-		if (fs::directory_iterator(p_folder, ec) != fs::directory_iterator() && !p_options.allow_non_empty_folder) {
-			return fail(p_folder + ": the folder is not empty; a recording is only written into a new or empty folder "
-									"(nothing was overwritten; RecordingWriteOptions::allow_non_empty_folder overrides this)");
-		}
-		if (ec) {
-			return fail(p_folder + ": cannot list the folder (" + ec.message() + ")");
-		}
+	} release{ this };
+	bool empty = true;
+	for (const fs::directory_entry &entry : fs::directory_iterator(p_folder, ec)) {
+		empty = empty && entry.path().filename() == recording_io::WRITING_MARKER;
+	}
+	if (ec) {
+		return fail(p_folder + ": cannot list the folder (" + ec.message() + ")");
+	}
+	if (!empty && !p_options.allow_non_empty_folder) {
+		return fail(p_folder + ": the folder is not empty; a recording is only written into a new or empty folder "
+								"(nothing was overwritten; RecordingWriteOptions::allow_non_empty_folder overrides this)");
 	}
 	// Into a used folder (allowed by the options): a previous recording's ground truth, room or
 	// fisheye index must not pass for this one's, as it would if this one wrote none.
@@ -187,7 +212,6 @@ RecordingStatus RecordingWriter::open_folder(const std::string &p_folder, const 
 			return fail(path(stale) + ": cannot remove the previous recording's file (" + ec.message() + ")");
 		}
 	}
-	std::string error;
 	for (const char *sub : { "rgb", "depth", "fisheye" }) {
 		if (std::string(sub) == "fisheye" && !p_rig.has_fisheye()) {
 			continue;
@@ -512,11 +536,58 @@ RecordingStatus RecordingWriter::close() {
 		index.stream->clear();
 	}
 	opened = false;
+	release_claim(true); // closed: the marker goes (a killed writer leaves it behind)
 	if (!error.empty()) {
 		status.ok = false;
 		status.error = error;
 	}
 	return status;
+}
+
+std::string RecordingWriter::claim_folder(const std::string &p_folder) {
+	const std::string marker = recording_io::join(p_folder, recording_io::WRITING_MARKER);
+	claim_made = false;
+	int fd = ::open(marker.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+	if (fd >= 0) {
+		claim_made = true;
+	} else if (errno == EEXIST) { // left by a writer that was killed, or held by one that writes now
+		fd = ::open(marker.c_str(), O_RDWR | O_CLOEXEC);
+	}
+	if (fd < 0) {
+		return marker + ": cannot be made (" + std::strerror(errno) + ")";
+	}
+	// An open file description's lock: another writer conflicts whether it is another process or
+	// this one, and the system lets go of it when the process dies.
+	struct flock lock {};
+	lock.l_type = F_WRLCK;
+	lock.l_whence = SEEK_SET;
+	if (::fcntl(fd, F_OFD_SETLK, &lock) != 0) {
+		const int why = errno;
+		::close(fd);
+		claim_made = false; // another's now: never removed by this writer
+		if (why == EAGAIN || why == EACCES) {
+			return p_folder + ": another writer is recording into this folder now (it holds " + recording_io::WRITING_MARKER + "); nothing written";
+		}
+		return marker + ": cannot be locked (" + std::strerror(why) + ")";
+	}
+	const std::string owner = "pid " + std::to_string(::getpid()) + "\n";
+	if (::ftruncate(fd, 0) != 0 || ::write(fd, owner.data(), owner.size()) != ssize_t(owner.size())) {
+		// Only for people reading it: the lock is what counts.
+	}
+	claim = fd;
+	return "";
+}
+
+void RecordingWriter::release_claim(bool p_remove) {
+	if (claim < 0) {
+		return;
+	}
+	if (p_remove) {
+		::unlink(recording_io::join(folder, recording_io::WRITING_MARKER).c_str());
+	}
+	::close(claim);
+	claim = -1;
+	claim_made = false;
 }
 
 } // namespace roomprobe

@@ -52,7 +52,9 @@ public:
 
 	// Creates p_folder (and its parents) if need be, writes rig.yaml and room.yaml, and starts
 	// the three frame indexes (two when the rig has no fisheye: no fisheye.txt). The rig and room
-	// must pass check_rig() and check_room().
+	// must pass check_rig() and check_room(). One writer a folder: while open, the writer holds
+	// recording_io::WRITING_MARKER in it, locked, and a second writer into that folder (another
+	// process or thread) is refused, never mixing its frames with the first's (issue #38).
 	RecordingStatus open(const std::string &p_folder, const Rig &p_rig, const RoomInfo &p_room,
 			const RecordingWriteOptions &p_options = RecordingWriteOptions());
 	// The same for a recording without a room (SLAM only): no room.yaml, and no ground-truth cubemaps.
@@ -120,6 +122,10 @@ private:
 	bool has_cubemap_time = false;
 	double last_cubemap_time_s = 0.0;
 	Trajectory ground_truth[2]; // indexed by RecordingStream
+	int claim = -1; // WRITING_MARKER's descriptor, locked while open; -1 when none is held
+	bool claim_made = false; // the marker was made by this writer (removed when the open fails)
+	std::string claim_folder(const std::string &p_folder);
+	void release_claim(bool p_remove);
 };
 
 } // namespace roomprobe

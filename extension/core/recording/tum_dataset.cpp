@@ -2,6 +2,8 @@
 
 #include "recording_io.h"
 
+#include <io/input_path.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -95,8 +97,8 @@ RecordingStatus open_tum_dataset(const std::string &p_folder, RecordingReader *r
 	RecordingStatus status;
 	r_reader->close();
 	std::error_code ec;
-	if (!fs::is_directory(p_folder, ec)) {
-		status.error = p_folder + ": " + (fs::exists(p_folder, ec) ? "not a folder" : "no such TUM RGB-D sequence folder");
+	status.error = input_folder_problem(p_folder, "no such TUM RGB-D sequence folder");
+	if (!status.error.empty()) {
 		return status;
 	}
 	const PinholeParams &rgb = p_options.rgb;

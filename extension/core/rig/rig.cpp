@@ -1,5 +1,6 @@
 #include "rig.h"
 
+#include <io/input_path.h>
 #include <io/opencv.h>
 #include <io/replace_file.h>
 #include <io/yaml_fields.h>
@@ -348,13 +349,8 @@ bool read_rig(YamlFieldReader &p_reader, const cv::FileNode &p_root, Rig *r_rig)
 RigLoadResult load_rig(const std::string &p_path) {
 	RigLoadResult result;
 	// Read here, parsed from memory: the errors are ours to word, and OpenCV logs nothing.
-	std::error_code ec;
-	if (!std::filesystem::exists(p_path, ec)) {
-		result.error = p_path + ": no such rig file";
-		return result;
-	}
-	if (!std::filesystem::is_regular_file(p_path, ec)) {
-		result.error = p_path + ": not a regular file";
+	result.error = input_file_problem(p_path, "no such rig file");
+	if (!result.error.empty()) {
 		return result;
 	}
 	std::ifstream file(p_path, std::ios::binary);

@@ -1,13 +1,17 @@
 #include "tsdf_volume.h"
 
 #include "depth_pyramid.h"
+#include "tsdf_capacity.h"
 #include "tsdf_integrate_simd.h"
 
 #include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <new>
+#include <stdexcept>
 
 namespace roomprobe {
 
@@ -204,11 +208,24 @@ TsdfVolume::TsdfVolume(const TsdfOptions &p_options) :
 	// size (a power of two of 32 bits) would overflow past it.
 	m_options.max_blocks = std::clamp(m_options.max_blocks, 1, TSDF_MAX_BLOCKS);
 	m_options.max_weight = std::clamp(m_options.max_weight, 1, 65535 / TSDF_WEIGHT_UNIT);
-	m_hash.assign(hash_size_for(m_options.max_blocks), TsdfHashEntry());
-	m_hash_mask = uint32_t(m_hash.size()) - 1;
-	// Address space for the whole cap at once, so that the pool never moves; pages are only
-	// committed as blocks are first written.
-	m_voxels.reserve(size_t(m_options.max_blocks) * TSDF_BLOCK_VOXELS);
+	// A cap this machine cannot hold is refused, naming it and the memory it needs (issue #38: the
+	// top of the range ended in a bare std::bad_alloc from the reservation below).
+	const std::string too_big = tsdf_capacity_problem("max_blocks", m_options.max_blocks, physical_memory_bytes());
+	if (!too_big.empty()) {
+		throw std::runtime_error(too_big);
+	}
+	try {
+		m_hash.assign(hash_size_for(m_options.max_blocks), TsdfHashEntry());
+		m_hash_mask = uint32_t(m_hash.size()) - 1;
+		// Address space for the whole cap at once, so that the pool never moves; pages are only
+		// committed as blocks are first written.
+		m_voxels.reserve(size_t(m_options.max_blocks) * TSDF_BLOCK_VOXELS);
+	} catch (const std::bad_alloc &) { // an address-space limit (ulimit -v), or no overcommit
+		char text[256];
+		std::snprintf(text, sizeof(text), "max_blocks %d: the %.1f GiB its full model needs could not be reserved (out of memory or address space): lower max_blocks",
+				m_options.max_blocks, double(tsdf_capacity_bytes(m_options.max_blocks)) / double(uint64_t(1) << 30));
+		throw std::runtime_error(text);
+	}
 }
 
 // ---- hash table ----

@@ -2,6 +2,7 @@
 
 #include "synth_scene.h"
 
+#include <io/input_path.h>
 #include <room/reference_rooms.h>
 
 
@@ -158,9 +159,9 @@ Color Panorama::lookup(const glm::dvec3 &p_direction) const {
 
 PanoramaLoadResult load_panorama(const std::string &p_path) {
 	PanoramaLoadResult result;
-	std::error_code ec;
-	if (!std::filesystem::is_regular_file(p_path, ec)) {
-		result.error = p_path + ": cannot read the panorama: no such file";
+	const std::string not_a_file = input_file_problem(p_path, "no such file");
+	if (!not_a_file.empty()) {
+		result.error = not_a_file + ", so the panorama cannot be read";
 		return result;
 	}
 	cv::Mat image = cv::imread(p_path, cv::IMREAD_UNCHANGED | cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);

@@ -15,6 +15,9 @@ namespace roomprobe {
 //   user://roomprobe/unpacked/ once and read from there.
 // - A .zip (of a recording folder, wherever it is, in a pack too) is unpacked into
 //   user://roomprobe/unpacked/NAME-MD5/ once; the path is the folder inside when the zip holds one.
+//   Within limits (io/zip_limits.h: 32 GiB in all, 2 GiB and 100-fold an entry, the disk's free
+//   space), checked on the zip's table of contents before anything is inflated; the folder is
+//   renamed into place only when whole (issue #38: a zip bomb inflated without limit).
 // - A folder inside an exported pack is refused: Godot exports a recording's PNG frames only as
 //   imported textures, so the zip is the way to ship one.
 // "" with r_error set when the path cannot be made usable. Unpacking runs on the calling thread.

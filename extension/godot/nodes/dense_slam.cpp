@@ -3,6 +3,7 @@
 #include "../property_checks.h"
 
 #include <camera/pinhole_camera.h>
+#include <slam/tsdf_capacity.h>
 
 #include <cmath>
 #include <cstdio>
@@ -212,7 +213,15 @@ void DenseSLAM::set_fusion_max_depth(double p_metres) {
 double DenseSLAM::get_fusion_max_depth() const { return fusion_max_depth; }
 
 void DenseSLAM::set_max_blocks(int p_blocks) {
-	max_blocks = int(property_checks::clamped_int("DenseSLAM.max_blocks", p_blocks, 1, 4194304));
+	const int blocks = int(property_checks::clamped_int("DenseSLAM.max_blocks", p_blocks, 1, 4194304));
+	// A cap whose full model would not fit in this machine's memory is refused, naming the memory
+	// it needs (issue #38: the top of the range ended in std::bad_alloc when the model was made).
+	const std::string too_big = roomprobe::tsdf_capacity_problem("DenseSLAM.max_blocks", blocks, roomprobe::physical_memory_bytes());
+	if (!too_big.empty()) {
+		ERR_PRINT(String((too_big + "; left at " + std::to_string(max_blocks)).c_str()));
+		return;
+	}
+	max_blocks = blocks;
 	push_settings();
 }
 
