@@ -475,11 +475,11 @@ TEST_CASE("capture: a UVC fisheye through OpenCV's VideoCapture (a video file in
 		const cv::Vec3b centre = image.at<cv::Vec3b>(24, 32);
 		CHECK(std::abs(int(centre[0]) - (100 + 10 * int(i))) <= 4); // red first: R, G, B
 		CHECK(centre[2] <= 4);
-		if (i > 0) {
-			// Played at the file's 30 Hz, as a camera would send it.
-			CHECK(got.frames[i].host_time_s - got.frames[i - 1].host_time_s > 0.02);
-		}
 	}
+	// Played at the file's 30 Hz, as a camera would send it: not faster over the whole file (a
+	// busy machine may deliver one frame late and the next one early, so single gaps vary).
+	const double span_s = got.frames.back().host_time_s - got.frames.front().host_time_s;
+	CHECK(span_s > 0.9 * double(got.frames.size() - 1) / 30.0);
 	std::filesystem::remove_all(folder);
 }
 

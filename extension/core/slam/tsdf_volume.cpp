@@ -39,15 +39,6 @@ struct RecentBlocks {
 	int next = 0;
 	bool used[SIZE] = {};
 
-	bool seen(const glm::ivec3 &p_block) const {
-		const uint64_t k = tsdf_block_key(p_block);
-		for (int i = 0; i < SIZE; i++) {
-			if (used[i] && keys[i] == k) {
-				return true;
-			}
-		}
-		return false;
-	}
 	// True when p_block was among the last SIZE; else remembers it.
 	bool seen_or_add(const glm::ivec3 &p_block) {
 		const uint64_t k = tsdf_block_key(p_block);
@@ -337,14 +328,6 @@ void TsdfVolume::collect_band_blocks(const cv::Mat &p_depth_m, const PinholeIntr
 					const float z0 = std::max(d - m_options.truncation_m, 0.5f * m_options.min_depth_m);
 					const glm::vec3 a = (rotation * p_camera.unproject(pixel, z0) + translation) * inv_block;
 					const glm::vec3 b = (rotation * p_camera.unproject(pixel, d + m_options.truncation_m) + translation) * inv_block;
-					// Most segments end in blocks just appended: when both ends are, in one block or
-					// two sharing a face (the segment stays in them), the walk would add nothing.
-					const glm::ivec3 first(tsdf_floor(a.x), tsdf_floor(a.y), tsdf_floor(a.z));
-					const glm::ivec3 last(tsdf_floor(b.x), tsdf_floor(b.y), tsdf_floor(b.z));
-					const glm::ivec3 apart = glm::abs(last - first);
-					if (apart.x + apart.y + apart.z <= 1 && recent.seen(first) && recent.seen(last)) {
-						continue;
-					}
 					append_segment_blocks(a, b, &recent, &out);
 				}
 			}
