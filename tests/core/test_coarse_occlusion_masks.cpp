@@ -1,4 +1,4 @@
-// Occlusion in the coarse model (paper §4.4): CGAL's visibility polygon against Embree rays, on the
+// Occlusion in the coarse model (paper §4.4): the visibility polygon's mask against Embree rays, on the
 // paper's Figure-4 two rooms and the convex living room.
 
 #include "io/opencv.h"
@@ -110,7 +110,7 @@ TEST_CASE("coarse occlusion: a convex room is all visible") {
 	CHECK(size_t(cv::countNonZero(rays)) == geometry.surface_texels);
 }
 
-TEST_CASE("coarse occlusion: CGAL's mask agrees with Embree's rays in the two rooms, except at shadow boundaries") {
+TEST_CASE("coarse occlusion: the visibility polygon's mask agrees with Embree's rays in the two rooms, except at shadow boundaries") {
 	const RoomMesh mesh = build(figure4_two_rooms());
 	const TexelGeometry geometry = make_texel_geometry(mesh);
 	const EmbreeOcclusion tracer(mesh);
@@ -119,8 +119,8 @@ TEST_CASE("coarse occlusion: CGAL's mask agrees with Embree's rays in the two ro
 		CAPTURE(camera.x);
 		CAPTURE(camera.z);
 		auto start = std::chrono::steady_clock::now();
-		const cv::Mat cgal = occlusion_mask(mesh, geometry, camera);
-		const double cgal_s = seconds_since(start);
+		const cv::Mat polygon = occlusion_mask(mesh, geometry, camera);
+		const double polygon_s = seconds_since(start);
 		start = std::chrono::steady_clock::now();
 		const cv::Mat rays = tracer.mask(geometry, camera);
 		const double rays_s = seconds_since(start);
@@ -129,22 +129,22 @@ TEST_CASE("coarse occlusion: CGAL's mask agrees with Embree's rays in the two ro
 		for (int y = 0; y < h; ++y) {
 			for (int x = 0; x < w; ++x) {
 				if (!geometry.on_surface(x, y)) {
-					off_surface_visible += cgal.at<uint8_t>(y, x) != 0 || rays.at<uint8_t>(y, x) != 0;
+					off_surface_visible += polygon.at<uint8_t>(y, x) != 0 || rays.at<uint8_t>(y, x) != 0;
 					continue;
 				}
 				++total;
-				const uint8_t c = cgal.at<uint8_t>(y, x);
+				const uint8_t c = polygon.at<uint8_t>(y, x);
 				visible_texels += c == 255;
 				if (c == rays.at<uint8_t>(y, x)) {
 					++agree;
 					continue;
 				}
-				// A disagreement must sit at a boundary of the CGAL mask (within 2 texels).
+				// A disagreement must sit at a boundary of the polygon's mask (within 2 texels).
 				bool boundary = false;
 				for (int dy = -2; dy <= 2 && !boundary; ++dy) {
 					for (int dx = -2; dx <= 2 && !boundary; ++dx) {
 						const int xx = x + dx, yy = y + dy;
-						boundary = xx >= 0 && yy >= 0 && xx < w && yy < h && geometry.on_surface(xx, yy) && cgal.at<uint8_t>(yy, xx) != c;
+						boundary = xx >= 0 && yy >= 0 && xx < w && yy < h && geometry.on_surface(xx, yy) && polygon.at<uint8_t>(yy, xx) != c;
 					}
 				}
 				unexplained += !boundary;
@@ -152,8 +152,8 @@ TEST_CASE("coarse occlusion: CGAL's mask agrees with Embree's rays in the two ro
 		}
 		const double agreement = double(agree) / double(total);
 		MESSAGE("camera (" << camera.x << ", " << camera.z << "): " << total << " surface texels, " << visible_texels
-						   << " visible (CGAL), agreement " << 100.0 * agreement << " % (" << total - agree << " differ), CGAL mask "
-						   << 1000.0 * cgal_s << " ms, Embree mask " << 1000.0 * rays_s << " ms");
+						   << " visible (polygon), agreement " << 100.0 * agreement << " % (" << total - agree << " differ), polygon mask "
+						   << 1000.0 * polygon_s << " ms, Embree mask " << 1000.0 * rays_s << " ms");
 		CHECK(agreement >= 0.995);
 		CHECK(unexplained == 0);
 		CHECK(off_surface_visible == 0);
@@ -165,10 +165,10 @@ TEST_CASE("coarse occlusion: spot checks from the left room") {
 	const RoomMesh mesh = build(figure4_two_rooms());
 	const TexelGeometry geometry = make_texel_geometry(mesh);
 	const glm::dvec3 camera(2.0, 1.45, 1.0);
-	const cv::Mat cgal = occlusion_mask(mesh, geometry, camera);
+	const cv::Mat polygon = occlusion_mask(mesh, geometry, camera);
 	const cv::Mat rays = occlusion_mask_embree(mesh, geometry, camera);
 	REQUIRE_FALSE(rays.empty());
-	for (const cv::Mat &mask : { cgal, rays }) {
+	for (const cv::Mat &mask : { polygon, rays }) {
 		// The left room's far walls (x = 0 and z = 4.5), its floor and ceiling.
 		CHECK(visible(mask, texel_at(mesh, SurfaceKind::Wall, glm::dvec3(0.0, 1.0, 2.0))));
 		CHECK(visible(mask, texel_at(mesh, SurfaceKind::Wall, glm::dvec3(1.0, 2.0, 4.5))));

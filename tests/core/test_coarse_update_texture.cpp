@@ -196,7 +196,7 @@ TEST_CASE("coarse update: keeping the best observation is closer to the truth th
 						  << geometry.surface_texels << "; MAE (linear radiance) best " << mae_best << ", last " << mae_last
 						  << "; on the " << differing << " texels where they differ: best " << differ_best / (3.0 * std::max<size_t>(differing, 1))
 						  << ", last " << differ_last / (3.0 * std::max<size_t>(differing, 1))
-						  << "; per frame: update " << 1000.0 * update_s / frames << " ms, CGAL mask " << 1000.0 * mask_s / frames
+						  << "; per frame: update " << 1000.0 * update_s / frames << " ms, occlusion mask " << 1000.0 * mask_s / frames
 						  << " ms (render " << 1000.0 * render_s / frames << " ms)");
 	CHECK(mae_best <= mae_last);
 }

@@ -1,6 +1,6 @@
 // The room file (recording/room_file.h load_room_file): any bytes give a room that passes
-// check_room, or an error that names the file. A room that loads builds its mesh (CGAL's
-// triangulation of the floorplan) or says why not, without throwing.
+// check_room, or an error that names the file. A room that loads builds its mesh (the
+// floorplan's constrained Delaunay triangulation) or says why not, without throwing.
 #include "fuzz_common.h"
 
 #include <recording/room_file.h>

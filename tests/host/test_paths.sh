@@ -3,6 +3,7 @@
 # and the paths the docs name (check_doc_paths.py).
 # These run on the host, where the paths live, not inside the toolchain like the other suites:
 # ./roomprobe test runs this first, and tools/run_tests.py reports its results as the 'host' suite.
+# One test is no path's: no_gpl_cgal_headers, the licence check of the CGAL headers compiled in.
 #
 # Usage: tests/host/test_paths.sh [--filter SUBSTRING] RESULTS LOG
 # Runs the tests whose name ('host::...') contains SUBSTRING (default: all). RESULTS gets one
@@ -527,10 +528,19 @@ test_outputs_inside_inputs_refused() {
 	check "room or calibrate wrote into the recording" test ! -e "$rec/top.png" -a ! -e "$rec/depth/rig.yaml"
 }
 
+# Issue #37: RoomProbe is meant to be MIT-licensed, so no CGAL header under GPL-3.0 may be in any
+# translation unit's include closure (CGAL's LGPL kernel and Polygon_2 may).
+test_no_gpl_cgal_headers() {
+	rp shell bash tools/package/check_cgal_licences.sh
+	check "check_cgal_licences.sh exited with status $rc (the GPL headers are in $log)" test "$rc" -eq 0
+	check "check_cgal_licences.sh did not say ', 0 GPL or unlabelled'" says ", 0 GPL or unlabelled"
+}
+
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
 	calibrate_refuses_and_never_overwrites synth_photometric_options_refused eval_refuses_bad_input numbers_out_of_range_refused
 	record_relative_out_run_directly bake_prt_bakes_and_caches unknown_verb_is_named editor_sees_the_callers_files docs_name_existing_paths
-	input_devices_named read_only_output_refused dev_full_outputs_refused synth_killed_midway two_writers_one_output outputs_inside_inputs_refused)
+	input_devices_named read_only_output_refused dev_full_outputs_refused synth_killed_midway two_writers_one_output outputs_inside_inputs_refused
+	no_gpl_cgal_headers)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.
 echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench, roomprobe_calibrate, roomprobe_record, roomprobe_oni and roomprobe_room"
 cd "$repo" || exit 1

@@ -2,30 +2,15 @@
 
 #include <io/embree_scene.h>
 
-#include <CGAL/Arr_segment_traits_2.h>
-#include <CGAL/Arrangement_2.h>
-#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Polygon_2.h>
-#include <CGAL/Triangular_expansion_visibility_2.h>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <exception>
 
 namespace roomprobe {
-
-namespace {
-
-using ExactKernel = CGAL::Exact_predicates_exact_constructions_kernel;
-using Traits = CGAL::Arr_segment_traits_2<ExactKernel>;
-using Arrangement = CGAL::Arrangement_2<Traits>;
-using Visibility = CGAL::Triangular_expansion_visibility_2<Arrangement, CGAL::Tag_true>;
-
-} // namespace
 
 bool floorplan_is_convex(const Floorplan &p_floorplan) {
 	using K = CGAL::Exact_predicates_inexact_constructions_kernel;
@@ -41,73 +26,6 @@ bool floorplan_is_convex(const Floorplan &p_floorplan) {
 		}
 	}
 	return true;
-}
-
-VisibilityPolygon visibility_polygon(const Floorplan &p_floorplan, const glm::dvec2 &p_viewpoint_xz) {
-	VisibilityPolygon result;
-	const size_t n = p_floorplan.points.size();
-	if (n < 3) {
-		result.error = "the floorplan has fewer than 3 points";
-		return result;
-	}
-	try {
-		const Floorplan plan = normalized(p_floorplan);
-		CGAL::Polygon_2<ExactKernel> polygon;
-		for (const Vec2 &p : plan.points) {
-			polygon.push_back(ExactKernel::Point_2(p.x, p.y));
-		}
-		const ExactKernel::Point_2 q(p_viewpoint_xz.x, p_viewpoint_xz.y);
-		if (polygon.bounded_side(q) != CGAL::ON_BOUNDED_SIDE) {
-			result.error = "the viewpoint is not strictly inside the floorplan";
-			return result;
-		}
-		std::vector<Traits::X_monotone_curve_2> segments;
-		for (size_t i = 0; i < n; ++i) {
-			segments.emplace_back(polygon.vertex(i), polygon.vertex((i + 1) % n));
-		}
-		Arrangement arrangement;
-		CGAL::insert_non_intersecting_curves(arrangement, segments.begin(), segments.end());
-		Arrangement::Face_const_handle interior;
-		bool found = false;
-		for (auto f = arrangement.faces_begin(); f != arrangement.faces_end(); ++f) {
-			if (!f->is_unbounded()) {
-				interior = f;
-				found = true;
-				break;
-			}
-		}
-		if (!found) {
-			result.error = "the floorplan's arrangement has no bounded face";
-			return result;
-		}
-		Visibility visibility(arrangement);
-		Arrangement output;
-		const Arrangement::Face_handle face = visibility.compute_visibility(q, interior, output);
-		if (face->is_unbounded() || !face->has_outer_ccb()) {
-			result.error = "CGAL returned no bounded visibility region";
-			return result;
-		}
-		auto start = face->outer_ccb();
-		auto edge = start;
-		do {
-			const auto &p = edge->source()->point();
-			result.points.emplace_back(CGAL::to_double(p.x()), CGAL::to_double(p.y()));
-		} while (++edge != start);
-		// An outer CCB of a bounded face runs counter-clockwise already; make sure.
-		double area2 = 0.0;
-		for (size_t i = 0; i < result.points.size(); ++i) {
-			const glm::dvec2 &a = result.points[i], &b = result.points[(i + 1) % result.points.size()];
-			area2 += a.x * b.y - b.x * a.y;
-		}
-		if (area2 < 0.0) {
-			std::reverse(result.points.begin(), result.points.end());
-		}
-		result.ok = true;
-	} catch (const std::exception &e) {
-		result = VisibilityPolygon();
-		result.error = std::string("CGAL: ") + e.what();
-	}
-	return result;
 }
 
 bool point_in_polygon(const std::vector<glm::dvec2> &p_polygon, const glm::dvec2 &p_point) {

@@ -2,7 +2,8 @@
 // Occlusion in the coarse model (paper §4.4): which atlas texels the fisheye can see. The room is
 // a right prism with full-height walls, so a surface point is visible from the fisheye exactly
 // when its floorplan position (x, z) is visible from the fisheye's (x, z) inside the floorplan
-// polygon: a 2-D visibility polygon (CGAL's triangular expansion, Bungiu et al. 2014) decides it.
+// polygon: a 2-D visibility polygon (an angular sweep over the corners, visibility_polygon.cpp)
+// decides it.
 // The paper rasterises that polygon into texture space on the GPU; here each texel is tested
 // against it (parallel over rows), which gives the same mask. An Embree ray caster validates it
 // (and can add occluders the floorplan does not know).
@@ -30,13 +31,15 @@ bool floorplan_is_convex(const Floorplan &p_floorplan);
 
 // The region of the floorplan visible from a viewpoint, in (x, z) metres.
 struct VisibilityPolygon {
-	bool ok = false; // false: the viewpoint is not strictly inside the floorplan (or CGAL failed)
+	bool ok = false; // false: the viewpoint is not strictly inside the floorplan, or the floorplan is not simple
 	std::string error; // why, when ok is false
 	std::vector<glm::dvec2> points; // counter-clockwise in (x, z) (floorplan.h's convention), closed implicitly
 };
 
-// CGAL's Triangular_expansion_visibility_2 over the arrangement of the floorplan's edges (exact
-// predicates and constructions), regularised (no needles). p_viewpoint_xz: world (x, z), metres.
+// The union, over the wedges between the directions to consecutive corners, of the triangle the
+// nearest wall closes: regularised (no needles along a ray that grazes a corner). Decisions use
+// CGAL's exact predicates; points are computed in doubles. Either orientation; consecutive
+// repeated points are dropped. p_viewpoint_xz: world (x, z), metres.
 VisibilityPolygon visibility_polygon(const Floorplan &p_floorplan, const glm::dvec2 &p_viewpoint_xz);
 
 // Whether a point (x, z) lies inside p_polygon (boundary points count as either).
@@ -47,7 +50,7 @@ struct OcclusionOptions {
 	// visible: they are tested this far inside the room along their inward normal, metres; > 0
 	// and well below the texel size.
 	double wall_inset_m = 1e-3;
-	// Floorplans that floorplan_is_convex() accepts get an all-visible mask without CGAL.
+	// Floorplans that floorplan_is_convex() accepts get an all-visible mask without a visibility polygon.
 	bool skip_convex = true;
 };
 

@@ -1,20 +1,15 @@
 #include "room_estimation.h"
 
+#include "room_polygon.h"
 #include "wall_planes.h"
 
 #include <slam/marching_cubes.h>
-
-#include <CGAL/Arr_segment_traits_2.h>
-#include <CGAL/Arrangement_2.h>
-#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <map>
-#include <set>
 #include <numeric>
 
 namespace roomprobe {
@@ -22,17 +17,6 @@ namespace roomprobe {
 namespace {
 
 using namespace room_planes;
-
-// A wall seen ending this close to a wall across it ends in that corner.
-constexpr double CORNER_REACH_M = 0.3;
-
-using ExactKernel = CGAL::Exact_predicates_exact_constructions_kernel;
-using Traits = CGAL::Arr_segment_traits_2<ExactKernel>;
-using Arrangement = CGAL::Arrangement_2<Traits>;
-
-Vec2 to_vec2(const ExactKernel::Point_2 &p_point) {
-	return { CGAL::to_double(p_point.x()), CGAL::to_double(p_point.y()) };
-}
 
 // Up: the area-weighted mean of the normals near the hint (floor, table tops and ceiling all
 // share it), in narrowing windows.
@@ -106,242 +90,6 @@ double wall_line_residual(const std::vector<FlatSample> &p_flat, const WallEstim
 	const double line_angle = 0.5 * std::atan2(2.0 * xy, xx - yy); // the principal axis
 	const double normal_angle = line_angle + PI / 2.0;
 	return std::remainder(normal_angle - std::atan2(p_wall.normal.y, p_wall.normal.x), PI / 2.0);
-}
-
-// A line n . p = d clipped to a box: false when it misses.
-bool clip_line(const Vec2 &p_normal, double p_offset, const Vec2 &p_min, const Vec2 &p_max, Vec2 *r_a, Vec2 *r_b) {
-	const Vec2 along = perp(p_normal);
-	const Vec2 base = { p_normal.x * p_offset, p_normal.y * p_offset };
-	double t0 = -1e9, t1 = 1e9;
-	const double origin[2] = { base.x, base.y }, direction[2] = { along.x, along.y }, low[2] = { p_min.x, p_min.y }, high[2] = { p_max.x, p_max.y };
-	for (int axis = 0; axis < 2; axis++) {
-		if (std::abs(direction[axis]) < 1e-12) {
-			if (origin[axis] < low[axis] || origin[axis] > high[axis]) {
-				return false;
-			}
-			continue;
-		}
-		double a = (low[axis] - origin[axis]) / direction[axis], b = (high[axis] - origin[axis]) / direction[axis];
-		if (a > b) {
-			std::swap(a, b);
-		}
-		t0 = std::max(t0, a);
-		t1 = std::min(t1, b);
-	}
-	if (t1 - t0 < 1e-6) {
-		return false;
-	}
-	*r_a = { base.x + along.x * t0, base.y + along.y * t0 };
-	*r_b = { base.x + along.x * t1, base.y + along.y * t1 };
-	return true;
-}
-
-// Drops corners where the boundary runs straight on (the arrangement splits walls at every line).
-std::vector<Vec2> drop_straight_corners(std::vector<Vec2> p_points) {
-	bool changed = true;
-	while (changed && p_points.size() > 3) {
-		changed = false;
-		for (size_t i = 0; i < p_points.size(); i++) {
-			const Vec2 &a = p_points[(i + p_points.size() - 1) % p_points.size()], &b = p_points[i], &c = p_points[(i + 1) % p_points.size()];
-			const Vec2 u = { b.x - a.x, b.y - a.y }, v = { c.x - b.x, c.y - b.y };
-			const double lu = std::hypot(u.x, u.y), lv = std::hypot(v.x, v.y);
-			if (lu < 1e-6 || lv < 1e-6 || std::abs(u.x * v.y - u.y * v.x) / (lu * lv) < 1e-3) {
-				p_points.erase(p_points.begin() + long(i));
-				changed = true;
-				break;
-			}
-		}
-	}
-	return p_points;
-}
-
-// The share of the segment a to b covered by a wall on its line facing its left side (or its
-// right, when p_left is false): what the sweep saw there as a wall, seen from that side.
-double wall_cover(const Vec2 &p_a, const Vec2 &p_b, bool p_left, const std::vector<WallEstimate> &p_walls) {
-	const double length = std::hypot(p_b.x - p_a.x, p_b.y - p_a.y);
-	if (!(length > 0.0)) {
-		return 0.0;
-	}
-	const Vec2 left = { -(p_b.y - p_a.y) / length, (p_b.x - p_a.x) / length };
-	const Vec2 facing = p_left ? left : Vec2{ -left.x, -left.y };
-	double cover = 0.0;
-	for (const WallEstimate &wall : p_walls) {
-		if (dot2(wall.normal, facing) > std::cos(2.0 * DEG) && std::abs(dot2(wall.normal, p_a) - wall.offset_m) < 0.05) {
-			const double ta = dot2(perp(wall.normal), p_a), tb = dot2(perp(wall.normal), p_b);
-			const double overlap = std::min(std::max(ta, tb), wall.to_m) - std::max(std::min(ta, tb), wall.from_m);
-			cover = std::max(cover, std::clamp(overlap / length, 0.0, 1.0));
-		}
-	}
-	return cover;
-}
-
-// Where the floor was seen, on a grid in the floor plane's 2-D coordinates.
-struct FloorGrid {
-	Vec2 origin;
-	double cell = 0.05;
-	int width = 0, height = 0;
-	std::vector<uint8_t> seen;
-	bool at(const Vec2 &p_point) const {
-		const int x = int(std::floor((p_point.x - origin.x) / cell)), y = int(std::floor((p_point.y - origin.y) / cell));
-		return x >= 0 && y >= 0 && x < width && y < height && seen[size_t(y) * size_t(width) + size_t(x)] != 0;
-	}
-};
-
-// The share of the face's floor the sweep saw, or 1 when a camera position lies in it.
-double face_seen(const std::vector<Vec2> &p_face, const FloorGrid &p_grid, const std::vector<Vec2> &p_cameras) {
-	for (const Vec2 &camera : p_cameras) {
-		if (polygon_contains(p_face, camera)) {
-			return 1.0;
-		}
-	}
-	Vec2 low = p_face.front(), high = p_face.front();
-	for (const Vec2 &p : p_face) {
-		low = { std::min(low.x, p.x), std::min(low.y, p.y) };
-		high = { std::max(high.x, p.x), std::max(high.y, p.y) };
-	}
-	size_t total = 0, seen = 0;
-	for (double y = low.y + 0.5 * p_grid.cell; y < high.y; y += p_grid.cell) {
-		for (double x = low.x + 0.5 * p_grid.cell; x < high.x; x += p_grid.cell) {
-			if (polygon_contains(p_face, { x, y })) {
-				total++;
-				seen += p_grid.at({ x, y }) ? 1 : 0;
-			}
-		}
-	}
-	return total == 0 ? 0.0 : double(seen) / double(total);
-}
-
-// The room's polygon: the walls' lines and the ends of what was seen of them cut the floor into
-// faces (CGAL's arrangement); the faces whose floor was seen are joined, and the largest region's
-// boundary is the room. Empty when no bounded region was seen.
-std::vector<Vec2> room_polygon(const std::vector<WallEstimate> &p_walls, const FloorGrid &p_grid, const std::vector<Vec2> &p_cameras,
-		const RoomEstimationOptions &p_options) {
-	struct Line {
-		Vec2 normal;
-		double offset;
-	};
-	std::vector<Line> lines;
-	auto add_line = [&](const Vec2 &p_normal, double p_offset) {
-		for (const Line &line : lines) { // the same line (either orientation) is inserted once
-			const double c = dot2(line.normal, p_normal);
-			if (std::abs(c) > std::cos(1.0 * DEG) && std::abs(line.offset - c * p_offset) < 0.05) {
-				return;
-			}
-		}
-		lines.push_back({ p_normal, p_offset });
-	};
-	for (const WallEstimate &wall : p_walls) {
-		add_line(wall.normal, wall.offset_m);
-	}
-	// The ends of each wall as seen, where the room may end (a partition's end). An end near a
-	// wall across it is that corner, seen short of it (something stood in the corner): the
-	// walls' own lines make the corner.
-	for (const WallEstimate &wall : p_walls) {
-		for (const double end : { wall.from_m, wall.to_m }) {
-			const Vec2 point = { wall.normal.x * wall.offset_m + perp(wall.normal).x * end, wall.normal.y * wall.offset_m + perp(wall.normal).y * end };
-			const bool near_wall = std::any_of(p_walls.begin(), p_walls.end(), [&](const WallEstimate &p_other) {
-				return std::abs(dot2(p_other.normal, wall.normal)) < std::cos(5.0 * DEG) && std::abs(dot2(p_other.normal, point) - p_other.offset_m) < CORNER_REACH_M;
-			});
-			if (!near_wall) {
-				add_line(perp(wall.normal), end);
-			}
-		}
-	}
-	Vec2 low = { p_grid.origin.x, p_grid.origin.y }, high = { p_grid.origin.x + p_grid.cell * p_grid.width, p_grid.origin.y + p_grid.cell * p_grid.height };
-	for (const WallEstimate &wall : p_walls) {
-		for (const double t : { wall.from_m, wall.to_m }) {
-			const Vec2 p = { wall.normal.x * wall.offset_m + perp(wall.normal).x * t, wall.normal.y * wall.offset_m + perp(wall.normal).y * t };
-			low = { std::min(low.x, p.x), std::min(low.y, p.y) };
-			high = { std::max(high.x, p.x), std::max(high.y, p.y) };
-		}
-	}
-	low = { low.x - 1.0, low.y - 1.0 };
-	high = { high.x + 1.0, high.y + 1.0 };
-	std::vector<Traits::X_monotone_curve_2> segments;
-	for (const Line &line : lines) {
-		Vec2 a, b;
-		if (clip_line(line.normal, line.offset, low, high, &a, &b)) {
-			segments.emplace_back(ExactKernel::Point_2(a.x, a.y), ExactKernel::Point_2(b.x, b.y));
-		}
-	}
-	Arrangement arrangement;
-	CGAL::insert(arrangement, segments.begin(), segments.end());
-
-	std::map<Arrangement::Face_const_handle, bool> inside;
-	for (Arrangement::Face_const_iterator face = arrangement.faces_begin(); face != arrangement.faces_end(); ++face) {
-		bool in = false;
-		if (!face->is_unbounded()) {
-			std::vector<Vec2> polygon;
-			Arrangement::Ccb_halfedge_const_circulator edge = face->outer_ccb(), first = edge;
-			do {
-				polygon.push_back(to_vec2(edge->source()->point()));
-			} while (++edge != first);
-			in = face_seen(polygon, p_grid, p_cameras) >= p_options.min_floor_seen;
-		}
-		inside[face] = in;
-	}
-	// A face whose floor stayed hidden (a sofa against the wall, the cut of a partition's seen end
-	// across it) is inside too when it opens onto the room, no wall between, and on its other
-	// sides the sweep saw walls facing into it, at least half their length and a metre: the camera
-	// looked across it at them. A face behind a wall seen from the room (a partition's inside), or
-	// bounded by walls never seen, stays out.
-	for (bool grew = true; grew;) {
-		grew = false;
-		for (Arrangement::Face_const_iterator face = arrangement.faces_begin(); face != arrangement.faces_end(); ++face) {
-			if (face->is_unbounded() || inside[face]) {
-				continue;
-			}
-			double open_m = 0.0, outer_m = 0.0, outer_walls_m = 0.0;
-			bool behind_wall = false;
-			Arrangement::Ccb_halfedge_const_circulator edge = face->outer_ccb(), first = edge;
-			do { // counter-clockwise: the face on the left
-				const Vec2 a = to_vec2(edge->source()->point());
-				const Vec2 b = to_vec2(edge->target()->point());
-				const double length = std::hypot(b.x - a.x, b.y - a.y);
-				if (inside[edge->twin()->face()]) {
-					const double wall = wall_cover(a, b, false, p_walls);
-					behind_wall = behind_wall || wall > 0.2; // the room sees a wall's face here: F is behind it (inside a partition)
-					open_m += length * (1.0 - wall);
-				} else {
-					outer_m += length;
-					outer_walls_m += length * wall_cover(a, b, true, p_walls);
-				}
-			} while (++edge != first);
-			if (!behind_wall && open_m >= 0.3 && outer_walls_m >= 1.0 && outer_walls_m >= 0.5 * outer_m) {
-				inside[face] = true;
-				grew = true;
-			}
-		}
-	}
-	// The boundary: halfedges with an inside face on their left and an outside one on their right,
-	// walked face by face: after a boundary halfedge, the next one turns around its target through
-	// the inside faces (so two regions meeting at one corner are walked apart, not mixed up).
-	auto on_boundary = [&](Arrangement::Halfedge_const_handle p_edge) { return inside[p_edge->face()] && !inside[p_edge->twin()->face()]; };
-	std::set<Arrangement::Halfedge_const_handle> walked;
-	std::vector<Vec2> best;
-	double best_area = 0.0;
-	for (Arrangement::Halfedge_const_iterator start = arrangement.halfedges_begin(); start != arrangement.halfedges_end(); ++start) {
-		if (!on_boundary(start) || walked.count(start) != 0) {
-			continue;
-		}
-		std::vector<Vec2> loop;
-		Arrangement::Halfedge_const_handle edge = start;
-		do {
-			walked.insert(edge);
-			loop.push_back(to_vec2(edge->source()->point()));
-			Arrangement::Halfedge_const_handle next = edge->next();
-			for (size_t turns = 0; !on_boundary(next) && turns < arrangement.number_of_halfedges(); turns++) {
-				next = next->twin()->next();
-			}
-			edge = next;
-		} while (edge != Arrangement::Halfedge_const_handle(start) && walked.count(edge) == 0);
-		const double area = loop.size() >= 3 ? polygon_signed_area_m2(loop) : 0.0;
-		if (area > best_area) {
-			best_area = area;
-			best = loop;
-		}
-	}
-	return best.empty() ? best : drop_straight_corners(best);
 }
 
 } // namespace

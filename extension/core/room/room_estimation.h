@@ -5,7 +5,7 @@
 //   1. the world frame: the floor is the lowest large horizontal plane, its normal is up, y = 0
 //      on it, and the x and z axes lie along the dominant walls;
 //   2. the floorplan: vertical planes fitted to the dense surface, the outermost of each
-//      direction kept as walls, their lines cut into faces (CGAL's 2-D arrangement), and the
+//      direction kept as walls, their lines cut into faces (segment_arrangement.h), and the
 //      faces the sweep saw floor in joined into the room's polygon;
 //   3. the ceiling height: the highest large downward-facing plane of the dense model, or, when
 //      the RGB-D camera never saw the ceiling, the height at which the walls' top edges line up

@@ -1,11 +1,7 @@
 #include "room_mesh.h"
 
+#include "polygon_triangulation.h"
 #include "room_cgal.h"
-
-#include <CGAL/Constrained_Delaunay_triangulation_2.h>
-#include <CGAL/Triangulation_vertex_base_with_info_2.h>
-#include <CGAL/Unique_hash_map.h>
-#include <boost/property_map/property_map.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -153,73 +149,6 @@ bool pack_atlas(std::vector<Chart> &r_charts, int p_padding, int p_max_size, int
 	}
 	*r_width = best.width;
 	*r_height = best.height;
-	return true;
-}
-
-// Triangulates the polygon with a constrained Delaunay triangulation of its
-// corners only (no Steiner points, so floor/ceiling edges match the walls).
-// Triangles are counter-clockwise in the (x, z) plane, as corner indices.
-bool triangulate_polygon(const std::vector<Vec2> &p_points, std::vector<std::size_t> *r_triangles, std::string *r_error) {
-	using VertexBase = CGAL::Triangulation_vertex_base_with_info_2<std::size_t, Kernel>;
-	using FaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel>;
-	using Tds = CGAL::Triangulation_data_structure_2<VertexBase, FaceBase>;
-	// No_constraint_intersection_tag: a validated floorplan has no crossing
-	// edges, and CGAL must not invent intersection points.
-	using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, Tds, CGAL::No_constraint_intersection_tag>;
-
-	const std::size_t n = p_points.size();
-	try {
-		Cdt cdt;
-		std::vector<Cdt::Vertex_handle> handles;
-		handles.reserve(n);
-		for (std::size_t i = 0; i < n; ++i) {
-			Cdt::Vertex_handle handle = cdt.insert(room_cgal::to_cgal(p_points[i]));
-			handle->info() = i;
-			handles.push_back(handle);
-		}
-		for (std::size_t i = 0; i < n; ++i) {
-			cdt.insert_constraint(handles[i], handles[(i + 1) % n]);
-		}
-		if (cdt.number_of_vertices() != n) {
-			*r_error = "floor triangulation merged floorplan corners";
-			return false;
-		}
-
-		// Outside is what the infinite face reaches without crossing a wall (a simple polygon has
-		// no holes). CGAL's mark_domain_in_triangulation does this from 5.6 on; Debian 12 has 5.5.
-		CGAL::Unique_hash_map<Cdt::Face_handle, bool> outside(false);
-		std::vector<Cdt::Face_handle> stack = { cdt.infinite_face() };
-		outside[cdt.infinite_face()] = true;
-		while (!stack.empty()) {
-			const Cdt::Face_handle face = stack.back();
-			stack.pop_back();
-			for (int edge = 0; edge < 3; ++edge) {
-				const Cdt::Face_handle next = face->neighbor(edge);
-				if (!outside[next] && !cdt.is_constrained(Cdt::Edge(face, edge))) {
-					outside[next] = true;
-					stack.push_back(next);
-				}
-			}
-		}
-
-		r_triangles->clear();
-		for (Cdt::Face_handle face : cdt.finite_face_handles()) {
-			if (!outside[face]) {
-				for (int corner = 0; corner < 3; ++corner) {
-					r_triangles->push_back(face->vertex(corner)->info());
-				}
-			}
-		}
-	} catch (const std::exception &e) {
-		*r_error = std::string("floor triangulation failed: ") + e.what();
-		return false;
-	}
-	// A simple polygon with n corners and no inner points always has n - 2 triangles.
-	if (r_triangles->size() != 3 * (n - 2)) {
-		*r_error = "floor triangulation produced " + std::to_string(r_triangles->size() / 3) + " triangles, expected " +
-				std::to_string(n - 2);
-		return false;
-	}
 	return true;
 }
 
@@ -393,7 +322,7 @@ RoomMeshResult build_room_mesh_unguarded(const Floorplan &p_floorplan, const Roo
 } // namespace
 
 RoomMeshResult build_room_mesh(const Floorplan &p_floorplan, const RoomMeshOptions &p_options) {
-	// CGAL reports failures by throwing; the Godot side is usually built without
+	// CGAL's predicates report failures by throwing; the Godot side is usually built without
 	// exceptions, so none may leave the core.
 	try {
 		return build_room_mesh_unguarded(p_floorplan, p_options);

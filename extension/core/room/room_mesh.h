@@ -88,8 +88,9 @@ struct RoomMeshResult {
 
 // Builds the coarse room: validates the floorplan (check_floorplan), normalizes
 // it, emits one quad (two triangles) per wall, triangulates floor and ceiling
-// with CGAL using only the polygon corners, and packs all charts into an atlas.
-// Never throws: every failure, CGAL's included, comes back as an error string.
+// with the polygon's constrained Delaunay triangulation of its corners only
+// (polygon_triangulation.h), and packs all charts into an atlas.
+// Never throws: every failure, CGAL's predicates' included, comes back as an error string.
 RoomMeshResult build_room_mesh(const Floorplan &p_floorplan, const RoomMeshOptions &p_options = RoomMeshOptions());
 
 // Index of the chart whose rect contains texel (p_x, p_y), or -1 (padding or outside the atlas).
