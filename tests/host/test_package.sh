@@ -47,6 +47,9 @@ test_zip() {
 		check "the zip lacks addons/roomprobe/$f" says "addons/roomprobe/$f"
 	done
 	check "the zip carries a licence for OpenCV" says "licenses/libopencv-core406.txt"
+	check "the zip carries RoomProbe's LICENSE" says "addons/roomprobe/LICENSE"
+	check "the zip carries the licence of CGAL, compiled in" says "licenses/libcgal-dev.txt"
+	check "the zip carries the licence of liblzma, bundled" says "licenses/liblzma5.txt"
 	check "the zip carries test files" bash -c "! grep -qE 'tests/|binding_test|\.debug\.' <<<\"\$0\"" "$out"
 	check "the zip has files outside addons/roomprobe/" bash -c "! awk 'NR > 1 && \$1 !~ /^addons\/roomprobe\// {bad = 1} END {exit !bad}' <<<\"\$0\"" "$out"
 	rm -rf "$work/unzipped"

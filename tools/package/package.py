@@ -7,7 +7,8 @@ target=release` built the library there. It stages addons/roomprobe/ with:
     libgcc_s), each given RUNPATH $ORIGIN, plus OpenNI2's device drivers in bin/OpenNI2/Drivers/;
   - roomprobe.gdextension listing them all in [dependencies], so that an export copies them too;
   - the editor plugin's scripts, the icons, the shaders and a README;
-  - licenses/: the Debian copyright file of every package a bundled library comes from;
+  - LICENSE (RoomProbe's, MIT) and licenses/: the Debian copyright file of every package a bundled
+    library comes from and of the header-only libraries compiled in (a missing one is an error);
 then checks that nothing shipped needs a glibc newer than the baseline, and zips it.
 The last line is one key=value summary.
 """
@@ -20,6 +21,13 @@ import stat
 import subprocess
 import sys
 import zipfile
+
+# Header-only libraries compiled into RoomProbe's own library: their licences ship too (CGAL's
+# LGPL kernel and polygon code, with Boost's headers; GLM). No GPL CGAL package is compiled in
+# (tools/package/check_cgal_licences.sh).
+HEADER_ONLY_PACKAGES = ("libcgal-dev", "libboost-dev", "libglm-dev")
+# RoomProbe's own licence (MIT), at the clone's top.
+LICENSE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "LICENSE")
 
 # Present on every Linux that runs Godot 4 (apt itself needs libstdc++): never bundled.
 BASE_SYSTEM = re.compile(r"^(linux-vdso|ld-linux-x86-64|libc|libm|libdl|librt|libpthread|libresolv|libutil|libstdc\+\+|libgcc_s)\.so")
@@ -52,8 +60,36 @@ def glibc_needs(path):
 
 
 def debian_package(path):
-    out = subprocess.run(["dpkg", "-S", os.path.realpath(path)], capture_output=True, text=True).stdout
-    return out.split(":")[0] if out else None
+    """The Debian package that installed path, or None. Debian 12 keeps some libraries under
+    /lib (merged with /usr/lib): dpkg knows them by the path they were installed under."""
+    real = os.path.realpath(path)
+    candidates = [real]
+    for a, b in (("/usr/lib/", "/lib/"), ("/lib/", "/usr/lib/")):
+        if real.startswith(a):
+            candidates.append(b + real[len(a):])
+    for candidate in candidates:
+        out = subprocess.run(["dpkg", "-S", candidate], capture_output=True, text=True).stdout
+        if out:
+            return out.split(":")[0]
+    return None
+
+
+def copy_licences(addon, package_of):
+    """RoomProbe's LICENSE, and licenses/PACKAGE.txt (Debian's copyright file) for every package a
+    bundled library comes from and every header-only library compiled in; a file without one
+    stops the package."""
+    shutil.copyfile(LICENSE, os.path.join(addon, "LICENSE"))
+    licenses = os.path.join(addon, "licenses")
+    os.makedirs(licenses)
+    missing = [f"bin/{rel} (no Debian package owns it)" for rel, package in sorted(package_of.items()) if not package]
+    for package in sorted(set(p for p in package_of.values() if p) | set(HEADER_ONLY_PACKAGES)):
+        copyright_file = f"/usr/share/doc/{package}/copyright"
+        if os.path.exists(copyright_file):
+            shutil.copyfile(copyright_file, os.path.join(licenses, f"{package}.txt"))
+        else:
+            missing.append(f"{package} (no {copyright_file})")
+    if missing:
+        sys.exit("package: no licence found for " + "; ".join(missing))
 
 
 def copy_tree_files(src, dst, keep):
@@ -125,12 +161,7 @@ def main():
                                                               ".gdshaderinc", ".uid")) and not n.endswith(".gdextension.uid"))
     shutil.copyfile(args.readme, os.path.join(addon, "README.md"))
     write_gdextension(os.path.join(args.addon, "roomprobe.gdextension"), os.path.join(addon, "roomprobe.gdextension"), bundled)
-    licenses = os.path.join(addon, "licenses")
-    os.makedirs(licenses)
-    for package in sorted(set(p for p in package_of.values() if p)):
-        copyright_file = f"/usr/share/doc/{package}/copyright"
-        if os.path.exists(copyright_file):
-            shutil.copyfile(copyright_file, os.path.join(licenses, f"{package}.txt"))
+    copy_licences(addon, package_of)
     with open(os.path.join(addon, "bin", "BUNDLED.txt"), "w") as f:
         f.write(f"RoomProbe {args.version}: libraries bundled from Debian 12 (bookworm), each with RUNPATH $ORIGIN.\n"
                 f"glibc baseline: {'.'.join(map(str, GLIBC_BASELINE))} (newest needed: GLIBC_{'.'.join(map(str, newest[0]))}).\n\n")
