@@ -125,17 +125,6 @@ Floorplan baffled_room() {
 	return plan_of({ { 0, -4 }, { 6, -4 }, { 6, 0 }, { 6.2, 0 }, { 6.2, -4 }, { 10, -4 }, { 10, 4 }, { 4.2, 4 }, { 4.2, 0 }, { 4, 0 }, { 4, 4 }, { 0, 4 } });
 }
 
-std::vector<Vec2> face_corners(const SegmentArrangement &p_arrangement, int p_face) {
-	std::vector<Vec2> corners;
-	const int first = p_arrangement.faces[p_face].halfedge;
-	int h = first;
-	do {
-		corners.push_back(p_arrangement.vertices[p_arrangement.halfedges[h].source]);
-		h = p_arrangement.halfedges[h].next;
-	} while (h != first && corners.size() <= p_arrangement.halfedges.size());
-	return corners;
-}
-
 // The half-edge structure is consistent: twins pair up, next continues at the target, and a
 // face's cycle keeps the face.
 void check_structure(const SegmentArrangement &p_arrangement) {
@@ -271,7 +260,7 @@ TEST_CASE("room arrangement: a noughts-and-crosses grid clipped to its box close
 	CHECK(a.halfedges.size() == 24);
 	REQUIRE(a.faces.size() == 2);
 	CHECK(a.faces[1].bounded);
-	const std::vector<Vec2> square = face_corners(a, 1);
+	const std::vector<Vec2> square = face_polygon(a, 1);
 	CHECK(square.size() == 4);
 	CHECK(area(square) == doctest::Approx(1.0));
 	for (const Vec2 &p : square) {
@@ -289,7 +278,7 @@ TEST_CASE("room arrangement: three lines through (1/3, 1/3) meet in one vertex, 
 	double total = 0.0;
 	for (size_t f = 1; f < a.faces.size(); ++f) {
 		CHECK(a.faces[f].bounded);
-		const std::vector<Vec2> face = face_corners(a, int(f));
+		const std::vector<Vec2> face = face_polygon(a, int(f));
 		CHECK(face.size() <= 4);
 		CHECK(area(face) > 0.1);
 		total += area(face);

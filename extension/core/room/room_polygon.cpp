@@ -138,18 +138,6 @@ std::vector<std::pair<Vec2, Vec2>> room_lines(const std::vector<WallEstimate> &p
 	return segments;
 }
 
-// The corners of a bounded face, counter-clockwise.
-std::vector<Vec2> face_polygon(const SegmentArrangement &p_arrangement, int p_face) {
-	std::vector<Vec2> polygon;
-	const int first = p_arrangement.faces[p_face].halfedge;
-	int edge = first;
-	do {
-		polygon.push_back(p_arrangement.vertices[p_arrangement.halfedges[edge].source]);
-		edge = p_arrangement.halfedges[edge].next;
-	} while (edge != first);
-	return polygon;
-}
-
 // A face whose floor stayed hidden (a sofa against the wall, the cut of a partition's seen end
 // across it) is inside too when it opens onto the room, no wall between, and on its other
 // sides the sweep saw walls facing into it, at least half their length and a metre: the camera

@@ -169,4 +169,16 @@ SegmentArrangement arrange_segments(const std::vector<std::pair<Vec2, Vec2>> &p_
 	return arrangement;
 }
 
+std::vector<Vec2> face_polygon(const SegmentArrangement &p_arrangement, int p_face) {
+	std::vector<Vec2> polygon;
+	const int first = p_arrangement.faces[size_t(p_face)].halfedge;
+	int edge = first;
+	// At most one corner a half-edge: a broken next-chain cannot loop for ever.
+	do {
+		polygon.push_back(p_arrangement.vertices[size_t(p_arrangement.halfedges[size_t(edge)].source)]);
+		edge = p_arrangement.halfedges[size_t(edge)].next;
+	} while (edge != first && polygon.size() <= p_arrangement.halfedges.size());
+	return polygon;
+}
+
 } // namespace roomprobe

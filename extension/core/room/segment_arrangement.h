@@ -38,4 +38,7 @@ struct SegmentArrangement {
 // finite input.
 SegmentArrangement arrange_segments(const std::vector<std::pair<Vec2, Vec2>> &p_segments);
 
+// The corners of bounded face p_face, counter-clockwise (its half-edges' sources in order).
+std::vector<Vec2> face_polygon(const SegmentArrangement &p_arrangement, int p_face);
+
 } // namespace roomprobe
