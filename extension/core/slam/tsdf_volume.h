@@ -40,7 +40,9 @@ struct TsdfOptions {
 	float max_depth_m = 4.0f;
 	// Cap on allocated blocks (6 KiB each: 512 voxels of 12 bytes): 40000 blocks = 246 MB of
 	// voxels plus a 2 MB hash table. See TsdfVolume for what happens at the cap.
-	int max_blocks = 40000; // clamped to [1, 4194304]
+	// Clamped to [1, 4194304]; a cap whose full model needs more than this machine's memory makes
+	// the constructor throw std::runtime_error naming max_blocks (slam/tsdf_capacity.h).
+	int max_blocks = 40000;
 	// Integration skips the blocks and voxels that a frame cannot change (same result; false: every
 	// voxel of every block in view is updated, the plain path the tests compare with).
 	bool skip_unchanged = true;
