@@ -477,8 +477,8 @@ TEST_CASE("engine: threaded mode, paced so that no frame is dropped, ends with s
 	engine.stop();
 	CHECK_FALSE(engine.is_running());
 	map = engine.probe_map(probe); // the worker's last map: nothing rendered after the matching one undid it
-	// The placement worker built its Embree scene from the mesh the SLAM worker published (frame
-	// 15): rays down onto its triangles meet the dense model (those on a wall may meet the room).
+	// The mesh worker meshed the blocks the SLAM worker copied (frame 15), then built its Embree scene
+	// from that mesh: rays down onto its triangles meet the dense model (those on a wall may meet the room).
 	const std::shared_ptr<const DenseMeshSnapshot> dense = engine.dense_mesh();
 	REQUIRE(dense != nullptr);
 	REQUIRE(dense->mesh != nullptr);
