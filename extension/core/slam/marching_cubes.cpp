@@ -292,21 +292,21 @@ TsdfBlockCopy::TsdfBlockCopy(const TsdfVolume &p_volume, std::vector<glm::ivec3>
 		m_voxels = std::vector<TsdfVoxel>();
 		m_voxels.reserve(needed + needed / 4);
 	}
-	m_index.reserve(found.size());
-	for (size_t i = 0; i < found.size(); i++) {
-		m_index.emplace_back(found[i].first, uint32_t(i));
-		const TsdfVoxel *voxels = view.voxels + size_t(found[i].second) * TSDF_BLOCK_VOXELS;
+	m_keys.reserve(found.size());
+	for (const auto &[key, slot] : found) {
+		m_keys.push_back(key);
+		const TsdfVoxel *voxels = view.voxels + size_t(slot) * TSDF_BLOCK_VOXELS;
 		m_voxels.insert(m_voxels.end(), voxels, voxels + TSDF_BLOCK_VOXELS);
 	}
 }
 
 const TsdfVoxel *TsdfBlockCopy::find_block(const glm::ivec3 &p_block) const {
 	const uint64_t key = tsdf_block_key(p_block);
-	const auto it = std::lower_bound(m_index.begin(), m_index.end(), key, [](const auto &p_entry, uint64_t p_key) { return p_entry.first < p_key; });
-	if (it == m_index.end() || it->first != key) {
+	const auto it = std::lower_bound(m_keys.begin(), m_keys.end(), key);
+	if (it == m_keys.end() || *it != key) {
 		return nullptr;
 	}
-	return &m_voxels[size_t(it->second) * TSDF_BLOCK_VOXELS];
+	return &m_voxels[size_t(it - m_keys.begin()) * TSDF_BLOCK_VOXELS];
 }
 
 void append_mesh(const TriangleMesh &p_piece, TriangleMesh *r_mesh) {

@@ -46,7 +46,7 @@ public:
 	TsdfBlockCopy(const TsdfVolume &p_volume, std::vector<glm::ivec3> p_changed_blocks, std::vector<TsdfVoxel> p_storage = {});
 	// Gives the voxel storage back for the next copy (this copy is empty afterwards).
 	std::vector<TsdfVoxel> release_storage() {
-		m_index.clear();
+		m_keys.clear();
 		m_changed.clear();
 		return std::move(m_voxels);
 	}
@@ -59,7 +59,7 @@ public:
 private:
 	float m_voxel_size_m = 0.01f;
 	std::vector<glm::ivec3> m_changed;
-	std::vector<std::pair<uint64_t, uint32_t>> m_index; // packed block key -> block of m_voxels, sorted
+	std::vector<uint64_t> m_keys; // packed block keys, sorted: block i's voxels are m_voxels[512 i ...]
 	std::vector<TsdfVoxel> m_voxels;
 };
 
