@@ -339,12 +339,7 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 		fused_since_mesh = 0;
 		remesh_due = false;
 	}
-	{
-		const std::lock_guard<std::mutex> lock(mesh_mutex);
-		mesher.clear();
-		whole_mesh.reset();
-		mesh_chunks.clear();
-	}
+	mesh_stage.clear();
 	mesh_inputs.reopen();
 	{
 		const std::lock_guard<std::mutex> lock(probe_mutex);
@@ -437,7 +432,7 @@ void LiveRoom::stop_locked() {
 		}
 	}
 	// Blocks copied after the mesh worker's last take are meshed here.
-	if (std::optional<std::shared_ptr<MeshInput>> input = mesh_inputs.try_take()) {
+	if (std::optional<std::shared_ptr<DenseMeshStage::Input>> input = mesh_inputs.try_take()) {
 		mesh_and_publish(**input);
 	}
 	running = false;
@@ -504,7 +499,7 @@ void LiveRoom::probe_worker() {
 // and a frame waiting behind them would be dropped.
 void LiveRoom::mesh_worker() {
 	while (!stopping) {
-		if (std::optional<std::shared_ptr<MeshInput>> input = mesh_inputs.take(WORKER_POLL)) {
+		if (std::optional<std::shared_ptr<DenseMeshStage::Input>> input = mesh_inputs.take(WORKER_POLL)) {
 			mesh_and_publish(**input);
 		}
 	}
@@ -1267,57 +1262,17 @@ void LiveRoom::send_mesh_input() {
 	if (!slam) {
 		return;
 	}
-	const auto start = std::chrono::steady_clock::now();
-	std::vector<TsdfVoxel> storage;
-	{
-		const std::lock_guard<std::mutex> lock(spare_mutex);
-		storage = std::move(spare_copy_storage);
-	}
-	auto input = std::make_shared<MeshInput>();
-	input->blocks = slam->copy_changed_blocks(std::move(storage));
-	input->copy_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+	const std::shared_ptr<DenseMeshStage::Input> input = mesh_stage.copy_changed(*slam);
 	if (running) {
-		mesh_inputs.put(std::move(input));
+		mesh_inputs.put(input);
 	} else {
 		mesh_and_publish(*input);
 	}
 }
 
-void LiveRoom::mesh_and_publish(MeshInput &p_input) {
-	const auto start = std::chrono::steady_clock::now();
-	auto snapshot = std::make_shared<DenseMeshSnapshot>();
+void LiveRoom::mesh_and_publish(DenseMeshStage::Input &p_input) {
 	bool changed = false;
-	{
-		const std::lock_guard<std::mutex> lock(mesh_mutex);
-		changed = mesher.update(p_input.blocks) > 0 || !whole_mesh;
-		if (changed) {
-			whole_mesh = std::make_shared<const TriangleMesh>(mesher.mesh());
-		}
-		// Only the regions the mesher touched are cut again.
-		for (auto &[region, triangles] : mesher.region_meshes(DENSE_MESH_REGION_BLOCKS, mesher.changed_regions(DENSE_MESH_REGION_BLOCKS))) {
-			if (triangles.indices.empty()) {
-				mesh_chunks.erase(region);
-				continue;
-			}
-			DenseMeshChunk chunk;
-			chunk.region = region;
-			chunk.version = ++chunk_versions;
-			chunk.mesh = std::make_shared<const TriangleMesh>(std::move(triangles));
-			mesh_chunks[region] = std::move(chunk);
-		}
-		snapshot->mesh = whole_mesh;
-		snapshot->chunks.reserve(mesh_chunks.size());
-		for (const auto &[region, chunk] : mesh_chunks) {
-			snapshot->chunks.push_back(chunk);
-		}
-	}
-	snapshot->copy_ms = p_input.copy_ms;
-	snapshot->copied_blocks = p_input.blocks.block_count();
-	snapshot->mesh_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-	{
-		const std::lock_guard<std::mutex> lock(spare_mutex);
-		spare_copy_storage = p_input.blocks.release_storage();
-	}
+	const std::shared_ptr<DenseMeshSnapshot> snapshot = mesh_stage.mesh(p_input, &changed);
 	{
 		const std::lock_guard<std::mutex> lock(publish_mutex);
 		snapshot->version = last_mesh ? last_mesh->version + 1 : 1;

@@ -25,6 +25,7 @@
 // Frames come in with timestamps on their own device clocks (RgbdFrame, FisheyeFrame); the
 // fisheye's pose is the RGB-D trajectory at fisheye timestamp + Rig::fisheye_time_offset_s.
 
+#include "dense_mesh_stage.h"
 #include "mailbox.h"
 
 #include <envmap/dense_render.h>
@@ -141,28 +142,6 @@ struct CoarseSnapshot {
 	LightingChange cumulative; // the coarse model's lighting changes so far (§4.6)
 	CoarseFrameStats last; // of the last frame
 	CoarsePipelineTimings timings; // of the last frame
-};
-
-// The dense mesh, whole (placement, scripts) and cut into cubic regions (display): a viewer
-// replaces only the regions whose version changed, so a growing model costs the main thread
-// what changed, not the whole mesh.
-struct DenseMeshChunk {
-	glm::ivec3 region = glm::ivec3(0); // block index / DENSE_MESH_REGION_BLOCKS
-	uint64_t version = 0; // changes whenever this region's triangles do
-	std::shared_ptr<const TriangleMesh> mesh; // world metres; never empty
-};
-
-inline constexpr int DENSE_MESH_REGION_BLOCKS = 8; // 8 blocks of 8 voxels: 64 cm at 1 cm voxels
-
-struct DenseMeshSnapshot {
-	uint64_t version = 0;
-	std::shared_ptr<const TriangleMesh> mesh; // the whole mesh, world metres
-	std::vector<DenseMeshChunk> chunks; // every non-empty region
-	// What making it cost: copying the changed blocks on the SLAM thread, and marching cubes plus
-	// the whole mesh and the regions on the mesh worker (both on the caller in step mode).
-	double copy_ms = 0.0;
-	double mesh_ms = 0.0;
-	size_t copied_blocks = 0;
 };
 
 // One environment map at one probe (§4.7): the float faces, 25 SH coefficients, and the faces
@@ -338,13 +317,8 @@ private:
 	// io_faces: the probe's dense faces (null: all six raycast now).
 	Cubemap render_map(const glm::dvec3 &p_position, int p_size, const CoarseSnapshot *p_coarse, bool p_with_dense, DenseRenderStats *r_dense,
 			double *r_coarse_ms, double *r_dense_ms, DenseFaceCache *io_faces = nullptr);
-	// The changed blocks copied on the SLAM thread (the mesh worker's input).
-	struct MeshInput {
-		TsdfBlockCopy blocks;
-		double copy_ms = 0.0;
-	};
 	void send_mesh_input();
-	void mesh_and_publish(MeshInput &p_input); // gives the copy's storage back for the next one
+	void mesh_and_publish(DenseMeshStage::Input &p_input);
 	void slam_worker();
 	void coarse_worker();
 	void probe_worker();
@@ -401,12 +375,7 @@ private:
 	int fused_since_mesh = 0;
 	bool remesh_due = false; // waiting for the mesh worker to take the last input
 
-	// The mesh stage: the mesh worker's (or, stopped, the caller's) state.
-	std::mutex mesh_mutex;
-	IncrementalMesher mesher;
-	std::shared_ptr<const TriangleMesh> whole_mesh;
-	std::map<glm::ivec3, DenseMeshChunk, IvecLess> mesh_chunks;
-	uint64_t chunk_versions = 0;
+	DenseMeshStage mesh_stage; // thread-safe itself
 
 	mutable std::mutex placer_mutex;
 	SurfacePlacer placer;
@@ -427,9 +396,7 @@ private:
 	std::thread slam_thread, coarse_thread, probe_thread, room_thread, mesh_thread;
 	// The blocks the mesh worker meshes next. The SLAM thread puts one only when the last was
 	// taken (the blocks changed meanwhile stay marked in the volume), so none is overwritten.
-	Mailbox<std::shared_ptr<MeshInput>> mesh_inputs;
-	std::mutex spare_mutex;
-	std::vector<TsdfVoxel> spare_copy_storage; // the last copy's, reused (its pages stay mapped)
+	Mailbox<std::shared_ptr<DenseMeshStage::Input>> mesh_inputs;
 
 	// The room from the sweep: fisheye frames kept for it (spread over time: when twice
 	// find_room_views are kept, every other one goes and the spacing doubles), and the estimate.
