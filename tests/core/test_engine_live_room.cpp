@@ -742,10 +742,10 @@ TEST_CASE("engine: probes are added, moved and removed; maps carry versions and 
 	// distance to the surface (envmap/parallax.h), area-averaged down the chain.
 	for (const auto &map : { map_a, map_b }) {
 		for (int f = 0; f < 6; f++) {
-			CHECK(map->gpu_faces[size_t(f)].size() == mip_chain_uint16(map->cubemap.size));
+			CHECK(map->gpu_faces[size_t(f)]->size() == mip_chain_uint16(map->cubemap.size));
 		}
 	}
-	const std::vector<uint16_t> &face = map_a->gpu_faces[0];
+	const std::vector<uint16_t> &face = *map_a->gpu_faces[0];
 	// Half floats have an 11-bit significand: relative error <= 2^-11 = 4.9e-4 on rounding.
 	for (int c = 0; c < 3; c++) {
 		CHECK(half_to_float(face[size_t(c)]) == doctest::Approx(colour[c]).epsilon(1e-3));
@@ -764,12 +764,12 @@ TEST_CASE("engine: probes are added, moved and removed; maps carry versions and 
 	CHECK(engine.probe_map(a)->version == 3);
 	CHECK(engine.probe_map(a)->cubemap.size == 16);
 	CHECK(engine.probe_map(a)->position.y == doctest::Approx(1.7));
-	CHECK(engine.probe_map(a)->gpu_faces[5].size() == mip_chain_uint16(16));
+	CHECK(engine.probe_map(a)->gpu_faces[5]->size() == mip_chain_uint16(16));
 	CHECK(engine.probe_map(b)->version == 2); // render_probe renders one
 	engine.set_probe(a, centre, 0); // sizes are clamped to 1..4096
 	engine.render_probe(a);
 	CHECK(engine.probe_map(a)->cubemap.size == 1);
-	CHECK(engine.probe_map(a)->gpu_faces[0].size() == 4u);
+	CHECK(engine.probe_map(a)->gpu_faces[0]->size() == 4u);
 	engine.set_probe(12345, centre, 8); // unknown: ignored
 	CHECK_FALSE(engine.render_probe(12345));
 	// probe_is_current (the editor renders only then): a rendered probe is, until it moves.

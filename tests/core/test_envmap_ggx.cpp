@@ -118,3 +118,41 @@ TEST_CASE("ggx prefilter: one filter per size for the whole process, small ones 
 	CHECK(large->face_size() == 128);
 	CHECK(shared_ggx_filter(128) == large);
 }
+
+TEST_CASE("ggx prefilter after a change of some faces: every texel as a whole filtering gives it, and the untouched faces' fine levels kept") {
+	const std::shared_ptr<const GgxFilter> filter = shared_ggx_filter(64);
+	REQUIRE(filter != nullptr);
+	const Cubemap before = test_map(64);
+	const std::vector<Cubemap> old_chain = filter->apply(before);
+	// Face 2 (+y) brightened: its colours and nothing else change.
+	Cubemap after = clone_cubemap(before);
+	after.faces[2] += cv::Scalar(0.5, 0.25, 0.1);
+	const uint8_t changed = cubemap_changed_faces(before, after);
+	CHECK(changed == (1u << 2));
+	CHECK(cubemap_changed_faces(after, after) == 0);
+	CHECK(cubemap_changed_faces(after, test_map(32)) == 0x3F);
+	uint8_t out_changed = 0;
+	const std::vector<Cubemap> partial = filter->apply(after, old_chain, changed, &out_changed);
+	const std::vector<Cubemap> whole = filter->apply(after);
+	REQUIRE(partial.size() == whole.size());
+	for (size_t l = 0; l < whole.size(); l++) {
+		CAPTURE(l);
+		REQUIRE(partial[l].size == whole[l].size);
+		for (int f = 0; f < 6; f++) {
+			CHECK(cv::norm(partial[l].faces[size_t(f)], whole[l].faces[size_t(f)], cv::NORM_INF) == 0.0); // the same sums in the same order
+		}
+	}
+	// The opposite face (-y) reads nothing of +y at the sharp levels, but the roughest read every face.
+	CHECK((out_changed & (1u << 2)) != 0);
+	CHECK((out_changed & (1u << 3)) != 0);
+	const int sharp = 1; // level 1: alpha 0.0016 at 6 levels
+	CHECK(cv::norm(partial[size_t(sharp)].faces[3], old_chain[size_t(sharp)].faces[3], cv::NORM_INF) == 0.0);
+	// Nothing changed: the previous chain comes back, nothing computed.
+	const std::vector<Cubemap> same = filter->apply(after, whole, 0, &out_changed);
+	CHECK(out_changed == 0);
+	CHECK(cv::norm(same.back().faces[0], whole.back().faces[0], cv::NORM_INF) == 0.0);
+	// A previous chain of another size is not used.
+	const std::vector<Cubemap> fresh = filter->apply(after, shared_ggx_filter(32)->apply(test_map(32)), changed, &out_changed);
+	CHECK(out_changed == 0x3F);
+	CHECK(cv::norm(fresh[1].faces[0], whole[1].faces[0], cv::NORM_INF) == 0.0);
+}

@@ -4,6 +4,7 @@
 #include <envmap/spherical_harmonics.h>
 #include <rig/fisheye_pose.h>
 
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -72,6 +73,20 @@ std::vector<uint16_t> gpu_face(const std::vector<Cubemap> &p_chain, const cv::Ma
 		}
 	}
 	return out;
+}
+
+// Whether two matrices hold the same pixels (both empty counts as the same).
+bool same_pixels(const cv::Mat &p_a, const cv::Mat &p_b) {
+	if (p_a.size() != p_b.size() || p_a.type() != p_b.type()) {
+		return false;
+	}
+	const size_t row_bytes = size_t(p_a.cols) * p_a.elemSize();
+	for (int y = 0; y < p_a.rows && p_a.data != p_b.data; y++) {
+		if (std::memcmp(p_a.ptr(y), p_b.ptr(y), row_bytes) != 0) {
+			return false;
+		}
+	}
+	return true;
 }
 
 // CoarseSnapshot::observed of a texture: where the fisheye observed each texel.
@@ -1168,12 +1183,7 @@ std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dve
 		map->sh = project_sh(map->cubemap);
 		map->sh_ms = ms_since(t) - map->objects.milliseconds;
 		t = now_s();
-		const std::shared_ptr<const GgxFilter> filter = shared_ggx_filter(p_size, cfg.wait_for_ggx_filter);
-		const std::vector<Cubemap> chain = filter ? filter->apply(map->cubemap) : std::vector<Cubemap>{ map->cubemap };
-		map->ggx_mips = filter != nullptr;
-		for (int f = 0; f < 6; f++) {
-			map->gpu_faces[size_t(f)] = gpu_face(chain, map->cubemap.distance_m[size_t(f)], f);
-		}
+		build_gpu_faces(previous.get(), map.get());
 		map->mips_ms = ms_since(t);
 		map->total_ms = ms_since(start);
 		{
@@ -1191,6 +1201,35 @@ std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dve
 	} catch (const std::exception &e) {
 		record_error("probe rendering", e.what());
 		return nullptr;
+	}
+}
+
+// The GGX chain and the faces as Godot takes them. Only what the map changed against the probe's
+// previous one is done again: the chain's texels that read a changed face, and the faces whose
+// chain or distances changed (dense faces take turns, and the coarse model changes with fisheye
+// frames only, so most maps change one or two faces).
+void LiveRoom::build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map) const {
+	const int size = io_map->cubemap.size;
+	const std::shared_ptr<const GgxFilter> filter = shared_ggx_filter(size, cfg.wait_for_ggx_filter);
+	const bool same_kind = p_previous != nullptr && p_previous->cubemap.size == size && p_previous->ggx_mips == (filter != nullptr);
+	const uint8_t source_changed = same_kind ? cubemap_changed_faces(p_previous->cubemap, io_map->cubemap) : uint8_t(0x3F);
+	uint8_t chain_changed = source_changed;
+	std::vector<Cubemap> chain;
+	if (filter) {
+		chain = filter->apply(io_map->cubemap, same_kind ? p_previous->ggx_chain : std::vector<Cubemap>{}, source_changed, &chain_changed);
+		chain[0] = io_map->cubemap; // the same pixels: no second copy kept
+	} else {
+		chain = { io_map->cubemap };
+	}
+	io_map->ggx_mips = filter != nullptr;
+	tbb::parallel_for(0, 6, [&](int p_face) {
+		const size_t f = size_t(p_face);
+		const cv::Mat &distance = io_map->cubemap.distance_m[f];
+		const bool same = same_kind && !(chain_changed & (1u << p_face)) && p_previous->gpu_faces[f] && same_pixels(distance, p_previous->cubemap.distance_m[f]);
+		io_map->gpu_faces[f] = same ? p_previous->gpu_faces[f] : std::make_shared<const std::vector<uint16_t>>(gpu_face(chain, distance, p_face));
+	});
+	if (filter) {
+		io_map->ggx_chain = std::move(chain);
 	}
 }
 

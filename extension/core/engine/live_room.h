@@ -154,8 +154,13 @@ struct ProbeMap {
 	glm::dvec3 position = glm::dvec3(0.0);
 	Cubemap cubemap;
 	ShCoefficients sh{};
-	std::array<std::vector<uint16_t>, 6> gpu_faces;
+	// Per face; a face the map did not change is the previous map's own (the same pointer), so a
+	// node uploads only the faces that changed.
+	std::array<std::shared_ptr<const std::vector<uint16_t>>, 6> gpu_faces;
 	bool ggx_mips = false; // false: box-filtered while the GGX filter is built (see LiveRoomConfig)
+	// The GGX chain as floats (level 0: the cubemap's faces): the next map of the probe filters
+	// again only the texels that read a changed face (GgxFilter::apply). Empty without ggx_mips.
+	std::vector<Cubemap> ggx_chain;
 	uint64_t rgbd_sequence = 0, fisheye_sequence = 0; // the newest frames it includes (0: none)
 	DenseRenderStats dense;
 	VirtualDrawStats objects; // the other virtual objects drawn into it
@@ -332,6 +337,7 @@ private:
 	void record_error(const std::string &p_stage, const std::string &p_what);
 	// Counts a pushed frame and keeps its push time for the latency figures.
 	void note_arrival(uint64_t p_sequence, double p_arrival_s, uint64_t *io_pushed, std::vector<std::pair<uint64_t, double>> *io_arrivals);
+	void build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map) const;
 	void note_latency(const ProbeMap &p_map);
 	void wake_probes();
 

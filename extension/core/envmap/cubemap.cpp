@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace roomprobe {
 
@@ -22,6 +23,24 @@ Cubemap clone_cubemap(const Cubemap &p_cubemap) {
 		out.distance_m[f] = p_cubemap.distance_m[f].clone();
 	}
 	return out;
+}
+
+uint8_t cubemap_changed_faces(const Cubemap &p_a, const Cubemap &p_b) {
+	if (!is_valid_cubemap(p_a) || !is_valid_cubemap(p_b) || p_a.size != p_b.size) {
+		return 0x3F;
+	}
+	uint8_t changed = 0;
+	const size_t row_bytes = size_t(p_a.size) * sizeof(cv::Vec3f);
+	for (int f = 0; f < 6; f++) {
+		const cv::Mat &a = p_a.faces[size_t(f)], &b = p_b.faces[size_t(f)];
+		for (int y = 0; y < p_a.size && a.data != b.data; y++) {
+			if (std::memcmp(a.ptr(y), b.ptr(y), row_bytes) != 0) {
+				changed |= uint8_t(1u << f);
+				break;
+			}
+		}
+	}
+	return changed;
 }
 
 bool has_distances(const Cubemap &p_cubemap) {

@@ -33,6 +33,10 @@ Cubemap clone_cubemap(const Cubemap &p_cubemap);
 // Whether p_cubemap has six p_cubemap.size-square CV_32FC3 faces (size > 0).
 bool is_valid_cubemap(const Cubemap &p_cubemap);
 
+// A bit per face (1 << face) whose colours differ between two valid cubemaps, bit for bit; all
+// six when their sizes differ.
+uint8_t cubemap_changed_faces(const Cubemap &p_a, const Cubemap &p_b);
+
 // The exact solid angle (steradians) that face pixel (p_u, p_v) of a p_size face subtends;
 // the same for every face. The 6 p_size^2 pixels sum to 4 pi.
 double cubemap_texel_solid_angle(int p_u, int p_v, int p_size);

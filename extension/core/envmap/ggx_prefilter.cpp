@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <future>
@@ -134,6 +135,21 @@ std::vector<Tap> texel_taps(const glm::dvec3 &p_r, double p_alpha, int p_samples
 	return merged;
 }
 
+// Per output texel (p_first: its taps' range in p_texel), a bit per source face its taps read:
+// a pyramid texel's face follows from its box level's offset and size.
+std::vector<uint8_t> source_face_bits(const std::vector<uint32_t> &p_first, const std::vector<uint32_t> &p_texel, const std::vector<size_t> &p_offset,
+		const std::vector<int> &p_sizes) {
+	std::vector<uint8_t> bits(p_first.empty() ? 0 : p_first.size() - 1, 0);
+	for (size_t t = 0; t < bits.size(); t++) {
+		for (uint32_t i = p_first[t]; i < p_first[t + 1]; i++) {
+			const size_t l = size_t(std::upper_bound(p_offset.begin(), p_offset.end(), size_t(p_texel[i])) - p_offset.begin()) - 1;
+			const size_t n = size_t(p_sizes[l]);
+			bits[t] |= uint8_t(1u << ((size_t(p_texel[i]) - p_offset[l]) / (n * n)));
+		}
+	}
+	return bits;
+}
+
 } // namespace
 
 double ggx_level_roughness(int p_level, int p_levels) {
@@ -195,6 +211,7 @@ GgxFilter::GgxFilter(int p_size, const GgxPrefilterOptions &p_options) {
 			}
 		}
 		level.first.push_back(uint32_t(level.texel.size()));
+		level.source_faces = source_face_bits(level.first, level.texel, pyramid_offset, sizes);
 		levels.push_back(std::move(level));
 	}
 }
@@ -216,10 +233,22 @@ size_t GgxFilter::memory_bytes() const {
 }
 
 std::vector<Cubemap> GgxFilter::apply(const Cubemap &p_source) const {
+	return apply(p_source, {}, 0x3F, nullptr);
+}
+
+std::vector<Cubemap> GgxFilter::apply(const Cubemap &p_source, const std::vector<Cubemap> &p_previous, uint8_t p_changed_faces, uint8_t *r_changed_faces) const {
 	std::vector<Cubemap> chain;
+	if (r_changed_faces != nullptr) {
+		*r_changed_faces = 0;
+	}
 	if (!is_valid() || !is_valid_cubemap(p_source) || p_source.size != size) {
 		return chain;
 	}
+	bool reuse = p_previous.size() == levels.size() + 1;
+	for (size_t l = 0; reuse && l < levels.size(); l++) {
+		reuse = p_previous[l + 1].size == levels[l].size;
+	}
+	const uint8_t changed = reuse ? uint8_t(p_changed_faces & 0x3F) : uint8_t(0x3F);
 	// The box pyramid, flattened in the order the taps index it.
 	std::vector<cv::Vec3f> pyramid(pyramid_offset.empty() ? 0 : pyramid_offset.back() + 6);
 	Cubemap level = p_source;
@@ -241,22 +270,37 @@ std::vector<Cubemap> GgxFilter::apply(const Cubemap &p_source) const {
 		}
 	}
 	chain.push_back(clone_cubemap(p_source));
-	for (const Level &filter : levels) {
+	std::atomic<uint8_t> computed{ changed };
+	for (size_t l = 0; l < levels.size(); l++) {
+		const Level &filter = levels[l];
 		Cubemap out = make_cubemap(filter.size);
 		const int n = filter.size;
 		tbb::parallel_for(0, 6 * n, [&](int p_row) {
 			const int face = p_row / n, y = p_row % n;
 			cv::Vec3f *row = out.faces[size_t(face)].ptr<cv::Vec3f>(y);
+			const cv::Vec3f *old_row = reuse ? p_previous[l + 1].faces[size_t(face)].ptr<cv::Vec3f>(y) : nullptr;
+			bool any = false;
 			for (int x = 0; x < n; x++) {
 				const size_t texel = size_t(p_row) * size_t(n) + size_t(x);
+				if ((filter.source_faces[texel] & changed) == 0) {
+					row[x] = old_row[x]; // reads no changed face (changed is all faces without a previous chain)
+					continue;
+				}
+				any = true;
 				cv::Vec3f sum(0.0f, 0.0f, 0.0f);
 				for (uint32_t i = filter.first[texel]; i < filter.first[texel + 1]; i++) {
 					sum += pyramid[filter.texel[i]] * filter.weight[i];
 				}
 				row[x] = sum;
 			}
+			if (any) {
+				computed.fetch_or(uint8_t(1u << face), std::memory_order_relaxed);
+			}
 		});
 		chain.push_back(std::move(out));
+	}
+	if (r_changed_faces != nullptr) {
+		*r_changed_faces = computed.load();
 	}
 	return chain;
 }

@@ -61,6 +61,12 @@ public:
 	// The chain of a source of face_size(): level 0 is a copy of the source. Empty for another
 	// size or an invalid source.
 	std::vector<Cubemap> apply(const Cubemap &p_source) const;
+	// The same after a change of some source faces: p_previous is this filter's chain of a source
+	// that differs from p_source only in the faces of p_changed_faces (a bit per face, 1 << face).
+	// Texels whose taps read none of them are copied from p_previous (the filter is linear, so they
+	// come out the same). r_changed_faces (may be null): a bit per output face some level of which
+	// was computed again. A p_previous of another shape is ignored (everything computed again).
+	std::vector<Cubemap> apply(const Cubemap &p_source, const std::vector<Cubemap> &p_previous, uint8_t p_changed_faces, uint8_t *r_changed_faces) const;
 
 private:
 	struct Level {
@@ -68,6 +74,7 @@ private:
 		std::vector<uint32_t> first; // per output texel (face, y, x) and one past the end: its taps
 		std::vector<uint32_t> texel; // into the flattened box pyramid
 		std::vector<float> weight; // summing to 1 per output texel
+		std::vector<uint8_t> source_faces; // per output texel: a bit per source face its taps read
 	};
 	int size = 0, samples = 0;
 	std::vector<size_t> pyramid_offset; // first texel of each box level in the flattened pyramid

@@ -42,6 +42,9 @@ struct RecentBlocks {
 	// True when p_block was among the last SIZE; else remembers it.
 	bool seen_or_add(const glm::ivec3 &p_block) {
 		const uint64_t k = tsdf_block_key(p_block);
+		if (k == keys[(next + SIZE - 1) % SIZE] && used[(next + SIZE - 1) % SIZE]) {
+			return true; // the last one: mostly, for neighbouring pixels
+		}
 		for (int i = 0; i < SIZE; i++) {
 			if (used[i] && keys[i] == k) {
 				return true;
@@ -59,6 +62,18 @@ struct RecentBlocks {
 void append_segment_blocks(const glm::vec3 &p_a, const glm::vec3 &p_b, RecentBlocks *p_recent, std::vector<glm::ivec3> *r_blocks) {
 	glm::ivec3 cell(tsdf_floor(p_a.x), tsdf_floor(p_a.y), tsdf_floor(p_a.z));
 	const glm::ivec3 last(tsdf_floor(p_b.x), tsdf_floor(p_b.y), tsdf_floor(p_b.z));
+	// Most bands (8 cm at the defaults, a block's size) lie in one block or in two that share a
+	// face: their union is a box, so the segment meets those two and no other, without the DDA.
+	const glm::ivec3 apart = glm::abs(last - cell);
+	if (apart.x + apart.y + apart.z <= 1) {
+		if (!p_recent->seen_or_add(cell)) {
+			r_blocks->push_back(cell);
+		}
+		if (last != cell && !p_recent->seen_or_add(last)) {
+			r_blocks->push_back(last);
+		}
+		return;
+	}
 	const glm::vec3 d = p_b - p_a;
 	glm::ivec3 step(0);
 	glm::vec3 t_max(std::numeric_limits<float>::infinity());
@@ -312,23 +327,25 @@ void TsdfVolume::collect_band_blocks(const cv::Mat &p_depth_m, const PinholeIntr
 	const int stripes = (p_depth_m.rows + ROWS_PER_STRIPE - 1) / ROWS_PER_STRIPE;
 	std::vector<std::vector<glm::ivec3>> per_stripe(static_cast<size_t>(stripes));
 	std::vector<int> valid(size_t(stripes), 0);
+	// A pixel's ray in block units, per metre of camera z: row_ray + u * ray_step (no division a pixel).
+	const glm::vec3 origin = translation * inv_block;
+	const glm::vec3 ray_step = rotation[0] * (inv_block / p_camera.fx); // glm: [0] is column 0
 	cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range &p_range) {
 		for (int s = p_range.start; s < p_range.end; s++) {
 			std::vector<glm::ivec3> &out = per_stripe[size_t(s)];
 			RecentBlocks recent;
 			for (int v = s * ROWS_PER_STRIPE; v < std::min(p_depth_m.rows, (s + 1) * ROWS_PER_STRIPE); v++) {
 				const float *row = p_depth_m.ptr<float>(v);
+				const glm::vec3 row_ray = rotation * p_camera.unproject(glm::vec2(0.0f, float(v)), 1.0f) * inv_block;
 				for (int u = 0; u < p_depth_m.cols; u++) {
 					const float d = row[u];
 					if (!(d == d)) {
 						continue; // no reading (the depth is clean)
 					}
 					valid[size_t(s)]++;
-					const glm::vec2 pixel = glm::vec2(float(u), float(v));
+					const glm::vec3 ray = row_ray + float(u) * ray_step;
 					const float z0 = std::max(d - m_options.truncation_m, 0.5f * m_options.min_depth_m);
-					const glm::vec3 a = (rotation * p_camera.unproject(pixel, z0) + translation) * inv_block;
-					const glm::vec3 b = (rotation * p_camera.unproject(pixel, d + m_options.truncation_m) + translation) * inv_block;
-					append_segment_blocks(a, b, &recent, &out);
+					append_segment_blocks(origin + z0 * ray, origin + (d + m_options.truncation_m) * ray, &recent, &out);
 				}
 			}
 		}
@@ -544,8 +561,8 @@ IntegrationStats TsdfVolume::integrate(const cv::Mat &p_depth_m, const cv::Mat &
 							any |= tsdf_update_voxel_at(frame, row + float(x) * step_x, voxel + x);
 						}
 					}
-					for (int x = 0; x < TSDF_BLOCK_SIDE; x++) {
-						saturated &= voxel[x].tsdf == 1.0f && voxel[x].weight == full_weight;
+					for (int x = 0; x < TSDF_BLOCK_SIDE && saturated; x++) { // a block near a surface stops at its first row
+						saturated = voxel[x].tsdf == 1.0f && voxel[x].weight == full_weight;
 					}
 				}
 			}

@@ -308,8 +308,11 @@ bool RoomProbe::take_map() {
 	const bool same_size = cubemap.is_valid() && cubemap->get_width() == size && cubemap->get_layers() == 6;
 	Array layers;
 	for (int i = 0; i < 6; i++) {
+		if (same_size && map && map->gpu_faces[size_t(i)] == newest->gpu_faces[size_t(i)]) {
+			continue; // the engine kept the previous map's face: nothing to upload
+		}
 		// The worker built the half floats and their mips: only bytes are copied here.
-		const std::vector<uint16_t> &half = newest->gpu_faces[size_t(i)];
+		const std::vector<uint16_t> &half = *newest->gpu_faces[size_t(i)];
 		PackedByteArray bytes;
 		bytes.resize(int64_t(half.size() * sizeof(uint16_t)));
 		std::memcpy(bytes.ptrw(), half.data(), half.size() * sizeof(uint16_t));
