@@ -19,10 +19,6 @@ constexpr uint32_t RENDER_LAYER_BITS = (1u << 20) - 1;
 // True when p_value names one of p_count enum values; otherwise an error naming p_where
 // ("Node.property") and the property is left as it was.
 inline bool enum_in_range(const char *p_where, int64_t p_value, int64_t p_count) {
-	// The binding hands enums over as unsigned 32-bit values: -1 from a script arrives as 2^32 - 1.
-	if (p_value > INT32_MAX && p_value <= int64_t(UINT32_MAX)) {
-		p_value -= int64_t(1) << 32;
-	}
 	if (p_value >= 0 && p_value < p_count) {
 		return true;
 	}
@@ -62,16 +58,26 @@ inline int64_t clamped_int(const char *p_where, int64_t p_value, int64_t p_low, 
 	return value;
 }
 
-// A render layer mask keeps only Godot's 20 layers, with a warning when other bits were set
-// (-1 from a script arrives as 0xFFFFFFFF).
-inline uint32_t render_layers(const char *p_where, uint32_t p_mask) {
-	if ((p_mask & ~RENDER_LAYER_BITS) != 0) {
+// A render layer mask keeps only Godot's 20 layers, with a warning when other bits were set.
+// Setters take int64_t, as scripts give integers: a narrower parameter would let the binding cut
+// 2^62 down to 0 unseen.
+inline uint32_t render_layers(const char *p_where, int64_t p_mask) {
+	const uint64_t mask = uint64_t(p_mask);
+	if ((mask & ~uint64_t(RENDER_LAYER_BITS)) != 0) {
 		char text[256];
-		std::snprintf(text, sizeof(text), "%s has bits above the 20 render layers (0x%x); kept 0x%x", p_where, p_mask,
-				p_mask & RENDER_LAYER_BITS);
+		std::snprintf(text, sizeof(text), "%s has bits above the 20 render layers (0x%llx); kept 0x%x", p_where, (unsigned long long)mask,
+				uint32_t(mask & RENDER_LAYER_BITS));
 		WARN_PRINT(text);
 	}
-	return p_mask & RENDER_LAYER_BITS;
+	return uint32_t(mask & RENDER_LAYER_BITS);
+}
+
+// Whether every number of a vector or a transform is finite.
+inline bool finite(const godot::Vector3 &p_v) {
+	return std::isfinite(p_v.x) && std::isfinite(p_v.y) && std::isfinite(p_v.z);
+}
+inline bool finite(const godot::Transform3D &p_t) {
+	return finite(p_t.basis.rows[0]) && finite(p_t.basis.rows[1]) && finite(p_t.basis.rows[2]) && finite(p_t.origin);
 }
 
 } // namespace roomprobe::property_checks

@@ -196,9 +196,11 @@ func _run_file(file: String) -> bool:
 	tc.tree = self
 	tc.rendering = _rendering
 	tc.artifacts_dir = _artifacts
+	tc._log_collector = _collector
 	for n in names:
 		await _run_test(tc, file, n)
 	tc.tree = null
+	tc._log_collector = null
 	tc = null  # the last reference: the test case (and what its members hold) goes now
 	await process_frame
 	var orphans := int(Performance.get_monitor(Performance.OBJECT_ORPHAN_NODE_COUNT) - orphans_before) - (_orphans_reported - reported_before)

@@ -124,7 +124,6 @@ func test_invalid_floorplans_warn_and_say_why() -> void:
 		"self-intersecting": [PackedVector2Array([Vector2(0, 0), Vector2(4, 3), Vector2(4, 0), Vector2(0, 3)]), 2.5],
 		"fewer than 3 points": [PackedVector2Array([Vector2(0, 0), Vector2(1, 0)]), 2.5],
 		"zero area": [PackedVector2Array([Vector2(0, 0), Vector2(1, 0), Vector2(2, 0)]), 2.5],
-		"at or below": [PackedVector2Array(FIGURE4), 0.0],
 		# 100000 points once held the main thread for minutes: refused at once (issue #17).
 		"too many points": [_circle(100000), 2.5],
 	}
@@ -135,7 +134,11 @@ func test_invalid_floorplans_warn_and_say_why() -> void:
 		assert_eq(_room.get_mesh().get_surface_count(), 0, "%s leaves no mesh" % expected)
 		var text := " ".join(_room.get_warnings())
 		assert_true(text.to_lower().contains(expected), "warning for %s says so: %s" % [expected, text])
+	# A ceiling at the floor is clamped to the lowest the property takes (issue #38's sweep).
 	_room.floorplan = PackedVector2Array(FIGURE4)
+	expect_warning("CoarseRoomModel.ceiling_height must be within [0.5, 100] m; got 0")
+	_room.ceiling_height = 0.0
+	assert_eq(_room.ceiling_height, 0.5)
 	_room.ceiling_height = HEIGHT
 	assert_true(_room.is_valid(), "valid again after the fix")
 	assert_eq(_room.get_mesh().get_surface_count(), 1)

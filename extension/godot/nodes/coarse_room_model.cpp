@@ -99,6 +99,15 @@ void CoarseRoomModel::_process(double p_delta) {
 }
 
 void CoarseRoomModel::set_floorplan(const PackedVector2Array &p_points) {
+	for (int64_t i = 0; i < p_points.size(); i++) {
+		if (!std::isfinite(p_points[i].x) || !std::isfinite(p_points[i].y)) {
+			char text[160];
+			std::snprintf(text, sizeof(text), "CoarseRoomModel.floorplan: corner %lld is (%g, %g), not a finite point; the floorplan was left as it was", (long long)i,
+					double(p_points[i].x), double(p_points[i].y));
+			ERR_PRINT(text);
+			return;
+		}
+	}
 	floorplan = p_points;
 	rebuild();
 }
@@ -106,17 +115,17 @@ void CoarseRoomModel::set_floorplan(const PackedVector2Array &p_points) {
 PackedVector2Array CoarseRoomModel::get_floorplan() const { return floorplan; }
 
 void CoarseRoomModel::set_ceiling_height(double p_metres) {
-	ceiling_height = p_metres;
+	ceiling_height = property_checks::clamped("CoarseRoomModel.ceiling_height", p_metres, CEILING_HEIGHT_MIN_M, CEILING_HEIGHT_MAX_M, ceiling_height, " m");
 	rebuild();
 }
 
 double CoarseRoomModel::get_ceiling_height() const { return ceiling_height; }
 
-void CoarseRoomModel::set_floorplan_source(FloorplanSource p_source) {
+void CoarseRoomModel::set_floorplan_source(int64_t p_source) {
 	if (!property_checks::enum_in_range("CoarseRoomModel.floorplan_source", p_source, 3)) {
 		return;
 	}
-	floorplan_source = p_source;
+	floorplan_source = FloorplanSource(p_source);
 	if (floorplan_source != FLOORPLAN_AUTOMATIC) {
 		found.reset();
 		wall_confidence.clear();
@@ -189,8 +198,8 @@ Vector2i CoarseRoomModel::get_atlas_size() const {
 }
 
 bool CoarseRoomModel::set_atlas_image(const Ref<Image> &p_image) {
-	ERR_FAIL_COND_V_MSG(!result.ok, false, "The room has no valid mesh, so no atlas.");
-	ERR_FAIL_COND_V_MSG(p_image.is_null(), false, "No image.");
+	ERR_FAIL_COND_V_MSG(!result.ok, false, "CoarseRoomModel.set_atlas_image: the room has no valid mesh, so no atlas.");
+	ERR_FAIL_COND_V_MSG(p_image.is_null(), false, "CoarseRoomModel.set_atlas_image: no image.");
 	ERR_FAIL_COND_V_MSG(p_image->get_width() != result.mesh.atlas_width || p_image->get_height() != result.mesh.atlas_height, false,
 			"The image must have the atlas's size (get_atlas_size()).");
 	ERR_FAIL_COND_V_MSG(p_image->is_compressed(), false, "A compressed image cannot be used as the atlas.");
@@ -236,11 +245,11 @@ void CoarseRoomModel::set_rig_capture_path(const NodePath &p_path) {
 
 NodePath CoarseRoomModel::get_rig_capture_path() const { return rig_capture_path; }
 
-void CoarseRoomModel::set_pose_source(PoseSource p_source) {
+void CoarseRoomModel::set_pose_source(int64_t p_source) {
 	if (!property_checks::enum_in_range("CoarseRoomModel.pose_source", p_source, 2)) {
 		return;
 	}
-	pose_source = p_source;
+	pose_source = PoseSource(p_source);
 	push_room();
 	update_configuration_warnings();
 }
@@ -261,17 +270,17 @@ void CoarseRoomModel::set_inpainting(bool p_enabled) {
 
 bool CoarseRoomModel::get_inpainting() const { return inpainting; }
 
-void CoarseRoomModel::set_lighting_compensation(LightingCompensation p_mode) {
+void CoarseRoomModel::set_lighting_compensation(int64_t p_mode) {
 	if (!property_checks::enum_in_range("CoarseRoomModel.lighting_compensation", p_mode, 3)) {
 		return;
 	}
-	lighting_compensation = p_mode;
+	lighting_compensation = LightingCompensation(p_mode);
 	push_room();
 }
 
 CoarseRoomModel::LightingCompensation CoarseRoomModel::get_lighting_compensation() const { return lighting_compensation; }
 
-void CoarseRoomModel::set_room_layers(uint32_t p_layers) {
+void CoarseRoomModel::set_room_layers(int64_t p_layers) {
 	room_layers = property_checks::render_layers("CoarseRoomModel.room_layers", p_layers);
 	if (mesh_instance != nullptr) {
 		mesh_instance->set_layer_mask(room_layers);
@@ -808,13 +817,13 @@ void CoarseRoomModel::_bind_methods() {
 	ADD_GROUP("Room", "");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "floorplan_source", PROPERTY_HINT_ENUM, "Manual,Recording,Automatic"), "set_floorplan_source", "get_floorplan_source");
 	ADD_PROPERTY(PropertyInfo(Variant::PACKED_VECTOR2_ARRAY, "floorplan"), "set_floorplan", "get_floorplan");
-	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "ceiling_height", PROPERTY_HINT_RANGE, "0.5,10,0.01,or_greater,suffix:m"), "set_ceiling_height", "get_ceiling_height");
+	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "ceiling_height", PROPERTY_HINT_RANGE, "0.5,100,0.01,exp,suffix:m"), "set_ceiling_height", "get_ceiling_height");
 	ADD_GROUP("Sources", "");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "rig_capture", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "RigCapture"), "set_rig_capture", "get_rig_capture");
 	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "dense_slam", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "DenseSLAM"), "set_dense_slam", "get_dense_slam");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "pose_source", PROPERTY_HINT_ENUM, "Ground Truth,Dense SLAM"), "set_pose_source", "get_pose_source");
 	ADD_GROUP("Texture", "");
-	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "texel_size", PROPERTY_HINT_RANGE, "0.005,0.1,0.001,suffix:m"), "set_texel_size", "get_texel_size");
+	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "texel_size", PROPERTY_HINT_RANGE, "0.001,1,0.001,exp,suffix:m"), "set_texel_size", "get_texel_size");
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "inpainting"), "set_inpainting", "get_inpainting");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "lighting_compensation", PROPERTY_HINT_ENUM, "Off,Additive (paper),Gain"), "set_lighting_compensation", "get_lighting_compensation");
 	ADD_GROUP("Rendering", "");

@@ -45,7 +45,7 @@ public:
 	godot::PackedVector2Array get_floorplan() const;
 	void set_ceiling_height(double p_metres);
 	double get_ceiling_height() const;
-	void set_floorplan_source(FloorplanSource p_source);
+	void set_floorplan_source(int64_t p_source);
 	FloorplanSource get_floorplan_source() const;
 	void set_texel_size(double p_metres);
 	double get_texel_size() const;
@@ -54,13 +54,13 @@ public:
 	godot::NodePath get_rig_capture_path() const;
 	void set_dense_slam_path(const godot::NodePath &p_path);
 	godot::NodePath get_dense_slam_path() const;
-	void set_pose_source(PoseSource p_source);
+	void set_pose_source(int64_t p_source);
 	PoseSource get_pose_source() const;
 	void set_inpainting(bool p_enabled);
 	bool get_inpainting() const;
-	void set_lighting_compensation(LightingCompensation p_mode);
+	void set_lighting_compensation(int64_t p_mode);
 	LightingCompensation get_lighting_compensation() const;
-	void set_room_layers(uint32_t p_layers);
+	void set_room_layers(int64_t p_layers);
 	uint32_t get_room_layers() const;
 
 	// Shows the engine's newest coarse atlas if it has not been shown yet (signals
@@ -138,6 +138,7 @@ private:
 	// beyond any GPU's texture limit for a room, coarser leaves a wall a handful of texels.
 	static constexpr double TEXEL_SIZE_MIN_M = 0.001;
 	static constexpr double TEXEL_SIZE_MAX_M = 1.0;
+	static constexpr double CEILING_HEIGHT_MIN_M = 0.5, CEILING_HEIGHT_MAX_M = 100.0; // as the property's hint
 	double texel_size = 0.02;
 
 	FloorplanCheck check;

@@ -212,7 +212,7 @@ void DenseSLAM::set_fusion_max_depth(double p_metres) {
 
 double DenseSLAM::get_fusion_max_depth() const { return fusion_max_depth; }
 
-void DenseSLAM::set_max_blocks(int p_blocks) {
+void DenseSLAM::set_max_blocks(int64_t p_blocks) {
 	const int blocks = int(property_checks::clamped_int("DenseSLAM.max_blocks", p_blocks, 1, 4194304));
 	// A cap whose full model would not fit in this machine's memory is refused, naming the memory
 	// it needs (issue #38: the top of the range ended in std::bad_alloc when the model was made).
@@ -227,7 +227,7 @@ void DenseSLAM::set_max_blocks(int p_blocks) {
 
 int DenseSLAM::get_max_blocks() const { return max_blocks; }
 
-void DenseSLAM::set_mesh_layers(uint32_t p_layers) {
+void DenseSLAM::set_mesh_layers(int64_t p_layers) {
 	mesh_layers = property_checks::render_layers("DenseSLAM.mesh_layers", p_layers);
 	masked_camera = 0; // the AR camera's mask is looked at again
 	for (auto &[region, view] : chunk_views) {
@@ -237,13 +237,13 @@ void DenseSLAM::set_mesh_layers(uint32_t p_layers) {
 
 uint32_t DenseSLAM::get_mesh_layers() const { return mesh_layers; }
 
-void DenseSLAM::set_mesh_update_interval(int p_frames) {
+void DenseSLAM::set_mesh_update_interval(int64_t p_frames) {
 	mesh_update_interval = int(property_checks::clamped_int("DenseSLAM.mesh_update_interval", p_frames, 1, 300, " frames"));
 	push_settings();
 }
 
 int DenseSLAM::get_mesh_update_interval() const { return mesh_update_interval; }
-void DenseSLAM::set_mesh_upload_budget(int p_triangles) {
+void DenseSLAM::set_mesh_upload_budget(int64_t p_triangles) {
 	mesh_upload_budget = int(property_checks::clamped_int("DenseSLAM.mesh_upload_budget", p_triangles, 0, 1000000, " triangles"));
 }
 int DenseSLAM::get_mesh_upload_budget() const { return mesh_upload_budget; }

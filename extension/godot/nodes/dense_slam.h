@@ -40,7 +40,7 @@ public:
 	double get_voxel_size() const;
 	void set_truncation_distance(double p_metres);
 	double get_truncation_distance() const;
-	void set_max_blocks(int p_blocks);
+	void set_max_blocks(int64_t p_blocks);
 	int get_max_blocks() const;
 	void set_colour_weight(double p_metres_per_intensity);
 	double get_colour_weight() const;
@@ -48,11 +48,11 @@ public:
 	double get_tracking_max_depth() const;
 	void set_fusion_max_depth(double p_metres);
 	double get_fusion_max_depth() const;
-	void set_mesh_layers(uint32_t p_layers);
+	void set_mesh_layers(int64_t p_layers);
 	uint32_t get_mesh_layers() const;
-	void set_mesh_upload_budget(int p_triangles);
+	void set_mesh_upload_budget(int64_t p_triangles);
 	int get_mesh_upload_budget() const;
-	void set_mesh_update_interval(int p_frames);
+	void set_mesh_update_interval(int64_t p_frames);
 	int get_mesh_update_interval() const;
 
 	// Takes the engine's newest tracked RGB-D frame if it has not been taken yet (drives the

@@ -27,9 +27,9 @@ void RigCapture::set_recording_path(const String &p_path) {
 }
 
 String RigCapture::get_recording_path() const { return recording_path; }
-void RigCapture::set_pacing(Pacing p_pacing) {
+void RigCapture::set_pacing(int64_t p_pacing) {
 	if (property_checks::enum_in_range("RigCapture.pacing", p_pacing, 2)) {
-		pacing = p_pacing;
+		pacing = Pacing(p_pacing);
 	}
 }
 RigCapture::Pacing RigCapture::get_pacing() const { return pacing; }
@@ -38,7 +38,7 @@ bool RigCapture::get_loop() const { return loop; }
 void RigCapture::set_autoplay(bool p_autoplay) { autoplay = p_autoplay; }
 bool RigCapture::get_autoplay() const { return autoplay; }
 
-void RigCapture::set_source(Source p_source) {
+void RigCapture::set_source(int64_t p_source) {
 	if (!property_checks::enum_in_range("RigCapture.source (0 Recording, 1 Live)", p_source, 2)) {
 		return;
 	}
@@ -46,7 +46,7 @@ void RigCapture::set_source(Source p_source) {
 		return;
 	}
 	close();
-	source = p_source;
+	source = Source(p_source);
 	last_error.clear();
 	update_configuration_warnings();
 }
@@ -81,11 +81,11 @@ String RigCapture::get_rgbd_device() const { return rgbd_device; }
 void RigCapture::set_fisheye_device(const String &p_id) { fisheye_device = p_id; }
 String RigCapture::get_fisheye_device() const { return fisheye_device; }
 
-void RigCapture::set_fisheye_backend(FisheyeBackend p_backend) {
+void RigCapture::set_fisheye_backend(int64_t p_backend) {
 	if (!property_checks::enum_in_range("RigCapture.fisheye_backend (0 Aravis, 1 UVC)", p_backend, 2)) {
 		return;
 	}
-	fisheye_backend = p_backend;
+	fisheye_backend = FisheyeBackend(p_backend);
 }
 
 RigCapture::FisheyeBackend RigCapture::get_fisheye_backend() const { return fisheye_backend; }
@@ -95,21 +95,13 @@ void RigCapture::set_auto_exposure(bool p_on) { auto_exposure = p_on; }
 bool RigCapture::get_auto_exposure() const { return auto_exposure; }
 
 void RigCapture::set_exposure_us(double p_exposure_us) {
-	if (!(p_exposure_us > 0.0 && p_exposure_us <= 10e6)) {
-		ERR_PRINT(String("RigCapture: exposure_us must be within 0 (excluded) and 10000000 microseconds; got ") + String::num(p_exposure_us) + "; left as it was");
-		return;
-	}
-	exposure_us = p_exposure_us;
+	exposure_us = property_checks::clamped("RigCapture.exposure_us", p_exposure_us, 1.0, 10e6, exposure_us, " us");
 }
 
 double RigCapture::get_exposure_us() const { return exposure_us; }
 
 void RigCapture::set_gain(double p_gain) {
-	if (!std::isfinite(p_gain)) {
-		ERR_PRINT("RigCapture: gain must be a finite number; left as it was");
-		return;
-	}
-	gain = p_gain;
+	gain = property_checks::clamped("RigCapture.gain", p_gain, 0.0, 100.0, gain);
 }
 
 double RigCapture::get_gain() const { return gain; }

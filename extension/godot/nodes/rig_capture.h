@@ -63,13 +63,13 @@ public:
 
 	void set_recording_path(const godot::String &p_path);
 	godot::String get_recording_path() const;
-	void set_pacing(Pacing p_pacing);
+	void set_pacing(int64_t p_pacing);
 	Pacing get_pacing() const;
 	void set_loop(bool p_loop);
 	bool get_loop() const;
 	void set_autoplay(bool p_autoplay);
 	bool get_autoplay() const;
-	void set_source(Source p_source);
+	void set_source(int64_t p_source);
 	Source get_source() const;
 	void set_rig_file(const godot::String &p_path);
 	godot::String get_rig_file() const;
@@ -79,7 +79,7 @@ public:
 	godot::String get_rgbd_device() const;
 	void set_fisheye_device(const godot::String &p_id);
 	godot::String get_fisheye_device() const;
-	void set_fisheye_backend(FisheyeBackend p_backend);
+	void set_fisheye_backend(int64_t p_backend);
 	FisheyeBackend get_fisheye_backend() const;
 	void set_fisheye_pixel_format(const godot::String &p_format);
 	godot::String get_fisheye_pixel_format() const;

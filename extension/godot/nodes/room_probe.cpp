@@ -46,7 +46,7 @@ RoomProbe::~RoomProbe() {
 	disconnect_engine();
 }
 
-void RoomProbe::set_resolution(int p_texels) {
+void RoomProbe::set_resolution(int64_t p_texels) {
 	resolution = int(property_checks::clamped_int("RoomProbe.resolution", p_texels, RESOLUTION_MIN, RESOLUTION_MAX, " texels"));
 	if (engine && probe_id != 0) {
 		place_in_engine();
@@ -70,11 +70,11 @@ void RoomProbe::set_dense_slam_path(const NodePath &p_path) {
 }
 NodePath RoomProbe::get_dense_slam_path() const { return dense_slam_path; }
 
-void RoomProbe::set_update_mode(UpdateMode p_mode) {
+void RoomProbe::set_update_mode(int64_t p_mode) {
 	if (!property_checks::enum_in_range("RoomProbe.update_mode", p_mode, 2)) {
 		return;
 	}
-	update_mode = p_mode;
+	update_mode = UpdateMode(p_mode);
 	set_process(update_mode == UPDATE_ALWAYS && is_inside_tree());
 }
 
@@ -444,14 +444,14 @@ void RoomProbe::drive_world_environment() {
 Ref<ShaderMaterial> RoomProbe::get_sky_material() const { return sky_material; }
 
 Error RoomProbe::save_exr(const String &p_path) const {
-	ERR_FAIL_COND_V_MSG(!map, ERR_UNAVAILABLE, "No environment map yet: call update_now() first.");
+	ERR_FAIL_COND_V_MSG(!map, ERR_UNAVAILABLE, "RoomProbe.save_exr: no environment map yet: call update_now() first.");
 	const std::string error = write_cubemap_exr(global_path(p_path), map->cubemap);
 	ERR_FAIL_COND_V_MSG(!error.empty(), ERR_FILE_CANT_WRITE, String(error.c_str()));
 	return OK;
 }
 
 Error RoomProbe::save_png_net(const String &p_path) const {
-	ERR_FAIL_COND_V_MSG(!map, ERR_UNAVAILABLE, "No environment map yet: call update_now() first.");
+	ERR_FAIL_COND_V_MSG(!map, ERR_UNAVAILABLE, "RoomProbe.save_png_net: no environment map yet: call update_now() first.");
 	const std::string error = write_cubemap_png_net(global_path(p_path), map->cubemap);
 	ERR_FAIL_COND_V_MSG(!error.empty(), ERR_FILE_CANT_WRITE, String(error.c_str()));
 	return OK;
@@ -485,7 +485,7 @@ void RoomProbe::set_sh_frame_path(const NodePath &p_path) {
 
 NodePath RoomProbe::get_sh_frame_path() const { return sh_frame_path; }
 
-void RoomProbe::set_virtual_objects_mask(uint32_t p_mask) {
+void RoomProbe::set_virtual_objects_mask(int64_t p_mask) {
 	virtual_objects_mask = property_checks::render_layers("RoomProbe.virtual_objects_mask", p_mask);
 	virtual_objects_signature.clear();
 	if (virtual_objects_mask == 0 && engine && probe_id != 0) {
@@ -554,7 +554,7 @@ void RoomProbe::refresh_virtual_objects() {
 Ref<godot::Cubemap> RoomProbe::get_cubemap() const { return cubemap; }
 
 Ref<Image> RoomProbe::get_face_image(int p_layer) const {
-	ERR_FAIL_INDEX_V(p_layer, 6, Ref<Image>());
+	ERR_FAIL_COND_V_MSG(p_layer < 0 || p_layer >= 6, Ref<Image>(), String("RoomProbe.get_face_image: layer must be a cubemap face, 0..5; got ") + String::num_int64(p_layer));
 	if (faces[p_layer].is_null() && map) {
 		faces[p_layer] = image_from_mat(map->cubemap.faces[size_t(p_layer)]);
 	}

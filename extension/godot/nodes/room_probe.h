@@ -27,13 +27,13 @@ public:
 	RoomProbe();
 	~RoomProbe();
 
-	void set_resolution(int p_texels);
+	void set_resolution(int64_t p_texels);
 	int get_resolution() const;
 	void set_coarse_model_path(const godot::NodePath &p_path);
 	godot::NodePath get_coarse_model_path() const;
 	void set_dense_slam_path(const godot::NodePath &p_path);
 	godot::NodePath get_dense_slam_path() const;
-	void set_update_mode(UpdateMode p_mode);
+	void set_update_mode(int64_t p_mode);
 	UpdateMode get_update_mode() const;
 	// Takes any Material so that a wrong one is named (a StandardMaterial3D cannot read the map).
 	void set_target_material(const godot::Ref<godot::Material> &p_material);
@@ -62,7 +62,7 @@ public:
 	godot::PackedVector3Array get_sh_coefficients_in(const godot::Basis &p_basis) const;
 	void set_sh_frame_path(const godot::NodePath &p_path);
 	godot::NodePath get_sh_frame_path() const;
-	void set_virtual_objects_mask(uint32_t p_mask);
+	void set_virtual_objects_mask(int64_t p_mask);
 	uint32_t get_virtual_objects_mask() const;
 	// How many virtual objects the last map drew (see virtual_objects_mask).
 	int get_virtual_object_count() const;

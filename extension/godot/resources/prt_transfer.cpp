@@ -40,7 +40,7 @@ Ref<Mesh> PRTTransfer::get_mesh() const {
 	return mesh;
 }
 
-void PRTTransfer::set_surface(int p_surface) {
+void PRTTransfer::set_surface(int64_t p_surface) {
 	surface = int(property_checks::clamped_int("PRTTransfer.surface", p_surface, 0, 255));
 	emit_changed();
 }
@@ -49,7 +49,7 @@ int PRTTransfer::get_surface() const {
 	return surface;
 }
 
-void PRTTransfer::set_samples_per_vertex(int p_samples) {
+void PRTTransfer::set_samples_per_vertex(int64_t p_samples) {
 	// The range the inspector offers: 16 (a quick look) to 65536 (a reference).
 	samples_per_vertex = int(property_checks::clamped_int("PRTTransfer.samples_per_vertex", p_samples, 16, 65536));
 	emit_changed();
@@ -94,6 +94,10 @@ Ref<Mesh> PRTTransfer::get_occluder() const {
 }
 
 void PRTTransfer::set_occluder_transform(const Transform3D &p_transform) {
+	if (!property_checks::finite(p_transform)) {
+		ERR_PRINT("PRTTransfer.occluder_transform must be finite (a number is NaN or infinite); left as it was");
+		return;
+	}
 	occluder_transform = p_transform;
 	emit_changed();
 }

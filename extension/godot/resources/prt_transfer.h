@@ -29,9 +29,9 @@ public:
 
 	void set_mesh(const godot::Ref<godot::Mesh> &p_mesh);
 	godot::Ref<godot::Mesh> get_mesh() const;
-	void set_surface(int p_surface);
+	void set_surface(int64_t p_surface);
 	int get_surface() const;
-	void set_samples_per_vertex(int p_samples);
+	void set_samples_per_vertex(int64_t p_samples);
 	int get_samples_per_vertex() const;
 	void set_transfer(const godot::Ref<godot::Image> &p_transfer);
 	godot::Ref<godot::Image> get_transfer() const;

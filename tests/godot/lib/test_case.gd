@@ -23,6 +23,7 @@ var _skip_reason := ""
 var _skipped := false
 var _expected_errors: Array[String] = []
 var _expected_warnings: Array[String] = []
+var _log_collector: Object = null  # the runner's ErrorCollector (take_logged)
 
 
 ## Called before every test. Override; may await.
@@ -130,6 +131,19 @@ func expect_error(substring: String) -> void:
 ## property, say); the test fails if none is logged. Other warnings never fail a test.
 func expect_warning(substring: String) -> void:
 	_expected_warnings.append(substring)
+
+
+## The engine errors and warnings logged since the test began or since the last call, as
+## {"errors": [...], "warnings": [...]} (message texts), for a test that judges each message
+## itself (a sweep over many properties). The errors taken count as expected: neither the
+## runner nor tools/run_tests.py fails the test for them.
+func take_logged() -> Dictionary:
+	var errors: Array[String] = []
+	for e in _log_collector.take():
+		var details: String = e.get_slice("\t", 0)
+		print("[EXPECTED-ERROR] %s" % details)
+		errors.append(details)
+	return {"errors": errors, "warnings": _log_collector.take_warnings()}
 
 
 ## Declares that an engine bug makes Godot report "count RIDs of type rid_type were leaked"
