@@ -466,10 +466,80 @@ test_synth_killed_midway() {
 	rp shell timeout 120 build/bin/roomprobe_bench slam --recording "$rec" --no-peers --probe-size 8
 	check "bench on the killed recording exited with status $rc" test "$rc" -eq 0
 	check "bench on the killed recording did not say it was never closed" says "the recording was never closed"
-	check "bench on the killed recording played no frame" grep -qE '^summary: mode=slam frames=[1-9]' <<<"$out"
+	check "bench on the killed recording played no frame" grep -qE "^summary: mode=[a-z]+ frames=[1-9]" <<<"$out"
 	rp shell timeout 120 build/bin/roomprobe_eval --recording "$rec" --no-dense --quiet
 	check "eval on the killed recording exited with status $rc, not 1" test "$rc" -eq 1
 	check "eval on the killed recording did not say why it refuses" says "no ground-truth RGB-D trajectory (PoseSource::GroundTruth needs it): the recording was never closed"
+}
+
+# small_disk DIR KB SCRIPT ARGS...: sh -c SCRIPT run in the toolchain with a KB-kilobyte tmpfs on
+# DIR (a full disk on demand), unmounted when it ends: checks that need the files run inside SCRIPT.
+# As root in the toolchain's own mount namespace (a new one with the host's toolchain); otherwise in
+# a user namespace of its own.
+small_disk() {
+	local dir=$1 kb=$2
+	shift 2
+	local -a wrap=()
+	[[ $(id -u) != 0 ]] && wrap=(unshare -r -m)
+	[[ $(id -u) == 0 && $kind == host ]] && wrap=(unshare -m)
+	rp shell "${wrap[@]}" sh -c 'dir=$1 kb=$2; shift 2; mount -t tmpfs -o size=${kb}k tmpfs "$dir" || exit 99; sh -c "$@"; status=$?; umount "$dir"; exit $status' \
+		sh "$dir" "$kb" "$@"
+}
+
+# A full disk under each tool's output: the tool stops with the system's reason naming the file and a
+# failing status, leaves no temporary file (files are written beside and renamed: no half-written
+# one under its name), and keeps what was there; the recordings that synth and record had begun
+# play the frames their indexes list.
+test_full_disk_outputs() {
+	local dir=build/test-data/faults/small rec=build/test-data/faults/rec oni=build/test-data/faults/oni
+	cd "$repo" || return
+	faults_recording || { failures+=("could not make the recording (see the log)"); return; }
+	rm -rf "$dir" "$oni" && mkdir -p "$dir" "$oni"
+	rp oni --recording "$rec" --out "$oni/rec.oni"
+	check "oni exited with status $rc" test "$rc" -eq 0
+	small_disk "$dir" 2000 'd=$1
+		build/bin/roomprobe_synth --scene two_rooms --out "$d/synth" --seconds 1 --cubemap-size 8 --no-calibration --seed 1; echo "synth status $?"
+		build/bin/roomprobe_bench slam --recording "$d/synth" --no-peers --probe-size 8 | grep "^summary"
+		timeout 60 build/bin/roomprobe_record --rig "$2/rig.yaml" --rgbd "$3" --no-fisheye --out "$d/record" --seconds 5; echo "record status $?"
+		rm -rf "$d/synth" "$d/record"
+		echo kept >"$d/room.yaml"; head -c 100M /dev/zero >"$d/fill" 2>/dev/null; truncate -s -24K "$d/fill"
+		build/bin/roomprobe_room --recording "$2" --out "$d/room.yaml" --picture "$d/top.png" --force --quiet; echo "room status $?"
+		build/bin/roomprobe_eval --recording "$2" --out "$d/eval" --cubemap-size 8 --max-cubemaps 1 --no-dense --quiet; echo "eval status $?"
+		echo "room.yaml holds $(cat "$d/room.yaml")"; echo "temporary files left: $(cd "$d" && find . -name ".*" -type f | tr "\n" " ")"' \
+		sh "$dir" "$rec" "$oni/rec.oni"
+	check "the tmpfs was not mounted (status 99; see the log)" test "$rc" -ne 99
+	check "synth on a full disk did not stop with status 2" says "synth status 2"
+	check "synth on a full disk did not name the frame and the reason" grep -qE "roomprobe_synth: $dir/synth/.*: could not be written: No space left on device" <<<"$out"
+	check "the recording synth began did not play" grep -qE "^summary: mode=[a-z]+ frames=[1-9]" <<<"$out"
+	check "record on a full disk did not stop with status 1" says "record status 1"
+	check "record on a full disk did not name the frame and the reason" grep -qE "roomprobe_record: .*$dir/record/.*: could not be written: No space left on device" <<<"$out"
+	check "room on a full disk did not name the picture and the reason" says "$dir/top.png: could not be written: No space left on device"
+	check "room on a full disk exited with status 0" says "room status 1"
+	check "eval on a full disk did not name a map and the reason" grep -qE "$dir/eval/[a-z_]+\\.(exr|png): could not be written: No space left on device" <<<"$out"
+	check "eval on a full disk did not stop with status 1" says "eval status 1"
+	check "the room.yaml that was there was not kept" says "room.yaml holds kept"
+	check "temporary files were left on the full disk" grep -qE '^temporary files left: ?$' <<<"$out"
+}
+
+# SIGKILL of record midway (as synth's): what its indexes list plays, and the tools say the recording
+# was never closed.
+test_record_killed_midway() {
+	local rec=build/test-data/faults/rec oni=build/test-data/faults/oni-killed out_dir=build/test-data/faults/record-killed
+	cd "$repo" || return
+	faults_recording || { failures+=("could not make the recording (see the log)"); return; }
+	rm -rf "$oni" "$out_dir" && mkdir -p "$oni"
+	rp oni --recording "$rec" --out "$oni/rec.oni"
+	rp shell sh -c 'build/bin/roomprobe_record --rig "$1/rig.yaml" --rgbd "$2" --no-fisheye --out "$3" --seconds 30 >/dev/null 2>&1 &
+		pid=$!; i=0
+		while n=$(grep -cv "^#" "$3/depth.txt" 2>/dev/null); [ "${n:-0}" -lt 3 ] && [ $i -lt 600 ]; do sleep 0.05; i=$((i + 1)); done
+		kill -KILL $pid; wait $pid; echo "record ended with status $?"' sh "$rec" "$oni/rec.oni" "$out_dir"
+	check "record was not killed (status 137)" says "record ended with status 137"
+	check "the killed record left no marker $out_dir/.roomprobe-writing" test -e "$out_dir/.roomprobe-writing"
+	check "the killed record listed $(frame_lines "$out_dir/depth.txt") depth frames, fewer than 3" test "$(frame_lines "$out_dir/depth.txt")" -ge 3
+	rp shell timeout 120 build/bin/roomprobe_bench slam --recording "$out_dir" --no-peers --probe-size 8
+	check "bench on the killed recording exited with status $rc" test "$rc" -eq 0
+	check "bench on the killed recording did not say it was never closed" says "the recording was never closed"
+	check "bench on the killed recording played no frame" grep -qE "^summary: mode=[a-z]+ frames=[1-9]" <<<"$out"
 }
 
 # Two writers on one output: of two synths started together into one folder, one writes it whole and
@@ -539,7 +609,8 @@ test_no_gpl_cgal_headers() {
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
 	calibrate_refuses_and_never_overwrites synth_photometric_options_refused eval_refuses_bad_input numbers_out_of_range_refused
 	record_relative_out_run_directly bake_prt_bakes_and_caches unknown_verb_is_named editor_sees_the_callers_files docs_name_existing_paths
-	input_devices_named read_only_output_refused dev_full_outputs_refused synth_killed_midway two_writers_one_output outputs_inside_inputs_refused
+	input_devices_named read_only_output_refused dev_full_outputs_refused full_disk_outputs synth_killed_midway record_killed_midway two_writers_one_output
+	outputs_inside_inputs_refused
 	no_gpl_cgal_headers)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.
 echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench, roomprobe_calibrate, roomprobe_record, roomprobe_oni and roomprobe_room"
