@@ -177,6 +177,28 @@ func test_zipped_recording_plays_and_zip_slip_is_refused() -> void:
 	assert_eq(frames, _index("rgb.txt").size() + _index("fisheye.txt").size(), "plays every frame")
 	DirAccess.remove_absolute(zip_path)
 
+	# Issue #38: unpacked recordings piled up in user://. A half-unpacked folder (a killed unpack)
+	# and one unused for a week are removed when a zip is next opened; the one opened is kept.
+	var unpacked := OS.get_user_data_dir().path_join("roomprobe/unpacked")
+	DirAccess.make_dir_recursive_absolute(unpacked.path_join("killed-0123456789ab.partial/living"))
+	DirAccess.make_dir_recursive_absolute(unpacked.path_join("old-0123456789ab/living"))
+	var stamp := FileAccess.open(unpacked.path_join("old-0123456789ab/.roomprobe-unpacked"), FileAccess.WRITE)
+	stamp.store_string("old\n")
+	stamp.close()
+	OS.execute("touch", ["-d", "10 days ago", unpacked.path_join("old-0123456789ab/.roomprobe-unpacked")])
+	_zip_recording(zip_path, "living")
+	_rig.recording_path = zip_path
+	assert_true(_rig.open(), "opens the zip again: %s" % _rig.get_last_error())
+	assert_false(DirAccess.dir_exists_absolute(unpacked.path_join("killed-0123456789ab.partial")), "a half-unpacked folder is removed")
+	assert_false(DirAccess.dir_exists_absolute(unpacked.path_join("old-0123456789ab")), "a folder unused for 10 days is removed")
+	var kept := Array(DirAccess.get_directories_at(unpacked)).filter(func(n: String) -> bool: return n.begins_with("roomprobe_test_recording-"))
+	assert_true(kept.size() >= 1, "the recording opened is kept")
+	assert_true(_rig.step(), "and plays")
+	_rig.close()
+	DirAccess.remove_absolute(zip_path)
+	for name in kept:  # this test's own, from this and earlier runs
+		remove_folder(unpacked.path_join(name))
+
 	var evil := OS.get_user_data_dir().path_join("roomprobe_test_evil.zip")
 	var packer := ZIPPacker.new()
 	packer.open(evil)
@@ -217,3 +239,4 @@ func test_a_zip_bomb_is_refused_before_anything_is_unpacked() -> void:
 	for name in DirAccess.get_directories_at(unpacked):
 		assert_false(name.begins_with("roomprobe_test_bomb"), "nothing unpacked: " + name)
 	DirAccess.remove_absolute(bomb)
+

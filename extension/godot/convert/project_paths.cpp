@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -114,6 +115,31 @@ private:
 	int fd = -1;
 };
 
+// Unpacked recordings not used for this long are removed when another zip is unpacked or used: each
+// version of a zipped recording unpacks beside the others (by its MD5), so without this user://
+// would keep every version ever played.
+constexpr std::chrono::hours UNPACKED_KEPT_UNUSED(24 * 7);
+
+// Under the unpack lock (no other unpacker writes meanwhile): removes half-unpacked folders
+// (NAME.partial, or without the stamp: a killed or failed unpack) and unpacked ones whose stamp
+// (touched at every use) is older than UNPACKED_KEPT_UNUSED, except p_keep. Best effort: a folder
+// that cannot be removed stays.
+void prune_unpacked(const fs::path &p_folder, const fs::path &p_keep) {
+	std::error_code ec;
+	const auto now = fs::file_time_type::clock::now();
+	for (const auto &entry : fs::directory_iterator(p_folder, ec)) {
+		if (entry.path() == p_keep || !entry.is_directory(ec)) {
+			continue;
+		}
+		const fs::path stamp = entry.path() / kStamp;
+		const bool whole = entry.path().extension() != ".partial" && fs::exists(stamp, ec);
+		if (!whole || now - fs::last_write_time(stamp, ec) > UNPACKED_KEPT_UNUSED) {
+			std::error_code ignored;
+			fs::remove_all(entry.path(), ignored);
+		}
+	}
+}
+
 // The folder a zip unpacks into, and inside it the one top-level folder when there is just one.
 //
 // Issue #38: a zip bomb inflated without limit into user://. Before anything is inflated, the
@@ -139,6 +165,7 @@ std::string unpack_zip(const String &p_path, std::string *r_error) {
 		*r_error = path + ": cannot unpack into " + fs::path(target).parent_path().string() + " (" + std::strerror(errno) + ")";
 		return "";
 	}
+	prune_unpacked(fs::path(target).parent_path(), target);
 	if (!fs::exists(fs::path(target) / kStamp, ec)) {
 		std::vector<ZipEntryInfo> entries;
 		std::string problem = zip_entries(p_path, &entries);
@@ -208,6 +235,7 @@ std::string unpack_zip(const String &p_path, std::string *r_error) {
 			return "";
 		}
 	}
+	fs::last_write_time(fs::path(target) / kStamp, fs::file_time_type::clock::now(), ec); // used now: kept another UNPACKED_KEPT_UNUSED
 	for (const auto &entry : fs::directory_iterator(target, ec)) {
 		if (entry.path().filename() == kStamp) {
 			continue;
