@@ -395,6 +395,21 @@ test_input_devices_named() {
 	check "roomprobe_bench --tum --open3d-results: not said to go with --recording" says "it goes with --recording"
 }
 
+# --hdri where it does not apply (two_rooms shows no panorama: it was ignored, and 10 s were made
+# without a word), or naming no file: refused before anything is made.
+test_synth_hdri_refused() {
+	local dir=build/test-data/faults/hdri
+	cd "$repo" || return
+	rm -rf "$dir"
+	rp shell build/bin/roomprobe_synth --scene two_rooms --hdri /nonexistent.hdr --out "$dir" --seconds 0.1
+	check "synth two_rooms --hdri exited with status $rc, not 2" test "$rc" -eq 2
+	check "synth two_rooms --hdri: not said not to apply" says "--hdri /nonexistent.hdr: the scene two_rooms shows no panorama; --hdri applies to living_room and panorama_room"
+	rp shell build/bin/roomprobe_synth --scene living_room --hdri /nonexistent.hdr --out "$dir" --seconds 0.1
+	check "synth living_room --hdri MISSING exited with status $rc, not 2" test "$rc" -eq 2
+	check "synth living_room --hdri MISSING: not said to be missing" says "--hdri /nonexistent.hdr: no such file"
+	check "synth made $dir although refused" test ! -e "$dir"
+}
+
 # A read-only output folder: refused before any work with the system's reason, status 2, nothing
 # written, --quiet or not (eval --quiet once exited 0 having written nothing); synth says it too.
 test_read_only_output_refused() {
@@ -609,7 +624,7 @@ test_no_gpl_cgal_headers() {
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
 	calibrate_refuses_and_never_overwrites synth_photometric_options_refused eval_refuses_bad_input numbers_out_of_range_refused
 	record_relative_out_run_directly bake_prt_bakes_and_caches unknown_verb_is_named editor_sees_the_callers_files docs_name_existing_paths
-	input_devices_named read_only_output_refused dev_full_outputs_refused full_disk_outputs synth_killed_midway record_killed_midway two_writers_one_output
+	input_devices_named synth_hdri_refused read_only_output_refused dev_full_outputs_refused full_disk_outputs synth_killed_midway record_killed_midway two_writers_one_output
 	outputs_inside_inputs_refused
 	no_gpl_cgal_headers)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.

@@ -255,6 +255,11 @@ int run(int argc, char **argv) {
 			}
 		}
 		scene_options.panorama_path = hdri;
+	} else if (hdri_given) {
+		return fail("--hdri " + hdri + ": the scene " + scene_name + " shows no panorama; --hdri applies to living_room and panorama_room");
+	}
+	if (!scene_options.panorama_path.empty() && !fs::exists(scene_options.panorama_path, ec)) {
+		return fail("--hdri " + scene_options.panorama_path + ": no such file (an equirectangular .hdr or .exr panorama, or none)");
 	}
 	std::unique_ptr<tbb::global_control> thread_limit;
 	if (threads > 0.0) {
