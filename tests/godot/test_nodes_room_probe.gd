@@ -242,6 +242,26 @@ func test_update_always_renders_every_frame() -> void:
 	assert_true(updates[0] >= 3, "updated on ready and each frame: %d" % updates[0])
 
 
+## Issue #37: a probe in Once mode readied before its room exists (a recording's room comes after
+## the scene starts) rendered never. Once means once per room: when the room comes, and again for
+## the next room, and not in between.
+func test_update_once_renders_once_per_room() -> void:
+	_room.floorplan = PackedVector2Array()  # no room yet
+	_probe.update_mode = 0  # UPDATE_ONCE
+	var updates := [0]
+	_probe.environment_map_updated.connect(func(): updates[0] += 1)
+	add_to_tree(_root)
+	await wait_frames(3)
+	assert_eq(updates[0], 0, "no map without a room")
+	_room.floorplan = PackedVector2Array(PLAN)
+	await wait_frames(4)
+	assert_eq(updates[0], 1, "one map once the room exists")
+	assert_not_null(_probe.get_cubemap(), "the map is there")
+	_room.floorplan = PackedVector2Array([Vector2(0, 0), Vector2(5, 0), Vector2(5, 3), Vector2(0, 3)])
+	await wait_frames(4)
+	assert_eq(updates[0], 2, "one more for the next room, none in between")
+
+
 func test_warnings_say_what_is_missing() -> void:
 	var lone = ClassDB.instantiate("RoomProbe")
 	var text := " ".join(lone.get_warnings())

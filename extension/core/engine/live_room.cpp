@@ -257,6 +257,7 @@ std::string LiveRoom::build_room_locked() {
 		coarse = std::move(fresh);
 		renderer = std::make_unique<CoarseCubemapRenderer>(coarse->mesh());
 	}
+	room_builds++;
 	const std::lock_guard<std::mutex> lock(placer_mutex);
 	placer.clear_coarse();
 	if (room_mesh() != nullptr) {
@@ -810,6 +811,7 @@ std::string LiveRoom::set_room(bool p_has_room, const Floorplan &p_floorplan, co
 		cfg = old_cfg;
 		coarse = std::move(old_coarse);
 		own_room = std::move(old_own);
+		room_builds++;
 		renderer = std::move(old_renderer);
 		const std::lock_guard<std::mutex> lock(placer_mutex);
 		placer.clear_coarse();

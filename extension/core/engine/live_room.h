@@ -293,6 +293,9 @@ public:
 	bool fisheye_pose(double p_fisheye_timestamp_s, Pose *r_world_from_fisheye, std::string *r_error) const;
 	// The room's mesh (null without a room). Valid until the next configure.
 	const RoomMesh *room_mesh() const;
+	// Counts the rooms made (configure, set_room, a room found): a new number is a new room, which
+	// a probe updated once per room (RoomProbe's Once) renders again.
+	uint64_t room_version() const { return room_builds.load(); }
 	// How far a world point lies outside the room's prism, metres (0 inside, and without a room).
 	double distance_outside_room_m(const glm::dvec3 &p_world) const;
 
@@ -353,6 +356,7 @@ private:
 	std::unique_ptr<DenseSlam> slam;
 	std::unique_ptr<CoarsePipeline> coarse;
 	std::unique_ptr<RoomMesh> own_room; // the room without a rig (no coarse pipeline)
+	std::atomic<uint64_t> room_builds{ 0 }; // room_version()
 	std::unique_ptr<CoarseCubemapRenderer> renderer;
 	std::mutex coarse_mutex; // the coarse pipeline: its worker, and finish()
 	FisheyeLinearizer linearizer;

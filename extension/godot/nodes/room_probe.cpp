@@ -75,7 +75,6 @@ void RoomProbe::set_update_mode(int64_t p_mode) {
 		return;
 	}
 	update_mode = UpdateMode(p_mode);
-	set_process(update_mode == UPDATE_ALWAYS && is_inside_tree());
 }
 
 RoomProbe::UpdateMode RoomProbe::get_update_mode() const { return update_mode; }
@@ -143,11 +142,12 @@ NodePath RoomProbe::get_world_environment_path() const { return world_environmen
 void RoomProbe::_notification(int p_what) {
 	if (p_what == NOTIFICATION_READY) {
 		connect_engine();
-		// A first map at once when the room is there; quietly none otherwise (see the warnings).
-		if (engine && engine->room_mesh() != nullptr) {
-			update_now();
+		// A first map at once when the room is there; quietly none otherwise (see the warnings):
+		// _process renders it once the room exists, in either update mode.
+		if (engine && engine->room_mesh() != nullptr && update_now()) {
+			once_room_version = engine->room_version();
 		}
-		set_process(update_mode == UPDATE_ALWAYS);
+		set_process(true);
 	} else if (p_what == NOTIFICATION_EXIT_TREE) {
 		restore_driven(); // the user's nodes as they were (a closed tab, a deleted probe)
 		disconnect_engine();
@@ -208,14 +208,15 @@ void RoomProbe::drive_outputs() {
 void RoomProbe::_process(double p_delta) {
 	(void)p_delta;
 	MainThreadTimer timer;
-	if (update_mode != UPDATE_ALWAYS) {
-		return;
-	}
 	if (!engine) {
 		connect_engine();
 		if (!engine) {
 			return;
 		}
+	}
+	if (update_mode == UPDATE_ONCE) {
+		process_once();
+		return;
 	}
 	if (engine->is_running()) {
 		// The probe worker renders; this only says where the probe is and takes finished maps.
@@ -277,6 +278,31 @@ void RoomProbe::place_in_engine() {
 		outside_room = outside;
 		outside_room_m = outside_m;
 		update_configuration_warnings();
+	}
+}
+
+// Once: one map per room, as soon as the room exists (a recording's room comes after ready, a
+// room found from the sweep later still), then nothing until the next room.
+void RoomProbe::process_once() {
+	const uint64_t room = engine->room_version();
+	if (room == once_room_version || engine->config_pending() || engine->room_mesh() == nullptr) {
+		return;
+	}
+	if (!engine->is_running()) {
+		if (update_now()) {
+			once_room_version = room;
+		}
+		return;
+	}
+	// Live: the probe worker renders it; the first map it finishes for this room is the one.
+	place_in_engine();
+	refresh_virtual_objects();
+	const std::shared_ptr<const ProbeMap> before = map;
+	if (take_map()) {
+		emit_signal("environment_map_updated");
+	}
+	if (map && map != before) {
+		once_room_version = room;
 	}
 }
 

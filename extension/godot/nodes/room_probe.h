@@ -148,6 +148,8 @@ private:
 	godot::Ref<godot::Sky> sky;
 
 	std::shared_ptr<LiveRoom> engine;
+	uint64_t once_room_version = 0; // Once: the room (LiveRoom::room_version) its map was made in
+	void process_once();
 	int probe_id = 0;
 	std::shared_ptr<const ProbeMap> map; // the one uploaded
 	mutable godot::Ref<godot::Image> faces[6]; // RGBF, made on request
