@@ -20,7 +20,9 @@ func after_each() -> void:
 
 
 ## rig, slam, camera, room and probe, wired; the rig stepped by hand, FRAMES RGB-D frames in.
-func _run_scene() -> Dictionary:
+## p_camera_set: DenseSLAM.camera names the camera; else it is left empty and the camera is made
+## current, as a scene built from the quick start has it (issue #37).
+func _run_scene(p_camera_set := true) -> Dictionary:
 	_scene = Node3D.new()
 	var rig = fixture_rig()
 	_scene.add_child(rig)
@@ -43,7 +45,10 @@ func _run_scene() -> Dictionary:
 	room.floorplan = rig.get_room_floorplan()
 	room.ceiling_height = rig.get_room_ceiling_height()
 	slam.capture = NodePath("../Rig")
-	slam.camera = NodePath("../Camera")
+	if p_camera_set:
+		slam.camera = NodePath("../Camera")
+	else:
+		camera.make_current()
 	slam.coarse_model = NodePath("../Room")
 	room.rig_capture = NodePath("../Rig")
 	room.dense_slam = NodePath("../SLAM")
@@ -86,6 +91,20 @@ func test_tracks_the_rgbd_camera_and_drives_the_ar_camera() -> void:
 	assert_eq(stats.integrated_frames, FRAMES)
 	assert_true(stats.allocated_blocks > 0 and stats.allocated_blocks <= stats.capacity_blocks, str(stats))
 	assert_eq(slam.get_warnings().size(), 0, str(slam.get_warnings()))
+
+
+## Issue #37: with camera empty the quick start's camera stayed at the origin and showed no video.
+## The current Camera3D follows the tracked pose, and the camera image is on by default.
+func test_drives_the_current_camera_when_none_is_named() -> void:
+	if not need_fixture_recording():
+		return
+	var s := _run_scene(false)
+	assert_eq(s.slam.camera, NodePath(""), "no camera named")
+	assert_true(s.worst < 0.01, "the current camera is within 1 cm of the true pose (worst %.4f m)" % s.worst)
+	assert_ne(s.camera.global_transform, Transform3D.IDENTITY, "it moved")
+	assert_near(s.camera.fov, s.rig.get_rgb_camera_fov(), 1e-3, "it has the rig's fov")
+	assert_true(s.slam.camera_background, "the camera image is shown by default")
+	assert_not_null(s.slam.get_camera_image_texture(), "and there is an image")
 
 
 func test_places_an_object_on_the_real_table() -> void:

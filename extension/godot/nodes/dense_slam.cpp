@@ -173,6 +173,18 @@ void DenseSLAM::set_capture_path(const NodePath &p_path) {
 
 NodePath DenseSLAM::get_capture_path() const { return capture_path; }
 void DenseSLAM::set_camera_path(const NodePath &p_path) { camera_path = p_path; }
+
+// The camera that follows the tracked pose: camera's node, or with none set the viewport's current
+// Camera3D while the game runs (the editor's view is never moved).
+Node3D *DenseSLAM::driven_camera() const {
+	if (!camera_path.is_empty()) {
+		return cast_to<Node3D>(get_node_or_null(camera_path));
+	}
+	if (!is_inside_tree() || Engine::get_singleton()->is_editor_hint() || get_viewport() == nullptr) {
+		return nullptr;
+	}
+	return get_viewport()->get_camera_3d();
+}
 NodePath DenseSLAM::get_camera_path() const { return camera_path; }
 void DenseSLAM::set_coarse_model_path(const NodePath &p_path) { coarse_model_path = p_path; }
 NodePath DenseSLAM::get_coarse_model_path() const { return coarse_model_path; }
@@ -276,9 +288,9 @@ bool DenseSLAM::process_rig_frame() {
 	processed++;
 	set_state(to_node_state(frame->state), frame->reason);
 	// The pose and the image of one frame: the background and the virtual objects stay in register.
-	if (!camera_path.is_empty() && frame->has_pose) {
-		Node3D *camera = cast_to<Node3D>(get_node_or_null(camera_path));
-		ERR_FAIL_NULL_V_MSG(camera, true, "camera does not lead to a Node3D.");
+	if (frame->has_pose && (!camera_path.is_empty() || driven_camera() != nullptr)) {
+		Node3D *camera = driven_camera();
+		ERR_FAIL_NULL_V_MSG(camera, true, "DenseSLAM.camera does not lead to a Node3D.");
 		camera->set_global_transform(camera_transform_from_pose(frame->world_from_camera));
 		// The AR camera sees what the RGB camera saw: its field of view from the rig.
 		Camera3D *ar_camera = cast_to<Camera3D>(camera);
@@ -550,9 +562,8 @@ Dictionary DenseSLAM::place_on_ray(const Vector3 &p_origin, const Vector3 &p_dir
 }
 
 Dictionary DenseSLAM::place_on_surface(const Vector2 &p_screen_position) const {
-	ERR_FAIL_COND_V_MSG(camera_path.is_empty(), Dictionary(), "place_on_surface needs the camera property (a Camera3D).");
-	const Camera3D *camera = cast_to<Camera3D>(get_node_or_null(camera_path));
-	ERR_FAIL_NULL_V_MSG(camera, Dictionary(), "camera does not lead to a Camera3D.");
+	const Camera3D *camera = cast_to<Camera3D>(driven_camera());
+	ERR_FAIL_NULL_V_MSG(camera, Dictionary(), camera_path.is_empty() ? "DenseSLAM.place_on_surface needs a camera: set camera, or make a Camera3D current" : "DenseSLAM.camera does not lead to a Camera3D.");
 	// Far off-screen the camera's ray still goes somewhere, and once returned a hit no one could
 	// see: a point outside the viewport is refused.
 	const Rect2 visible = camera->get_viewport()->get_visible_rect();

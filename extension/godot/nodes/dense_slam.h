@@ -34,6 +34,7 @@ public:
 	godot::NodePath get_capture_path() const;
 	void set_camera_path(const godot::NodePath &p_path);
 	godot::NodePath get_camera_path() const;
+	godot::Node3D *driven_camera() const;
 	void set_coarse_model_path(const godot::NodePath &p_path);
 	godot::NodePath get_coarse_model_path() const;
 	void set_voxel_size(double p_metres);
@@ -130,7 +131,7 @@ private:
 	godot::Ref<godot::StandardMaterial3D> material;
 	mutable godot::Ref<godot::ImageTexture> camera_image;
 	mutable bool camera_image_wanted = false;
-	bool camera_background = false;
+	bool camera_background = true;
 	uint64_t masked_camera = 0; // the AR camera whose cull mask was last cleared of the room's layers
 	uint32_t masked_camera_mask = 0; // and the mask it was left with
 	godot::MeshInstance3D *background = nullptr; // internal, while camera_background is on
