@@ -425,6 +425,28 @@ TEST_CASE("rig file: version 2 keeps the photometry; version 1 files load withou
 	CHECK(contains(save_rig((dir.path / "first.yaml").string(), first), "photometry.fisheye.vignetting[0]: must be 1"));
 }
 
+// Issue #38 (found by fuzzing synth.yaml): any positive ratio was taken as the recording's truth,
+// so an exposure of 1e-310 gave infinite channel gains and an edge gain of 1e-300 a vignetting
+// table of zeros. Ratios are held to [1e-6, 1e6] and the result to check_photometry.
+TEST_CASE("synth.yaml: photometry ratios outside [1e-6, 1e6] are refused, naming the field") {
+	TempDir dir("synth_ratios");
+	for (const std::string &field : { std::string("fisheye_exposure: 1e-310"), std::string("fisheye_vignetting_edge_gain: 1e-300"),
+				 std::string("rgb_exposure: 1e300"), std::string("fisheye_channel_gains: [ 1, 1e9, 1 ]") }) {
+		CAPTURE(field);
+		const std::string synth = dir.write("synth.yaml", "%YAML:1.0\n---\n" + field + "\n");
+		RigPhotometry photometry;
+		std::string error;
+		CHECK_FALSE(read_recording_photometry(dir.path.string(), RigPhotometry(), &photometry, &error));
+		CHECK(contains(error, synth + ": " + field.substr(0, field.find(':'))));
+		CHECK(contains(error, "within [1e-6, 1e6]"));
+	}
+	dir.write("synth.yaml", "%YAML:1.0\n---\nfisheye_exposure: 0.5\nfisheye_vignetting_edge_gain: 0.8\n");
+	RigPhotometry photometry;
+	std::string error;
+	CHECK(read_recording_photometry(dir.path.string(), RigPhotometry(), &photometry, &error));
+	CHECK(error.empty());
+}
+
 // Issue #38: the text that hung OpenCV's parser was screened for the rig and room files only; in a
 // recording's synth.yaml it hung eval, bench and RigCapture. Every YAML file a user may give now
 // opens through open_yaml_file.

@@ -140,6 +140,9 @@ extern "C" int LLVMFuzzerInitialize(int *, char ***) {
 			out << (first ? "@@" : "\n@@") << name << "\n" << bytes;
 			first = false;
 		}
+		// Closed here: std::exit destroys no local, so the stream's last buffer was never
+		// written (the seed was an empty file).
+		out.close();
 		std::exit(out ? 0 : 1);
 	}
 	return 0;

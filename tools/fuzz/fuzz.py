@@ -3,8 +3,9 @@
 
 Runs inside the toolchain. Builds the targets (scons fuzz=yes: clang, the core instrumented,
 AddressSanitizer and UndefinedBehaviorSanitizer), makes each target's seed corpus when it has
-none (build/fuzz/corpus/TARGET/: files of a synthetic recording, small PNGs written here, and
-the recording target's own template), then fuzzes each target on its corpus. A crash or a broken
+none (build/fuzz/corpus/TARGET/: files of a synthetic recording, small PNGs and YAML files
+written here, and what the recording, capture and photometric targets write themselves under
+ROOMPROBE_FUZZ_SEED), then fuzzes each target on its corpus. A crash or a broken
 invariant leaves its input in build/fuzz/crashes/TARGET/ and fails the run. Each run adds a line
 to build/fuzz/ledger.tsv, so that executions add up across runs and machines: --ledger prints
 the totals, --add-logs counts libFuzzer logs of runs made elsewhere (TARGET*.log). Ends with one
@@ -27,7 +28,7 @@ REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 sys.path.insert(0, os.path.join(REPO, "tools"))
 import rp_godot as rp  # noqa: E402
 
-TARGETS = ["rig", "room", "index", "png", "depth", "exr", "recording"]
+TARGETS = ["rig", "room", "index", "png", "depth", "exr", "recording", "synth", "capture", "photometric", "board", "cli"]
 # Inputs longer than this are cut (libFuzzer's -max_len): a whole 640x480 frame seed would make each
 # execution slow; its header and first rows are what the decoders' checks read.
 MAX_LEN = {"png": 65536, "depth": 65536, "exr": 65536}
@@ -89,12 +90,39 @@ def first_file(folder, suffix):
     return os.path.join(folder, names[0]) if names else None
 
 
+def target_seed(target, path):
+    """Has TARGET write its own seed to path (ROOMPROBE_FUZZ_SEED: the recording target's template,
+    the capture target's capture.txt, the photometric target's photometric.yaml); returns its bytes."""
+    subprocess.run([binary(target)], env=dict(os.environ, ROOMPROBE_FUZZ_SEED=path), check=True,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    with open(path, "rb") as f:
+        data = f.read()
+    if not data:  # the targets once exited before their stream was flushed, leaving empty seeds
+        sys.exit(f"fuzz: {target} wrote an empty seed ({path})")
+    return data
+
+
+# Small valid files written by hand, for the targets whose files a short recording may lack
+# (fuzz-seed-recording is made without calibration/).
+BOARD_YAML = b"%YAML:1.0\n---\ninner_corners_x: 9\ninner_corners_y: 6\nsquare_m: 0.035\n"
+BOARDS_YAML = (b"%YAML:1.0\n---\nroomprobe_calibration_views: 1\nboard:\n   inner_corners_x: 7\n   inner_corners_y: 5\n"
+               b"   square_m: 2.5000000000000001e-02\n")
+SYNTH_YAML = (b"%YAML:1.0\n---\nroomprobe_synth: 1\nscene: two_rooms\nscene_panorama: none\ntrajectory: room_sweep\n"
+              b"duration_s: 2.5\nlight_switch_s: -1\nfisheye_vignetting_edge_gain: 0.25\nfisheye_exposure: 0.5\n"
+              b"fisheye_reference_exposure_us: 5000.\nfisheye_tone_curve: log\nfisheye_channel_gains: [ 1.25, 1., 0.75 ]\n"
+              b"rgb_tone_curve: srgb\nrgb_exposure: 2.\n")
+
+CLI_ARGVS = {
+    "options.argv": [b"--threads", b"2", b"--square-m", b"0.035", b"--seconds", b"0.3", b"--offset", b"0",
+                     b"--gains", b"1.1,1,0.85", b"--stops", b"-5,0"],
+    "bad_values.argv": [b"--threads", b"100000", b"--square-m", b"nan", b"--seconds", b"1e999", b"--gains", b"1,2",
+                        b"--stops", b"1,,2", b"99999999999999999999", b"--offset"],
+}
+
+
 def template_files():
     """The recording target's template (small frames of every kind), as {relative path: bytes}."""
-    bundle = os.path.join(FUZZ_DIR, "template.bundle")
-    subprocess.run([binary("recording")], env=dict(os.environ, ROOMPROBE_FUZZ_SEED=bundle), check=True,
-                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    data = open(bundle, "rb").read()
+    data = target_seed("recording", os.path.join(FUZZ_DIR, "template.bundle"))
     files = {}
     for part in data[2:].split(b"\n@@"):
         name, _, body = part.partition(b"\n")
@@ -144,6 +172,34 @@ def make_corpus(target, corpus):
             if os.path.isfile(path):
                 parts.append(b"@@" + name.encode() + b"\n" + (first_lines(path, INDEX_LINES) if name.endswith(".txt") else open(path, "rb").read()))
         seeds["synthetic_text.bundle"] = b"\n".join(parts)
+    elif target == "synth":
+        text = open(os.path.join(recording, "synth.yaml"), "rb").read()
+        seeds["synthetic_synth.yaml"] = text
+        # Without the panorama (a 1k HDR read each time the scene is built), and by hand.
+        seeds["synthetic_no_panorama.yaml"] = re.sub(rb"(?m)^scene_panorama: .*$", b"scene_panorama: none", text)
+        seeds["two_rooms.yaml"] = SYNTH_YAML
+        # What the first runs found by hand: ratios whose photometry check_photometry refused.
+        seeds["edge_gain_1e-300.yaml"] = SYNTH_YAML.replace(b"edge_gain: 0.25", b"edge_gain: 1e-300")
+        seeds["exposure_1e-310.yaml"] = SYNTH_YAML.replace(b"fisheye_exposure: 0.5", b"fisheye_exposure: 1e-310")
+    elif target == "capture":
+        seeds["template_capture.txt"] = target_seed("capture", os.path.join(FUZZ_DIR, "capture.seed"))
+        path = os.path.join(recording, "capture.txt")
+        if os.path.isfile(path):
+            seeds["synthetic_capture.txt"] = first_lines(path, INDEX_LINES)
+    elif target == "photometric":
+        seeds["template_photometric.yaml"] = target_seed("photometric", os.path.join(FUZZ_DIR, "photometric.seed"))
+        path = os.path.join(recording, "calibration", "photometric.yaml")
+        if os.path.isfile(path):
+            seeds["synthetic_photometric.yaml"] = open(path, "rb").read()
+    elif target == "board":
+        seeds["board.yaml"] = BOARD_YAML
+        seeds["boards.yaml"] = BOARDS_YAML
+        path = os.path.join(recording, "calibration", "boards.yaml")
+        if os.path.isfile(path):  # its board map; the views' corners after it are not read
+            seeds["synthetic_boards.yaml"] = open(path, "rb").read().split(b"\nviews:")[0] + b"\n"
+    elif target == "cli":  # argvs, NUL between arguments, of the options the target walks
+        for name, argv in CLI_ARGVS.items():
+            seeds[name] = b"\0".join(argv)
     if not seeds:
         sys.exit(f"fuzz: no seeds for {target} in {recording}")
     for name, data in seeds.items():

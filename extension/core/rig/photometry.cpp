@@ -13,6 +13,10 @@ namespace roomprobe {
 namespace {
 
 constexpr double LOG_CURVE_A = 30.0;
+// The range of synth.yaml's ratios (exposures, vignetting edge gain, channel gains): the synthetic
+// rig writes them near 1 (--fisheye-gains within (0, 10], --vignetting within (0, 1]).
+constexpr double SYNTH_RATIO_MIN = 1e-6;
+constexpr double SYNTH_RATIO_MAX = 1e6;
 
 const char *CHANNEL_NAMES[3] = { "r", "g", "b" };
 
@@ -193,13 +197,19 @@ bool read_recording_photometry(const std::string &p_recording_folder, const RigP
 		double fisheye_exposure = 1.0, rgb_exposure = 1.0, edge_gain = 1.0, reference_us = std::numeric_limits<double>::quiet_NaN();
 		const std::pair<const char *, double *> fields[] = { { "fisheye_exposure", &fisheye_exposure }, { "rgb_exposure", &rgb_exposure },
 			{ "fisheye_vignetting_edge_gain", &edge_gain }, { "fisheye_reference_exposure_us", &reference_us } };
+		// The exposures, the edge gain and the channel gains are ratios: within [1e-6, 1e6]. Any
+		// positive number was taken, and 1e-310 or 1e300 made channel gains (1 / (exposure *
+		// gain)) of inf or 0 and an edge gain of 1e-300 a vignetting table of zeros: photometry
+		// that check_photometry refuses, used as the truth (found by fuzzing synth.yaml).
+		const auto ratio = [](double p_value) { return p_value >= SYNTH_RATIO_MIN && p_value <= SYNTH_RATIO_MAX; };
 		for (const auto &[name, value] : fields) {
 			if (info[name].empty()) {
 				continue;
 			}
 			*value = double(info[name]);
-			if (!std::isfinite(*value) || *value <= 0.0) {
-				*r_error = path.string() + ": " + name + ": must be a positive number";
+			const bool is_ratio = value != &reference_us;
+			if (!std::isfinite(*value) || *value <= 0.0 || (is_ratio && !ratio(*value))) {
+				*r_error = path.string() + ": " + name + ": must be a positive number" + (is_ratio ? " within [1e-6, 1e6]" : "");
 				return false;
 			}
 		}
@@ -220,8 +230,8 @@ bool read_recording_photometry(const std::string &p_recording_folder, const RigP
 			}
 			for (int c = 0; c < 3; c++) {
 				gains[c] = double(gains_node[c]);
-				if (!std::isfinite(gains[c]) || gains[c] <= 0.0) {
-					*r_error = path.string() + ": fisheye_channel_gains[" + std::to_string(c) + "]: must be a positive number";
+				if (!std::isfinite(gains[c]) || !ratio(gains[c])) {
+					*r_error = path.string() + ": fisheye_channel_gains[" + std::to_string(c) + "]: must be a positive number within [1e-6, 1e6]";
 					return false;
 				}
 			}
@@ -232,6 +242,12 @@ bool read_recording_photometry(const std::string &p_recording_folder, const RigP
 		p.fisheye.vignetting = radial_vignetting_table(edge_gain);
 		p.fisheye.reference_exposure_us = reference_us;
 		p.rgb = tone_curve_photometry(rgb_curve, rgb_exposure);
+		// What the rig file would refuse is not taken as the truth either.
+		const std::string invalid = check_photometry(p);
+		if (!invalid.empty()) {
+			*r_error = path.string() + ": the photometry it states is not valid: " + invalid;
+			return false;
+		}
 		*r_photometry = p;
 		return true;
 	} catch (const cv::Exception &e) {

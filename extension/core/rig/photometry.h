@@ -100,7 +100,8 @@ double exposure_ratio(const CameraPhotometry &p_camera, double p_exposure_us, do
 // The photometry a recording's frames are linearised with: the truth a synthetic recording
 // states in its synth.yaml (tone curves, exposures, vignetting, channel gains), else p_rig, the
 // recording's rig file's (unknown for a version 1 file). False, with r_error naming the file, when
-// synth.yaml is there but cannot be read.
+// synth.yaml is there but cannot be read, or states a ratio (an exposure, the vignetting edge gain
+// or a channel gain) outside [1e-6, 1e6] or a photometry that check_photometry refuses.
 bool read_recording_photometry(const std::string &p_recording_folder, const RigPhotometry &p_rig, RigPhotometry *r_photometry, std::string *r_error);
 
 // A linearised fisheye frame.
