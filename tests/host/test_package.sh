@@ -40,13 +40,20 @@ test_zip() {
 	needed=$(summary_value glibc_needed)
 	check "the summary names no glibc_needed" test -n "$needed"
 	check "the shipped files need glibc $needed, more than the 2.36 baseline" version_at_most "$needed" 2.36
+	# The size (issue #37): package.py fails above its budget and names the largest files.
+	local unpacked budget
+	unpacked=$(summary_value unpacked_mb) budget=$(summary_value budget_mb)
+	check "the summary names no unpacked_mb or budget_mb" test -n "$unpacked" -a -n "$budget"
+	check "the unpacked addon ($unpacked MB) is over its budget ($budget MB)" python3 -c 'import sys; sys.exit(float(sys.argv[1]) > float(sys.argv[2]))' "${unpacked:-0}" "${budget:-0}"
+	check "the package did not list the largest files" says "largest: bin/"
 	logged python3 -m zipfile -l "$zip"
 	local f
 	for f in roomprobe.gdextension plugin.cfg README.md bin/libroomprobe.linux.release.x86_64.so bin/BUNDLED.txt \
 		bin/OpenNI2/Drivers/libOniFile.so shaders/mirror.gdshader shaders/sh_irradiance.gdshaderinc icons/RoomProbe.svg; do
 		check "the zip lacks addons/roomprobe/$f" says "addons/roomprobe/$f"
 	done
-	check "the zip carries a licence for OpenCV" says "licenses/libopencv-core406.txt"
+	check "the zip carries a licence for OpenCV, compiled in" says "licenses/libopencv-core-dev.txt"
+	check "the zip bundles an OpenCV module, which the library should have compiled in" bash -c "! grep -q 'bin/libopencv_' <<<\"\$0\"" "$out"
 	check "the zip carries RoomProbe's LICENSE" says "addons/roomprobe/LICENSE"
 	check "the zip carries the licence of CGAL, compiled in" says "licenses/libcgal-dev.txt"
 	check "the zip carries the licence of liblzma, bundled" says "licenses/liblzma5.txt"
@@ -67,6 +74,8 @@ test_gdextension_lists_dependencies() {
 	done < <(find "$addon/bin" -name '*.so*' -type f | sort)
 	logged rp_run_in_root "$RP_SHIP_ROOT" readelf -d "$addon/bin/libroomprobe.linux.release.x86_64.so"
 	check "the library's RUNPATH is not \$ORIGIN" says 'Library runpath: [$ORIGIN]'
+	logged rp_run_in_root "$RP_SHIP_ROOT" readelf -S -W "$addon/bin/libroomprobe.linux.release.x86_64.so"
+	check "the library is not stripped (it has a .symtab)" bash -c '! grep -q "] \.symtab " <<<"$0"' "$out"
 }
 
 # The addon on a bare Debian 12: dlopen binds every symbol and finds the entry, as Godot would.
@@ -108,4 +117,30 @@ test_exported_app_runs_without_dependencies() {
 	check "the app did not write the map" test -s "$maps/cubemap.exr" -a -s "$maps/cubemap_net.png"
 }
 
-run_host_tests package "" zip gdextension_lists_dependencies loads_on_bare_debian_12 exported_app_runs_without_dependencies
+# Issue #37: a user's own project, outside the clone, exported with the addon: its first Linux preset
+# (which names no template: Debian's is used in the copy), the project only read, the app running.
+test_export_own_project() {
+	local user app
+	user=$(mktemp -d "${TMPDIR:-/tmp}/roomprobe-user-project.XXXXXX") || { failures+=("no temporary folder"); return; }
+	printf 'config_version=5\n\n[application]\nconfig/name="User Game"\nrun/main_scene="res://main.tscn"\n' >"$user/project.godot"
+	printf '[gd_scene format=3]\n\n[node name="Main" type="Node3D"]\n\n[node name="Probe" type="RoomProbe" parent="."]\n' >"$user/main.tscn"
+	printf '[preset.0]\n\nname="Desktop"\nplatform="Linux"\nrunnable=true\nexport_filter="all_resources"\nexport_path="build/user_game.x86_64"\n\n[preset.0.options]\n\nbinary_format/embed_pck=false\nbinary_format/architecture="x86_64"\n' \
+		>"$user/export_presets.cfg"
+	local sums
+	sums=$(cd "$user" && find . -type f | sort | xargs cksum)
+	logged ./roomprobe export --project "$user" --out "$work/user-app"
+	check "./roomprobe export --project failed (exit $rc)" test "$rc" -eq 0
+	check "export --project did not use the first Linux preset" says "preset=Desktop"
+	check "the user's project was written" test "$(cd "$user" && find . -type f | sort | xargs cksum)" = "$sums"
+	check "the user's project got a .godot/" test ! -e "$user/.godot"
+	app=$work/user-app/user_game.x86_64
+	logged ./roomprobe shell timeout 120 "$app" --headless --quit-after 20
+	check "the exported user app failed (exit $rc)" test "$rc" -eq 0
+	check "the exported user app did not find RoomProbe's classes" bash -c '! grep -qiE "cannot get class|ERROR" <<<"$0"' "$out"
+	logged ./roomprobe export --project "$user" --preset Nope --out "$work/user-app"
+	check "export --preset Nope exited with status $rc" test "$rc" -ne 0
+	check "export --preset Nope: the presets were not named" says "export --preset Nope: no such preset"
+	rm -rf "$user"
+}
+
+run_host_tests package "" zip gdextension_lists_dependencies loads_on_bare_debian_12 exported_app_runs_without_dependencies export_own_project

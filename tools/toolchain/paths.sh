@@ -23,11 +23,11 @@ RP_MKDIRS=()
 # exist); nothing when the option takes no path.
 rp_path_option() {
 	case "$1 $2" in
-	"synth --out" | "eval --out" | "record --out") echo out-dir ;;
+	"synth --out" | "eval --out" | "record --out" | "export --out") echo out-dir ;;
 	"bench --save-trajectory" | "oni --out" | "calibrate --out" | "room --out" | "room --picture") echo out-file ;;
 	"synth --rig" | "synth --hdri" | "bench --recording" | "bench --tum" | "bench --7scenes" | "bench --rig" | \
 		"bench --intrinsics" | "bench --open3d-results" | "soak --recording" | "eval --recording" | "room --recording" | "record --rig" | "oni --recording" | \
-		"calibrate --images" | "calibrate --recording" | "calibrate --ocamcalib") echo in ;;
+		"calibrate --images" | "calibrate --recording" | "calibrate --ocamcalib" | "export --project" | "export --recording") echo in ;;
 	esac
 }
 
