@@ -865,13 +865,33 @@ def suite_godot(opts, rendering, allow_empty):
     cmd += ["-s", "res://tests/run_tests.gd"]
     if user:
         cmd += ["--"] + user
+    runs = [(cmd, s.logs[0])]
+    if rendering:
+        # The same tests under the Mobile renderer, which headsets use (ids end in @mobile).
+        at = cmd.index("res://tests/run_tests.gd") - 1  # before its -s (xvfb-run has one too)
+        mobile = cmd[:at] + ["--rendering-method", "mobile"] + cmd[at:]
+        mobile[mobile.index("--artifacts") + 1] = artifacts + "-mobile"  # its pictures beside Forward+'s
+        os.makedirs(artifacts + "-mobile", exist_ok=True)
+        runs.append((mobile, os.path.join(LOGS, f"{name}-mobile.log")))
+        s.logs.append(runs[1][1])
+    seconds = 0.0
+    for run_cmd, log in runs:
+        seconds += run_godot_tests(s, name, run_cmd, user, log, (RENDERING_TIMEOUT if rendering else GODOT_TIMEOUT) * (4 if env else 1), env, opts)
+    status = "ok" if s.failed == 0 else "FAILED"
+    print(f"{status}: {s.passed} passed, {s.failed} failed, {s.skipped} skipped ({rp.fmt_duration(seconds)})")
+    return s
+
+
+def run_godot_tests(s, name, cmd, user, log, timeout, env, opts):
+    """One Godot run of run_tests.gd: its results, errors and leaks added to s; returns its seconds."""
+    passed, failed, skipped = s.passed, len(s.failures), s.skipped
     rp.header(f"{name}: {shlex.join(cmd)}" + (f" ({sanitizer_env_text(opts, godot_env_shown(env))})" if env else ""))
 
     def echo(line):
         if opts.verbose or RESULT.match(line):
             print("    " + line, flush=True)
 
-    r = rp.run(cmd, s.logs[0], (RENDERING_TIMEOUT if rendering else GODOT_TIMEOUT) * (4 if env else 1), echo=echo, env=env)
+    r = rp.run(cmd, log, timeout, echo=echo, env=env)
     s.seconds += r.seconds
     s.ran = True
     kept, dropped = rp.filter_noise(r.lines)
@@ -880,7 +900,7 @@ def suite_godot(opts, rendering, allow_empty):
     start, report = sanitizer_report(kept)
     if report:
         s.fail(f"{name}: {sanitizer_summary(report)}")
-        print(f"FAILED: {rp.describe_exit(r)} on a sanitizer report; the report (all of it in {rp.relpath(s.logs[0])}):")
+        print(f"FAILED: {rp.describe_exit(r)} on a sanitizer report; the report (all of it in {rp.relpath(log)}):")
         rp.tail(report, 80)
 
     summary = None
@@ -898,7 +918,7 @@ def suite_godot(opts, rendering, allow_empty):
         if m:
             summary = tuple(int(x) for x in m.groups())
 
-    failed_tests = [f for f in s.failures if not f.startswith(f"{name}: ")]
+    failed_tests = [f for f in s.failures[failed:] if not f.startswith(f"{name}: ")]
     if summary is None and not report:
         why = rp.describe_exit(r)
         s.fail(f"{name}: no GODOT_TESTS line ({why}; crashed or hung?)")
@@ -906,8 +926,8 @@ def suite_godot(opts, rendering, allow_empty):
         rp.tail(kept, 30)
     elif summary is None:
         pass  # the report ended it, counted above
-    elif summary != (s.passed, len(failed_tests), s.skipped):
-        s.fail(f"{name}: GODOT_TESTS says {summary}, the result lines say {(s.passed, len(failed_tests), s.skipped)}")
+    elif summary != (s.passed - passed, len(failed_tests), s.skipped - skipped):
+        s.fail(f"{name}: GODOT_TESTS says {summary}, the result lines say {(s.passed - passed, len(failed_tests), s.skipped - skipped)}")
     elif r.rc != (0 if summary[1] == 0 else 1) and not report:
         s.fail(f"{name}: {rp.describe_exit(r)} with {summary[1]} failed")
 
@@ -923,9 +943,7 @@ def suite_godot(opts, rendering, allow_empty):
     s.notes += [f"tolerated {t}" for t in tolerated]
     if dropped:
         s.notes.append(f"{len(dropped)} known noise line(s) ignored")
-    status = "ok" if s.failed == 0 else "FAILED"
-    print(f"{status}: {s.passed} passed, {s.failed} failed, {s.skipped} skipped ({rp.fmt_duration(r.seconds)})")
-    return s
+    return r.seconds
 
 
 def sanitized_project(opts, s):

@@ -216,6 +216,9 @@ func _selected(id: String) -> bool:
 
 func _run_test(tc: RoomProbeTestCase, file: String, test_name: String) -> void:
 	var id := "%s::%s" % [file, test_name]
+	# Under the Mobile renderer every id says so: the rendering suite runs the same tests under both.
+	if _rendering and RenderingServer.get_current_rendering_method() == "mobile":
+		id += "@mobile"
 	tc._rp_reset()
 	_collector.take()
 	_collector.take_warnings()

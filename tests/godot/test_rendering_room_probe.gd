@@ -341,6 +341,11 @@ func test_world_environment_route_lights_standard_materials_from_the_map() -> vo
 func test_rough_metal_matches_a_standard_material_at_the_same_roughness() -> void:
 	if not rendering:
 		return skip("needs a renderer (rendering suite: --rendering under a display)")
+	if RenderingServer.get_current_rendering_method() == "mobile":
+		# Measured on lavapipe: Mobile's own StandardMaterial3D reflects the same sky darker and
+		# flatter than Forward+'s (its simplified environment specular), 0.42-1.5 from ours and
+		# from Forward+'s alike: no like-for-like reference. The other Mobile tests still run.
+		return skip("Mobile renderer: its StandardMaterial3D's environment specular is simplified, no reference to match")
 	var probe = _probe_in_coloured_room(64, {})
 	const ROUGHNESS := [0.25, 0.5, 0.8]
 	_viewport = SubViewport.new()
