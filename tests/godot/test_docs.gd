@@ -210,6 +210,34 @@ func _registered_methods(c: String) -> Dictionary:
 	return out
 
 
+## Issue #37: documented ranges drifted from the registered ones (texel_size's inspector offered
+## 0.005..0.1 while the text and the setter said 0.001..1). A member whose text states "Values
+## outside A to B" must have a range hint of exactly [A, B], and a ranged number's text must say
+## what happens outside its range.
+func test_documented_ranges_match_the_registered_hints() -> void:
+	var stated := RegEx.create_from_string("[Vv]alues outside (-?[0-9.e+]+) to (-?[0-9.e+]+)")
+	var checked := 0
+	for c in _documented_classes():
+		var doc: Dictionary = _docs[c]
+		var registered := _registered_properties(c)
+		for p in registered:
+			if not doc.members.has(p):
+				continue
+			var where := "%s.%s" % [c, p]
+			var info: Dictionary = registered[p]
+			var text: String = doc.members[p].description
+			var m := stated.search(text)
+			if info.hint != PROPERTY_HINT_RANGE or not (info.type in [TYPE_INT, TYPE_FLOAT]):
+				continue  # a list to pick from (RoomProbe.resolution's sizes) while the setter takes a range
+			var hint := String(info.hint_string).split(",")
+			if not assert_true(m != null, "%s: a ranged number whose text does not say \"Values outside A to B\" (hint %s)" % [where, info.hint_string]):
+				continue
+			assert_eq(float(m.get_string(1)), float(hint[0]), "%s: the documented low end against the hint %s" % [where, info.hint_string])
+			assert_eq(float(m.get_string(2)), float(hint[1]), "%s: the documented high end against the hint %s" % [where, info.hint_string])
+			checked += 1
+	assert_true(checked >= 10, "%d ranged members checked" % checked)
+
+
 ## Properties that belong under <members>, by name: not groups, categories or internal ones.
 func _registered_properties(c: String) -> Dictionary:
 	var skip := PROPERTY_USAGE_GROUP | PROPERTY_USAGE_SUBGROUP | PROPERTY_USAGE_CATEGORY | PROPERTY_USAGE_INTERNAL

@@ -653,9 +653,9 @@ void DenseSLAM::_bind_methods() {
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "voxel_size", PROPERTY_HINT_RANGE, "0.002,0.1,0.001,suffix:m"), "set_voxel_size", "get_voxel_size");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "truncation_distance", PROPERTY_HINT_RANGE, "0.005,0.5,0.001,suffix:m"), "set_truncation_distance", "get_truncation_distance");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "max_blocks", PROPERTY_HINT_RANGE, "1,4194304,1"), "set_max_blocks", "get_max_blocks");
-	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "colour_weight", PROPERTY_HINT_RANGE, "0,10,0.01,or_greater"), "set_colour_weight", "get_colour_weight");
-	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "tracking_max_depth", PROPERTY_HINT_RANGE, "0.5,20,0.1,or_greater,suffix:m"), "set_tracking_max_depth", "get_tracking_max_depth");
-	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "fusion_max_depth", PROPERTY_HINT_RANGE, "0.5,20,0.1,or_greater,suffix:m"), "set_fusion_max_depth", "get_fusion_max_depth");
+	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "colour_weight", PROPERTY_HINT_RANGE, "0,100,0.01,exp"), "set_colour_weight", "get_colour_weight");
+	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "tracking_max_depth", PROPERTY_HINT_RANGE, "0.5,100,0.1,exp,suffix:m"), "set_tracking_max_depth", "get_tracking_max_depth");
+	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "fusion_max_depth", PROPERTY_HINT_RANGE, "0.5,100,0.1,exp,suffix:m"), "set_fusion_max_depth", "get_fusion_max_depth");
 	ADD_GROUP("Mesh", "mesh_");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "mesh_layers", PROPERTY_HINT_LAYERS_3D_RENDER), "set_mesh_layers", "get_mesh_layers");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "mesh_update_interval", PROPERTY_HINT_RANGE, "1,300,1,suffix:frames"), "set_mesh_update_interval", "get_mesh_update_interval");

@@ -960,7 +960,7 @@ void RigCapture::_bind_methods() {
 	ADD_PROPERTY(PropertyInfo(Variant::STRING, "fisheye_pixel_format"), "set_fisheye_pixel_format", "get_fisheye_pixel_format");
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "auto_exposure"), "set_auto_exposure", "get_auto_exposure");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "exposure_us", PROPERTY_HINT_RANGE, "1,10000000,1,suffix:us"), "set_exposure_us", "get_exposure_us");
-	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "gain", PROPERTY_HINT_RANGE, "0,48,0.1,or_greater"), "set_gain", "get_gain");
+	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "gain", PROPERTY_HINT_RANGE, "0,100,0.1"), "set_gain", "get_gain");
 	ADD_GROUP("Playback", "");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "pacing", PROPERTY_HINT_ENUM, "Real Time,Step"), "set_pacing", "get_pacing");
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "loop"), "set_loop", "get_loop");
