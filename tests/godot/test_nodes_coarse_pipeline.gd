@@ -229,8 +229,9 @@ func test_a_new_floorplan_carries_the_texture_where_the_walls_stayed() -> void:
 	assert_false(room.has_texture_data())
 
 
-## floorplan_source = Recording: the room takes the recording's floorplan and ceiling by itself,
-## once the RigCapture has opened it (no floorplan typed in).
+## floorplan_source = Recording: the room takes the recording's floorplan and ceiling by itself (no
+## floorplan typed in), from its room.yaml at once, before the recording is opened: the editor,
+## where nothing opens it, shows the room too (issue #37).
 func test_the_floorplan_can_come_from_the_recording() -> void:
 	if not need_fixture_recording():
 		return
@@ -244,9 +245,12 @@ func test_the_floorplan_can_come_from_the_recording() -> void:
 	room.rig_capture = NodePath("../Rig")
 	_scene.add_child(room)
 	add_to_tree(_scene)
-	assert_eq(room.floorplan.size(), 0, "nothing before the recording opens")
+	var before: PackedVector2Array = room.floorplan
+	assert_true(before.size() >= 3, "the recording's room before it is opened: %s" % [before])
+	assert_true(room.is_valid(), "and its mesh")
 	assert_true(rig.open(), rig.get_last_error())
 	await wait_frames(2)
 	assert_eq(room.floorplan, rig.get_room_floorplan(), "the recording's floorplan")
+	assert_eq(room.floorplan, before, "the same as read before opening")
 	assert_eq(room.ceiling_height, rig.get_room_ceiling_height())
 	assert_true(room.get_warnings().is_empty() or not " ".join(room.get_warnings()).contains("floorplan"), str(room.get_warnings()))

@@ -81,6 +81,7 @@ void CoarseRoomModel::_notification(int p_what) {
 	}
 	if (p_what == NOTIFICATION_READY) {
 		connect_engine();
+		take_recording_room(); // the editor too: RigCapture reads the recording's room.yaml unopened
 	}
 	if (p_what == NOTIFICATION_EXIT_TREE && engine && !own_engine) {
 		engine->edit_config([](LiveRoomConfig &p_config) { p_config.has_room = false; });

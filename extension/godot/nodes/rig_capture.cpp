@@ -13,6 +13,7 @@
 #include <room/room_from_sweep.h>
 
 #include <cmath>
+#include <filesystem>
 
 using namespace godot;
 
@@ -773,7 +774,32 @@ const RoomInfo *RigCapture::room_info() const {
 	if (live_open) {
 		return has_live_room ? &live_room : nullptr;
 	}
-	return reader && reader->has_room() ? &reader->get_room() : nullptr;
+	if (reader) {
+		return reader->has_room() ? &reader->get_room() : nullptr;
+	}
+	return preview_room();
+}
+
+// Before the recording is opened (in the editor nothing opens it), a CoarseRoomModel with
+// floorplan_source Recording should still show its room: the folder's room.yaml alone is read
+// (not a zip's: that would unpack it).
+const RoomInfo *RigCapture::preview_room() const {
+	if (source != SOURCE_RECORDING || recording_path.is_empty() ||
+			recording_path.to_lower().ends_with(".zip")) {
+		return nullptr;
+	}
+	if (previewed_path != recording_path) {
+		previewed_path = recording_path;
+		has_preview_room = false;
+		std::string error;
+		const std::string folder = disk_path_for(recording_path, &error);
+		if (error.empty() && !folder.empty()) {
+			const RoomLoadResult loaded = load_room_file((std::filesystem::path(folder) / "room.yaml").string());
+			has_preview_room = loaded.ok;
+			preview = loaded.room;
+		}
+	}
+	return has_preview_room ? &preview : nullptr;
 }
 
 const Rig *RigCapture::rig_info() const {

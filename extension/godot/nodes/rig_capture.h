@@ -172,6 +172,10 @@ private:
 	void start_live();
 	// Main thread: emits device_state_changed for the changes the capture threads queued.
 	void report_device_states();
+	const RoomInfo *preview_room() const; // before opening (the editor): room.yaml of recording_path
+	mutable godot::String previewed_path; // preview_room()'s cache
+	mutable RoomInfo preview;
+	mutable bool has_preview_room = false;
 	const RoomInfo *room_info() const; // the recording's room, or room_file's (live); null without
 	const Rig *rig_info() const; // the recording's rig, or rig_file's (live); null when not open
 	void reopen_if_live();
