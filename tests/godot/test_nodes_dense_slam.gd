@@ -107,6 +107,20 @@ func test_drives_the_current_camera_when_none_is_named() -> void:
 	assert_not_null(s.slam.get_camera_image_texture(), "and there is an image")
 
 
+## Issue #37: a correct scene in the editor showed "dense SLAM needs a rig" although its RigCapture
+## had a recording: before the recording opens there is no rig yet, and that is no fault.
+func test_no_warning_before_the_recording_opens() -> void:
+	if not need_fixture_recording():
+		return
+	_scene = Node3D.new()
+	_scene.add_child(fixture_rig())
+	var slam = ClassDB.instantiate("DenseSLAM")
+	_scene.add_child(slam)
+	add_to_tree(_scene)
+	await wait_frames(2)
+	assert_eq(slam.get_warnings(), PackedStringArray(), "no warning while the recording is still closed")
+
+
 func test_places_an_object_on_the_real_table() -> void:
 	if not need_fixture_recording():
 		return

@@ -593,7 +593,10 @@ PackedStringArray DenseSLAM::get_warnings() const {
 	if (!settings_valid()) {
 		warnings.push_back("RGB-D frames are not being processed: voxel_size must be > 0, truncation_distance larger than voxel_size, max_blocks in 1..4194304, colour_weight in 0..100, tracking_max_depth and fusion_max_depth above 0.3 m and at most 100 m.");
 	}
-	if (engine && !engine->config_pending() && !engine->configuration_error().empty()) {
+	// Without a rig yet (the editor, or before the RigCapture opens its recording) the engine says
+	// dense SLAM needs one: not this node's problem while a RigCapture is there; it says its own.
+	const bool rig_to_come = capture != nullptr && engine && !engine->config().has_rig;
+	if (engine && !engine->config_pending() && !engine->configuration_error().empty() && !rig_to_come) {
 		warnings.push_back(String(("RGB-D frames are not being processed: " + engine->configuration_error()).c_str()));
 	}
 	if (!camera_path.is_empty() && is_inside_tree() && cast_to<Camera3D>(get_node_or_null(camera_path)) == nullptr) {
