@@ -24,6 +24,64 @@ func test_a_scene_with_no_script_shows_a_reflecting_sphere_over_the_camera_image
 		return
 	var scene: Node3D = load("res://demo_scenes/no_code.tscn").instantiate()
 	scene.get_node("Rig").recording_path = fixture_recording()
+	await _play_and_check(scene, "no_code_scene.png")
+
+
+## Issue #37: README's quick start, followed literally, gave a grey screen. The scene built here
+## from its step 2 alone: the nodes it names, no NodePath between them, and only the settings it
+## names (the recording, the room from the recording, the probe's world_environment and Always).
+func test_the_quick_start_as_written_reflects_the_room() -> void:
+	if not rendering:
+		return skip("needs a renderer (rendering suite: --rendering under a display)")
+	if not need_fixture_recording():
+		return
+	var scene := Node3D.new()
+	var rig = ClassDB.instantiate("RigCapture")
+	rig.name = "Rig"
+	rig.recording_path = fixture_recording()
+	scene.add_child(rig)
+	var slam = ClassDB.instantiate("DenseSLAM")
+	slam.name = "SLAM"
+	scene.add_child(slam)
+	var room = ClassDB.instantiate("CoarseRoomModel")
+	room.name = "Room"
+	room.floorplan_source = 1  # FLOORPLAN_RECORDING
+	scene.add_child(room)
+	var camera := Camera3D.new()
+	camera.name = "Camera3D"
+	scene.add_child(camera)
+	var world := WorldEnvironment.new()
+	world.name = "WorldEnvironment"
+	scene.add_child(world)
+	var anchor = ClassDB.instantiate("SurfaceAnchor")
+	anchor.name = "OnTheTable"
+	anchor.position = Vector3(2.5, 0.75, 2.0)  # where the user drops it: over the recording's table
+	scene.add_child(anchor)
+	var ball := MeshInstance3D.new()  # the user's object: a chrome sphere
+	ball.name = "ChromeBall"
+	var sphere := SphereMesh.new()
+	sphere.radius = 0.1
+	sphere.height = 0.2
+	ball.mesh = sphere
+	var chrome := StandardMaterial3D.new()
+	chrome.metallic = 1.0
+	chrome.roughness = 0.05
+	ball.material_override = chrome
+	ball.position = Vector3(0, 0.1, 0)
+	anchor.add_child(ball)
+	var probe = ClassDB.instantiate("RoomProbe")
+	probe.name = "Probe"
+	probe.update_mode = 1  # UPDATE_ALWAYS
+	ball.add_child(probe)
+	probe.world_environment = NodePath("../../../WorldEnvironment")  # the one probe setting README names
+	await _play_and_check(scene, "quick_start_scene.png")
+	assert_eq(probe.get_warnings(), PackedStringArray(), "the probe is content")
+	assert_eq(slam.get_warnings(), PackedStringArray(), "DenseSLAM is content")
+
+
+## Plays p_scene's recording in real time in a viewport, then checks the picture: the background
+## is the camera image, and the sphere (OnTheTable/ChromeBall) reflects the room over it.
+func _play_and_check(scene: Node3D, p_picture: String) -> void:
 	_viewport = SubViewport.new()
 	_viewport.size = SIZE
 	_viewport.own_world_3d = true
@@ -32,6 +90,7 @@ func test_a_scene_with_no_script_shows_a_reflecting_sphere_over_the_camera_image
 	add_to_tree(_viewport)
 	var slam = scene.get_node("SLAM")
 	var camera: Camera3D = scene.get_node("Camera3D")
+	assert_true(camera.is_current(), "the scene's camera is the one shown")
 	var finished := [false]
 	scene.get_node("Rig").finished.connect(func(): finished[0] = true)
 	var start := Time.get_ticks_msec()
@@ -50,7 +109,7 @@ func test_a_scene_with_no_script_shows_a_reflecting_sphere_over_the_camera_image
 	var shot := _viewport.get_texture().get_image()
 	var video: Image = slam.get_camera_image_texture().get_image()
 	if not artifacts_dir.is_empty():
-		shot.save_png(artifacts_dir.path_join("no_code_scene.png"))
+		shot.save_png(artifacts_dir.path_join(p_picture))
 	# The background: the camera image, stretched to the viewport. Compared at a grid of points;
 	# a point on a sharp edge (the checkered wall) may fall on the other side of it in the other
 	# image, so most, not all, must agree (8-bit both ways, bilinear: a few codes).
