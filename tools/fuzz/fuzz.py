@@ -14,6 +14,7 @@ line: 'summary: targets=K execs=N crashes=C seconds=S'.
 
 import argparse
 import datetime
+import io
 import os
 import re
 import shutil
@@ -22,13 +23,14 @@ import subprocess
 import sys
 import tempfile
 import time
+import zipfile
 import zlib
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(REPO, "tools"))
 import rp_godot as rp  # noqa: E402
 
-TARGETS = ["rig", "room", "index", "png", "depth", "exr", "recording", "synth", "capture", "photometric", "board", "cli"]
+TARGETS = ["rig", "room", "index", "png", "depth", "exr", "recording", "synth", "capture", "photometric", "board", "cli", "trajectory", "zip"]
 # Inputs longer than this are cut (libFuzzer's -max_len): a whole 640x480 frame seed would make each
 # execution slow; its header and first rows are what the decoders' checks read.
 MAX_LEN = {"png": 65536, "depth": 65536, "exr": 65536}
@@ -200,6 +202,23 @@ def make_corpus(target, corpus):
     elif target == "cli":  # argvs, NUL between arguments, of the options the target walks
         for name, argv in CLI_ARGVS.items():
             seeds[name] = b"\0".join(argv)
+    elif target == "trajectory":
+        for name in ("rgb_trajectory.txt", "fisheye_trajectory.txt"):
+            path = os.path.join(recording, "groundtruth", name)
+            if os.path.isfile(path):
+                seeds["synthetic_" + name] = first_lines(path, INDEX_LINES)
+        seeds["tum_comments.txt"] = b"# ground truth\n1.0 0 0 0 0 0 0 1\n\n2.5 0.1 -0.2 1e-3 0.7071 0 0 0.7071\n"
+    elif target == "zip":
+        for zip64 in (False, True):  # a small recording's text files, in a plain and a zip64 directory
+            buffer = io.BytesIO()
+            with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as z:
+                for name in ("rig.yaml", "room.yaml", "rgb.txt"):
+                    path = os.path.join(recording, name)
+                    if os.path.isfile(path):
+                        with z.open("living/" + name, "w", force_zip64=zip64) as f:
+                            f.write(first_lines(path, INDEX_LINES))
+                z.writestr("living/rgb/", b"")
+            seeds[f"recording{'_zip64' if zip64 else ''}.zip"] = buffer.getvalue()
     if not seeds:
         sys.exit(f"fuzz: no seeds for {target} in {recording}")
     for name, data in seeds.items():
