@@ -30,7 +30,7 @@
 
 #include <envmap/dense_render.h>
 #include <envmap/ggx_prefilter.h>
-#include <envmap/virtual_objects.h>
+#include <prt/virtual_objects.h>
 #include <pipeline/coarse_pipeline.h>
 #include <room/room_from_sweep.h>
 #include <placement/surface_placement.h>
@@ -263,7 +263,7 @@ public:
 	// Probes (ids from add_probe). p_size: cubemap face size in texels (1..4096).
 	int add_probe(const glm::dvec3 &p_position, int p_size);
 	void set_probe(int p_probe, const glm::dvec3 &p_position, int p_size);
-	// The virtual objects drawn into this probe's maps (envmap/virtual_objects.h; null: none).
+	// The virtual objects drawn into this probe's maps (prt/virtual_objects.h; null: none).
 	// The probe's own object must not be among them. A new scene marks the probe for a new map.
 	void set_probe_objects(int p_probe, std::shared_ptr<const VirtualScene> p_objects);
 	void remove_probe(int p_probe);

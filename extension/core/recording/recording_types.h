@@ -6,7 +6,7 @@
 
 #include <io/opencv.h>
 #include <math/pose.h>
-#include <room/floorplan.h>
+#include <types/room_types.h>
 
 #include <glm/vec3.hpp>
 

@@ -1,5 +1,7 @@
 #include "room_file.h"
 
+#include <room/floorplan.h> // check_floorplan: the one file of recording/ that reaches up into room/ (#39)
+
 #include "recording_io.h"
 
 #include <rig/trajectory.h>

@@ -4,7 +4,7 @@
 // ceiling height. The room is the polygon extruded from the floor (world y = 0)
 // up to the ceiling (world y = ceiling_height_m).
 
-#include "room_types.h"
+#include <types/room_types.h>
 
 #include <cstddef>
 #include <string>
@@ -12,27 +12,7 @@
 
 namespace roomprobe {
 
-// Coordinates: floorplan point p maps to world (p.x, 0, p.y) on the floor and
-// (p.x, ceiling_height_m, p.y) at the ceiling, i.e. Vec2::y holds world Z.
-//
-// Orientation convention: a *normalized* floorplan lists its points
-// counter-clockwise in the 2-D (x, z) plane as CGAL sees the coordinates
-// (x to the right, z upwards on paper), so the room interior lies to the LEFT
-// of every edge points[i] -> points[i + 1]. Beware: seen from above in Godot's
-// right-handed Y-up world (camera at +Y looking down, X to the right, so +Z
-// points down the screen) the same polygon appears CLOCKWISE.
-//
-// Edges and walls are numbered like the points: edge i runs from points[i] to
-// points[(i + 1) % n]. All indices in messages are 0-based.
-struct Floorplan {
-	std::vector<Vec2> points; // Polygon corners, metres; implicitly closed (last connects to first).
-	double ceiling_height_m = 0.0; // Floor-to-ceiling height, metres; must be > 0.
-};
-
-// The most corners a floorplan may have. A room's walls number in the tens; the checks and the
-// room mesh grow with the square of the count, so a 100000-point polygon (a point cloud pasted
-// by mistake) once held the editor's main thread for minutes. Refused before anything else runs.
-inline constexpr std::size_t FLOORPLAN_MAX_POINTS = 1024;
+// The Floorplan itself, its coordinates and orientation convention: types/room_types.h.
 
 // Result of check_floorplan(). When ok is true, problem is None and message is empty.
 struct FloorplanCheck {

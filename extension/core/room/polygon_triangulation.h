@@ -5,7 +5,7 @@
 // every one is locally Delaunay, which makes it the polygon's constrained Delaunay triangulation.
 // Decisions use CGAL's exact predicates (its LGPL kernel); no point is ever constructed.
 
-#include "room_types.h"
+#include <types/room_types.h>
 
 #include <cstddef>
 #include <string>

@@ -2,7 +2,7 @@
 // The room from what a sweep observed (issue #18): room_estimation.h's steps in order, on the
 // dense model's surface, the RGB-D camera's path and fisheye views posed in the same frame (the
 // dense model's, "model" below). The live engine (engine/live_room.h find_room_now) and
-// roomprobe_room (pipeline/room_sweep.h) both call this one function.
+// roomprobe_room (engine/room_sweep.h) both call this one function.
 
 #include "room_estimation.h"
 

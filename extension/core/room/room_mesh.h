@@ -4,7 +4,7 @@
 // with a single light-map atlas in which every texel covers the same world area.
 
 #include "floorplan.h"
-#include "room_types.h"
+#include <types/room_types.h>
 
 #include <cstdint>
 #include <string>

@@ -5,7 +5,7 @@
 // exact-constructions kernel), so three lines through one point meet in one vertex and no
 // sliver face is lost or invented; coordinates come back as doubles.
 
-#include "room_types.h"
+#include <types/room_types.h>
 
 #include <utility>
 #include <vector>

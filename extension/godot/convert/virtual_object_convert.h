@@ -1,5 +1,5 @@
 #pragma once
-// A MeshInstance3D as a virtual object drawn into other probes' maps (envmap/virtual_objects.h):
+// A MeshInstance3D as a virtual object drawn into other probes' maps (prt/virtual_objects.h):
 // its mesh in world coordinates and its look, read from its material:
 // - RoomProbe's mirror.gdshader and rough_metal.gdshader: a mirror with their `tint`;
 // - glass.gdshader: glass with its `ior` and `tint`;
@@ -8,7 +8,7 @@
 // - a BaseMaterial3D: a mirror when metallic >= 0.5 and roughness < 0.35 (albedo as tint),
 //   otherwise diffuse with its albedo; anything else: diffuse grey.
 
-#include <envmap/virtual_objects.h>
+#include <prt/virtual_objects.h>
 
 #include <rp_godot/godot.h>
 

@@ -7,7 +7,7 @@
 #include "../convert/pose_convert.h"
 #include "../convert/project_paths.h"
 
-#include <pipeline/room_sweep.h>
+#include <engine/room_sweep.h>
 #include <recording/room_file.h>
 
 #include <atomic>

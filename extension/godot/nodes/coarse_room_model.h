@@ -78,7 +78,7 @@ public:
 	bool estimate_room_now();
 	// The editor's way to the room of a recording: finds the room of p_path (empty: the
 	// RigCapture's recording_path) on a worker thread (about a minute for a 10-s sweep; the
-	// pipeline/room_sweep.h of ./roomprobe room), then applies it as Automatic does, placed in the
+	// engine/room_sweep.h of ./roomprobe room), then applies it as Automatic does, placed in the
 	// recording's world. False, with an error, when one is running or the path is unusable.
 	bool find_room_in_recording(const godot::String &p_path);
 	bool is_finding_room() const;

@@ -110,7 +110,7 @@ private:
 	void restore_driven();
 	void drive_outputs();
 	// The MeshInstance3Ds on virtual_objects_mask's layers, in this probe's viewport, less its own
-	// object, handed to the engine when any of them changed (envmap/virtual_objects.h).
+	// object, handed to the engine when any of them changed (prt/virtual_objects.h).
 	void refresh_virtual_objects();
 
 	// Face sides the setter accepts (clamped with a warning outside).

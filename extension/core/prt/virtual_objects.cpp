@@ -1,6 +1,6 @@
 #include "virtual_objects.h"
 
-#include <prt/contact_shadow.h>
+#include "contact_shadow.h"
 
 #include <glm/geometric.hpp>
 

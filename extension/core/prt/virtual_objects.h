@@ -12,11 +12,11 @@
 // one-bounce approximation). Real surfaces never hide a virtual object (the objects stand in
 // the room, in front of its walls).
 
-#include "cubemap.h"
-#include "spherical_harmonics.h"
+#include "prt_transfer.h"
 
+#include <envmap/cubemap.h>
+#include <envmap/spherical_harmonics.h>
 #include <io/embree_scene.h>
-#include <prt/prt_transfer.h>
 
 #include <glm/mat3x3.hpp>
 
