@@ -1,9 +1,9 @@
-// Virtual objects drawn into a probe's map (envmap/virtual_objects.h, paper §4.7's last
+// Virtual objects drawn into a probe's map (prt/virtual_objects.h, paper §4.7's last
 // paragraph): known scenes whose answer is worked out by hand.
 
 #include "prt_test_meshes.h"
 
-#include "envmap/virtual_objects.h"
+#include "prt/virtual_objects.h"
 #include "prt/contact_shadow.h"
 
 #include <doctest/doctest.h>

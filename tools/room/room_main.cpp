@@ -1,5 +1,5 @@
 // roomprobe_room: the room a recording's sweep shows (issue #18): the world frame, the floorplan,
-// the ceiling height (pipeline/room_sweep.h), written as a room.yaml, with a picture of the
+// the ceiling height (engine/room_sweep.h), written as a room.yaml, with a picture of the
 // floorplan over the dense model seen from above. When the recording holds its true room, the
 // two are compared, and the true floorplan is registered to the reconstructed walls as a given
 // floorplan would be; the last line is
@@ -10,7 +10,7 @@
 // roomprobe_room --recording DIR --out FILE [--picture FILE] [--true-poses] [--seconds S] [--force] [--quiet]
 
 #include <io/image_codec.h>
-#include <pipeline/room_sweep.h>
+#include <engine/room_sweep.h>
 #include <recording/room_file.h>
 
 #include "../common/cli.h"
