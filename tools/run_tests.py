@@ -876,13 +876,13 @@ def suite_godot(opts, rendering, allow_empty):
         s.logs.append(runs[1][1])
     seconds = 0.0
     for run_cmd, log in runs:
-        seconds += run_godot_tests(s, name, run_cmd, user, log, (RENDERING_TIMEOUT if rendering else GODOT_TIMEOUT) * (4 if env else 1), env, opts)
+        seconds += run_godot_tests(s, name, run_cmd, log, (RENDERING_TIMEOUT if rendering else GODOT_TIMEOUT) * (4 if env else 1), env, opts)
     status = "ok" if s.failed == 0 else "FAILED"
     print(f"{status}: {s.passed} passed, {s.failed} failed, {s.skipped} skipped ({rp.fmt_duration(seconds)})")
     return s
 
 
-def run_godot_tests(s, name, cmd, user, log, timeout, env, opts):
+def run_godot_tests(s, name, cmd, log, timeout, env, opts):
     """One Godot run of run_tests.gd: its results, errors and leaks added to s; returns its seconds."""
     passed, failed, skipped = s.passed, len(s.failures), s.skipped
     rp.header(f"{name}: {shlex.join(cmd)}" + (f" ({sanitizer_env_text(opts, godot_env_shown(env))})" if env else ""))

@@ -141,8 +141,7 @@ def main():
     log = os.path.join(out, "export.log")
     with open(log, "w") as f:
         # The import (the extension loaded at start-up: godot#111048), then the export.
-        for step in (rp_godot.import_command(project), ["godot", "--headless", "--path", project, "--export-release", preset, os.path.join(out, app)]):
-            step = ["godot"] + step[1:]
+        for step in (rp_godot.import_command(project), [rp_godot.godot(), "--headless", "--path", project, "--export-release", preset, os.path.join(out, app)]):
             r = subprocess.run(step, stdout=f, stderr=subprocess.STDOUT)
             if r.returncode != 0:
                 sys.exit(f"export: {' '.join(step[1:])} failed with status {r.returncode}; see {log}")

@@ -75,20 +75,6 @@ std::vector<uint16_t> gpu_face(const std::vector<Cubemap> &p_chain, const cv::Ma
 	return out;
 }
 
-// Whether two matrices hold the same pixels (both empty counts as the same).
-bool same_pixels(const cv::Mat &p_a, const cv::Mat &p_b) {
-	if (p_a.size() != p_b.size() || p_a.type() != p_b.type()) {
-		return false;
-	}
-	const size_t row_bytes = size_t(p_a.cols) * p_a.elemSize();
-	for (int y = 0; y < p_a.rows && p_a.data != p_b.data; y++) {
-		if (std::memcmp(p_a.ptr(y), p_b.ptr(y), row_bytes) != 0) {
-			return false;
-		}
-	}
-	return true;
-}
-
 // CoarseSnapshot::observed of a texture: where the fisheye observed each texel.
 cv::Mat observed_mask(const CoarseTexture &p_texture) {
 	cv::Mat observed;
@@ -1219,7 +1205,6 @@ void LiveRoom::build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map) con
 	std::vector<Cubemap> chain;
 	if (filter) {
 		chain = filter->apply(io_map->cubemap, same_kind ? p_previous->ggx_chain : std::vector<Cubemap>{}, source_changed, &chain_changed);
-		chain[0] = io_map->cubemap; // the same pixels: no second copy kept
 	} else {
 		chain = { io_map->cubemap };
 	}

@@ -25,19 +25,27 @@ Cubemap clone_cubemap(const Cubemap &p_cubemap) {
 	return out;
 }
 
+bool same_pixels(const cv::Mat &p_a, const cv::Mat &p_b) {
+	if (p_a.size() != p_b.size() || p_a.type() != p_b.type()) {
+		return false;
+	}
+	const size_t row_bytes = size_t(p_a.cols) * p_a.elemSize();
+	for (int y = 0; y < p_a.rows && p_a.data != p_b.data; y++) {
+		if (std::memcmp(p_a.ptr(y), p_b.ptr(y), row_bytes) != 0) {
+			return false;
+		}
+	}
+	return true;
+}
+
 uint8_t cubemap_changed_faces(const Cubemap &p_a, const Cubemap &p_b) {
 	if (!is_valid_cubemap(p_a) || !is_valid_cubemap(p_b) || p_a.size != p_b.size) {
 		return 0x3F;
 	}
 	uint8_t changed = 0;
-	const size_t row_bytes = size_t(p_a.size) * sizeof(cv::Vec3f);
 	for (int f = 0; f < 6; f++) {
-		const cv::Mat &a = p_a.faces[size_t(f)], &b = p_b.faces[size_t(f)];
-		for (int y = 0; y < p_a.size && a.data != b.data; y++) {
-			if (std::memcmp(a.ptr(y), b.ptr(y), row_bytes) != 0) {
-				changed |= uint8_t(1u << f);
-				break;
-			}
+		if (!same_pixels(p_a.faces[size_t(f)], p_b.faces[size_t(f)])) {
+			changed |= uint8_t(1u << f);
 		}
 	}
 	return changed;

@@ -33,6 +33,9 @@ Cubemap clone_cubemap(const Cubemap &p_cubemap);
 // Whether p_cubemap has six p_cubemap.size-square CV_32FC3 faces (size > 0).
 bool is_valid_cubemap(const Cubemap &p_cubemap);
 
+// Whether two images hold the same pixels, bit for bit (two empty ones do).
+bool same_pixels(const cv::Mat &p_a, const cv::Mat &p_b);
+
 // A bit per face (1 << face) whose colours differ between two valid cubemaps, bit for bit; all
 // six when their sizes differ.
 uint8_t cubemap_changed_faces(const Cubemap &p_a, const Cubemap &p_b);

@@ -269,7 +269,7 @@ std::vector<Cubemap> GgxFilter::apply(const Cubemap &p_source, const std::vector
 			level = std::move(next);
 		}
 	}
-	chain.push_back(clone_cubemap(p_source));
+	chain.push_back(p_source); // level 0: the source itself, its pixels shared (no copy)
 	std::atomic<uint8_t> computed{ changed };
 	for (size_t l = 0; l < levels.size(); l++) {
 		const Level &filter = levels[l];

@@ -58,8 +58,8 @@ public:
 	size_t tap_count() const; // weights stored, all levels
 	size_t memory_bytes() const;
 
-	// The chain of a source of face_size(): level 0 is a copy of the source. Empty for another
-	// size or an invalid source.
+	// The chain of a source of face_size(): level 0 is the source itself (sharing its pixels, as a
+	// Cubemap's copy does). Empty for another size or an invalid source.
 	std::vector<Cubemap> apply(const Cubemap &p_source) const;
 	// The same after a change of some source faces: p_previous is this filter's chain of a source
 	// that differs from p_source only in the faces of p_changed_faces (a bit per face, 1 << face).

@@ -288,9 +288,9 @@ bool DenseSLAM::process_rig_frame() {
 	processed++;
 	set_state(to_node_state(frame->state), frame->reason);
 	// The pose and the image of one frame: the background and the virtual objects stay in register.
-	if (frame->has_pose && (!camera_path.is_empty() || driven_camera() != nullptr)) {
-		Node3D *camera = driven_camera();
-		ERR_FAIL_NULL_V_MSG(camera, true, "DenseSLAM.camera does not lead to a Node3D.");
+	Node3D *camera = frame->has_pose ? driven_camera() : nullptr;
+	ERR_FAIL_COND_V_MSG(frame->has_pose && camera == nullptr && !camera_path.is_empty(), true, "DenseSLAM.camera does not lead to a Node3D.");
+	if (camera != nullptr) {
 		camera->set_global_transform(camera_transform_from_pose(frame->world_from_camera));
 		// The AR camera sees what the RGB camera saw: its field of view from the rig.
 		Camera3D *ar_camera = cast_to<Camera3D>(camera);

@@ -297,12 +297,9 @@ void RoomProbe::process_once() {
 	// Live: the probe worker renders it; the first map it finishes for this room is the one.
 	place_in_engine();
 	refresh_virtual_objects();
-	const std::shared_ptr<const ProbeMap> before = map;
 	if (take_map()) {
-		emit_signal("environment_map_updated");
-	}
-	if (map && map != before) {
 		once_room_version = room;
+		emit_signal("environment_map_updated");
 	}
 }
 
