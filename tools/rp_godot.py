@@ -1,4 +1,4 @@
-"""Helpers shared by tools/run_tests.py and tools/run_demo.py (python3 standard library only).
+"""Helpers shared by tools/run_tests.py (tools/testrun/) and tools/run_demo.py (python3 standard library only).
 
 Both scripts run inside RoomProbe's toolchain (./roomprobe test, ./roomprobe demo), from any
 directory; paths here are absolute, from the repository root.

@@ -3,7 +3,7 @@
 // a map with a small bright light and smooth walls (the hard case: a peak the lobe must spread).
 
 #include "envmap/ggx_prefilter.h"
-#include "recording/cubemap_layout.h"
+#include "types/cubemap_layout.h"
 
 #include <doctest/doctest.h>
 

@@ -5,7 +5,7 @@
 #include "eval/evaluate.h"
 #include "io/exr_write.h"
 #include "io/raw_frame.h"
-#include "recording/cubemap_layout.h"
+#include "types/cubemap_layout.h"
 #include "recording/recording_io.h"
 #include "recording/recording_reader.h"
 #include "recording/recording_writer.h"

@@ -6,7 +6,7 @@
 #include "io/opencv.h"
 
 #include "camera/pinhole_camera.h"
-#include "recording/cubemap_layout.h"
+#include "types/cubemap_layout.h"
 #include "room/floorplan.h"
 #include "synth/synth_renderer.h"
 #include "synth/synth_scene.h"

@@ -325,17 +325,29 @@ test_editor_sees_the_callers_files() {
 	check "the toolchain does not see the caller's file at its own path" test "$seen" = rig
 }
 
-# Issue #39: every repository path that README.md, docs/*.md and tests/README.md name exists
-# (tests/host/check_doc_paths.py; docs/ARCHITECTURE.md had drifted from the tree). The host's
-# Python when it has one, else the toolchain's.
-test_docs_name_existing_paths() {
+# Runs a check script with the host's Python when it has one, else the toolchain's.
+logged_python() {
 	if command -v python3 >/dev/null 2>&1; then
-		logged python3 tests/host/check_doc_paths.py
+		logged python3 "$@"
 	else
-		rp shell python3 tests/host/check_doc_paths.py
+		rp shell python3 "$@"
 	fi
+}
+
+# Issue #39: every repository path that README.md, docs/*.md and tests/README.md name exists
+# (tests/host/check_doc_paths.py; docs/ARCHITECTURE.md had drifted from the tree).
+test_docs_name_existing_paths() {
+	logged_python tests/host/check_doc_paths.py
 	check "tests/host/check_doc_paths.py exited with status $rc: $(grep -m3 'names no file' <<<"$out" | tr '\n' ' ')" test "$rc" -eq 0
 	check "tests/host/check_doc_paths.py did not say it checked the paths" says "files, all found"
+}
+
+# Issue #39: no include arrow of the core runs upward: each folder includes only the layers below
+# it, in the order docs/ARCHITECTURE.md gives (tests/host/check_layers.py).
+test_core_includes_run_downward() {
+	logged_python tests/host/check_layers.py
+	check "tests/host/check_layers.py exited with status $rc: $(grep -m3 ' -> ' <<<"$out" | tr '\n' ' ')" test "$rc" -eq 0
+	check "tests/host/check_layers.py did not say it checked the includes" says "all downward"
 }
 
 # ---------------------------------------------------------------- issue #38: faults and odd inputs
@@ -623,7 +635,7 @@ test_no_gpl_cgal_headers() {
 
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
 	calibrate_refuses_and_never_overwrites synth_photometric_options_refused eval_refuses_bad_input numbers_out_of_range_refused
-	record_relative_out_run_directly bake_prt_bakes_and_caches unknown_verb_is_named editor_sees_the_callers_files docs_name_existing_paths
+	record_relative_out_run_directly bake_prt_bakes_and_caches unknown_verb_is_named editor_sees_the_callers_files docs_name_existing_paths core_includes_run_downward
 	input_devices_named synth_hdri_refused read_only_output_refused dev_full_outputs_refused full_disk_outputs synth_killed_midway record_killed_midway two_writers_one_output
 	outputs_inside_inputs_refused
 	no_gpl_cgal_headers)

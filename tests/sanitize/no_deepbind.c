@@ -1,5 +1,5 @@
 // Preloaded into Godot, before the sanitizer's runtime, when the godot suite runs against a sanitized
-// library (./roomprobe test --sanitize ... --suite godot; tools/run_tests.py). Godot opens a
+// library (./roomprobe test --sanitize ... --suite godot; tools/testrun/sanitize.py). Godot opens a
 // GDExtension with dlopen(RTLD_NOW | RTLD_DEEPBIND) unless Godot itself was built with sanitizers, and
 // the sanitizers' dlopen ends the process on RTLD_DEEPBIND (google/sanitizers#611: a library bound to
 // itself first would call libc's malloc and friends, not the sanitizer's). This dlopen drops that one

@@ -144,102 +144,100 @@ std::string describe(const cv::Mat &p_image) {
 	return std::to_string(p_image.cols) + "x" + std::to_string(p_image.rows) + " " + depth + " " + std::to_string(p_image.channels()) + "-channel";
 }
 
-} // namespace
-
-int bench_decode(const DecodeBenchOptions &p_options) {
-	RecordingReader reader;
-	const RecordingStatus opened = reader.open(p_options.recording);
-	if (!opened.ok) {
-		std::fprintf(stderr, "roomprobe_bench: %s\n", opened.error.c_str());
-		return 1;
+// How the recording's RGB-D frames are stored: zstd, png, ... ("none" without RGB-D frames).
+std::string stored_format(const RecordingReader &p_reader, size_t p_rgbd_count) {
+	if (p_rgbd_count == 0) {
+		return "none";
 	}
-	const size_t limit = p_options.frames < 0 ? SIZE_MAX : size_t(p_options.frames);
-	const size_t rgbd_count = std::min(reader.rgbd_count(), limit);
-	const size_t fisheye_count = std::min(reader.fisheye_count(), limit);
-	const std::string folder = reader.get_folder();
-	std::string format = "none";
-	if (rgbd_count > 0) {
-		const std::string extension = fs::path(reader.get_rgbd_ref(0).rgb.path).extension().string();
-		format = extension == ".zst" ? "zstd" : extension.empty() ? "unknown" : extension.substr(1);
-	}
-	std::printf("roomprobe_bench decode --recording %s\n", p_options.recording.c_str());
-	std::printf("  %zu RGB-D frames, %zu fisheye frames (of %zu, %zu); RGB-D frames stored as %s; %d timed passes after one warm-up\n",
-			rgbd_count, fisheye_count, reader.rgbd_count(), reader.fisheye_count(), format.c_str(), p_options.repeats);
+	const std::string extension = fs::path(p_reader.get_rgbd_ref(0).rgb.path).extension().string();
+	return extension == ".zst" ? "zstd" : extension.empty() ? "unknown" : extension.substr(1);
+}
 
-	// 1. As stored, through the reader. The warm-up pass keeps the frames for part 2.
-	Stream streams[3] = { { "rgb", {} }, { "depth", {} }, { "fisheye", {} } };
+// Part 1's figures: the files' bytes over one pass and the timed reads.
+struct StoredFigures {
 	uint64_t rgbd_bytes = 0, fisheye_bytes = 0;
 	bool fisheye_hdr = false;
-	for (size_t i = 0; i < rgbd_count; i++) {
-		const RgbdFrameResult frame = reader.read_rgbd(i);
+	Samples read_rgbd, read_fisheye;
+};
+
+double bytes_per_frame(uint64_t p_bytes, size_t p_frames) {
+	return p_frames ? double(p_bytes) / double(p_frames) : 0.0;
+}
+
+// The warm-up pass: every frame read once, kept in r_streams (rgb, depth as stored, fisheye) for
+// part 2, and the files' bytes counted; false (said) when one fails.
+bool keep_frames(const RecordingReader &p_reader, size_t p_rgbd_count, size_t p_fisheye_count, Stream *r_streams, StoredFigures *r_figures) {
+	const std::string folder = p_reader.get_folder();
+	for (size_t i = 0; i < p_rgbd_count; i++) {
+		const RgbdFrameResult frame = p_reader.read_rgbd(i);
 		if (!frame.ok) {
 			std::fprintf(stderr, "roomprobe_bench: %s\n", frame.error.c_str());
-			return 1;
+			return false;
 		}
-		const RgbdFrameRef &ref = reader.get_rgbd_ref(i);
+		const RgbdFrameRef &ref = p_reader.get_rgbd_ref(i);
 		cv::Mat raw_depth;
 		const std::string error = decode_stored(join(folder, ref.depth.path), &raw_depth);
 		if (!error.empty()) {
 			std::fprintf(stderr, "roomprobe_bench: %s\n", error.c_str());
-			return 1;
+			return false;
 		}
-		streams[0].frames.push_back(frame.frame.rgb);
-		streams[1].frames.push_back(raw_depth);
-		rgbd_bytes += file_bytes(join(folder, ref.rgb.path)) + file_bytes(join(folder, ref.depth.path));
+		r_streams[0].frames.push_back(frame.frame.rgb);
+		r_streams[1].frames.push_back(raw_depth);
+		r_figures->rgbd_bytes += file_bytes(join(folder, ref.rgb.path)) + file_bytes(join(folder, ref.depth.path));
 	}
-	for (size_t i = 0; i < fisheye_count; i++) {
-		const FisheyeFrameResult frame = reader.read_fisheye(i);
+	for (size_t i = 0; i < p_fisheye_count; i++) {
+		const FisheyeFrameResult frame = p_reader.read_fisheye(i);
 		if (!frame.ok) {
 			std::fprintf(stderr, "roomprobe_bench: %s\n", frame.error.c_str());
-			return 1;
+			return false;
 		}
 		cv::Mat image = frame.frame.image;
 		if (frame.frame.hdr) {
-			fisheye_hdr = true;
+			r_figures->fisheye_hdr = true;
 			image.convertTo(image, CV_16F); // as a half-float raw frame would hold it
 		}
-		streams[2].frames.push_back(image);
-		fisheye_bytes += file_bytes(join(folder, reader.get_fisheye_ref(i).path));
+		r_streams[2].frames.push_back(image);
+		r_figures->fisheye_bytes += file_bytes(join(folder, p_reader.get_fisheye_ref(i).path));
 	}
-	Samples read_rgbd, read_fisheye;
-	for (int pass = 0; pass < p_options.repeats; pass++) {
-		for (size_t i = 0; i < rgbd_count; i++) {
+	return true;
+}
+
+// p_repeats timed passes of reading every frame through the reader; false (said) when a frame no
+// longer reads.
+bool time_reads(const RecordingReader &p_reader, size_t p_rgbd_count, size_t p_fisheye_count, int p_repeats, StoredFigures *r_figures) {
+	for (int pass = 0; pass < p_repeats; pass++) {
+		for (size_t i = 0; i < p_rgbd_count; i++) {
 			const double start = now_ms();
-			const bool ok = reader.read_rgbd(i).ok;
-			read_rgbd.add(now_ms() - start);
+			const bool ok = p_reader.read_rgbd(i).ok;
+			r_figures->read_rgbd.add(now_ms() - start);
 			if (!ok) {
 				std::fprintf(stderr, "roomprobe_bench: RGB-D frame %zu no longer reads\n", i);
-				return 1;
+				return false;
 			}
 		}
-		for (size_t i = 0; i < fisheye_count; i++) {
+		for (size_t i = 0; i < p_fisheye_count; i++) {
 			const double start = now_ms();
-			const bool ok = reader.read_fisheye(i).ok;
-			read_fisheye.add(now_ms() - start);
+			const bool ok = p_reader.read_fisheye(i).ok;
+			r_figures->read_fisheye.add(now_ms() - start);
 			if (!ok) {
 				std::fprintf(stderr, "roomprobe_bench: fisheye frame %zu no longer reads\n", i);
-				return 1;
+				return false;
 			}
 		}
 	}
-	const double rgbd_bytes_per_frame = rgbd_count ? double(rgbd_bytes) / double(rgbd_count) : 0.0;
-	const double fisheye_bytes_per_frame = fisheye_count ? double(fisheye_bytes) / double(fisheye_count) : 0.0;
-	std::printf("as stored, through RecordingReader (file read, decode, checks, conversion to the frame's types):\n");
-	std::printf("  read_rgbd     %8.2f ms median  %8.2f ms mean   %10.0f bytes per frame (RGB and depth files)\n", read_rgbd.median(), read_rgbd.mean(),
-			rgbd_bytes_per_frame);
-	std::printf("  read_fisheye  %8.2f ms median  %8.2f ms mean   %10.0f bytes per frame%s\n", read_fisheye.median(), read_fisheye.mean(),
-			fisheye_bytes_per_frame, fisheye_hdr ? " (HDR)" : "");
+	return true;
+}
 
-	// 2. Each encoding on the same frames, in memory.
+// Part 2: each stream through each codec, a table row each; the summary's keys onto *r_summary and
+// whether every frame round-tripped into *r_all_exact. False (said) when a codec fails.
+bool compare_codecs(const Stream (&p_streams)[3], const DecodeBenchOptions &p_options, std::string *r_summary, bool *r_all_exact) {
 	std::vector<Codec> codecs = { { "png", 0, true } };
 	for (int level : p_options.levels) {
 		codecs.push_back({ level < 0 ? "zstd_neg" + std::to_string(-level) : "zstd" + std::to_string(level), level, false });
 	}
 	std::printf("each encoding on the same frames, in memory (median per frame; PNG includes the R, G, B <-> B, G, R swap of colour):\n");
 	std::printf("  %-10s %-8s %-30s %12s %8s %11s %11s %s\n", "encoding", "stream", "frames", "bytes/frame", "ratio", "encode_ms", "decode_ms", "bit-exact");
-	std::string summary;
-	bool all_exact = true;
-	for (const Stream &stream : streams) {
+	for (const Stream &stream : p_streams) {
 		if (stream.frames.empty()) {
 			continue;
 		}
@@ -255,18 +253,59 @@ int bench_decode(const DecodeBenchOptions &p_options) {
 			const std::string error = run_codec(codec, stream.frames, p_options.repeats, &figures);
 			if (!error.empty()) {
 				std::fprintf(stderr, "roomprobe_bench: %s frame: %s\n", stream.name, error.c_str());
-				return 1;
+				return false;
 			}
 			const double per_frame = double(figures.bytes) / double(std::max<size_t>(figures.frames, 1));
 			std::printf("  %-10s %-8s %-30s %12.0f %7.2fx %11.2f %11.2f %s\n", codec.name.c_str(), stream.name,
 					(describe(first) + " x" + std::to_string(stream.frames.size())).c_str(), per_frame, raw_bytes / per_frame, figures.encode_ms.median(),
 					figures.decode_ms.median(), figures.exact ? "yes" : "NO");
-			all_exact = all_exact && figures.exact;
+			*r_all_exact = *r_all_exact && figures.exact;
 			char keys[256];
 			std::snprintf(keys, sizeof(keys), " %s_%s_bytes=%.0f %s_%s_encode_ms=%.2f %s_%s_decode_ms=%.2f", codec.name.c_str(), stream.name, per_frame,
 					codec.name.c_str(), stream.name, figures.encode_ms.median(), codec.name.c_str(), stream.name, figures.decode_ms.median());
-			summary += keys;
+			*r_summary += keys;
 		}
+	}
+	return true;
+}
+
+} // namespace
+
+int bench_decode(const DecodeBenchOptions &p_options) {
+	RecordingReader reader;
+	const RecordingStatus opened = reader.open(p_options.recording);
+	if (!opened.ok) {
+		std::fprintf(stderr, "roomprobe_bench: %s\n", opened.error.c_str());
+		return 1;
+	}
+	const size_t limit = p_options.frames < 0 ? SIZE_MAX : size_t(p_options.frames);
+	const size_t rgbd_count = std::min(reader.rgbd_count(), limit);
+	const size_t fisheye_count = std::min(reader.fisheye_count(), limit);
+	const std::string format = stored_format(reader, rgbd_count);
+	std::printf("roomprobe_bench decode --recording %s\n", p_options.recording.c_str());
+	std::printf("  %zu RGB-D frames, %zu fisheye frames (of %zu, %zu); RGB-D frames stored as %s; %d timed passes after one warm-up\n",
+			rgbd_count, fisheye_count, reader.rgbd_count(), reader.fisheye_count(), format.c_str(), p_options.repeats);
+
+	// 1. As stored, through the reader. The warm-up pass keeps the frames for part 2.
+	Stream streams[3] = { { "rgb", {} }, { "depth", {} }, { "fisheye", {} } };
+	StoredFigures stored;
+	if (!keep_frames(reader, rgbd_count, fisheye_count, streams, &stored) || !time_reads(reader, rgbd_count, fisheye_count, p_options.repeats, &stored)) {
+		return 1;
+	}
+	const double rgbd_bytes_per_frame = bytes_per_frame(stored.rgbd_bytes, rgbd_count);
+	const double fisheye_bytes_per_frame = bytes_per_frame(stored.fisheye_bytes, fisheye_count);
+	const Samples &read_rgbd = stored.read_rgbd, &read_fisheye = stored.read_fisheye;
+	std::printf("as stored, through RecordingReader (file read, decode, checks, conversion to the frame's types):\n");
+	std::printf("  read_rgbd     %8.2f ms median  %8.2f ms mean   %10.0f bytes per frame (RGB and depth files)\n", read_rgbd.median(), read_rgbd.mean(),
+			rgbd_bytes_per_frame);
+	std::printf("  read_fisheye  %8.2f ms median  %8.2f ms mean   %10.0f bytes per frame%s\n", read_fisheye.median(), read_fisheye.mean(),
+			fisheye_bytes_per_frame, stored.fisheye_hdr ? " (HDR)" : "");
+
+	// 2. Each encoding on the same frames, in memory.
+	std::string summary;
+	bool all_exact = true;
+	if (!compare_codecs(streams, p_options, &summary, &all_exact)) {
+		return 1;
 	}
 	std::printf("summary: mode=decode format=%s rgbd_frames=%zu fisheye_frames=%zu read_rgbd_ms_p50=%.2f read_fisheye_ms_p50=%.2f "
 				"rgbd_bytes_per_frame=%.0f fisheye_bytes_per_frame=%.0f bit_exact=%d%s\n",

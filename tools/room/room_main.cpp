@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <string>
 
 namespace {
@@ -95,48 +96,56 @@ cv::Mat top_view(const RoomSweepResult &p_result) {
 	return picture;
 }
 
-int run(int argc, char **argv) {
+// The usage, after p_error when there is one; usage's exit status.
+int usage(const char *p_error) {
+	std::fprintf(stderr,
+			"%s%susage: roomprobe_room --recording DIR --out FILE [--picture FILE] [--true-poses] [--seconds S]\n"
+			"                      [--force] [--quiet]\n"
+			"  --out FILE: the room.yaml to write (an existing file is kept unless --force)\n"
+			"  --picture FILE: the top view (default: FILE with .png; the same rule); never a folder or a device\n"
+			"  --true-poses: fuse depth at the recording's true poses instead of tracking\n"
+			"  --seconds S: only the sweep's first S seconds\n",
+			p_error ? "roomprobe_room: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
+	return 2;
+}
+
+// The command line, as given.
+struct RoomArgs {
 	RoomSweepOptions options;
 	std::string out, picture_path;
 	bool force = false, quiet = false;
-	auto usage = [](const char *p_error) {
-		std::fprintf(stderr,
-				"%s%susage: roomprobe_room --recording DIR --out FILE [--picture FILE] [--true-poses] [--seconds S]\n"
-				"                      [--force] [--quiet]\n"
-				"  --out FILE: the room.yaml to write (an existing file is kept unless --force)\n"
-				"  --picture FILE: the top view (default: FILE with .png; the same rule); never a folder or a device\n"
-				"  --true-poses: fuse depth at the recording's true poses instead of tracking\n"
-				"  --seconds S: only the sweep's first S seconds\n",
-				p_error ? "roomprobe_room: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
-		return 2;
-	};
+};
+
+// The command line into *r_args: the exit status when the tool ends here (--help, a bad option),
+// else nothing.
+std::optional<int> parse_arguments(int argc, char **argv, RoomArgs *r_args) {
 	cli::Arguments cursor(argc, argv, 1);
 	std::string arg;
 	while (cursor.next(&arg)) {
 		double x = 0.0;
 		if (arg == "--recording") {
-			if (!cursor.value(&options.recording)) {
+			if (!cursor.value(&r_args->options.recording)) {
 				return usage("--recording needs a folder");
 			}
 		} else if (arg == "--out") {
-			if (!cursor.value(&out)) {
+			if (!cursor.value(&r_args->out)) {
 				return usage("--out needs a file name");
 			}
 		} else if (arg == "--picture") {
-			if (!cursor.value(&picture_path)) {
+			if (!cursor.value(&r_args->picture_path)) {
 				return usage("--picture needs a file name");
 			}
 		} else if (arg == "--seconds") {
 			if (!cursor.positive_number(36000.0, &x)) {
 				return usage("--seconds needs a number of seconds in (0, 36000]");
 			}
-			options.max_seconds = x;
+			r_args->options.max_seconds = x;
 		} else if (arg == "--true-poses") {
-			options.true_poses = true;
+			r_args->options.true_poses = true;
 		} else if (arg == "--force") {
-			force = true;
+			r_args->force = true;
 		} else if (arg == "--quiet") {
-			quiet = true;
+			r_args->quiet = true;
 		} else if (arg == "--help" || arg == "-h") {
 			usage(nullptr);
 			return 0;
@@ -144,19 +153,31 @@ int run(int argc, char **argv) {
 			return usage(("unknown argument " + arg).c_str());
 		}
 	}
-	if (options.recording.empty() || out.empty()) {
+	return std::nullopt;
+}
+
+// Why p_option's file p_path cannot be written, or "": never into the recording it reads (--out
+// REC/room.yaml would replace the recording's own room), even with --force, as bench's
+// --save-trajectory; a device (/dev/full) is refused even with --force: it was once removed when
+// the write failed.
+std::string output_problem(const char *p_option, const std::string &p_path, const RoomArgs &p_args) {
+	const std::string problem = cli::output_in_input_problem(p_option, p_path, { p_args.options.recording });
+	return problem.empty() ? cli::output_file_problem(p_option, p_path, p_args.force) : problem;
+}
+
+// The options checked before the sweep: both given, and the room and the picture (named when not
+// given) writable; the exit status when they are not, else nothing.
+std::optional<int> check_outputs(RoomArgs *r_args) {
+	const std::string &out = r_args->out;
+	std::string &picture_path = r_args->picture_path;
+	if (r_args->options.recording.empty() || out.empty()) {
 		return usage("--recording and --out are required");
 	}
 	std::error_code ec;
 	if (std::filesystem::is_directory(out, ec)) {
 		return usage(("--out " + out + " is a folder: name the room.yaml to write").c_str());
 	}
-	// Never into the recording it reads (--out REC/room.yaml would replace the recording's own room),
-	// even with --force, as bench's --save-trajectory.
-	std::string problem = cli::output_in_input_problem("--out", out, { options.recording });
-	if (problem.empty()) {
-		problem = cli::output_file_problem("--out", out, force);
-	}
+	std::string problem = output_problem("--out", out, *r_args);
 	if (!problem.empty()) {
 		return usage(problem.c_str());
 	}
@@ -166,11 +187,7 @@ int run(int argc, char **argv) {
 	if (std::filesystem::path(picture_path).lexically_normal() == std::filesystem::path(out).lexically_normal()) {
 		return usage(("the picture and the room would both be " + out + ": give --picture another name").c_str());
 	}
-	// A device (/dev/full) is refused even with --force: it was once removed when the write failed.
-	problem = cli::output_in_input_problem("the picture", picture_path, { options.recording });
-	if (problem.empty()) {
-		problem = cli::output_file_problem("the picture", picture_path, force);
-	}
+	problem = output_problem("the picture", picture_path, *r_args);
 	if (!problem.empty()) {
 		return usage(problem.c_str());
 	}
@@ -182,15 +199,12 @@ int run(int argc, char **argv) {
 	if (!problem.empty()) {
 		return usage(problem.c_str());
 	}
-	if (!quiet) {
-		options.progress = [](const std::string &p_line) { std::cerr << p_line << "\n"; };
-	}
-	const RoomSweepResult result = sweep_room(options);
-	if (!result.error.empty()) {
-		std::fprintf(stderr, "roomprobe_room: %s\n", result.error.c_str());
-		return 1;
-	}
-	const RoomEstimate &estimate = result.estimate;
+	return std::nullopt;
+}
+
+// What the sweep found: the floor, the corners, the walls, the ceiling and the fisheye's searches.
+void print_estimate(const RoomSweepResult &p_result) {
+	const RoomEstimate &estimate = p_result.estimate;
 	std::printf("room: %s: %s\n", room_estimate_state_name(estimate.state), estimate.message.c_str());
 	std::printf("floor: %.2f m2 seen, %.1f mm rms\n", estimate.floor_seen_m2, estimate.floor_rms_m * 1000.0);
 	for (size_t i = 0; i < estimate.floorplan.points.size(); i++) {
@@ -205,50 +219,86 @@ int run(int argc, char **argv) {
 	if (estimate.floorplan.ceiling_height_m > 0.0) {
 		std::printf("ceiling: %.3f m (%s)\n", estimate.floorplan.ceiling_height_m, estimate.ceiling_source.c_str());
 	}
-	if (!result.fisheye_ceiling.message.empty()) {
-		std::printf("fisheye ceiling search: %s (%zu views)\n", result.fisheye_ceiling.message.c_str(), result.fisheye_ceiling.views_used);
+	if (!p_result.fisheye_ceiling.message.empty()) {
+		std::printf("fisheye ceiling search: %s (%zu views)\n", p_result.fisheye_ceiling.message.c_str(), p_result.fisheye_ceiling.views_used);
 	}
-	for (const std::string &line : result.fisheye_walls) {
+	for (const std::string &line : p_result.fisheye_walls) {
 		std::printf("fisheye wall search: %s\n", line.c_str());
 	}
-	const cv::Mat picture = top_view(result);
+}
+
+// The picture (when there is one to draw) and the room.yaml written: 0, or 1 when either fails or
+// no room was found.
+int write_outputs(const RoomArgs &p_args, const RoomSweepResult &p_result) {
+	const cv::Mat picture = top_view(p_result);
 	if (!picture.empty()) {
-		const std::string written = png_write(picture_path, picture);
+		const std::string written = png_write(p_args.picture_path, picture);
 		if (!written.empty()) {
 			std::fprintf(stderr, "roomprobe_room: %s\n", written.c_str());
 			return 1;
 		}
-		std::printf("picture: %s\n", picture_path.c_str());
+		std::printf("picture: %s\n", p_args.picture_path.c_str());
 	}
-	if (result.room.floorplan.points.empty()) {
-		std::fprintf(stderr, "roomprobe_room: %s: no room written: %s\n", options.recording.c_str(), estimate.message.c_str());
+	if (p_result.room.floorplan.points.empty()) {
+		std::fprintf(stderr, "roomprobe_room: %s: no room written: %s\n", p_args.options.recording.c_str(), p_result.estimate.message.c_str());
 		return 1;
 	}
-	const std::string saved = save_room_file(out, result.room);
+	const std::string saved = save_room_file(p_args.out, p_result.room);
 	if (!saved.empty()) {
 		std::fprintf(stderr, "roomprobe_room: %s\n", saved.c_str());
 		return 1;
 	}
-	std::printf("room.yaml: %s\n", out.c_str());
-	if (result.has_truth) {
-		const RoomComparison comparison = compare_rooms(estimate.floorplan, result.world_from_model, result.truth.floorplan, result.true_world_from_model);
-		// The true floorplan as a given one: placed on the reconstructed walls, then compared
-		// where it lands (corners as sets: a symmetric room fits turned too).
-		const FloorplanRegistration registration = register_floorplan(result.truth.floorplan, transform_samples(result.samples, result.world_from_model));
-		double registration_error_m = -1.0;
-		if (registration.ok) {
-			Floorplan placed = result.truth.floorplan;
-			for (Vec2 &p : placed.points) {
-				const glm::dvec3 q = transform_point(registration.world_from_given, glm::dvec3(p.x, 0.0, p.y));
-				p = { q.x, q.z };
-			}
-			registration_error_m = compare_rooms(placed, result.world_from_model, result.truth.floorplan, result.true_world_from_model).corner_error_max_m;
+	std::printf("room.yaml: %s\n", p_args.out.c_str());
+	return 0;
+}
+
+// The room found against the recording's true room, and the true floorplan registered to the
+// reconstructed walls; the last line.
+void print_comparison(const RoomSweepResult &p_result) {
+	const RoomComparison comparison =
+			compare_rooms(p_result.estimate.floorplan, p_result.world_from_model, p_result.truth.floorplan, p_result.true_world_from_model);
+	// The true floorplan as a given one: placed on the reconstructed walls, then compared
+	// where it lands (corners as sets: a symmetric room fits turned too).
+	const FloorplanRegistration registration = register_floorplan(p_result.truth.floorplan, transform_samples(p_result.samples, p_result.world_from_model));
+	double registration_error_m = -1.0;
+	if (registration.ok) {
+		Floorplan placed = p_result.truth.floorplan;
+		for (Vec2 &p : placed.points) {
+			const glm::dvec3 q = transform_point(registration.world_from_given, glm::dvec3(p.x, 0.0, p.y));
+			p = { q.x, q.z };
 		}
-		std::printf("registration of the true floorplan: %s\n", registration.message.c_str());
-		std::printf("corner_error_max_m=%.4f ceiling_error_m=%.4f up_error_deg=%.3f registration_error_m=%.4f registration_rms_m=%.4f "
-					"corner_error_fitted_m=%.4f\n",
-				comparison.corner_error_max_m, comparison.ceiling_error_m, comparison.up_error_deg, registration_error_m, registration.residual_rms_m,
-				comparison.corner_error_fitted_m);
+		registration_error_m = compare_rooms(placed, p_result.world_from_model, p_result.truth.floorplan, p_result.true_world_from_model).corner_error_max_m;
+	}
+	std::printf("registration of the true floorplan: %s\n", registration.message.c_str());
+	std::printf("corner_error_max_m=%.4f ceiling_error_m=%.4f up_error_deg=%.3f registration_error_m=%.4f registration_rms_m=%.4f "
+				"corner_error_fitted_m=%.4f\n",
+			comparison.corner_error_max_m, comparison.ceiling_error_m, comparison.up_error_deg, registration_error_m, registration.residual_rms_m,
+			comparison.corner_error_fitted_m);
+}
+
+int run(int argc, char **argv) {
+	RoomArgs args;
+	if (const std::optional<int> done = parse_arguments(argc, argv, &args)) {
+		return *done;
+	}
+	if (const std::optional<int> refused = check_outputs(&args)) {
+		return *refused;
+	}
+	if (!args.quiet) {
+		args.options.progress = [](const std::string &p_line) { std::cerr << p_line << "\n"; };
+	}
+	const RoomSweepResult result = sweep_room(args.options);
+	if (!result.error.empty()) {
+		std::fprintf(stderr, "roomprobe_room: %s\n", result.error.c_str());
+		return 1;
+	}
+	print_estimate(result);
+	const int written = write_outputs(args, result);
+	if (written != 0) {
+		return written;
+	}
+	if (result.has_truth) {
+		print_comparison(result);
 	}
 	return 0;
 }

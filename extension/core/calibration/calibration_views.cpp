@@ -212,6 +212,142 @@ void load_recording_views(const fs::path &p_root, const CalibrationViewsOptions 
 	r_views->fisheye_circle = find_image_circle(fisheye_brightest);
 }
 
+// The views of a folder of images: rgb/, fisheye/ and pairs/ (calib/README.md).
+struct FolderViews {
+	const fs::path &root;
+	const CalibrationViewsOptions &options;
+	CalibrationViews &result;
+	size_t total = 0; // images to read, for the progress
+	cv::Mat fisheye_brightest; // for the image circle
+
+	// One image read, checked against its camera's size and searched for the whole board; a miss
+	// is said in result.missed.
+	Detected detect(const fs::path &p_file, bool p_is_rgb);
+	// A pair (pairs/NAME_rgb.png, NAME_fisheye.png and optionally NAME_depth.png): each view where
+	// the board is found, and the pair when both are.
+	void add_pair(const fs::path &p_file);
+};
+
+Detected FolderViews::detect(const fs::path &p_file, bool p_is_rgb) {
+	std::error_code ec;
+	Detected d;
+	d.view.name = fs::relative(p_file, root, ec).string();
+	if (options.progress) {
+		options.progress(result.images, total, d.view.name);
+	}
+	result.images++;
+	const std::string error = image_read(p_file.string(), ImageReadMode::Gray8, &d.image);
+	if (!error.empty()) {
+		d.image = cv::Mat();
+		result.missed.push_back(d.view.name + ": cannot read the image (" + error + ")");
+		return d;
+	}
+	cv::Size &size = p_is_rgb ? result.rgb_size : result.fisheye_size;
+	if (size.area() == 0) {
+		size = d.image.size();
+	} else if (size != d.image.size()) {
+		result.missed.push_back(d.view.name + ": " + std::to_string(d.image.cols) + "x" + std::to_string(d.image.rows) + ", the camera's other images are " +
+				std::to_string(size.width) + "x" + std::to_string(size.height));
+		return d;
+	}
+	if (!p_is_rgb) {
+		keep_brightest(fisheye_brightest, d.image);
+	}
+	BoardDetection found = detect_board(d.image, result.board);
+	if (!found.found) {
+		result.missed.push_back(d.view.name + ": the whole board (" + board_text(result.board) + ") was not found");
+		return d;
+	}
+	d.view.corners = std::move(found.corners);
+	d.ok = true;
+	return d;
+}
+
+void FolderViews::add_pair(const fs::path &p_file) {
+	std::error_code ec;
+	const std::string stem = p_file.stem().string();
+	const std::string name = stem.substr(0, stem.size() - 4);
+	const fs::path fisheye_file = p_file.parent_path() / (name + "_fisheye.png");
+	if (!fs::exists(fisheye_file, ec)) {
+		result.missed.push_back(fs::relative(p_file, root, ec).string() + ": no " + name + "_fisheye.png beside it");
+		return;
+	}
+	Detected rgb = detect(p_file, true);
+	Detected fisheye = detect(fisheye_file, false);
+	if (rgb.ok) {
+		result.rgb.push_back(rgb.view);
+	}
+	if (fisheye.ok) {
+		result.fisheye.push_back(fisheye.view);
+	}
+	if (!rgb.ok || !fisheye.ok) {
+		return;
+	}
+	BoardPair pair;
+	pair.rgb = std::move(rgb.view);
+	pair.fisheye = std::move(fisheye.view);
+	for (const auto &[path, image] : { std::pair(p_file, &pair.rgb_image), std::pair(fisheye_file, &pair.fisheye_image) }) {
+		cv::Mat bgr;
+		if (image_read(path.string(), ImageReadMode::Bgr8, &bgr).empty()) {
+			cv::cvtColor(bgr, *image, cv::COLOR_BGR2RGB);
+		}
+	}
+	const fs::path depth_file = p_file.parent_path() / (name + "_depth.png");
+	if (fs::exists(depth_file, ec)) {
+		cv::Mat raw;
+		image_read(depth_file.string(), ImageReadMode::Unchanged, &raw);
+		if (raw.type() != CV_16UC1 || raw.size() != rgb.image.size()) {
+			result.missed.push_back(fs::relative(depth_file, root, ec).string() + ": not a 16-bit depth image of the RGB image's size; depth not checked on it");
+		} else {
+			pair.depth_m = depth_metres_from_raw(raw, options.depth_scale_m);
+		}
+	}
+	result.pairs.push_back(std::move(pair));
+}
+
+// The pairs' RGB images: pairs/NAME_rgb.png.
+std::vector<fs::path> pair_rgb_files(const fs::path &p_root) {
+	std::vector<fs::path> pair_files;
+	for (const fs::path &file : images_in(p_root / "pairs")) {
+		const std::string stem = file.stem().string();
+		if (stem.size() > 4 && stem.compare(stem.size() - 4, 4, "_rgb") == 0 && file.extension() == ".png") {
+			pair_files.push_back(file);
+		}
+	}
+	return pair_files;
+}
+
+void load_folder_views(const fs::path &p_root, const CalibrationViewsOptions &p_options, CalibrationViews *r_views) {
+	const std::vector<fs::path> rgb_files = images_in(p_root / "rgb");
+	const std::vector<fs::path> fisheye_files = images_in(p_root / "fisheye");
+	const std::vector<fs::path> pair_files = pair_rgb_files(p_root);
+	if (rgb_files.empty() && fisheye_files.empty() && pair_files.empty()) {
+		r_views->error = p_root.string() + ": no views (PNG or JPEG images in rgb/ or fisheye/, or pairs/NAME_rgb.png with NAME_fisheye.png; calib/README.md)";
+		return;
+	}
+	const size_t total = rgb_files.size() + fisheye_files.size() + 2 * pair_files.size();
+	FolderViews folder{ p_root, p_options, *r_views, total, cv::Mat() };
+	for (const fs::path &file : rgb_files) {
+		Detected d = folder.detect(file, true);
+		if (d.ok) {
+			r_views->rgb.push_back(std::move(d.view));
+		}
+	}
+	for (const fs::path &file : fisheye_files) {
+		Detected d = folder.detect(file, false);
+		if (d.ok) {
+			r_views->fisheye.push_back(std::move(d.view));
+		}
+	}
+	for (const fs::path &file : pair_files) {
+		folder.add_pair(file);
+	}
+	if (p_options.progress) {
+		p_options.progress(total, total, "");
+	}
+	r_views->fisheye_circle = find_image_circle(folder.fisheye_brightest);
+}
+
 } // namespace
 
 CalibrationViews load_calibration_views(const std::string &p_folder, const CalibrationViewsOptions &p_options) {
@@ -253,110 +389,7 @@ CalibrationViews load_calibration_views(const std::string &p_folder, const Calib
 		load_recording_views(root, p_options, &result);
 		return result;
 	}
-	const std::vector<fs::path> rgb_files = images_in(root / "rgb");
-	const std::vector<fs::path> fisheye_files = images_in(root / "fisheye");
-	std::vector<fs::path> pair_files; // the pairs' RGB images
-	for (const fs::path &file : images_in(root / "pairs")) {
-		const std::string stem = file.stem().string();
-		if (stem.size() > 4 && stem.compare(stem.size() - 4, 4, "_rgb") == 0 && file.extension() == ".png") {
-			pair_files.push_back(file);
-		}
-	}
-	if (rgb_files.empty() && fisheye_files.empty() && pair_files.empty()) {
-		result.error = root.string() + ": no views (PNG or JPEG images in rgb/ or fisheye/, or pairs/NAME_rgb.png with NAME_fisheye.png; calib/README.md)";
-		return result;
-	}
-	const size_t total = rgb_files.size() + fisheye_files.size() + 2 * pair_files.size();
-	cv::Mat fisheye_brightest; // for the image circle
-	const auto detect = [&](const fs::path &p_file, bool p_is_rgb) {
-		Detected d;
-		d.view.name = fs::relative(p_file, root, ec).string();
-		if (p_options.progress) {
-			p_options.progress(result.images, total, d.view.name);
-		}
-		result.images++;
-		const std::string error = image_read(p_file.string(), ImageReadMode::Gray8, &d.image);
-		if (!error.empty()) {
-			d.image = cv::Mat();
-			result.missed.push_back(d.view.name + ": cannot read the image (" + error + ")");
-			return d;
-		}
-		cv::Size &size = p_is_rgb ? result.rgb_size : result.fisheye_size;
-		if (size.area() == 0) {
-			size = d.image.size();
-		} else if (size != d.image.size()) {
-			result.missed.push_back(d.view.name + ": " + std::to_string(d.image.cols) + "x" + std::to_string(d.image.rows) + ", the camera's other images are " +
-					std::to_string(size.width) + "x" + std::to_string(size.height));
-			return d;
-		}
-		if (!p_is_rgb) {
-			keep_brightest(fisheye_brightest, d.image);
-		}
-		BoardDetection found = detect_board(d.image, result.board);
-		if (!found.found) {
-			result.missed.push_back(d.view.name + ": the whole board (" + board_text(result.board) + ") was not found");
-			return d;
-		}
-		d.view.corners = std::move(found.corners);
-		d.ok = true;
-		return d;
-	};
-	for (const fs::path &file : rgb_files) {
-		Detected d = detect(file, true);
-		if (d.ok) {
-			result.rgb.push_back(std::move(d.view));
-		}
-	}
-	for (const fs::path &file : fisheye_files) {
-		Detected d = detect(file, false);
-		if (d.ok) {
-			result.fisheye.push_back(std::move(d.view));
-		}
-	}
-	for (const fs::path &file : pair_files) {
-		const std::string stem = file.stem().string();
-		const std::string name = stem.substr(0, stem.size() - 4);
-		const fs::path fisheye_file = file.parent_path() / (name + "_fisheye.png");
-		if (!fs::exists(fisheye_file, ec)) {
-			result.missed.push_back(fs::relative(file, root, ec).string() + ": no " + name + "_fisheye.png beside it");
-			continue;
-		}
-		Detected rgb = detect(file, true);
-		Detected fisheye = detect(fisheye_file, false);
-		if (rgb.ok) {
-			result.rgb.push_back(rgb.view);
-		}
-		if (fisheye.ok) {
-			result.fisheye.push_back(fisheye.view);
-		}
-		if (!rgb.ok || !fisheye.ok) {
-			continue;
-		}
-		BoardPair pair;
-		pair.rgb = std::move(rgb.view);
-		pair.fisheye = std::move(fisheye.view);
-		for (const auto &[path, image] : { std::pair(file, &pair.rgb_image), std::pair(fisheye_file, &pair.fisheye_image) }) {
-			cv::Mat bgr;
-			if (image_read(path.string(), ImageReadMode::Bgr8, &bgr).empty()) {
-				cv::cvtColor(bgr, *image, cv::COLOR_BGR2RGB);
-			}
-		}
-		const fs::path depth_file = file.parent_path() / (name + "_depth.png");
-		if (fs::exists(depth_file, ec)) {
-			cv::Mat raw;
-			image_read(depth_file.string(), ImageReadMode::Unchanged, &raw);
-			if (raw.type() != CV_16UC1 || raw.size() != rgb.image.size()) {
-				result.missed.push_back(fs::relative(depth_file, root, ec).string() + ": not a 16-bit depth image of the RGB image's size; depth not checked on it");
-			} else {
-				pair.depth_m = depth_metres_from_raw(raw, p_options.depth_scale_m);
-			}
-		}
-		result.pairs.push_back(std::move(pair));
-	}
-	if (p_options.progress) {
-		p_options.progress(total, total, "");
-	}
-	result.fisheye_circle = find_image_circle(fisheye_brightest);
+	load_folder_views(root, p_options, &result);
 	return result;
 }
 

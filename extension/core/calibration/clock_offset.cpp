@@ -196,6 +196,180 @@ double cost(const std::vector<glm::dvec3> &p_residuals, size_t *r_count) {
 	return n ? sum / double(3 * n) : std::numeric_limits<double>::infinity();
 }
 
+// 1. The RGB-D camera's orientations, in runs broken where a step fails. False on a read error
+// (r_result->error says it); r_result->rgbd_steps counts the steps.
+bool rgbd_orientations(const RecordingReader &p_reader, const Rig &p_rig, const ClockOffsetOptions &p_options, double p_start,
+		std::vector<OrientationRun> *r_runs, ClockOffsetEstimate *r_result) {
+	std::vector<OrientationRun> &runs = *r_runs;
+	cv::Mat prev_gray, prev_depth;
+	double prev_time = 0.0;
+	for (size_t i = 0; i < p_reader.rgbd_count(); i++) {
+		const RgbdFrameResult read = p_reader.read_rgbd(i);
+		if (!read.ok) {
+			r_result->error = read.error;
+			return false;
+		}
+		if (read.frame.timestamp_s - p_start > p_options.max_seconds) {
+			break;
+		}
+		const cv::Mat gray = gray_8bit(read.frame.rgb);
+		glm::dquat step;
+		OrientationRun &run = runs.back();
+		if (!prev_gray.empty() && rgbd_step(p_rig.rgb, prev_gray, prev_depth, gray, &step)) {
+			r_result->rgbd_steps++;
+			if (run.times.empty()) {
+				run.times.push_back(prev_time);
+				run.orientations.push_back(glm::dquat(1.0, 0.0, 0.0, 0.0));
+			}
+			run.times.push_back(read.frame.timestamp_s);
+			run.orientations.push_back(glm::normalize(run.orientations.back() * glm::inverse(step)));
+		} else if (!run.times.empty()) {
+			runs.emplace_back();
+		}
+		prev_gray = gray;
+		prev_depth = read.frame.depth_m;
+		prev_time = read.frame.timestamp_s;
+	}
+	return true;
+}
+
+// 2. The fisheye's steps. False on a read error (r_result->error says it).
+bool fisheye_steps(const RecordingReader &p_reader, const Rig &p_rig, const ClockOffsetOptions &p_options, double p_start,
+		std::vector<FisheyeStep> *r_steps, ClockOffsetEstimate *r_result) {
+	const OmniParams &lens = p_rig.fisheye;
+	cv::Mat mask(lens.height, lens.width, CV_8UC1, cv::Scalar(0));
+	const ImageCircle circle = lens_circle(lens);
+	cv::circle(mask, cv::Point(int(circle.cx), int(circle.cy)), int(circle.radius * 0.95), cv::Scalar(255), cv::FILLED);
+	cv::Mat prev_gray;
+	double prev_time = 0.0;
+	for (size_t k = 0; k < p_reader.fisheye_count(); k++) {
+		const double t = p_reader.get_fisheye_ref(k).timestamp_s;
+		if (t + p_rig.fisheye_time_offset_s - p_start > p_options.max_seconds + p_options.search_s) {
+			break;
+		}
+		const FisheyeFrameResult read = p_reader.read_fisheye(k);
+		if (!read.ok) {
+			r_result->error = read.error;
+			return false;
+		}
+		const cv::Mat gray = gray_8bit(read.frame.image);
+		FisheyeStep step;
+		if (!prev_gray.empty() && gray.size() == mask.size() && fisheye_step(lens, prev_gray, gray, mask, &step.rotation)) {
+			step.t0 = prev_time;
+			step.t1 = t;
+			r_steps->push_back(step);
+		}
+		prev_gray = gray;
+		prev_time = t;
+	}
+	return true;
+}
+
+// The steps explained over the whole search range (the same steps for every candidate).
+std::vector<uint8_t> explained_steps(const std::vector<OrientationRun> &p_runs, const std::vector<FisheyeStep> &p_steps, const glm::dquat &p_extrinsic,
+		double p_search_s) {
+	std::vector<uint8_t> use(p_steps.size(), 1);
+	const std::vector<uint8_t> all(p_steps.size(), 1);
+	for (double d = -p_search_s; d <= p_search_s + 1e-9; d += 0.002) {
+		const std::vector<glm::dvec3> r = residuals(p_runs, p_steps, p_extrinsic, d, all);
+		for (size_t k = 0; k < p_steps.size(); k++) {
+			use[k] = use[k] && std::isfinite(r[k].x);
+		}
+	}
+	return use;
+}
+
+// The offset of least cost: a grid, then golden-section refinement. p_best: the grid's pick when no
+// candidate has a finite cost.
+double best_offset(const std::vector<OrientationRun> &p_runs, const std::vector<FisheyeStep> &p_steps, const glm::dquat &p_extrinsic, double p_search_s,
+		const std::vector<uint8_t> &p_use, double p_best) {
+	double best = p_best;
+	double best_cost = std::numeric_limits<double>::infinity();
+	size_t n = 0;
+	for (double d = -p_search_s; d <= p_search_s + 1e-9; d += 0.002) {
+		const double c = cost(residuals(p_runs, p_steps, p_extrinsic, d, p_use), &n);
+		if (c < best_cost) {
+			best_cost = c;
+			best = d;
+		}
+	}
+	double lo = best - 0.002, hi = best + 0.002;
+	const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
+	while (hi - lo > 5e-5) {
+		const double a = hi - phi * (hi - lo), b = lo + phi * (hi - lo);
+		if (cost(residuals(p_runs, p_steps, p_extrinsic, a, p_use), &n) < cost(residuals(p_runs, p_steps, p_extrinsic, b, p_use), &n)) {
+			hi = b;
+		} else {
+			lo = a;
+		}
+	}
+	return 0.5 * (lo + hi);
+}
+
+// Outliers (a failed step's rotation): beyond 3 MADs of the residual's norm, dropped from r_use.
+// p_residuals: those of the used steps. False when there are none.
+bool drop_outliers(const std::vector<glm::dvec3> &p_residuals, std::vector<uint8_t> *r_use) {
+	std::vector<double> norms;
+	for (const glm::dvec3 &v : p_residuals) {
+		norms.push_back(glm::length(v)); // finite: every used step is explained at every candidate
+	}
+	if (norms.empty()) {
+		return false;
+	}
+	std::vector<double> sorted = norms;
+	std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+	const double median = sorted[sorted.size() / 2];
+	for (double &v : sorted) {
+		v = std::abs(v - median);
+	}
+	std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+	const double limit = median + 3.0 * 1.4826 * std::max(sorted[sorted.size() / 2], 1e-6);
+	std::vector<uint8_t> &use = *r_use;
+	size_t j = 0;
+	for (size_t k = 0; k < use.size(); k++) {
+		if (use[k]) {
+			use[k] = norms[j++] <= limit;
+		}
+	}
+	return true;
+}
+
+// The fit at p_best into r_result: the steps used, the turn, the residual and the standard deviation
+// (Gauss-Newton, d residual / d offset by central differences), and the error when it is weak.
+void describe_fit(const std::vector<OrientationRun> &p_runs, const std::vector<FisheyeStep> &p_steps, const glm::dquat &p_extrinsic,
+		const std::vector<uint8_t> &p_use, double p_best, ClockOffsetEstimate *r_result) {
+	ClockOffsetEstimate &result = *r_result;
+	size_t n = 0;
+	const std::vector<glm::dvec3> r0 = residuals(p_runs, p_steps, p_extrinsic, p_best, p_use);
+	const double h = 0.0005;
+	const std::vector<glm::dvec3> rp = residuals(p_runs, p_steps, p_extrinsic, p_best + h, p_use), rm = residuals(p_runs, p_steps, p_extrinsic, p_best - h, p_use);
+	double jtj = 0.0, sum2 = 0.0;
+	for (size_t k = 0; k < r0.size(); k++) {
+		const glm::dvec3 j = (rp[k] - rm[k]) / (2.0 * h);
+		jtj += glm::dot(j, j);
+		sum2 += glm::dot(r0[k], r0[k]);
+	}
+	cost(r0, &n);
+	for (size_t k = 0; k < p_steps.size(); k++) {
+		if (p_use[k]) {
+			result.turn_deg += 2.0 * std::acos(std::min(1.0, std::abs(p_steps[k].rotation.w))) * DEG;
+		}
+	}
+	result.steps_used = n;
+	const double dof = std::max(1.0, 3.0 * double(n) - 1.0);
+	result.residual_rms_deg = std::sqrt(sum2 / (3.0 * double(std::max<size_t>(n, 1)))) * DEG;
+	result.std_s = jtj > 0.0 ? std::sqrt(sum2 / dof / jtj) : std::numeric_limits<double>::infinity();
+	result.offset_s = p_best;
+	if (n < 8) {
+		result.error = "too few fisheye steps fall within the RGB-D camera's track (" + std::to_string(n) + ")";
+	} else if (!(result.std_s < 0.01)) {
+		char text[256];
+		std::snprintf(text, sizeof(text), "the motion does not fix the offset (%.1f +- %.1f ms over %zu steps, residual %.3f deg): turn the rig by hand, back and forth, while recording",
+				p_best * 1000.0, result.std_s * 1000.0, n, result.residual_rms_deg);
+		result.error = text;
+	}
+}
+
 } // namespace
 
 ClockOffsetEstimate estimate_clock_offset(const RecordingReader &p_reader, const Rig &p_rig, const ClockOffsetOptions &p_options) {
@@ -215,64 +389,14 @@ ClockOffsetEstimate estimate_clock_offset(const RecordingReader &p_reader, const
 		return result;
 	}
 	const double start = p_reader.get_rgbd_ref(0).rgb.timestamp_s;
-	// 1. The RGB-D camera's orientations, in runs broken where a step fails.
 	std::vector<OrientationRun> runs(1);
-	cv::Mat prev_gray, prev_depth;
-	double prev_time = 0.0;
-	for (size_t i = 0; i < p_reader.rgbd_count(); i++) {
-		const RgbdFrameResult read = p_reader.read_rgbd(i);
-		if (!read.ok) {
-			result.error = read.error;
-			return result;
-		}
-		if (read.frame.timestamp_s - start > p_options.max_seconds) {
-			break;
-		}
-		const cv::Mat gray = gray_8bit(read.frame.rgb);
-		glm::dquat step;
-		OrientationRun &run = runs.back();
-		if (!prev_gray.empty() && rgbd_step(p_rig.rgb, prev_gray, prev_depth, gray, &step)) {
-			result.rgbd_steps++;
-			if (run.times.empty()) {
-				run.times.push_back(prev_time);
-				run.orientations.push_back(glm::dquat(1.0, 0.0, 0.0, 0.0));
-			}
-			run.times.push_back(read.frame.timestamp_s);
-			run.orientations.push_back(glm::normalize(run.orientations.back() * glm::inverse(step)));
-		} else if (!run.times.empty()) {
-			runs.emplace_back();
-		}
-		prev_gray = gray;
-		prev_depth = read.frame.depth_m;
-		prev_time = read.frame.timestamp_s;
+	if (!rgbd_orientations(p_reader, p_rig, p_options, start, &runs, &result)) {
+		return result;
 	}
 	progress(std::to_string(result.rgbd_steps) + " RGB-D rotations");
-	// 2. The fisheye's steps.
 	std::vector<FisheyeStep> steps;
-	const OmniParams &lens = p_rig.fisheye;
-	cv::Mat mask(lens.height, lens.width, CV_8UC1, cv::Scalar(0));
-	const ImageCircle circle = lens_circle(lens);
-	cv::circle(mask, cv::Point(int(circle.cx), int(circle.cy)), int(circle.radius * 0.95), cv::Scalar(255), cv::FILLED);
-	prev_gray.release();
-	for (size_t k = 0; k < p_reader.fisheye_count(); k++) {
-		const double t = p_reader.get_fisheye_ref(k).timestamp_s;
-		if (t + p_rig.fisheye_time_offset_s - start > p_options.max_seconds + p_options.search_s) {
-			break;
-		}
-		const FisheyeFrameResult read = p_reader.read_fisheye(k);
-		if (!read.ok) {
-			result.error = read.error;
-			return result;
-		}
-		const cv::Mat gray = gray_8bit(read.frame.image);
-		FisheyeStep step;
-		if (!prev_gray.empty() && gray.size() == mask.size() && fisheye_step(lens, prev_gray, gray, mask, &step.rotation)) {
-			step.t0 = prev_time;
-			step.t1 = t;
-			steps.push_back(step);
-		}
-		prev_gray = gray;
-		prev_time = t;
+	if (!fisheye_steps(p_reader, p_rig, p_options, start, &steps, &result)) {
+		return result;
 	}
 	result.fisheye_steps = steps.size();
 	progress(std::to_string(steps.size()) + " fisheye rotations");
@@ -282,95 +406,17 @@ ClockOffsetEstimate estimate_clock_offset(const RecordingReader &p_reader, const
 		return result;
 	}
 	// 3. The offset: a grid, then golden-section refinement, on the steps explained over the whole
-	// search range (the same steps for every candidate).
+	// search range (the same steps for every candidate); a second pass without the outliers.
 	const glm::dquat extrinsic = glm::normalize(p_rig.rgb_from_fisheye.rotation);
-	std::vector<uint8_t> use(steps.size(), 1);
-	const std::vector<uint8_t> all(steps.size(), 1);
-	for (double d = -p_options.search_s; d <= p_options.search_s + 1e-9; d += 0.002) {
-		const std::vector<glm::dvec3> r = residuals(runs, steps, extrinsic, d, all);
-		for (size_t k = 0; k < steps.size(); k++) {
-			use[k] = use[k] && std::isfinite(r[k].x);
-		}
-	}
+	std::vector<uint8_t> use = explained_steps(runs, steps, extrinsic, p_options.search_s);
 	double best = 0.0;
 	for (int pass = 0; pass < 2; pass++) {
-		double best_cost = std::numeric_limits<double>::infinity();
-		size_t n = 0;
-		for (double d = -p_options.search_s; d <= p_options.search_s + 1e-9; d += 0.002) {
-			const double c = cost(residuals(runs, steps, extrinsic, d, use), &n);
-			if (c < best_cost) {
-				best_cost = c;
-				best = d;
-			}
-		}
-		double lo = best - 0.002, hi = best + 0.002;
-		const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
-		while (hi - lo > 5e-5) {
-			const double a = hi - phi * (hi - lo), b = lo + phi * (hi - lo);
-			if (cost(residuals(runs, steps, extrinsic, a, use), &n) < cost(residuals(runs, steps, extrinsic, b, use), &n)) {
-				hi = b;
-			} else {
-				lo = a;
-			}
-		}
-		best = 0.5 * (lo + hi);
-		if (pass == 1) {
+		best = best_offset(runs, steps, extrinsic, p_options.search_s, use, best);
+		if (pass == 1 || !drop_outliers(residuals(runs, steps, extrinsic, best, use), &use)) {
 			break;
 		}
-		// Outliers (a failed step's rotation): beyond 3 MADs of the residual's norm.
-		const std::vector<glm::dvec3> r = residuals(runs, steps, extrinsic, best, use);
-		std::vector<double> norms;
-		for (const glm::dvec3 &v : r) {
-			norms.push_back(glm::length(v)); // finite: every used step is explained at every candidate
-		}
-		if (norms.empty()) {
-			break;
-		}
-		std::vector<double> sorted = norms;
-		std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-		const double median = sorted[sorted.size() / 2];
-		for (double &v : sorted) {
-			v = std::abs(v - median);
-		}
-		std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-		const double limit = median + 3.0 * 1.4826 * std::max(sorted[sorted.size() / 2], 1e-6);
-		size_t j = 0;
-		for (size_t k = 0; k < steps.size(); k++) {
-			if (use[k]) {
-				use[k] = norms[j++] <= limit;
-			}
-		}
 	}
-	// The standard deviation: Gauss-Newton, d residual / d offset by central differences.
-	size_t n = 0;
-	const std::vector<glm::dvec3> r0 = residuals(runs, steps, extrinsic, best, use);
-	const double h = 0.0005;
-	const std::vector<glm::dvec3> rp = residuals(runs, steps, extrinsic, best + h, use), rm = residuals(runs, steps, extrinsic, best - h, use);
-	double jtj = 0.0, sum2 = 0.0;
-	for (size_t k = 0; k < r0.size(); k++) {
-		const glm::dvec3 j = (rp[k] - rm[k]) / (2.0 * h);
-		jtj += glm::dot(j, j);
-		sum2 += glm::dot(r0[k], r0[k]);
-	}
-	cost(r0, &n);
-	for (size_t k = 0; k < steps.size(); k++) {
-		if (use[k]) {
-			result.turn_deg += 2.0 * std::acos(std::min(1.0, std::abs(steps[k].rotation.w))) * DEG;
-		}
-	}
-	result.steps_used = n;
-	const double dof = std::max(1.0, 3.0 * double(n) - 1.0);
-	result.residual_rms_deg = std::sqrt(sum2 / (3.0 * double(std::max<size_t>(n, 1)))) * DEG;
-	result.std_s = jtj > 0.0 ? std::sqrt(sum2 / dof / jtj) : std::numeric_limits<double>::infinity();
-	result.offset_s = best;
-	if (n < 8) {
-		result.error = "too few fisheye steps fall within the RGB-D camera's track (" + std::to_string(n) + ")";
-	} else if (!(result.std_s < 0.01)) {
-		char text[256];
-		std::snprintf(text, sizeof(text), "the motion does not fix the offset (%.1f +- %.1f ms over %zu steps, residual %.3f deg): turn the rig by hand, back and forth, while recording",
-				best * 1000.0, result.std_s * 1000.0, n, result.residual_rms_deg);
-		result.error = text;
-	}
+	describe_fit(runs, steps, extrinsic, use, best, &result);
 	return result;
 }
 

@@ -182,6 +182,82 @@ std::vector<Sample> sample_circle(const ScaramuzzaModel &p_model, const glm::dve
 	return samples;
 }
 
+// One stage of the fit: the p_free entries of r_values moved to project p_samples' rays onto their
+// pixels (the others held). False when the least squares fail.
+bool fit_stage(const std::vector<Sample> &p_samples, const OmniParams &p_base, const std::vector<int> &p_free, double *r_values) {
+	std::vector<double> params;
+	for (int index : p_free) {
+		params.push_back(r_values[index]);
+	}
+	auto residuals = [&](const std::vector<double> &p_params, std::vector<double> &r_residuals) {
+		double values[FIT_PARAM_COUNT];
+		std::copy(r_values, r_values + FIT_PARAM_COUNT, values);
+		for (size_t i = 0; i < p_free.size(); i++) {
+			values[p_free[i]] = p_params[i];
+		}
+		const OmniParams params = unpack(values, p_base);
+		const glm::dmat3 rotation = rotation_z(values[ROLL]);
+		r_residuals.resize(2 * p_samples.size());
+		for (size_t i = 0; i < p_samples.size(); i++) {
+			glm::dvec2 pixel;
+			if (!project_omni(params, rotation * p_samples[i].ray, &pixel)) {
+				return false;
+			}
+			r_residuals[2 * i] = pixel.x - p_samples[i].pixel.x;
+			r_residuals[2 * i + 1] = pixel.y - p_samples[i].pixel.y;
+		}
+		return true;
+	};
+	LeastSquaresOptions options;
+	options.max_iterations = 300;
+	const LeastSquaresResult fitted = minimize_least_squares(residuals, params, options);
+	for (size_t i = 0; i < p_free.size(); i++) {
+		r_values[p_free[i]] = params[i];
+	}
+	return fitted.ok;
+}
+
+// Errors over a dense grid of the image circle, with the same unrestricted model, into r_result
+// (eval_count, max_px, rms_px). False, error set, when a ray does not project.
+bool measure_fit(const ScaramuzzaModel &p_model, const glm::dvec2 &p_centre, const OmniFitOptions &p_options, OmniFitResult *r_result) {
+	OmniFitResult &result = *r_result;
+	double sum = 0.0;
+	for (const Sample &sample : sample_circle(p_model, p_centre, p_options.circle_radius, p_options.eval_step_px, true)) {
+		glm::dvec2 pixel;
+		if (!project_omni(result.params, result.omni_from_scaramuzza * sample.ray, &pixel)) {
+			result.error = "fit_omni_to_scaramuzza: the fitted model cannot project a ray of the image circle";
+			return false;
+		}
+		const double error = glm::length(pixel - sample.pixel);
+		sum += error * error;
+		result.max_px = std::max(result.max_px, error);
+		result.eval_count++;
+	}
+	result.rms_px = std::sqrt(sum / std::max(1, result.eval_count));
+	return true;
+}
+
+// What the lens sees: the image circle (or the whole image), up to its largest angle.
+void set_field_of_view(const ScaramuzzaModel &p_model, const glm::dvec2 &p_centre, double p_circle_radius, OmniParams *r_params) {
+	OmniParams &params = *r_params;
+	double max_angle = 0.0;
+	if (p_circle_radius > 0.0) {
+		params.circle_cx = p_centre.x;
+		params.circle_cy = p_centre.y;
+		params.circle_radius = p_circle_radius;
+		for (int i = 0; i < 3600; i++) {
+			const double angle = 2.0 * std::numbers::pi * i / 3600.0;
+			const glm::dvec3 ray = unproject_scaramuzza(p_model, p_centre + p_circle_radius * glm::dvec2(std::cos(angle), std::sin(angle)));
+			max_angle = std::max(max_angle, std::acos(std::clamp(ray.z, -1.0, 1.0)));
+		}
+	} else {
+		for (const Sample &sample : sample_circle(p_model, p_centre, 0.0, 1.0, false)) {
+			max_angle = std::max(max_angle, std::acos(std::clamp(sample.ray.z, -1.0, 1.0)));
+		}
+	}
+	params.max_angle_deg = max_angle * 180.0 / std::numbers::pi;
+}
+
 } // namespace
 
 ScaramuzzaLoadResult load_ocamcalib(const std::string &p_path) {
@@ -312,43 +388,10 @@ OmniFitResult fit_omni_to_scaramuzza(const ScaramuzzaModel &p_model, const OmniF
 	start[CX] = p_model.yc;
 	start[CY] = p_model.xc;
 
-	auto fit_stage = [&](const std::vector<int> &p_free, double *r_values) {
-		std::vector<double> params;
-		for (int index : p_free) {
-			params.push_back(r_values[index]);
-		}
-		auto residuals = [&](const std::vector<double> &p_params, std::vector<double> &r_residuals) {
-			double values[FIT_PARAM_COUNT];
-			std::copy(r_values, r_values + FIT_PARAM_COUNT, values);
-			for (size_t i = 0; i < p_free.size(); i++) {
-				values[p_free[i]] = p_params[i];
-			}
-			const OmniParams params = unpack(values, base);
-			const glm::dmat3 rotation = rotation_z(values[ROLL]);
-			r_residuals.resize(2 * samples.size());
-			for (size_t i = 0; i < samples.size(); i++) {
-				glm::dvec2 pixel;
-				if (!project_omni(params, rotation * samples[i].ray, &pixel)) {
-					return false;
-				}
-				r_residuals[2 * i] = pixel.x - samples[i].pixel.x;
-				r_residuals[2 * i + 1] = pixel.y - samples[i].pixel.y;
-			}
-			return true;
-		};
-		LeastSquaresOptions options;
-		options.max_iterations = 300;
-		const LeastSquaresResult fitted = minimize_least_squares(residuals, params, options);
-		for (size_t i = 0; i < p_free.size(); i++) {
-			r_values[p_free[i]] = params[i];
-		}
-		return fitted.ok;
-	};
-
 	// First the lens without distortion, then everything: the distortion terms and xi are nearly
 	// interchangeable near the axis, so they start from a sensible lens.
 	std::vector<int> free = { XI, FX, FY, CX, CY, ROLL };
-	if (!fit_stage(free, start)) {
+	if (!fit_stage(samples, base, free, start)) {
 		result.error = "fit_omni_to_scaramuzza: the starting lens cannot project the samples";
 		return result;
 	}
@@ -358,7 +401,7 @@ OmniFitResult fit_omni_to_scaramuzza(const ScaramuzzaModel &p_model, const OmniF
 	if (p_options.fit_distortion) {
 		free.insert(free.end(), { K1, K2, P1, P2 });
 	}
-	if (!fit_stage(free, start)) {
+	if (!fit_stage(samples, base, free, start)) {
 		result.error = "fit_omni_to_scaramuzza: the fit failed";
 		return result;
 	}
@@ -368,39 +411,10 @@ OmniFitResult fit_omni_to_scaramuzza(const ScaramuzzaModel &p_model, const OmniF
 	result.omni_from_scaramuzza = rotation_z(start[ROLL]);
 	result.sample_count = int(samples.size());
 
-	// Errors over a dense grid of the image circle, with the same unrestricted model.
-	double sum = 0.0;
-	for (const Sample &sample : sample_circle(p_model, centre, p_options.circle_radius, p_options.eval_step_px, true)) {
-		glm::dvec2 pixel;
-		if (!project_omni(result.params, result.omni_from_scaramuzza * sample.ray, &pixel)) {
-			result.error = "fit_omni_to_scaramuzza: the fitted model cannot project a ray of the image circle";
-			return result;
-		}
-		const double error = glm::length(pixel - sample.pixel);
-		sum += error * error;
-		result.max_px = std::max(result.max_px, error);
-		result.eval_count++;
+	if (!measure_fit(p_model, centre, p_options, &result)) {
+		return result;
 	}
-	result.rms_px = std::sqrt(sum / std::max(1, result.eval_count));
-
-	// What the lens sees: the image circle (or the whole image), up to its largest angle.
-	OmniParams &params = result.params;
-	double max_angle = 0.0;
-	if (p_options.circle_radius > 0.0) {
-		params.circle_cx = centre.x;
-		params.circle_cy = centre.y;
-		params.circle_radius = p_options.circle_radius;
-		for (int i = 0; i < 3600; i++) {
-			const double angle = 2.0 * std::numbers::pi * i / 3600.0;
-			const glm::dvec3 ray = unproject_scaramuzza(p_model, centre + p_options.circle_radius * glm::dvec2(std::cos(angle), std::sin(angle)));
-			max_angle = std::max(max_angle, std::acos(std::clamp(ray.z, -1.0, 1.0)));
-		}
-	} else {
-		for (const Sample &sample : sample_circle(p_model, centre, 0.0, 1.0, false)) {
-			max_angle = std::max(max_angle, std::acos(std::clamp(sample.ray.z, -1.0, 1.0)));
-		}
-	}
-	params.max_angle_deg = max_angle * 180.0 / std::numbers::pi;
+	set_field_of_view(p_model, centre, p_options.circle_radius, &result.params);
 	result.ok = true;
 	return result;
 }

@@ -5,7 +5,9 @@
 //   the rig (geometry and photometry) and the room (one coarse pipeline with its room mesh and atlas);
 //   DenseSlam, the RGB-D pose history and the fisheye's pose at its own timestamp (§4.3);
 //   the coarse pipeline (§4.3-§4.6) with its inpainting worker (§4.5);
-//   the probes: coarse render, dense pass with its lighting change, SH, half-float mip chains (§4.7);
+//   the probes, each map rendered by envmap/probe_renderer.h's ProbeRenderer (§4.7: coarse render,
+//     dense pass, virtual objects, SH, GGX chain, upload faces), which render_at shares;
+//   the room finder stage (room_finder_stage.h), with its own lock;
 //   placement rays (Embree) against the dense mesh and the room.
 //
 // Two ways to run the same code:
@@ -27,9 +29,11 @@
 
 #include "dense_mesh_stage.h"
 #include "mailbox.h"
+#include "room_finder_stage.h"
 
 #include <envmap/dense_render.h>
 #include <envmap/ggx_prefilter.h>
+#include <envmap/probe_renderer.h>
 #include <prt/virtual_objects.h>
 #include <pipeline/coarse_pipeline.h>
 #include <room/room_from_sweep.h>
@@ -144,47 +148,12 @@ struct CoarseSnapshot {
 	CoarsePipelineTimings timings; // of the last frame
 };
 
-// One environment map at one probe (§4.7): the float faces, 25 SH coefficients, and the faces
-// as Godot uploads them (RGBA half floats with the whole mip chain, level 0 first: the GGX
-// prefiltered chain of envmap/ggx_prefilter.h, Godot's roughness convention), built on the worker
-// so the main thread only copies bytes.
-struct ProbeMap {
-	int probe = 0;
-	uint64_t version = 0; // per probe: 1, 2, ...
-	glm::dvec3 position = glm::dvec3(0.0);
-	Cubemap cubemap;
-	ShCoefficients sh{};
-	// Per face; a face the map did not change is the previous map's own (the same pointer), so a
-	// node uploads only the faces that changed.
-	std::array<std::shared_ptr<const std::vector<uint16_t>>, 6> gpu_faces;
-	bool ggx_mips = false; // false: box-filtered while the GGX filter is built (see LiveRoomConfig)
-	// The GGX chain as floats (level 0: the cubemap's faces): the next map of the probe filters
-	// again only the texels that read a changed face (GgxFilter::apply). Empty without ggx_mips.
-	std::vector<Cubemap> ggx_chain;
-	uint64_t rgbd_sequence = 0, fisheye_sequence = 0; // the newest frames it includes (0: none)
-	DenseRenderStats dense;
-	VirtualDrawStats objects; // the other virtual objects drawn into it
-	double coarse_ms = 0.0, dense_ms = 0.0, sh_ms = 0.0, mips_ms = 0.0 /* GGX chain and half floats */, total_ms = 0.0;
-};
-
 // Nearest-rank percentiles of a latency series, milliseconds.
 struct LatencySummary {
 	size_t count = 0;
 	double p50_ms = 0.0, p95_ms = 0.0, max_ms = 0.0;
 };
 LatencySummary summarise_latency(std::vector<double> p_values_ms);
-
-// The room found from the sweep so far, in the engine's world (the model frame of
-// room/room_from_sweep.h): result.estimate.world_from_model maps the engine's world into the
-// room found, so the room's pose in the world is its inverse.
-struct FoundRoom {
-	uint64_t version = 0; // 1, 2, ... per estimate
-	RoomFromSweep result;
-	std::vector<SurfaceSample> samples; // the dense surface it was found on, engine world
-	size_t fused_frames = 0; // the dense model's fused frames then
-	size_t fisheye_views = 0; // fisheye frames searched
-	double seconds = 0.0; // how long the estimate took
-};
 
 struct LiveRoomStats {
 	bool running = false;
@@ -293,6 +262,9 @@ public:
 	bool fisheye_pose(double p_fisheye_timestamp_s, Pose *r_world_from_fisheye, std::string *r_error) const;
 	// The room's mesh (null without a room). Valid until the next configure.
 	const RoomMesh *room_mesh() const;
+	// The renderer every map comes from (null until configured). Valid until the next configure
+	// or set_room; the evaluation renders its direction masks through its coarse renderer.
+	const ProbeRenderer *probe_renderer() const { return renderer.get(); }
 	// Counts the rooms made (configure, set_room, a room found): a new number is a new room, which
 	// a probe updated once per room (RoomProbe's Once) renders again.
 	uint64_t room_version() const { return room_builds.load(); }
@@ -322,9 +294,6 @@ private:
 	void process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence, bool p_wait_for_pose);
 	// p_generation: input_generation when the render was decided (its inputs are at least that new).
 	std::shared_ptr<const ProbeMap> render_one(int p_probe, const glm::dvec3 &p_position, int p_size, uint64_t p_generation);
-	// io_faces: the probe's dense faces (null: all six raycast now).
-	Cubemap render_map(const glm::dvec3 &p_position, int p_size, const CoarseSnapshot *p_coarse, bool p_with_dense, DenseRenderStats *r_dense,
-			double *r_coarse_ms, double *r_dense_ms, DenseFaceCache *io_faces = nullptr);
 	void send_mesh_input();
 	void mesh_and_publish(DenseMeshStage::Input &p_input);
 	void slam_worker();
@@ -334,13 +303,15 @@ private:
 	void mesh_worker();
 	void place_on(const TriangleMesh &p_mesh);
 	std::shared_ptr<const FoundRoom> find_room_locked(const std::vector<FisheyeFrame> *p_views);
-	std::string build_room_locked(); // the coarse model, its renderer and placement from cfg
+	std::string build_room_locked(); // the coarse model, the probe renderer and placement from cfg
+	// The models' parts of a map, for the renderer: a coarse snapshot's, and the dense model's
+	// (none when p_with_dense is false or there is no dense model).
+	static CoarseMapInput coarse_input(const CoarseSnapshot &p_snapshot);
+	DenseMapInput dense_input(bool p_with_dense);
 	void take_coarse_state(CoarseSnapshot *r_snapshot) const; // coarse must exist
-	void keep_room_view(const FisheyeFrame &p_frame);
 	void record_error(const std::string &p_stage, const std::string &p_what);
 	// Counts a pushed frame and keeps its push time for the latency figures.
 	void note_arrival(uint64_t p_sequence, double p_arrival_s, uint64_t *io_pushed, std::vector<std::pair<uint64_t, double>> *io_arrivals);
-	void build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map) const;
 	void note_latency(const ProbeMap &p_map);
 	void wake_probes();
 
@@ -357,7 +328,7 @@ private:
 	std::unique_ptr<CoarsePipeline> coarse;
 	std::unique_ptr<RoomMesh> own_room; // the room without a rig (no coarse pipeline)
 	std::atomic<uint64_t> room_builds{ 0 }; // room_version()
-	std::unique_ptr<CoarseCubemapRenderer> renderer;
+	std::unique_ptr<ProbeRenderer> renderer; // built with the room (build_room_locked)
 	std::mutex coarse_mutex; // the coarse pipeline: its worker, and finish()
 	FisheyeLinearizer linearizer;
 	std::array<float, 256> rgb_lut{};
@@ -408,14 +379,7 @@ private:
 	// taken (the blocks changed meanwhile stay marked in the volume), so none is overwritten.
 	Mailbox<std::shared_ptr<DenseMeshStage::Input>> mesh_inputs;
 
-	// The room from the sweep: fisheye frames kept for it (spread over time: when twice
-	// find_room_views are kept, every other one goes and the spacing doubles), and the estimate.
-	mutable std::mutex room_mutex;
-	std::condition_variable room_wake;
-	std::vector<FisheyeFrame> room_views;
-	double room_view_spacing_s = 0.25;
-	std::shared_ptr<const FoundRoom> last_found;
-	uint64_t found_mesh_version = 0; // the dense mesh version last estimated on
+	RoomFinderStage room_finder; // the room from the sweep: its views and estimates, its own lock
 
 	// Counters and latencies.
 	mutable std::mutex stats_mutex;

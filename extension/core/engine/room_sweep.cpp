@@ -1,5 +1,9 @@
 #include "room_sweep.h"
 
+#include "engine_config.h"
+
+#include <source/recording_player.h>
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -15,39 +19,77 @@ void say(const RoomSweepOptions &p_options, const std::string &p_line) {
 	}
 }
 
+// One probe 1 m up at the floorplan's centroid, or, when that lies outside (an L), where the
+// camera first was.
+glm::dvec3 default_probe(const RoomInfo &p_room) {
+	const std::vector<Vec2> &points = p_room.floorplan.points;
+	double area = 0.0;
+	glm::dvec3 centre(0.0, 1.0, 0.0);
+	for (size_t i = 0; i < points.size(); i++) {
+		const Vec2 &a = points[i], &b = points[(i + 1) % points.size()];
+		const double cross = a.x * b.y - b.x * a.y;
+		area += cross;
+		centre.x += (a.x + b.x) * cross;
+		centre.z += (a.y + b.y) * cross;
+	}
+	centre.x /= 3.0 * area;
+	centre.z /= 3.0 * area;
+	if (distance_outside_room_m(p_room.floorplan, Vec3{ centre.x, centre.y, centre.z }) > 0.0) {
+		const glm::dvec3 camera = p_room.initial_rgb_pose.translation;
+		centre = glm::dvec3(camera.x, 1.0, camera.z);
+	}
+	return centre;
+}
+
+// The engine's configuration for the sweep: dense SLAM alone, finding the room.
+std::string sweep_config(const RecordingReader &p_reader, const RoomSweepOptions &p_options, LiveRoomConfig *r_config) {
+	const std::string config_error = config_from_recording(p_reader, false, r_config);
+	if (!config_error.empty()) {
+		return config_error;
+	}
+	// The room is what is sought: nothing of room.yaml, and no photometry (the fisheye views are
+	// searched for edges as recorded).
+	r_config->photometry = RigPhotometry();
+	r_config->keep_points.clear();
+	r_config->initial_rgb_pose = Pose(); // the dense model's frame: the first RGB-D frame's camera
+	r_config->has_room = false;
+	r_config->dense = true;
+	r_config->find_room = true;
+	r_config->room_estimation = p_options.estimation;
+	if (p_options.voxel_size_m > 0.0f) {
+		r_config->slam.tsdf.voxel_size_m = p_options.voxel_size_m;
+	}
+	r_config->slam.tsdf.max_depth_m = p_options.max_depth_m;
+	if (p_options.true_poses) {
+		r_config->dense_poses = PoseSource::GroundTruth;
+		r_config->coarse_poses = PoseSource::GroundTruth;
+	}
+	return std::string();
+}
+
 } // namespace
 
 RoomSweepResult sweep_room(const RoomSweepOptions &p_options) {
 	RoomSweepResult failed;
-	RecordingReader reader;
-	const RecordingStatus opened = reader.open(p_options.recording);
-	if (!opened.ok) {
-		failed.error = opened.error;
+	RecordingPlayer player;
+	PlayerOptions play;
+	play.max_seconds = p_options.max_seconds;
+	const std::string opened = open_player(p_options.recording, play, &player);
+	if (!opened.empty()) {
+		failed.error = opened;
 		return failed;
 	}
-	const Rig &rig = reader.get_rig();
+	const RecordingReader &reader = player.reader();
 	const bool has_truth = reader.has_ground_truth_trajectory(RecordingStream::Rgbd);
 	if (p_options.true_poses && !has_truth) {
 		failed.error = p_options.recording + ": no ground-truth RGB-D trajectory, so no true poses to fuse at";
 		return failed;
 	}
 	LiveRoomConfig config;
-	config.rig = rig;
-	config.has_room = false;
-	config.dense = true;
-	config.initial_rgb_pose = Pose(); // the dense model's frame: the first RGB-D frame's camera
-	config.find_room = true;
-	config.room_estimation = p_options.estimation;
-	if (p_options.voxel_size_m > 0.0f) {
-		config.slam.tsdf.voxel_size_m = p_options.voxel_size_m;
-	}
-	config.slam.tsdf.max_depth_m = p_options.max_depth_m;
-	if (has_truth) {
-		config.ground_truth = reader.ground_truth_trajectory(RecordingStream::Rgbd);
-	}
-	if (p_options.true_poses) {
-		config.dense_poses = PoseSource::GroundTruth;
-		config.coarse_poses = PoseSource::GroundTruth;
+	const std::string config_error = sweep_config(reader, p_options, &config);
+	if (!config_error.empty()) {
+		failed.error = config_error;
+		return failed;
 	}
 	LiveRoom engine;
 	const std::string configured = engine.configure(config);
@@ -55,28 +97,24 @@ RoomSweepResult sweep_room(const RoomSweepOptions &p_options) {
 		failed.error = p_options.recording + ": " + configured;
 		return failed;
 	}
-	const std::vector<PlaybackEvent> &events = reader.get_events();
-	const double start_s = events.empty() ? 0.0 : events.front().time_s;
 	std::vector<size_t> fisheye_indices;
 	size_t rgbd_frames = 0;
-	for (const PlaybackEvent &event : events) {
-		if (p_options.max_seconds > 0.0 && event.time_s - start_s > p_options.max_seconds) {
-			break;
-		}
+	for (size_t e = 0; e < player.events().size(); e++) {
 		if (p_options.cancel != nullptr && p_options.cancel->load()) {
 			failed.error = p_options.recording + ": cancelled";
 			return failed;
 		}
+		const PlaybackEvent &event = player.events()[e];
 		if (event.stream == RecordingStream::Fisheye) {
-			fisheye_indices.push_back(event.index);
+			fisheye_indices.push_back(event.index); // read below: only some are searched
 			continue;
 		}
-		RgbdFrameResult frame = reader.read_rgbd(event.index);
+		SourceFrame frame = player.read(e);
 		if (!frame.ok) {
 			say(p_options, "skipping RGB-D frame: " + frame.error);
 			continue;
 		}
-		engine.push_rgbd(std::move(frame.frame));
+		engine.push_rgbd(std::move(frame.rgbd));
 		rgbd_frames++;
 	}
 	say(p_options, "fused " + std::to_string(rgbd_frames) + " RGB-D frames" + (p_options.true_poses ? " at their true poses" : ", tracked"));
@@ -117,25 +155,7 @@ RoomSweepResult sweep_room(const RoomSweepOptions &p_options) {
 		}
 	}
 	if (result.room.probes.empty() && !result.room.floorplan.points.empty()) {
-		// One probe 1 m up at the floorplan's centroid, or, when that lies outside (an L), where
-		// the camera first was.
-		const std::vector<Vec2> &points = result.room.floorplan.points;
-		double area = 0.0;
-		glm::dvec3 centre(0.0, 1.0, 0.0);
-		for (size_t i = 0; i < points.size(); i++) {
-			const Vec2 &a = points[i], &b = points[(i + 1) % points.size()];
-			const double cross = a.x * b.y - b.x * a.y;
-			area += cross;
-			centre.x += (a.x + b.x) * cross;
-			centre.z += (a.y + b.y) * cross;
-		}
-		centre.x /= 3.0 * area;
-		centre.z /= 3.0 * area;
-		if (distance_outside_room_m(result.room.floorplan, Vec3{ centre.x, centre.y, centre.z }) > 0.0) {
-			const glm::dvec3 camera = result.room.initial_rgb_pose.translation;
-			centre = glm::dvec3(camera.x, 1.0, camera.z);
-		}
-		result.room.probes.push_back(centre);
+		result.room.probes.push_back(default_probe(result.room));
 	}
 	return result;
 }

@@ -1,13 +1,13 @@
 #pragma once
 // An environment map as a cubemap (paper §4.7): six square CV_32FC3 faces of linear R, G, B,
-// in the project's one cubemap convention (recording/cubemap_layout.h: face order +X -X +Y -Y
+// in the project's one cubemap convention (types/cubemap_layout.h: face order +X -X +Y -Y
 // +Z -Z, world Y up, cubemap_direction / cubemap_face_pixel for the pixel <-> direction map).
 
 #include <io/opencv.h>
 
 #include <array>
 
-#include <recording/cubemap_layout.h>
+#include <types/cubemap_layout.h>
 #include <recording/recording_types.h>
 
 namespace roomprobe {

@@ -1,6 +1,6 @@
 #include "dense_render.h"
 
-#include <recording/cubemap_layout.h>
+#include <types/cubemap_layout.h>
 
 #include <glm/mat3x3.hpp>
 

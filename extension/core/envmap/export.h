@@ -1,7 +1,7 @@
 #pragma once
 // Writing environment maps for tools and people.
 //
-// - EXR: the recordings' cubemap file layout (recording/cubemap_layout.h): an N x 6N vertical
+// - EXR: the recordings' cubemap file layout (types/cubemap_layout.h): an N x 6N vertical
 //   strip, faces top to bottom +X -X +Y -Y +Z -Z, channels R, G, B as 32-bit float (so a write
 //   and read round trip is exact), ZIP compressed.
 // - PNG "net": a horizontal cross, 4N wide and 3N tall, for looking at:

@@ -1,6 +1,6 @@
 #include "ggx_prefilter.h"
 
-#include <recording/cubemap_layout.h>
+#include <types/cubemap_layout.h>
 
 #include <glm/geometric.hpp>
 
@@ -232,25 +232,8 @@ size_t GgxFilter::memory_bytes() const {
 	return bytes;
 }
 
-std::vector<Cubemap> GgxFilter::apply(const Cubemap &p_source) const {
-	return apply(p_source, {}, 0x3F, nullptr);
-}
-
-std::vector<Cubemap> GgxFilter::apply(const Cubemap &p_source, const std::vector<Cubemap> &p_previous, uint8_t p_changed_faces, uint8_t *r_changed_faces) const {
-	std::vector<Cubemap> chain;
-	if (r_changed_faces != nullptr) {
-		*r_changed_faces = 0;
-	}
-	if (!is_valid() || !is_valid_cubemap(p_source) || p_source.size != size) {
-		return chain;
-	}
-	bool reuse = p_previous.size() == levels.size() + 1;
-	for (size_t l = 0; reuse && l < levels.size(); l++) {
-		reuse = p_previous[l + 1].size == levels[l].size;
-	}
-	const uint8_t changed = reuse ? uint8_t(p_changed_faces & 0x3F) : uint8_t(0x3F);
-	// The box pyramid, flattened in the order the taps index it.
-	std::vector<cv::Vec3f> pyramid(pyramid_offset.empty() ? 0 : pyramid_offset.back() + 6);
+std::vector<cv::Vec3f> GgxFilter::box_pyramid(const Cubemap &p_source) const {
+	std::vector<cv::Vec3f> pyramid(pyramid_texels());
 	Cubemap level = p_source;
 	for (size_t l = 0; l < pyramid_offset.size(); l++) {
 		const int n = level.size;
@@ -269,6 +252,27 @@ std::vector<Cubemap> GgxFilter::apply(const Cubemap &p_source, const std::vector
 			level = std::move(next);
 		}
 	}
+	return pyramid;
+}
+
+std::vector<Cubemap> GgxFilter::apply(const Cubemap &p_source) const {
+	return apply(p_source, {}, 0x3F, nullptr);
+}
+
+std::vector<Cubemap> GgxFilter::apply(const Cubemap &p_source, const std::vector<Cubemap> &p_previous, uint8_t p_changed_faces, uint8_t *r_changed_faces) const {
+	std::vector<Cubemap> chain;
+	if (r_changed_faces != nullptr) {
+		*r_changed_faces = 0;
+	}
+	if (!is_valid() || !is_valid_cubemap(p_source) || p_source.size != size) {
+		return chain;
+	}
+	bool reuse = p_previous.size() == levels.size() + 1;
+	for (size_t l = 0; reuse && l < levels.size(); l++) {
+		reuse = p_previous[l + 1].size == levels[l].size;
+	}
+	const uint8_t changed = reuse ? uint8_t(p_changed_faces & 0x3F) : uint8_t(0x3F);
+	const std::vector<cv::Vec3f> pyramid = box_pyramid(p_source);
 	chain.push_back(p_source); // level 0: the source itself, its pixels shared (no copy)
 	std::atomic<uint8_t> computed{ changed };
 	for (size_t l = 0; l < levels.size(); l++) {

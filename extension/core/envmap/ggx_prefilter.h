@@ -68,7 +68,13 @@ public:
 	// was computed again. A p_previous of another shape is ignored (everything computed again).
 	std::vector<Cubemap> apply(const Cubemap &p_source, const std::vector<Cubemap> &p_previous, uint8_t p_changed_faces, uint8_t *r_changed_faces) const;
 
+	// Texels of the box pyramid the taps index: every box level of the source, flattened.
+	size_t pyramid_texels() const { return pyramid_offset.empty() ? 0 : pyramid_offset.back() + 6; }
+	// That pyramid of p_source (face_size()), in the order the taps index it.
+	std::vector<cv::Vec3f> box_pyramid(const Cubemap &p_source) const;
+
 private:
+	friend class GgxFilterGpu; // uploads the levels' taps (ggx_prefilter_gpu.h)
 	struct Level {
 		int size = 0;
 		std::vector<uint32_t> first; // per output texel (face, y, x) and one past the end: its taps

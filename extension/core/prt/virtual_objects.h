@@ -15,6 +15,7 @@
 #include "prt_transfer.h"
 
 #include <envmap/cubemap.h>
+#include <envmap/map_overlay.h>
 #include <envmap/spherical_harmonics.h>
 #include <io/embree_scene.h>
 
@@ -46,25 +47,20 @@ struct VirtualObject {
 	glm::dvec3 plane_normal = glm::dvec3(0.0, 1.0, 0.0);
 };
 
-struct VirtualDrawStats {
-	size_t texels_traced = 0, texels_drawn = 0, texels_shadowed = 0;
-	double milliseconds = 0.0;
-};
-
 // The objects a probe draws (never its own object: the caller leaves it out), with their Embree
 // scenes. Immutable once made; shared with the engine's worker.
-class VirtualScene {
+class VirtualScene final : public MapOverlay {
 public:
 	// "" or what is wrong with which object (by its index in p_objects).
 	static std::string make(std::vector<VirtualObject> p_objects, std::shared_ptr<const VirtualScene> *r_scene);
 
-	size_t object_count() const { return objects.size(); }
+	size_t object_count() const override { return objects.size(); }
 
 	// Draws the objects into io_map as seen from p_position_m: p_light is the SH radiance at the
 	// probe (its previous map's, or this map's before the objects), p_previous its previous map
 	// (null: mirrors and glass fall back to diffuse shading with their tint). Only the texels
 	// within the objects' bounding sphere are traced.
-	VirtualDrawStats draw(const glm::dvec3 &p_position_m, const ShCoefficients &p_light, const Cubemap *p_previous, Cubemap *io_map) const;
+	VirtualDrawStats draw(const glm::dvec3 &p_position_m, const ShCoefficients &p_light, const Cubemap *p_previous, Cubemap *io_map) const override;
 
 private:
 	VirtualScene() = default;

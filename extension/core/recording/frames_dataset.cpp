@@ -168,28 +168,11 @@ std::string read_pose(const std::string &p_path, Pose *r_pose) {
 	return std::string();
 }
 
-} // namespace
-
-RecordingStatus open_frames_dataset(const std::string &p_folder, RecordingReader *r_reader, const FramesDatasetOptions &p_options) {
-	RecordingStatus status;
-	r_reader->close();
+// The frames by number (r_digits: their numbers' width, left as it is when there are none); the
+// error when the folder cannot be listed or holds no depth image.
+std::string list_frames(const std::string &p_folder, std::map<long, FrameFiles> *r_frames, int *r_digits) {
+	std::map<long, FrameFiles> &frames = *r_frames;
 	std::error_code ec;
-	status.error = input_folder_problem(p_folder, "no such frames folder");
-	if (!status.error.empty()) {
-		return status;
-	}
-	if (!(p_options.depth_scale_m > 0.0) || !std::isfinite(p_options.depth_scale_m)) {
-		status.error = p_folder + ": FramesDatasetOptions::depth_scale_m: must be positive (got " + format_number(p_options.depth_scale_m) + ")";
-		return status;
-	}
-	if (!(p_options.frame_rate_hz > 0.0) || !std::isfinite(p_options.frame_rate_hz)) {
-		status.error = p_folder + ": FramesDatasetOptions::frame_rate_hz: must be positive (got " + format_number(p_options.frame_rate_hz) + ")";
-		return status;
-	}
-
-	// The frames by number.
-	std::map<long, FrameFiles> frames;
-	int digits = 6;
 	for (fs::directory_iterator it(p_folder, ec), end; !ec && it != end; it.increment(ec)) {
 		const std::string name = it->path().filename().string();
 		long number = 0;
@@ -199,7 +182,7 @@ RecordingStatus open_frames_dataset(const std::string &p_folder, RecordingReader
 			continue;
 		}
 		FrameFiles &files = frames[number];
-		digits = width;
+		*r_digits = width;
 		if (kind == "depth.png") {
 			files.depth = name;
 		} else if (kind == "pose.txt") {
@@ -218,42 +201,36 @@ RecordingStatus open_frames_dataset(const std::string &p_folder, RecordingReader
 		}
 	}
 	if (ec) {
-		status.error = p_folder + ": cannot list the folder (" + ec.message() + ")";
-		return status;
+		return p_folder + ": cannot list the folder (" + ec.message() + ")";
 	}
 	size_t depth_files = 0;
 	for (const auto &[number, files] : frames) {
 		depth_files += files.depth.empty() ? 0 : 1;
 	}
 	if (depth_files == 0) {
-		status.error = p_folder + ": no frame-NNNNNN.depth.png (not a 7-Scenes-style folder of frames)";
-		return status;
+		return p_folder + ": no frame-NNNNNN.depth.png (not a 7-Scenes-style folder of frames)";
 	}
+	return std::string();
+}
 
-	RecordingContents contents;
-	contents.folder = p_folder;
-	contents.rig.depth_scale_m = p_options.depth_scale_m;
-	contents.rig.fisheye = OmniParams(); // none
-	contents.has_room = false;
-
-	// Intrinsics, then the size from the first depth image whose header reads.
-	PinholeParams &rgb = contents.rig.rgb;
+// Intrinsics, then the size from the first depth image whose header reads.
+std::string read_colour_camera(const std::string &p_folder, const std::map<long, FrameFiles> &p_frames, const FramesDatasetOptions &p_options,
+		PinholeParams *r_rgb) {
+	PinholeParams &rgb = *r_rgb;
 	if (p_options.override_intrinsics) {
 		rgb = p_options.intrinsics;
 		if (!(rgb.fx > 0.0) || !(rgb.fy > 0.0) || !std::isfinite(rgb.cx) || !std::isfinite(rgb.cy) || rgb.width < 0 || rgb.height < 0) {
-			status.error = p_folder + ": FramesDatasetOptions::intrinsics: needs positive focal lengths, a finite principal point and a size >= 0";
-			return status;
+			return p_folder + ": FramesDatasetOptions::intrinsics: needs positive focal lengths, a finite principal point and a size >= 0";
 		}
 	} else {
 		const std::string error = read_intrinsics(join(p_folder, INTRINSICS_FILE), &rgb);
 		if (!error.empty()) {
-			status.error = error;
-			return status;
+			return error;
 		}
 	}
 	if (rgb.width == 0 || rgb.height == 0) {
 		std::string first_error;
-		for (const auto &[number, files] : frames) {
+		for (const auto &[number, files] : p_frames) {
 			if (files.depth.empty()) {
 				continue;
 			}
@@ -267,32 +244,44 @@ RecordingStatus open_frames_dataset(const std::string &p_folder, RecordingReader
 			first_error = first_error.empty() ? error : first_error;
 		}
 		if (rgb.width == 0) {
-			status.error = p_folder + ": no depth image gives the image size (" + first_error + ")";
-			return status;
+			return p_folder + ": no depth image gives the image size (" + first_error + ")";
 		}
 	}
+	return std::string();
+}
 
-	// Gaps in the numbering, and frames short of an image.
-	const std::string color_kind = [&] {
-		for (const auto &[number, files] : frames) {
-			if (!files.color.empty()) {
-				return files.color.substr(files.color.find('.') + 1);
-			}
+// The kind a missing colour image is named by: that of the first frame with one.
+std::string colour_kind(const std::map<long, FrameFiles> &p_frames) {
+	for (const auto &[number, files] : p_frames) {
+		if (!files.color.empty()) {
+			return files.color.substr(files.color.find('.') + 1);
 		}
-		return std::string("color.jpg");
-	}();
+	}
+	return std::string("color.jpg");
+}
+
+void add_gap_issue(const std::string &p_folder, long p_previous, long p_number, int p_digits, RecordingContents *r_contents) {
+	const std::string first = frame_name(p_previous + 1, p_digits, "*"), last = frame_name(p_number - 1, p_digits, "*");
+	r_contents->issues.push_back({ p_folder, 0,
+			"gap in the numbering: " + (p_number == p_previous + 2 ? first : first + " to " + last) + " missing (" + std::to_string(p_number - p_previous - 1) +
+					" frames between " + frame_name(p_previous, p_digits, "*") + " and " + frame_name(p_number, p_digits, "*") +
+					"); the frames after keep their times" });
+}
+
+// The RGB-D frames and ground-truth poses into r_contents; gaps in the numbering, and frames short
+// of an image, become issues.
+void add_frames(const std::string &p_folder, const std::map<long, FrameFiles> &p_frames, int p_digits, const FramesDatasetOptions &p_options,
+		RecordingContents *r_contents) {
+	RecordingContents &contents = *r_contents;
+	const std::string color_kind = colour_kind(p_frames);
 	std::vector<FrameRef> rgb_frames, depth_frames;
 	std::vector<TimedPose> poses;
 	size_t without_pose = 0;
 	std::string first_without_pose;
 	long previous = -1;
-	for (const auto &[number, files] : frames) {
+	for (const auto &[number, files] : p_frames) {
 		if (previous >= 0 && number > previous + 1) {
-			const std::string first = frame_name(previous + 1, digits, "*"), last = frame_name(number - 1, digits, "*");
-			contents.issues.push_back({ p_folder, 0,
-					"gap in the numbering: " + (number == previous + 2 ? first : first + " to " + last) + " missing (" + std::to_string(number - previous - 1) +
-							" frames between " + frame_name(previous, digits, "*") + " and " + frame_name(number, digits, "*") +
-							"); the frames after keep their times" });
+			add_gap_issue(p_folder, previous, number, p_digits, &contents);
 		}
 		previous = number;
 		const double t_s = double(number) / p_options.frame_rate_hz;
@@ -300,7 +289,7 @@ RecordingStatus open_frames_dataset(const std::string &p_folder, RecordingReader
 			contents.issues.push_back({ join(p_folder, files.other_color), 0, "a second colour image of the frame; " + files.color + " is used" });
 		}
 		if (files.color.empty() || files.depth.empty()) {
-			const std::string missing = files.color.empty() ? frame_name(number, digits, color_kind.c_str()) : frame_name(number, digits, "depth.png");
+			const std::string missing = files.color.empty() ? frame_name(number, p_digits, color_kind.c_str()) : frame_name(number, p_digits, "depth.png");
 			contents.issues.push_back({ join(p_folder, missing), 0, "missing; RGB-D frame skipped" });
 		} else {
 			rgb_frames.push_back(FrameRef{ t_s, files.color, 0 });
@@ -308,7 +297,7 @@ RecordingStatus open_frames_dataset(const std::string &p_folder, RecordingReader
 		}
 		if (files.pose.empty()) {
 			without_pose++;
-			first_without_pose = first_without_pose.empty() ? frame_name(number, digits, "pose.txt") : first_without_pose;
+			first_without_pose = first_without_pose.empty() ? frame_name(number, p_digits, "pose.txt") : first_without_pose;
 			continue;
 		}
 		Pose pose;
@@ -321,7 +310,7 @@ RecordingStatus open_frames_dataset(const std::string &p_folder, RecordingReader
 	}
 	if (without_pose > 0) {
 		contents.issues.push_back({ join(p_folder, first_without_pose), 0,
-				"missing; " + std::to_string(without_pose) + " of " + std::to_string(frames.size()) + " frames have no pose file (this is the first)" +
+				"missing; " + std::to_string(without_pose) + " of " + std::to_string(p_frames.size()) + " frames have no pose file (this is the first)" +
 						(poses.empty() ? ": no ground-truth trajectory" : "") });
 	}
 	// Paired by construction (same timestamps): this checks each pair's images from their headers.
@@ -334,7 +323,41 @@ RecordingStatus open_frames_dataset(const std::string &p_folder, RecordingReader
 			contents.issues.push_back({ p_folder, 0, "poses: " + error + "; no ground-truth trajectory" }); // unreachable: each was checked
 		}
 	}
+}
 
+} // namespace
+
+RecordingStatus open_frames_dataset(const std::string &p_folder, RecordingReader *r_reader, const FramesDatasetOptions &p_options) {
+	RecordingStatus status;
+	r_reader->close();
+	status.error = input_folder_problem(p_folder, "no such frames folder");
+	if (!status.error.empty()) {
+		return status;
+	}
+	if (!(p_options.depth_scale_m > 0.0) || !std::isfinite(p_options.depth_scale_m)) {
+		status.error = p_folder + ": FramesDatasetOptions::depth_scale_m: must be positive (got " + format_number(p_options.depth_scale_m) + ")";
+		return status;
+	}
+	if (!(p_options.frame_rate_hz > 0.0) || !std::isfinite(p_options.frame_rate_hz)) {
+		status.error = p_folder + ": FramesDatasetOptions::frame_rate_hz: must be positive (got " + format_number(p_options.frame_rate_hz) + ")";
+		return status;
+	}
+	std::map<long, FrameFiles> frames;
+	int digits = 6;
+	status.error = list_frames(p_folder, &frames, &digits);
+	if (!status.error.empty()) {
+		return status;
+	}
+	RecordingContents contents;
+	contents.folder = p_folder;
+	contents.rig.depth_scale_m = p_options.depth_scale_m;
+	contents.rig.fisheye = OmniParams(); // none
+	contents.has_room = false;
+	status.error = read_colour_camera(p_folder, frames, p_options, &contents.rig.rgb);
+	if (!status.error.empty()) {
+		return status;
+	}
+	add_frames(p_folder, frames, digits, p_options, &contents);
 	r_reader->open_contents(std::move(contents));
 	status.ok = true;
 	return status;

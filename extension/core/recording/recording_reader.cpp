@@ -1,6 +1,6 @@
 #include "recording_reader.h"
 
-#include "cubemap_layout.h"
+#include <types/cubemap_layout.h>
 #include "recording_io.h"
 #include "room_file.h"
 

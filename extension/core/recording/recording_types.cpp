@@ -9,10 +9,6 @@ const char *recording_stream_name(RecordingStream p_stream) {
 	return p_stream == RecordingStream::Fisheye ? "fisheye" : "rgbd";
 }
 
-bool CaptureInfo::is_known() const {
-	return !std::isnan(device_time_s) || device_frame_id >= 0 || !std::isnan(exposure_us) || !std::isnan(gain);
-}
-
 cv::Mat depth_metres_from_raw(const cv::Mat &p_raw, double p_scale_m) {
 	cv::Mat depth_m(p_raw.rows, p_raw.cols, CV_32FC1);
 	const float no_reading = std::numeric_limits<float>::quiet_NaN();

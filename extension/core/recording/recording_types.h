@@ -6,6 +6,8 @@
 
 #include <io/opencv.h>
 #include <math/pose.h>
+#include <types/cubemap_layout.h>
+#include <types/frames.h>
 #include <types/room_types.h>
 
 #include <glm/vec3.hpp>
@@ -36,50 +38,10 @@ struct FrameRef {
 	int line = 0; // 1-based line of the index that lists it (0: not from a file)
 };
 
-// What a live device said about one of its frames, kept in recordings made live (capture.txt,
-// docs/recording-format.md). Unknown values are NaN (times, exposure, gain) or -1 (frame id).
-struct CaptureInfo {
-	double device_time_s = std::numeric_limits<double>::quiet_NaN(); // the device's own clock, seconds
-	int64_t device_frame_id = -1; // the device's frame counter (a jump: frames the device dropped)
-	// The fisheye's exposure time (microseconds) and gain (the camera's unit, usually dB) when
-	// the frame was taken: what a photometric model needs to bring frames to one radiance scale
-	// (rig/photometry.h exposure_ratio).
-	double exposure_us = std::numeric_limits<double>::quiet_NaN();
-	double gain = std::numeric_limits<double>::quiet_NaN();
-	bool is_known() const; // any value known
-};
-
-// An RGB image and the depth image registered to it (one RGB-D frame).
-struct RgbdFrame {
-	double timestamp_s = 0.0; // the RGB image's timestamp, seconds on the RGB-D clock
-	// The depth image's timestamp, seconds on the RGB-D clock. NaN when writing means "the same
-	// as timestamp_s"; a reader always fills it in.
-	double depth_timestamp_s = std::numeric_limits<double>::quiet_NaN();
-	cv::Mat rgb; // CV_8UC3 in R, G, B order (not OpenCV's usual BGR), the rig's rgb size
-	// CV_32FC1, metres along the optical axis (z, not ray length), NaN where there is no reading;
-	// registered to rgb (same size, same pixels). The writer also takes CV_16UC1 holding the
-	// raw values already in units of Rig::depth_scale_m (0 = no reading).
-	cv::Mat depth_m;
-	CaptureInfo capture; // live frames only (exposure and gain stay unknown)
-};
-
 // depth_m from 16-bit raw depth (CV_16UC1, units of p_scale_m, 0 or 65535 = no reading: sensors
 // mark saturated or invalid pixels with either): CV_32FC1 metres, NaN where there is no reading. Recordings (depth PNGs) and live cameras (OpenNI2's millimetres)
 // both come in this way.
 cv::Mat depth_metres_from_raw(const cv::Mat &p_raw, double p_scale_m);
-
-// One image of the upward fisheye.
-struct FisheyeFrame {
-	double timestamp_s = 0.0; // seconds on the fisheye's own clock
-	// 8-bit: CV_8UC1 (gray) or CV_8UC3 (R, G, B order); HDR: CV_32FC3 linear R, G, B.
-	// The rig's fisheye size.
-	cv::Mat image;
-	bool hdr = false; // true exactly when image is CV_32FC3 (stored as EXR)
-	// CV_8UC1, 255 where a channel was clipped: set on a linearised 8-bit frame (rig/photometry.h),
-	// which the coarse texture reads; empty otherwise (never stored).
-	cv::Mat saturated;
-	CaptureInfo capture; // live frames and synthetic ones with their exposure
-};
 
 // What is wrong with a fisheye frame's image for a fisheye of p_width x p_height ("" when
 // nothing): its type (CV_8UC1, CV_8UC3, or CV_32FC3 exactly when hdr), its size, and for HDR any
@@ -106,10 +68,6 @@ struct RecordingIssue {
 std::string to_string(const RecordingIssue &p_issue);
 // Every issue as to_string gives it, each once, in the order first met: what a tool lists.
 std::vector<std::string> issue_lines(const std::vector<RecordingIssue> &p_issues);
-
-// The six faces of a cubemap in the order +X, -X, +Y, -Y, +Z, -Z (the OpenGL and Godot layer
-// order), each square, all the same size. See cubemap_layout.h for how pixels map to directions.
-using CubemapFaces = std::array<cv::Mat, 6>;
 
 // One line of groundtruth/cubemaps.txt.
 struct CubemapRef {

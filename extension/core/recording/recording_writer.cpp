@@ -1,6 +1,6 @@
 #include "recording_writer.h"
 
-#include "cubemap_layout.h"
+#include <types/cubemap_layout.h>
 #include "recording_io.h"
 #include "room_file.h"
 
@@ -85,6 +85,113 @@ std::string depth_to_raw(const cv::Mat &p_depth, double p_scale_m, const std::st
 	return std::string();
 }
 
+// What RecordingWriter::open refuses before touching the folder: the rig, the room and the
+// options.
+std::string settings_problem(const std::string &p_folder, const Rig &p_rig, const RoomInfo *p_room, const RecordingWriteOptions &p_options) {
+	std::string problem = check_rig(p_rig);
+	if (!problem.empty()) {
+		return recording_io::join(p_folder, "rig.yaml") + ": " + problem;
+	}
+	problem = p_room != nullptr ? check_room(*p_room) : std::string();
+	if (!problem.empty()) {
+		return recording_io::join(p_folder, "room.yaml") + ": " + problem;
+	}
+	if (p_options.frame_format != FrameFormat::Png && p_options.frame_format != FrameFormat::Zstd) {
+		return p_folder + ": unknown frame format " + std::to_string(int(p_options.frame_format));
+	}
+	problem = p_options.frame_format == FrameFormat::Zstd ? raw_frame_level_problem(p_options.zstd_level) : std::string();
+	if (!problem.empty()) {
+		return p_folder + ": " + problem + " (RecordingWriteOptions::zstd_level)";
+	}
+	return std::string();
+}
+
+// The claimed folder made ready: found empty (or allowed not to be), a previous recording's files
+// that this one may not write removed, the image folders made, and rig.yaml and room.yaml saved.
+std::string prepare_folder(const std::string &p_folder, const Rig &p_rig, const RoomInfo *p_room, const RecordingWriteOptions &p_options) {
+	const auto path = [&](const char *p_relative) { return recording_io::join(p_folder, p_relative); };
+	std::error_code ec;
+	bool empty = true;
+	for (const fs::directory_entry &entry : fs::directory_iterator(p_folder, ec)) {
+		empty = empty && entry.path().filename() == recording_io::WRITING_MARKER;
+	}
+	if (ec) {
+		return p_folder + ": cannot list the folder (" + ec.message() + ")";
+	}
+	if (!empty && !p_options.allow_non_empty_folder) {
+		return p_folder + ": the folder is not empty; a recording is only written into a new or empty folder "
+						  "(nothing was overwritten; RecordingWriteOptions::allow_non_empty_folder overrides this)";
+	}
+	// Into a used folder (allowed by the options): a previous recording's ground truth, room or
+	// fisheye index must not pass for this one's, as it would if this one wrote none.
+	for (const char *stale : { TRAJECTORY_FILES[0], TRAJECTORY_FILES[1], "groundtruth/cubemaps.txt", "room.yaml", "fisheye.txt", "capture.txt" }) {
+		fs::remove(path(stale), ec);
+		if (ec) {
+			return path(stale) + ": cannot remove the previous recording's file (" + ec.message() + ")";
+		}
+	}
+	std::string error;
+	for (const char *sub : { "rgb", "depth", "fisheye" }) {
+		if (std::string(sub) == "fisheye" && !p_rig.has_fisheye()) {
+			continue;
+		}
+		if (!create_folder(path(sub), &error)) {
+			return error;
+		}
+	}
+	error = save_rig(path("rig.yaml"), p_rig);
+	if (!error.empty()) {
+		return error;
+	}
+	if (p_room != nullptr) {
+		error = save_room_file(path("room.yaml"), *p_room);
+		if (!error.empty()) {
+			return error;
+		}
+	}
+	return std::string();
+}
+
+// rgb.txt, depth.txt and fisheye.txt (none without a fisheye) begun with their headers; on a
+// failure every one is closed.
+std::string open_indexes(const std::string &p_folder, const Rig &p_rig, const RecordingWriteOptions &p_options, std::ofstream *r_rgb_index,
+		std::ofstream *r_depth_index, std::ofstream *r_fisheye_index) {
+	struct Index {
+		std::ofstream *stream;
+		const char *name;
+		const char *header;
+	};
+	const bool raw = p_options.frame_format == FrameFormat::Zstd;
+	const std::string rgb_header = std::string("# RoomProbe recording: RGB images (") + (raw ? "8-bit R, G, B raw frames, zstd" : "8-bit RGB PNG") +
+			"), RGB-D camera clock\n# timestamp_s filename\n";
+	const std::string depth_header = std::string("# RoomProbe recording: depth images (") + (raw ? "16-bit raw frames, zstd" : "16-bit PNG") +
+			", value x rig depth_scale_m = metres, 0 = no reading), RGB-D camera clock\n# timestamp_s filename\n";
+	const std::string fisheye_header = std::string("# RoomProbe recording: fisheye images (") + (raw ? "8-bit raw frames, zstd," : "8-bit PNG") +
+			" or linear HDR EXR), fisheye camera clock\n# timestamp_s filename\n";
+	const Index indexes[3] = {
+		{ r_rgb_index, "rgb.txt", rgb_header.c_str() },
+		{ r_depth_index, "depth.txt", depth_header.c_str() },
+		{ r_fisheye_index, "fisheye.txt", fisheye_header.c_str() },
+	};
+	for (const Index &index : indexes) {
+		index.stream->close();
+		index.stream->clear();
+		if (index.stream == r_fisheye_index && !p_rig.has_fisheye()) {
+			continue; // an RGB-D camera alone: no fisheye.txt
+		}
+		index.stream->open(recording_io::join(p_folder, index.name), std::ios::out | std::ios::trunc | std::ios::binary);
+		*index.stream << index.header;
+		index.stream->flush();
+		if (!*index.stream) {
+			for (const Index &other : indexes) {
+				other.stream->close();
+			}
+			return recording_io::join(p_folder, index.name) + ": cannot be written";
+		}
+	}
+	return std::string();
+}
+
 } // namespace
 
 const char *frame_format_name(FrameFormat p_format) {
@@ -156,20 +263,9 @@ RecordingStatus RecordingWriter::open_folder(const std::string &p_folder, const 
 		return fail(p_folder + ": this writer is already writing " + folder + "; close() it first");
 	}
 	folder = p_folder;
-	std::string problem = check_rig(p_rig);
+	std::string problem = settings_problem(p_folder, p_rig, p_room, p_options);
 	if (!problem.empty()) {
-		return fail(path("rig.yaml") + ": " + problem);
-	}
-	problem = p_room != nullptr ? check_room(*p_room) : std::string();
-	if (!problem.empty()) {
-		return fail(path("room.yaml") + ": " + problem);
-	}
-	if (p_options.frame_format != FrameFormat::Png && p_options.frame_format != FrameFormat::Zstd) {
-		return fail(p_folder + ": unknown frame format " + std::to_string(int(p_options.frame_format)));
-	}
-	problem = p_options.frame_format == FrameFormat::Zstd ? raw_frame_level_problem(p_options.zstd_level) : std::string();
-	if (!problem.empty()) {
-		return fail(p_folder + ": " + problem + " (RecordingWriteOptions::zstd_level)");
+		return fail(problem);
 	}
 	std::error_code ec;
 	if (fs::exists(p_folder, ec) && !fs::is_directory(p_folder, ec)) {
@@ -193,75 +289,13 @@ RecordingStatus RecordingWriter::open_folder(const std::string &p_folder, const 
 			}
 		}
 	} release{ this };
-	bool empty = true;
-	for (const fs::directory_entry &entry : fs::directory_iterator(p_folder, ec)) {
-		empty = empty && entry.path().filename() == recording_io::WRITING_MARKER;
-	}
-	if (ec) {
-		return fail(p_folder + ": cannot list the folder (" + ec.message() + ")");
-	}
-	if (!empty && !p_options.allow_non_empty_folder) {
-		return fail(p_folder + ": the folder is not empty; a recording is only written into a new or empty folder "
-								"(nothing was overwritten; RecordingWriteOptions::allow_non_empty_folder overrides this)");
-	}
-	// Into a used folder (allowed by the options): a previous recording's ground truth, room or
-	// fisheye index must not pass for this one's, as it would if this one wrote none.
-	for (const char *stale : { TRAJECTORY_FILES[0], TRAJECTORY_FILES[1], "groundtruth/cubemaps.txt", "room.yaml", "fisheye.txt", "capture.txt" }) {
-		fs::remove(path(stale), ec);
-		if (ec) {
-			return fail(path(stale) + ": cannot remove the previous recording's file (" + ec.message() + ")");
-		}
-	}
-	for (const char *sub : { "rgb", "depth", "fisheye" }) {
-		if (std::string(sub) == "fisheye" && !p_rig.has_fisheye()) {
-			continue;
-		}
-		if (!create_folder(path(sub), &error)) {
-			return fail(error);
-		}
-	}
-	error = save_rig(path("rig.yaml"), p_rig);
+	error = prepare_folder(p_folder, p_rig, p_room, p_options);
 	if (!error.empty()) {
 		return fail(error);
 	}
-	if (p_room != nullptr) {
-		error = save_room_file(path("room.yaml"), *p_room);
-		if (!error.empty()) {
-			return fail(error);
-		}
-	}
-	struct Index {
-		std::ofstream *stream;
-		const char *name;
-		const char *header;
-	};
-	const bool raw = p_options.frame_format == FrameFormat::Zstd;
-	const std::string rgb_header = std::string("# RoomProbe recording: RGB images (") + (raw ? "8-bit R, G, B raw frames, zstd" : "8-bit RGB PNG") +
-			"), RGB-D camera clock\n# timestamp_s filename\n";
-	const std::string depth_header = std::string("# RoomProbe recording: depth images (") + (raw ? "16-bit raw frames, zstd" : "16-bit PNG") +
-			", value x rig depth_scale_m = metres, 0 = no reading), RGB-D camera clock\n# timestamp_s filename\n";
-	const std::string fisheye_header = std::string("# RoomProbe recording: fisheye images (") + (raw ? "8-bit raw frames, zstd," : "8-bit PNG") +
-			" or linear HDR EXR), fisheye camera clock\n# timestamp_s filename\n";
-	const Index indexes[3] = {
-		{ &rgb_index, "rgb.txt", rgb_header.c_str() },
-		{ &depth_index, "depth.txt", depth_header.c_str() },
-		{ &fisheye_index, "fisheye.txt", fisheye_header.c_str() },
-	};
-	for (const Index &index : indexes) {
-		index.stream->close();
-		index.stream->clear();
-		if (index.stream == &fisheye_index && !p_rig.has_fisheye()) {
-			continue; // an RGB-D camera alone: no fisheye.txt
-		}
-		index.stream->open(path(index.name), std::ios::out | std::ios::trunc | std::ios::binary);
-		*index.stream << index.header;
-		index.stream->flush();
-		if (!*index.stream) {
-			for (const Index &other : indexes) {
-				other.stream->close();
-			}
-			return fail(path(index.name) + ": cannot be written");
-		}
+	error = open_indexes(p_folder, p_rig, p_options, &rgb_index, &depth_index, &fisheye_index);
+	if (!error.empty()) {
+		return fail(error);
 	}
 	rig = p_rig;
 	has_room = p_room != nullptr;

@@ -1,6 +1,6 @@
 #include "room_file.h"
 
-#include <room/floorplan.h> // check_floorplan: the one file of recording/ that reaches up into room/ (#39)
+#include <room/floorplan.h> // check_floorplan (room/ is a layer below recording/)
 
 #include "recording_io.h"
 

@@ -1,6 +1,7 @@
 #include "photometry.h"
 
 #include <io/yaml_fields.h>
+#include <parallel/parallel_for.h>
 
 #include <math/srgb.h>
 
@@ -296,7 +297,7 @@ LinearFrame FisheyeLinearizer::linearise(const cv::Mat &p_image, double p_exposu
 	const int saturation = camera.saturation_code;
 	frame.radiance.create(rgb.size(), CV_32FC3);
 	frame.saturated.create(rgb.size(), CV_8UC1);
-	cv::parallel_for_(cv::Range(0, rgb.rows), [&](const cv::Range &p_rows) {
+	parallel_for(cv::Range(0, rgb.rows), [&](const cv::Range &p_rows) {
 		for (int y = p_rows.start; y < p_rows.end; y++) {
 			const cv::Vec3b *in = rgb.ptr<cv::Vec3b>(y);
 			const float *iv = inverse_vignetting.ptr<float>(y);

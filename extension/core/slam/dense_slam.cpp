@@ -1,5 +1,7 @@
 #include "dense_slam.h"
 
+#include <parallel/parallel_for.h>
+
 #include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
@@ -20,7 +22,7 @@ cv::Mat search_intervals(const cv::Mat &p_depth_m, int p_level, float p_margin_m
 	const int side = 1 << p_level;
 	const float nan = std::numeric_limits<float>::quiet_NaN();
 	cv::Mat intervals(p_depth_m.rows >> p_level, p_depth_m.cols >> p_level, CV_32FC2);
-	cv::parallel_for_(cv::Range(0, intervals.rows), [&](const cv::Range &p_range) {
+	parallel_for(cv::Range(0, intervals.rows), [&](const cv::Range &p_range) {
 		for (int v = p_range.start; v < p_range.end; v++) {
 			cv::Vec2f *out = intervals.ptr<cv::Vec2f>(v);
 			for (int u = 0; u < intervals.cols; u++) {

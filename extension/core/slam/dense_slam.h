@@ -25,7 +25,7 @@
 #include "tsdf_volume.h"
 
 #include <camera/camera_params.h>
-#include <recording/recording_types.h>
+#include <types/frames.h>
 
 #include <atomic>
 #include <shared_mutex>

@@ -1,5 +1,7 @@
 #include "depth_pyramid.h"
 
+#include <parallel/parallel_for.h>
+
 #include "icp_kernels.h"
 
 #include <algorithm>
@@ -19,7 +21,7 @@ constexpr int ROWS_PER_STRIPE = 16;
 template <typename Body>
 void for_rows(int p_rows, const Body &p_body) {
 	const int stripes = (p_rows + ROWS_PER_STRIPE - 1) / ROWS_PER_STRIPE;
-	cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range &p_range) {
+	parallel_for(cv::Range(0, stripes), [&](const cv::Range &p_range) {
 		for (int s = p_range.start; s < p_range.end; ++s) {
 			const int end = std::min(p_rows, (s + 1) * ROWS_PER_STRIPE);
 			for (int y = s * ROWS_PER_STRIPE; y < end; ++y) {
@@ -129,7 +131,7 @@ cv::Mat smooth_depth(const cv::Mat &p_depth_m, int p_radius, float p_band_m) {
 	cv::Mat smooth(p_depth_m.size(), CV_32FC1);
 	const int width = p_depth_m.cols, height = p_depth_m.rows;
 	const int stripes = (height + ROWS_PER_STRIPE - 1) / ROWS_PER_STRIPE;
-	cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range &p_range) {
+	parallel_for(cv::Range(0, stripes), [&](const cv::Range &p_range) {
 		std::vector<float> sum(static_cast<size_t>(width)), weight_sum(static_cast<size_t>(width));
 		for (int s = p_range.start; s < p_range.end; ++s) {
 			const int end = std::min(height, (s + 1) * ROWS_PER_STRIPE);

@@ -1,5 +1,7 @@
 #include "icp_tracker.h"
 
+#include <parallel/parallel_for.h>
+
 #include "depth_pyramid.h"
 #include "icp_kernels.h"
 
@@ -143,7 +145,7 @@ NormalSystem accumulate(const FramePyramid &p_frame, int p_level, int p_stride, 
 	const int rows = (vertices.rows + p_stride - 1) / p_stride; // sampled rows
 	const int stripes = (rows + ROWS_PER_STRIPE - 1) / ROWS_PER_STRIPE;
 	std::vector<NormalSystem> partial(static_cast<size_t>(stripes));
-	cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range &p_range) {
+	parallel_for(cv::Range(0, stripes), [&](const cv::Range &p_range) {
 		for (int s = p_range.start; s < p_range.end; ++s) {
 			NormalSystem &system = partial[size_t(s)];
 			const int end = std::min(rows, (s + 1) * ROWS_PER_STRIPE);
@@ -507,7 +509,7 @@ ModelMaps make_model_maps(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const 
 	const glm::vec3 translation(p_world_from_camera.translation);
 	maps.points.create(vertices.size(), CV_32FC3);
 	maps.normals.create(vertices.size(), CV_32FC3);
-	cv::parallel_for_(cv::Range(0, vertices.rows), [&](const cv::Range &p_range) {
+	parallel_for(cv::Range(0, vertices.rows), [&](const cv::Range &p_range) {
 		for (int y = p_range.start; y < p_range.end; ++y) {
 			const cv::Vec3f *v = vertices.ptr<cv::Vec3f>(y);
 			const cv::Vec3f *n = normals.ptr<cv::Vec3f>(y);

@@ -41,6 +41,103 @@ RP_AVX2 inline __m256 gather(const float *p_base, __m256i p_index, __m256 p_mask
 	return _mm256_mask_i32gather_ps(_mm256_setzero_ps(), p_base, p_index, p_mask, 4);
 }
 
+// tsdf_update_row_simd's steps, split out for reading: always inlined, so that the kernel stays one
+// function with no calls.
+
+// tsdf_update_voxel_at's early exits, so that the same voxels count as changed: the live lanes
+// left. r_far_free: lanes in free space beyond the band whatever the bilinear depth.
+RP_AVX2 __attribute__((always_inline)) static inline __m256 skip_early_exits(const TsdfFrameView &p_frame, __m256 p_live, __m256 p_z, __m256 p_nearest,
+		__m256 p_factor, __m256 p_has_plane, __m256 p_old_tsdf, __m256i p_old_weight, int p_full_weight, __m256 *r_far_free) {
+	const __m256 one = _mm256_set1_ps(1.0f);
+	const __m256 truncation = _mm256_set1_ps(p_frame.truncation_m), neg_truncation = _mm256_set1_ps(-p_frame.truncation_m);
+	const __m256 spread = _mm256_set1_ps(0.5f * p_frame.truncation_m + 1e-5f);
+	const __m256 eta_hi = _mm256_mul_ps(_mm256_sub_ps(_mm256_add_ps(p_nearest, spread), p_z), p_factor);
+	const __m256 hidden = _mm256_or_ps(_mm256_cmp_ps(eta_hi, neg_truncation, _CMP_LT_OQ),
+			_mm256_andnot_ps(p_has_plane, _mm256_cmp_ps(eta_hi, truncation, _CMP_LT_OQ)));
+	const __m256 saturated = _mm256_and_ps(_mm256_cmp_ps(p_old_tsdf, one, _CMP_EQ_OQ),
+			_mm256_castsi256_ps(_mm256_cmpeq_epi32(p_old_weight, _mm256_set1_epi32(p_full_weight))));
+	const __m256 eta_lo = _mm256_mul_ps(_mm256_sub_ps(_mm256_sub_ps(p_nearest, spread), p_z), p_factor);
+	const __m256 far_free = _mm256_and_ps(_mm256_cmp_ps(eta_lo, truncation, _CMP_GE_OQ), _mm256_cmp_ps(eta_lo, _mm256_set1_ps(p_frame.color_band_m), _CMP_GE_OQ));
+	*r_far_free = far_free;
+	const __m256 free_again = _mm256_and_ps(saturated, far_free);
+	return _mm256_andnot_ps(_mm256_or_ps(hidden, free_again), p_live);
+}
+
+// The bilinear depth where the four pixels around agree, else p_nearest.
+RP_AVX2 __attribute__((always_inline)) static inline __m256 bilinear_depth(const TsdfFrameView &p_frame, __m256 p_live, __m256 p_far_free, __m256 p_px, __m256 p_py,
+		__m256 p_nearest) {
+	const PinholeIntrinsics &camera = p_frame.camera;
+	const __m256 one = _mm256_set1_ps(1.0f);
+	const __m256i u0 = floor_epi32(_mm256_and_ps(p_px, p_live)), v0 = floor_epi32(_mm256_and_ps(p_py, p_live));
+	const __m256i last_u = _mm256_set1_epi32(camera.width - 1), last_v = _mm256_set1_epi32(camera.height - 1);
+	const __m256i inside = _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(u0, _mm256_set1_epi32(-1)), _mm256_cmpgt_epi32(v0, _mm256_set1_epi32(-1))),
+			_mm256_and_si256(_mm256_cmpgt_epi32(last_u, u0), _mm256_cmpgt_epi32(last_v, v0)));
+	const __m256 four = _mm256_andnot_ps(p_far_free, _mm256_and_ps(p_live, _mm256_castsi256_ps(inside)));
+	__m256 depth = p_nearest;
+	if (lanes(four) != 0) {
+		const __m256i i00 = _mm256_add_epi32(_mm256_mullo_epi32(v0, _mm256_set1_epi32(int(p_frame.depth_stride))), u0);
+		const __m256i i01 = _mm256_add_epi32(i00, _mm256_set1_epi32(int(p_frame.depth_stride)));
+		const __m256i one_i = _mm256_set1_epi32(1);
+		const __m256 d00 = gather(p_frame.depth, i00, four), d10 = gather(p_frame.depth, _mm256_add_epi32(i00, one_i), four);
+		const __m256 d01 = gather(p_frame.depth, i01, four), d11 = gather(p_frame.depth, _mm256_add_epi32(i01, one_i), four);
+		const __m256 lo = _mm256_min_ps(_mm256_min_ps(d00, d10), _mm256_min_ps(d01, d11)); // NaN lanes fail the sum test
+		const __m256 hi = _mm256_max_ps(_mm256_max_ps(d00, d10), _mm256_max_ps(d01, d11));
+		const __m256 sum = _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(d00, d10), d01), d11);
+		const __m256 agree = _mm256_and_ps(four, _mm256_and_ps(_mm256_cmp_ps(sum, sum, _CMP_ORD_Q),
+															  _mm256_cmp_ps(_mm256_sub_ps(hi, lo), _mm256_set1_ps(0.5f * p_frame.truncation_m), _CMP_LT_OQ)));
+		const __m256 fx = _mm256_sub_ps(p_px, _mm256_cvtepi32_ps(u0)), fy = _mm256_sub_ps(p_py, _mm256_cvtepi32_ps(v0));
+		const __m256 gx = _mm256_sub_ps(one, fx), gy = _mm256_sub_ps(one, fy);
+		const __m256 top = _mm256_add_ps(_mm256_mul_ps(d00, gx), _mm256_mul_ps(d10, fx));
+		const __m256 bottom = _mm256_add_ps(_mm256_mul_ps(d01, gx), _mm256_mul_ps(d11, fx));
+		const __m256 bilinear = _mm256_add_ps(_mm256_mul_ps(top, gy), _mm256_mul_ps(bottom, fy));
+		depth = _mm256_blendv_ps(depth, bilinear, agree);
+	}
+	return depth;
+}
+
+// The running averages, as the scalar kernel forms them: the new tsdf, and into r_new_weight the
+// new weight.
+RP_AVX2 __attribute__((always_inline)) static inline __m256 average_tsdf(__m256 p_eta, __m256 p_truncation, __m256 p_slope, __m256 p_has_plane, __m256 p_old_tsdf,
+		__m256i p_old_weight, int p_full_weight, __m256i *r_new_weight) {
+	const __m256 one = _mm256_set1_ps(1.0f), half = _mm256_set1_ps(0.5f);
+	const __m256 sdf = min_ordered(_mm256_div_ps(p_eta, p_truncation), one);
+	const __m256 c = _mm256_and_ps(min_ordered(p_slope, one), p_has_plane);
+	const __m256 scaled = _mm256_mul_ps(_mm256_mul_ps(c, c), _mm256_set1_ps(float(TSDF_WEIGHT_UNIT)));
+	const __m256i truncated = _mm256_cvttps_epi32(scaled);
+	const __m256 remainder = _mm256_sub_ps(scaled, _mm256_cvtepi32_ps(truncated));
+	const __m256i rounded = _mm256_sub_epi32(truncated, _mm256_castps_si256(_mm256_cmp_ps(remainder, half, _CMP_GE_OQ))); // + 1 where set
+	const __m256i add = _mm256_max_epi32(rounded, _mm256_set1_epi32(1));
+	const __m256 add_f = _mm256_cvtepi32_ps(add);
+	const __m256 w = _mm256_cvtepi32_ps(p_old_weight);
+	*r_new_weight = _mm256_min_epi32(_mm256_add_epi32(p_old_weight, add), _mm256_set1_epi32(p_full_weight));
+	return _mm256_div_ps(_mm256_add_ps(_mm256_mul_ps(p_old_tsdf, w), _mm256_mul_ps(sdf, add_f)), _mm256_add_ps(w, add_f));
+}
+
+// The p_changed lanes' tsdf and weight written back, and the p_colour lanes' colour blended in
+// from pixel (p_u, p_v).
+RP_AVX2 __attribute__((always_inline)) static inline void store_row(const TsdfFrameView &p_frame, int p_changed, int p_colour, __m256 p_new_tsdf,
+		__m256i p_new_weight, __m256i p_u, __m256i p_v, TsdfVoxel *r_voxels) {
+	alignas(32) float tsdf_out[8];
+	alignas(32) int weight_out[8], u_out[8], v_out[8];
+	_mm256_store_ps(tsdf_out, p_new_tsdf);
+	_mm256_store_si256(reinterpret_cast<__m256i *>(weight_out), p_new_weight);
+	if (p_colour != 0) {
+		_mm256_store_si256(reinterpret_cast<__m256i *>(u_out), p_u);
+		_mm256_store_si256(reinterpret_cast<__m256i *>(v_out), p_v);
+	}
+	for (int i = 0; i < 8; i++) {
+		if (!(p_changed & (1 << i))) {
+			continue;
+		}
+		TsdfVoxel &voxel = r_voxels[i];
+		voxel.tsdf = tsdf_out[i];
+		voxel.weight = uint16_t(weight_out[i]);
+		if (p_colour & (1 << i)) {
+			tsdf_blend_color(p_frame, u_out[i], v_out[i], &voxel);
+		}
+	}
+}
+
 } // namespace
 
 RP_AVX2 bool tsdf_update_row_simd(const TsdfFrameView &p_frame, const glm::vec3 &p_row_origin, const glm::vec3 &p_step_x, TsdfVoxel *r_voxels) {
@@ -90,46 +187,12 @@ RP_AVX2 bool tsdf_update_row_simd(const TsdfFrameView &p_frame, const glm::vec3 
 	// +1 and they take no colour, so the four depth reads of the bilinear depth change nothing.
 	__m256 far_free = zero;
 	if (p_frame.early_exits) {
-		// tsdf_update_voxel_at's early exits, so that the same voxels count as changed.
-		const __m256 spread = _mm256_set1_ps(0.5f * p_frame.truncation_m + 1e-5f);
-		const __m256 eta_hi = _mm256_mul_ps(_mm256_sub_ps(_mm256_add_ps(nearest, spread), z), factor);
-		const __m256 hidden = _mm256_or_ps(_mm256_cmp_ps(eta_hi, neg_truncation, _CMP_LT_OQ),
-				_mm256_andnot_ps(has_plane, _mm256_cmp_ps(eta_hi, truncation, _CMP_LT_OQ)));
-		const __m256 saturated = _mm256_and_ps(_mm256_cmp_ps(old_tsdf, one, _CMP_EQ_OQ),
-				_mm256_castsi256_ps(_mm256_cmpeq_epi32(old_weight, _mm256_set1_epi32(full_weight))));
-		const __m256 eta_lo = _mm256_mul_ps(_mm256_sub_ps(_mm256_sub_ps(nearest, spread), z), factor);
-		far_free = _mm256_and_ps(_mm256_cmp_ps(eta_lo, truncation, _CMP_GE_OQ), _mm256_cmp_ps(eta_lo, _mm256_set1_ps(p_frame.color_band_m), _CMP_GE_OQ));
-		const __m256 free_again = _mm256_and_ps(saturated, far_free);
-		live = _mm256_andnot_ps(_mm256_or_ps(hidden, free_again), live);
+		live = skip_early_exits(p_frame, live, z, nearest, factor, has_plane, old_tsdf, old_weight, full_weight, &far_free);
 		if (lanes(live) == 0) {
 			return false;
 		}
 	}
-	// The bilinear depth where the four pixels around agree, else the nearest reading.
-	const __m256i u0 = floor_epi32(_mm256_and_ps(px, live)), v0 = floor_epi32(_mm256_and_ps(py, live));
-	const __m256i last_u = _mm256_set1_epi32(camera.width - 1), last_v = _mm256_set1_epi32(camera.height - 1);
-	const __m256i inside = _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(u0, _mm256_set1_epi32(-1)), _mm256_cmpgt_epi32(v0, _mm256_set1_epi32(-1))),
-			_mm256_and_si256(_mm256_cmpgt_epi32(last_u, u0), _mm256_cmpgt_epi32(last_v, v0)));
-	const __m256 four = _mm256_andnot_ps(far_free, _mm256_and_ps(live, _mm256_castsi256_ps(inside)));
-	__m256 depth = nearest;
-	if (lanes(four) != 0) {
-		const __m256i i00 = _mm256_add_epi32(_mm256_mullo_epi32(v0, _mm256_set1_epi32(int(p_frame.depth_stride))), u0);
-		const __m256i i01 = _mm256_add_epi32(i00, _mm256_set1_epi32(int(p_frame.depth_stride)));
-		const __m256i one_i = _mm256_set1_epi32(1);
-		const __m256 d00 = gather(p_frame.depth, i00, four), d10 = gather(p_frame.depth, _mm256_add_epi32(i00, one_i), four);
-		const __m256 d01 = gather(p_frame.depth, i01, four), d11 = gather(p_frame.depth, _mm256_add_epi32(i01, one_i), four);
-		const __m256 lo = _mm256_min_ps(_mm256_min_ps(d00, d10), _mm256_min_ps(d01, d11)); // NaN lanes fail the sum test
-		const __m256 hi = _mm256_max_ps(_mm256_max_ps(d00, d10), _mm256_max_ps(d01, d11));
-		const __m256 sum = _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(d00, d10), d01), d11);
-		const __m256 agree = _mm256_and_ps(four, _mm256_and_ps(_mm256_cmp_ps(sum, sum, _CMP_ORD_Q),
-															  _mm256_cmp_ps(_mm256_sub_ps(hi, lo), _mm256_set1_ps(0.5f * p_frame.truncation_m), _CMP_LT_OQ)));
-		const __m256 fx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(u0)), fy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(v0));
-		const __m256 gx = _mm256_sub_ps(one, fx), gy = _mm256_sub_ps(one, fy);
-		const __m256 top = _mm256_add_ps(_mm256_mul_ps(d00, gx), _mm256_mul_ps(d10, fx));
-		const __m256 bottom = _mm256_add_ps(_mm256_mul_ps(d01, gx), _mm256_mul_ps(d11, fx));
-		const __m256 bilinear = _mm256_add_ps(_mm256_mul_ps(top, gy), _mm256_mul_ps(bottom, fy));
-		depth = _mm256_blendv_ps(depth, bilinear, agree);
-	}
+	const __m256 depth = bilinear_depth(p_frame, live, far_free, px, py, nearest);
 	const __m256 eta = _mm256_mul_ps(_mm256_sub_ps(depth, z), factor);
 	live = _mm256_andnot_ps(_mm256_or_ps(_mm256_cmp_ps(eta, neg_truncation, _CMP_LT_OQ), _mm256_andnot_ps(has_plane, _mm256_cmp_ps(eta, truncation, _CMP_LT_OQ))),
 			live);
@@ -137,39 +200,11 @@ RP_AVX2 bool tsdf_update_row_simd(const TsdfFrameView &p_frame, const glm::vec3 
 	if (changed == 0) {
 		return false;
 	}
-	// The running averages, as the scalar kernel forms them.
-	const __m256 sdf = min_ordered(_mm256_div_ps(eta, truncation), one);
-	const __m256 c = _mm256_and_ps(min_ordered(slope, one), has_plane);
-	const __m256 scaled = _mm256_mul_ps(_mm256_mul_ps(c, c), _mm256_set1_ps(float(TSDF_WEIGHT_UNIT)));
-	const __m256i truncated = _mm256_cvttps_epi32(scaled);
-	const __m256 remainder = _mm256_sub_ps(scaled, _mm256_cvtepi32_ps(truncated));
-	const __m256i rounded = _mm256_sub_epi32(truncated, _mm256_castps_si256(_mm256_cmp_ps(remainder, half, _CMP_GE_OQ))); // + 1 where set
-	const __m256i add = _mm256_max_epi32(rounded, _mm256_set1_epi32(1));
-	const __m256 add_f = _mm256_cvtepi32_ps(add);
-	const __m256 w = _mm256_cvtepi32_ps(old_weight);
-	const __m256 new_tsdf = _mm256_div_ps(_mm256_add_ps(_mm256_mul_ps(old_tsdf, w), _mm256_mul_ps(sdf, add_f)), _mm256_add_ps(w, add_f));
-	const __m256i new_weight = _mm256_min_epi32(_mm256_add_epi32(old_weight, add), _mm256_set1_epi32(full_weight));
+	__m256i new_weight;
+	const __m256 new_tsdf = average_tsdf(eta, truncation, slope, has_plane, old_tsdf, old_weight, full_weight, &new_weight);
 	const __m256 in_band = _mm256_cmp_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), eta), _mm256_set1_ps(p_frame.color_band_m), _CMP_LT_OQ);
 	const int colour = lanes(in_band) & changed;
-	alignas(32) float tsdf_out[8];
-	alignas(32) int weight_out[8], u_out[8], v_out[8];
-	_mm256_store_ps(tsdf_out, new_tsdf);
-	_mm256_store_si256(reinterpret_cast<__m256i *>(weight_out), new_weight);
-	if (colour != 0) {
-		_mm256_store_si256(reinterpret_cast<__m256i *>(u_out), u);
-		_mm256_store_si256(reinterpret_cast<__m256i *>(v_out), v);
-	}
-	for (int i = 0; i < 8; i++) {
-		if (!(changed & (1 << i))) {
-			continue;
-		}
-		TsdfVoxel &voxel = r_voxels[i];
-		voxel.tsdf = tsdf_out[i];
-		voxel.weight = uint16_t(weight_out[i]);
-		if (colour & (1 << i)) {
-			tsdf_blend_color(p_frame, u_out[i], v_out[i], &voxel);
-		}
-	}
+	store_row(p_frame, changed, colour, new_tsdf, new_weight, u, v, r_voxels);
 	return true;
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 // Per-voxel and per-pixel kernels of the voxel-hashed TSDF (tsdf_volume.h), InfiniTAM style:
 // plain inline functions on plain data, free of threads and of any device API, called from the
-// CPU loops in tsdf_volume.cpp (and, later, from a GPU path).
+// CPU loops in tsdf_volume_integrate.cpp and tsdf_volume_raycast.cpp (and, later, from a GPU path).
 //
 // Grid: voxel (i, j, k) (integers) sits at world (i, j, k) * voxel_size. Voxels are stored in
 // blocks of 8 x 8 x 8; voxel v lies in block v >> 3 (floor division) at local index v & 7.
@@ -306,7 +306,7 @@ inline void tsdf_blend_color(const TsdfFrameView &p_frame, int p_u, int p_v, Tsd
 // plane of the reading on the voxel's ray (tsdf_depth_slope), truncated to [-1, 1] and skipped
 // well behind the surface, averaged with a capped weight; the colour only within color_band of
 // the surface, where the pixel really shows this voxel. True when the voxel changed.
-// p_camera_point: the voxel's point in the camera's frame (tsdf_volume.cpp steps through a
+// p_camera_point: the voxel's point in the camera's frame (tsdf_volume_integrate.cpp steps through a
 // block's voxels there).
 inline bool tsdf_update_voxel_at(const TsdfFrameView &p_frame, const glm::vec3 &p_camera_point, TsdfVoxel *r_voxel) {
 	const glm::vec3 &pc = p_camera_point;
@@ -450,7 +450,7 @@ struct TsdfRayHit {
 	float depth = 0.0f; // metres along the optical axis
 };
 
-// Limits of one pixel's march (tsdf_volume.cpp fills them from TsdfOptions and the bounds of
+// Limits of one pixel's march (tsdf_volume_raycast.cpp fills them from TsdfOptions and the bounds of
 // the allocated blocks).
 struct TsdfRayParams {
 	glm::vec3 origin = glm::vec3(0.0f); // the camera centre, world metres

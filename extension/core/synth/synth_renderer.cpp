@@ -6,7 +6,7 @@
 
 #include <camera/omni_camera.h>
 #include <camera/pinhole_camera.h>
-#include <recording/cubemap_layout.h>
+#include <types/cubemap_layout.h>
 #include <room/room_mesh.h>
 #include <slam/slam_types.h>
 

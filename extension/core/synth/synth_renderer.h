@@ -163,7 +163,7 @@ FisheyeImage render_fisheye(const SynthRenderer &p_renderer, const OmniParams &p
 // ---------------------------------------------------------------- ground-truth cubemaps
 
 // Six CV_32FC3 faces (linear HDR radiance, R, G, B) of size x size at a world position and time,
-// in the face order and orientation of recording/cubemap_layout.h (cubemap_direction there).
+// in the face order and orientation of types/cubemap_layout.h (cubemap_direction there).
 std::array<cv::Mat, 6> render_cubemap(const SynthRenderer &p_renderer, const glm::dvec3 &p_position, double p_time_s, int p_size);
 
 // ---------------------------------------------------------------- helpers

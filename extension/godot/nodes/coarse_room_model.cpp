@@ -1,33 +1,26 @@
+// CoarseRoomModel (coarse_room_model.h): the node's life, its room and mesh, the atlas, the engine
+// it gives the room to, the room file and the warnings. Its properties and bindings are in
+// coarse_room_model_properties.cpp, the room found from a sweep in coarse_room_model_found_room.cpp
+// (split by concern to keep each file short).
 #include "coarse_room_model.h"
-
-#include "../property_checks.h"
+#include "coarse_room_model_internal.h"
 
 #include "../convert/image_convert.h"
 #include "../convert/mesh_convert.h"
 #include "../convert/pose_convert.h"
 #include "../convert/project_paths.h"
 
-#include <engine/room_sweep.h>
 #include <recording/room_file.h>
 
-#include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <thread>
 
 using namespace godot;
 
 namespace roomprobe {
 
-// A room search on a recording (find_room_in_recording): the worker writes result, then done.
-struct CoarseRoomModel::RoomSearch {
-	std::thread thread;
-	std::atomic<bool> cancel{ false };
-	std::atomic<bool> done{ false };
-	std::string recording;
-	RoomSweepResult result;
-};
 
 namespace {
 
@@ -99,45 +92,6 @@ void CoarseRoomModel::_process(double p_delta) {
 	}
 }
 
-void CoarseRoomModel::set_floorplan(const PackedVector2Array &p_points) {
-	for (int64_t i = 0; i < p_points.size(); i++) {
-		if (!std::isfinite(p_points[i].x) || !std::isfinite(p_points[i].y)) {
-			char text[160];
-			std::snprintf(text, sizeof(text), "CoarseRoomModel.floorplan: corner %lld is (%g, %g), not a finite point; the floorplan was left as it was", (long long)i,
-					double(p_points[i].x), double(p_points[i].y));
-			ERR_PRINT(text);
-			return;
-		}
-	}
-	floorplan = p_points;
-	rebuild();
-}
-
-PackedVector2Array CoarseRoomModel::get_floorplan() const { return floorplan; }
-
-void CoarseRoomModel::set_ceiling_height(double p_metres) {
-	ceiling_height = property_checks::clamped("CoarseRoomModel.ceiling_height", p_metres, CEILING_HEIGHT_MIN_M, CEILING_HEIGHT_MAX_M, ceiling_height, " m");
-	rebuild();
-}
-
-double CoarseRoomModel::get_ceiling_height() const { return ceiling_height; }
-
-void CoarseRoomModel::set_floorplan_source(int64_t p_source) {
-	if (!property_checks::enum_in_range("CoarseRoomModel.floorplan_source", p_source, 3)) {
-		return;
-	}
-	floorplan_source = FloorplanSource(p_source);
-	if (floorplan_source != FLOORPLAN_AUTOMATIC) {
-		found.reset();
-		wall_confidence.clear();
-	}
-	take_recording_room();
-	push_room(); // the engine finds the room only for Automatic
-	update_configuration_warnings();
-}
-
-CoarseRoomModel::FloorplanSource CoarseRoomModel::get_floorplan_source() const { return floorplan_source; }
-
 void CoarseRoomModel::take_recording_room() {
 	if (floorplan_source != FLOORPLAN_RECORDING || !is_inside_tree()) {
 		return;
@@ -157,13 +111,6 @@ void CoarseRoomModel::take_recording_room() {
 	ceiling_height = ceiling;
 	rebuild();
 }
-
-void CoarseRoomModel::set_texel_size(double p_metres) {
-	texel_size = property_checks::clamped("CoarseRoomModel.texel_size", p_metres, TEXEL_SIZE_MIN_M, TEXEL_SIZE_MAX_M, texel_size, " m");
-	rebuild();
-}
-
-double CoarseRoomModel::get_texel_size() const { return texel_size; }
 
 Floorplan CoarseRoomModel::core_floorplan() const {
 	Floorplan plan;
@@ -233,62 +180,6 @@ Ref<Image> CoarseRoomModel::get_atlas_image() const {
 }
 
 bool CoarseRoomModel::has_texture_data() const { return result.ok && shown && !shown->atlas.empty(); }
-
-// ---------------------------------------------------------------- texturing from the rig (§4.3-§4.6)
-
-void CoarseRoomModel::set_rig_capture_path(const NodePath &p_path) {
-	rig_capture_path = p_path;
-	if (is_inside_tree()) {
-		connect_engine();
-	}
-	update_configuration_warnings();
-}
-
-NodePath CoarseRoomModel::get_rig_capture_path() const { return rig_capture_path; }
-
-void CoarseRoomModel::set_pose_source(int64_t p_source) {
-	if (!property_checks::enum_in_range("CoarseRoomModel.pose_source", p_source, 2)) {
-		return;
-	}
-	pose_source = PoseSource(p_source);
-	push_room();
-	update_configuration_warnings();
-}
-
-CoarseRoomModel::PoseSource CoarseRoomModel::get_pose_source() const { return pose_source; }
-
-void CoarseRoomModel::set_dense_slam_path(const NodePath &p_path) {
-	dense_slam_path = p_path;
-	update_configuration_warnings();
-}
-
-NodePath CoarseRoomModel::get_dense_slam_path() const { return dense_slam_path; }
-
-void CoarseRoomModel::set_inpainting(bool p_enabled) {
-	inpainting = p_enabled;
-	push_room();
-}
-
-bool CoarseRoomModel::get_inpainting() const { return inpainting; }
-
-void CoarseRoomModel::set_lighting_compensation(int64_t p_mode) {
-	if (!property_checks::enum_in_range("CoarseRoomModel.lighting_compensation", p_mode, 3)) {
-		return;
-	}
-	lighting_compensation = LightingCompensation(p_mode);
-	push_room();
-}
-
-CoarseRoomModel::LightingCompensation CoarseRoomModel::get_lighting_compensation() const { return lighting_compensation; }
-
-void CoarseRoomModel::set_room_layers(int64_t p_layers) {
-	room_layers = property_checks::render_layers("CoarseRoomModel.room_layers", p_layers);
-	if (mesh_instance != nullptr) {
-		mesh_instance->set_layer_mask(room_layers);
-	}
-}
-
-uint32_t CoarseRoomModel::get_room_layers() const { return room_layers; }
 
 // ---------------------------------------------------------------- the engine
 
@@ -466,199 +357,6 @@ void CoarseRoomModel::finish_inpainting() {
 	}
 }
 
-// ---------------------------------------------------------------- the room from the sweep (issue #18)
-
-void CoarseRoomModel::take_found_room() {
-	if (floorplan_source != FLOORPLAN_AUTOMATIC || !engine || own_engine) {
-		return;
-	}
-	const std::shared_ptr<const FoundRoom> newest = engine->found_room();
-	if (!newest || newest == looked_at) {
-		return;
-	}
-	looked_at = newest;
-	if (newest->result.has_room && !worse_than_shown(*newest)) {
-		apply_found_room(*newest);
-		found = newest;
-	}
-	const RoomEstimate &estimate = newest->result.estimate;
-	// After the room is applied: a handler sees the room of this estimate.
-	emit_signal("room_estimated", String(room_estimate_state_name(estimate.state)), String(estimate.message.c_str()));
-	update_configuration_warnings();
-}
-
-// Whether p_candidate would replace the room shown with a lesser one: a partial room after a
-// complete one, or less wall seen (the walls' length times their seen share) by a tenth. A
-// sweep's later estimate can lose a wall (blocks evicted, a view that confused the fisheye).
-bool CoarseRoomModel::worse_than_shown(const FoundRoom &p_candidate) const {
-	if (!found) {
-		return false;
-	}
-	const auto seen_m = [](const RoomEstimate &p_estimate) {
-		const std::vector<Vec2> &points = p_estimate.floorplan.points;
-		double sum = 0.0;
-		for (size_t i = 0; i < points.size() && i < p_estimate.edge_confidence.size(); i++) {
-			const Vec2 &a = points[i], &b = points[(i + 1) % points.size()];
-			sum += std::hypot(b.x - a.x, b.y - a.y) * p_estimate.edge_confidence[i];
-		}
-		return sum;
-	};
-	const RoomEstimate &now = found->result.estimate, &next = p_candidate.result.estimate;
-	if (now.state == RoomEstimateState::Complete && next.state != RoomEstimateState::Complete) {
-		return true;
-	}
-	return seen_m(next) < 0.9 * seen_m(now);
-}
-
-// Shows the room found (and gives it to the engine) when it differs from the one shown by more
-// than the estimate's own noise: a corner 2 cm, the ceiling 1 cm, or another corner count.
-void CoarseRoomModel::apply_found_room(const FoundRoom &p_found, const Pose &p_world_from_model) {
-	const RoomEstimate &estimate = p_found.result.estimate;
-	const Pose placed = compose(p_world_from_model, inverse(estimate.world_from_model)); // the world from the room found
-	const std::vector<Vec2> &points = estimate.floorplan.points;
-	bool changed = !found || int64_t(points.size()) != floorplan.size() || std::abs(estimate.floorplan.ceiling_height_m - ceiling_height) > 0.01;
-	const Pose shown_pose = world_from_room();
-	for (size_t i = 0; !changed && i < points.size(); i++) {
-		const glm::dvec3 now = transform_point(placed, glm::dvec3(points[i].x, 0.0, points[i].y));
-		const glm::dvec3 before = transform_point(shown_pose, glm::dvec3(floorplan[int64_t(i)].x, 0.0, floorplan[int64_t(i)].y));
-		changed = glm::length(now - before) > 0.02;
-	}
-	wall_confidence.resize(int64_t(estimate.edge_confidence.size()));
-	for (size_t i = 0; i < estimate.edge_confidence.size(); i++) {
-		wall_confidence[int64_t(i)] = float(estimate.edge_confidence[i]);
-	}
-	if (!changed) {
-		return;
-	}
-	PackedVector2Array plan;
-	for (const Vec2 &p : points) {
-		plan.push_back(Vector2(real_t(p.x), real_t(p.y)));
-	}
-	floorplan = plan;
-	ceiling_height = estimate.floorplan.ceiling_height_m;
-	if (is_inside_tree()) {
-		set_global_transform(transform_from_pose(placed));
-	}
-	rebuild();
-	notify_property_list_changed();
-}
-
-PackedFloat32Array CoarseRoomModel::get_wall_confidence() const { return wall_confidence; }
-
-bool CoarseRoomModel::find_room_in_recording(const String &p_path) {
-	ERR_FAIL_COND_V_MSG(search != nullptr, false, "find_room_in_recording: a search is already running.");
-	String path = p_path;
-	if (path.is_empty()) {
-		std::string unused;
-		Node *capture = is_inside_tree() ? find_collaborator(*this, rig_capture_path, "RigCapture", "rig_capture", &unused) : nullptr;
-		ERR_FAIL_COND_V_MSG(capture == nullptr, false, "find_room_in_recording: no path given and no RigCapture to take its recording_path from.");
-		path = capture->get("recording_path");
-	}
-	std::string error;
-	const std::string folder = disk_path_for(path, &error);
-	ERR_FAIL_COND_V_MSG(!error.empty() || folder.empty(), false, String(("find_room_in_recording: " + (error.empty() ? std::string("the recording path is empty") : error)).c_str()));
-	search = std::make_unique<RoomSearch>();
-	search->recording = folder;
-	RoomSearch *job = search.get();
-	job->thread = std::thread([job] {
-		RoomSweepOptions options;
-		options.recording = job->recording;
-		options.cancel = &job->cancel;
-		try {
-			job->result = sweep_room(options);
-		} catch (const std::exception &e) {
-			job->result = RoomSweepResult();
-			job->result.error = job->recording + ": " + e.what();
-		}
-		job->done = true;
-	});
-	set_process(true); // in the editor too, until the room is taken
-	return true;
-}
-
-bool CoarseRoomModel::is_finding_room() const { return search != nullptr; }
-
-void CoarseRoomModel::stop_room_search() {
-	if (search) {
-		search->cancel = true;
-		if (search->thread.joinable()) {
-			search->thread.join();
-		}
-		search.reset();
-	}
-}
-
-bool CoarseRoomModel::finish_room_search() {
-	if (search && search->thread.joinable()) {
-		search->thread.join();
-	}
-	take_room_search();
-	return searched && searched->result.has_room;
-}
-
-void CoarseRoomModel::take_room_search() {
-	if (!search || !search->done) {
-		return;
-	}
-	if (search->thread.joinable()) {
-		search->thread.join();
-	}
-	const RoomSweepResult result = std::move(search->result);
-	search.reset();
-	if (Engine::get_singleton()->is_editor_hint()) {
-		set_process(false);
-	}
-	auto taken = std::make_shared<FoundRoom>();
-	taken->version = searched ? searched->version + 1 : 1;
-	taken->result.estimate = result.estimate;
-	taken->result.fisheye_ceiling = result.fisheye_ceiling;
-	taken->result.fisheye_walls = result.fisheye_walls;
-	taken->result.has_room = !result.room.floorplan.points.empty();
-	taken->result.initial_rgb_pose = result.room.initial_rgb_pose;
-	if (!result.ok) {
-		taken->result.estimate.message = result.error;
-	}
-	searched = taken;
-	const RoomEstimate &estimate = taken->result.estimate;
-	if (taken->result.has_room) {
-		// The scene's world is the recording's: its first camera at room.yaml's initial_rgb_pose.
-		apply_found_room(*taken, result.has_truth ? result.true_world_from_model : Pose());
-		found = taken;
-	}
-	emit_signal("room_estimated", String(result.ok ? room_estimate_state_name(estimate.state) : "failed"), String(estimate.message.c_str()));
-	update_configuration_warnings();
-}
-
-Dictionary CoarseRoomModel::get_room_estimate() const {
-	Dictionary d;
-	std::shared_ptr<const FoundRoom> newest = engine && !own_engine ? engine->found_room() : nullptr;
-	if (!newest) {
-		newest = searched;
-	}
-	if (!newest) {
-		return d;
-	}
-	const RoomEstimate &estimate = newest->result.estimate;
-	d.set("state", String(room_estimate_state_name(estimate.state)));
-	d.set("message", String(estimate.message.c_str()));
-	d.set("version", int64_t(newest->version));
-	d.set("has_room", newest->result.has_room);
-	d.set("ceiling_source", String(estimate.ceiling_source.c_str()));
-	d.set("fused_frames", int64_t(newest->fused_frames));
-	d.set("fisheye_views", int64_t(newest->fisheye_views));
-	d.set("seconds", newest->seconds);
-	return d;
-}
-
-bool CoarseRoomModel::estimate_room_now() {
-	ERR_FAIL_COND_V_MSG(floorplan_source != FLOORPLAN_AUTOMATIC, false, "estimate_room_now() needs floorplan_source Automatic.");
-	ERR_FAIL_COND_V_MSG(!engine || own_engine, false, "estimate_room_now() needs a RigCapture with DenseSLAM (the room is found in the dense model).");
-	engine->apply_config(); // find_room on before the estimate
-	engine->find_room_now();
-	take_found_room();
-	return found != nullptr;
-}
-
 Error CoarseRoomModel::save_room(const String &p_path, bool p_overwrite) {
 	ERR_FAIL_COND_V_MSG(!result.ok, ERR_UNCONFIGURED, String(("save_room: the room is not valid, so not saved: " + result.error).c_str()));
 	std::string error;
@@ -770,78 +468,6 @@ PackedStringArray CoarseRoomModel::get_warnings() const {
 		}
 	}
 	return warnings;
-}
-
-void CoarseRoomModel::_bind_methods() {
-	ClassDB::bind_method(D_METHOD("get_warnings"), &CoarseRoomModel::get_warnings);
-	ClassDB::bind_method(D_METHOD("set_floorplan", "points"), &CoarseRoomModel::set_floorplan);
-	ClassDB::bind_method(D_METHOD("get_floorplan"), &CoarseRoomModel::get_floorplan);
-	ClassDB::bind_method(D_METHOD("set_ceiling_height", "metres"), &CoarseRoomModel::set_ceiling_height);
-	ClassDB::bind_method(D_METHOD("get_ceiling_height"), &CoarseRoomModel::get_ceiling_height);
-	ClassDB::bind_method(D_METHOD("set_texel_size", "metres"), &CoarseRoomModel::set_texel_size);
-	ClassDB::bind_method(D_METHOD("get_texel_size"), &CoarseRoomModel::get_texel_size);
-	ClassDB::bind_method(D_METHOD("is_valid"), &CoarseRoomModel::is_valid);
-	ClassDB::bind_method(D_METHOD("get_floorplan_error"), &CoarseRoomModel::get_floorplan_error);
-	ClassDB::bind_method(D_METHOD("get_mesh"), &CoarseRoomModel::get_mesh);
-	ClassDB::bind_method(D_METHOD("get_atlas_size"), &CoarseRoomModel::get_atlas_size);
-	ClassDB::bind_method(D_METHOD("set_atlas_image", "image"), &CoarseRoomModel::set_atlas_image);
-	ClassDB::bind_method(D_METHOD("get_atlas_image"), &CoarseRoomModel::get_atlas_image);
-	ClassDB::bind_method(D_METHOD("has_texture_data"), &CoarseRoomModel::has_texture_data);
-	ClassDB::bind_method(D_METHOD("get_charts"), &CoarseRoomModel::get_charts);
-	ClassDB::bind_method(D_METHOD("set_rig_capture", "path"), &CoarseRoomModel::set_rig_capture_path);
-	ClassDB::bind_method(D_METHOD("get_rig_capture"), &CoarseRoomModel::get_rig_capture_path);
-	ClassDB::bind_method(D_METHOD("set_dense_slam", "path"), &CoarseRoomModel::set_dense_slam_path);
-	ClassDB::bind_method(D_METHOD("get_dense_slam"), &CoarseRoomModel::get_dense_slam_path);
-	ClassDB::bind_method(D_METHOD("set_floorplan_source", "source"), &CoarseRoomModel::set_floorplan_source);
-	ClassDB::bind_method(D_METHOD("get_floorplan_source"), &CoarseRoomModel::get_floorplan_source);
-	ClassDB::bind_method(D_METHOD("set_pose_source", "source"), &CoarseRoomModel::set_pose_source);
-	ClassDB::bind_method(D_METHOD("get_pose_source"), &CoarseRoomModel::get_pose_source);
-	ClassDB::bind_method(D_METHOD("set_inpainting", "enabled"), &CoarseRoomModel::set_inpainting);
-	ClassDB::bind_method(D_METHOD("get_inpainting"), &CoarseRoomModel::get_inpainting);
-	ClassDB::bind_method(D_METHOD("set_lighting_compensation", "mode"), &CoarseRoomModel::set_lighting_compensation);
-	ClassDB::bind_method(D_METHOD("get_lighting_compensation"), &CoarseRoomModel::get_lighting_compensation);
-	ClassDB::bind_method(D_METHOD("set_room_layers", "layers"), &CoarseRoomModel::set_room_layers);
-	ClassDB::bind_method(D_METHOD("get_room_layers"), &CoarseRoomModel::get_room_layers);
-	ClassDB::bind_method(D_METHOD("integrate_rig_frame"), &CoarseRoomModel::integrate_rig_frame);
-	ClassDB::bind_method(D_METHOD("get_integrated_frame_count"), &CoarseRoomModel::get_integrated_frame_count);
-	ClassDB::bind_method(D_METHOD("get_last_frame_stats"), &CoarseRoomModel::get_last_frame_stats);
-	ClassDB::bind_method(D_METHOD("reset_texture"), &CoarseRoomModel::reset_texture);
-	ClassDB::bind_method(D_METHOD("finish_inpainting"), &CoarseRoomModel::finish_inpainting);
-	ClassDB::bind_method(D_METHOD("get_wall_confidence"), &CoarseRoomModel::get_wall_confidence);
-	ClassDB::bind_method(D_METHOD("get_room_estimate"), &CoarseRoomModel::get_room_estimate);
-	ClassDB::bind_method(D_METHOD("estimate_room_now"), &CoarseRoomModel::estimate_room_now);
-	ClassDB::bind_method(D_METHOD("save_room", "path", "overwrite"), &CoarseRoomModel::save_room, false);
-	ClassDB::bind_method(D_METHOD("find_room_in_recording", "path"), &CoarseRoomModel::find_room_in_recording, String());
-	ClassDB::bind_method(D_METHOD("is_finding_room"), &CoarseRoomModel::is_finding_room);
-	ClassDB::bind_method(D_METHOD("finish_room_search"), &CoarseRoomModel::finish_room_search);
-
-	ADD_GROUP("Room", "");
-	ADD_PROPERTY(PropertyInfo(Variant::INT, "floorplan_source", PROPERTY_HINT_ENUM, "Manual,Recording,Automatic"), "set_floorplan_source", "get_floorplan_source");
-	ADD_PROPERTY(PropertyInfo(Variant::PACKED_VECTOR2_ARRAY, "floorplan"), "set_floorplan", "get_floorplan");
-	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "ceiling_height", PROPERTY_HINT_RANGE, "0.5,100,0.01,exp,suffix:m"), "set_ceiling_height", "get_ceiling_height");
-	ADD_GROUP("Sources", "");
-	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "rig_capture", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "RigCapture"), "set_rig_capture", "get_rig_capture");
-	ADD_PROPERTY(PropertyInfo(Variant::NODE_PATH, "dense_slam", PROPERTY_HINT_NODE_PATH_VALID_TYPES, "DenseSLAM"), "set_dense_slam", "get_dense_slam");
-	ADD_PROPERTY(PropertyInfo(Variant::INT, "pose_source", PROPERTY_HINT_ENUM, "Ground Truth,Dense SLAM"), "set_pose_source", "get_pose_source");
-	ADD_GROUP("Texture", "");
-	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "texel_size", PROPERTY_HINT_RANGE, "0.001,1,0.001,exp,suffix:m"), "set_texel_size", "get_texel_size");
-	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "inpainting"), "set_inpainting", "get_inpainting");
-	ADD_PROPERTY(PropertyInfo(Variant::INT, "lighting_compensation", PROPERTY_HINT_ENUM, "Off,Additive (paper),Gain"), "set_lighting_compensation", "get_lighting_compensation");
-	ADD_GROUP("Rendering", "");
-	ADD_PROPERTY(PropertyInfo(Variant::INT, "room_layers", PROPERTY_HINT_LAYERS_3D_RENDER), "set_room_layers", "get_room_layers");
-
-	BIND_ENUM_CONSTANT(POSE_SOURCE_GROUND_TRUTH);
-	BIND_ENUM_CONSTANT(POSE_SOURCE_DENSE_SLAM);
-	BIND_ENUM_CONSTANT(LIGHTING_OFF);
-	BIND_ENUM_CONSTANT(LIGHTING_ADDITIVE);
-	BIND_ENUM_CONSTANT(LIGHTING_GAIN);
-	BIND_ENUM_CONSTANT(FLOORPLAN_MANUAL);
-	BIND_ENUM_CONSTANT(FLOORPLAN_RECORDING);
-	BIND_ENUM_CONSTANT(FLOORPLAN_AUTOMATIC);
-
-	ADD_SIGNAL(MethodInfo("mesh_changed"));
-	ADD_SIGNAL(MethodInfo("texture_updated", PropertyInfo(Variant::INT, "fisheye_frame")));
-	ADD_SIGNAL(MethodInfo("room_estimated", PropertyInfo(Variant::STRING, "state"), PropertyInfo(Variant::STRING, "message")));
 }
 
 } // namespace roomprobe

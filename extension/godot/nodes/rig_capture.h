@@ -2,7 +2,8 @@
 // RigCapture: where the rig's frames come from: the RGB-D camera and the upward fisheye, two
 // unsynchronised streams (paper §3.2, §4.3). Plays a recording (docs/recording-format.md) and
 // feeds every frame into the scene's live engine (engine/live_room.h), which it owns:
-//   Real Time: a capture thread reads and decodes the frames due by the scene's clock (the
+// Both pacings go through source/paced_player.h, as every player of a recording does:
+//   Real Time: its capture thread reads and decodes the frames due by the scene's clock (the
 //     process delta summed, so Movie Maker's fixed steps play it at recorded speed) and posts
 //     them to the engine's workers; the main thread only shows the newest frames as textures,
 //     and only those asked for.
@@ -16,16 +17,14 @@
 
 #include <capture/live_rig.h>
 #include <recording/recording_reader.h>
+#include <source/paced_player.h>
 
 #include <rp_godot/godot.h>
 
 #include <math/pose.h>
 
-#include <atomic>
-#include <condition_variable>
 #include <memory>
 #include <mutex>
-#include <thread>
 
 namespace roomprobe {
 
@@ -151,6 +150,7 @@ protected:
 	void _notification(int p_what);
 
 private:
+	static void bind_properties(); // _bind_methods' second half: properties, constants, signals
 	// A decoded frame to show and signal, handed from whoever read it to the main thread.
 	struct Shown {
 		RgbdFrame rgbd;
@@ -158,10 +158,10 @@ private:
 		int64_t index[2] = { -1, -1 };
 		uint64_t version[2] = { 0, 0 };
 	};
-	bool read_event(size_t p_event);
-	void capture_loop();
-	void start_capture();
-	void stop_capture();
+	// Any capture thread: the frame goes to the engine and becomes the newest for the main thread.
+	// p_index: its index in its stream; -1 counts the live device's frames instead.
+	void deliver(bool p_is_rgbd, RgbdFrame &&p_rgbd, FisheyeFrame &&p_fisheye, int64_t p_index);
+	void deliver_recorded(SourceFrame &&p_frame); // the player's sink, and step()'s
 	void show_frames(bool p_signal);
 	// The textures of the newest RGB-D and / or fisheye frame (made on first use).
 	void update_textures(bool p_rgbd, bool p_fisheye) const;
@@ -178,6 +178,7 @@ private:
 	mutable bool has_preview_room = false;
 	const RoomInfo *room_info() const; // the recording's room, or room_file's (live); null without
 	const Rig *rig_info() const; // the recording's rig, or rig_file's (live); null when not open
+	const RecordingReader *recording_reader() const; // null when no recording is open
 	void reopen_if_live();
 
 	godot::String recording_path;
@@ -195,7 +196,6 @@ private:
 	mutable std::string checked_recording, recording_problem, checked_rig, rig_problem;
 
 	std::shared_ptr<LiveRoom> engine;
-	std::shared_ptr<const RecordingReader> reader; // read_* is const: the capture thread reads frames
 	bool playing = false;
 	// Live source: opened (rig_file read) while live_rig holds a value.
 	std::unique_ptr<drivers::LiveRig> live;
@@ -208,19 +208,15 @@ private:
 		drivers::DeviceStatus status;
 	};
 
-	// Shared with the capture thread, under mutex.
+	// Shared with the capture threads (the player's, the live devices'), under mutex.
 	mutable std::mutex mutex;
-	std::condition_variable clock_advanced;
-	std::thread capture_thread;
-	bool capture_stop = false;
-	size_t next_event = 0;
-	double clock_s = 0.0; // playback time since the first event, seconds (the scene's clock)
-	int64_t dropped = 0;
-	bool reached_end = false; // the capture thread played the last event (the main thread signals it)
 	std::vector<std::string> frame_warnings; // unreadable frames, printed by the main thread
 	std::vector<StateChange> state_changes; // device state changes, signalled by the main thread
 	int64_t live_frames[2] = { 0, 0 }; // frames the live devices delivered since play()
 	Shown latest;
+	// The open recording (is_open()): its position, clock, drop count and capture thread, under
+	// its own lock. Its sink reaches the members above, so it is stopped first (~RigCapture).
+	PacedPlayer player;
 
 	// Main thread only.
 	uint64_t shown_version[2] = { 0, 0 };

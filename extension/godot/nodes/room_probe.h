@@ -68,7 +68,7 @@ public:
 	int get_virtual_object_count() const;
 	// What the last update_now() did: dense_texels (int), dense_ms, update_ms (float).
 	godot::Dictionary get_last_update_stats() const;
-	// The latest map as an EXR strip (32-bit float, recording/cubemap_layout.h) or as an 8-bit
+	// The latest map as an EXR strip (32-bit float, types/cubemap_layout.h) or as an 8-bit
 	// PNG cross (envmap/export.h). Paths may be res:// or user:// or absolute. Error codes as
 	// Godot's; the message names the file.
 	godot::Error save_exr(const godot::String &p_path) const;

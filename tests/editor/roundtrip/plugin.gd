@@ -1,6 +1,6 @@
 @tool
 extends EditorPlugin
-## The editor suite's round trip (tools/run_tests.py, editor::scene-roundtrip): opens the scene,
+## The editor suite's round trip (tools/testrun/editor.py, editor::scene-roundtrip): opens the scene,
 ## waits while its RoomProbe renders and drives the material, ReflectionProbe and sky, counts the
 ## maps it makes while nothing changes (none) and after a move (some), saves the scene as a user
 ## would, switches tabs, reloads and closes it, then quits. The runner compares the saved file

@@ -136,7 +136,7 @@ func expect_warning(substring: String) -> void:
 ## The engine errors and warnings logged since the test began or since the last call, as
 ## {"errors": [...], "warnings": [...]} (message texts), for a test that judges each message
 ## itself (a sweep over many properties). The errors taken count as expected: neither the
-## runner nor tools/run_tests.py fails the test for them.
+## runner nor tools/testrun/godot.py fails the test for them.
 func take_logged() -> Dictionary:
 	var errors: Array[String] = []
 	for e in _log_collector.take():
@@ -147,7 +147,7 @@ func take_logged() -> Dictionary:
 
 
 ## Declares that an engine bug makes Godot report "count RIDs of type rid_type were leaked"
-## at exit because of what this test did (e.g. "Texture"). tools/run_tests.py adds up these
+## at exit because of what this test did (e.g. "Texture"). tools/testrun/godot.py adds up these
 ## declarations and tolerates exactly that many such RIDs; any other count still fails.
 ## Name the engine issue in reason, and remove the call once the engine is fixed.
 func known_engine_leak(count: int, rid_type: String, reason: String) -> void:
@@ -155,7 +155,7 @@ func known_engine_leak(count: int, rid_type: String, reason: String) -> void:
 
 
 ## An absolute path in the repository. godot_project/ is res://, so the repository is its parent,
-## except for a scratch copy of the project elsewhere (the sanitizer runs of tools/run_tests.py
+## except for a scratch copy of the project elsewhere (the sanitizer runs of tools/testrun/sanitize.py
 ## copy it under build/), whose runner names the repository in $ROOMPROBE_REPO.
 static func repo_path(relative: String) -> String:
 	var repo := OS.get_environment("ROOMPROBE_REPO")

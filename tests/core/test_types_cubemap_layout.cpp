@@ -1,7 +1,7 @@
 // The cubemap layout of recordings (docs/recording-format.md, "Cubemaps"): OpenGL/Godot face
 // order and pixel-to-direction mapping, and the N x 6N strip.
 
-#include "recording/cubemap_layout.h"
+#include "types/cubemap_layout.h"
 
 #include <doctest/doctest.h>
 

@@ -16,11 +16,17 @@
 // The file layout is a vertical strip, N wide and 6 N tall, faces top to bottom in the order
 // above: face f holds rows [f N, (f + 1) N). It is what Godot's cubemap import calls "1x6".
 
-#include "recording_types.h"
+#include <opencv2/core/mat.hpp>
+
+#include <array>
 
 #include <glm/vec3.hpp>
 
 namespace roomprobe {
+
+// The six faces of a cubemap in the order +X, -X, +Y, -Y, +Z, -Z (the OpenGL and Godot layer
+// order), each square, all the same size. See below for how pixels map to directions.
+using CubemapFaces = std::array<cv::Mat, 6>;
 
 enum CubemapFace {
 	CUBEMAP_POSITIVE_X = 0,

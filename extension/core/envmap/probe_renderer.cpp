@@ -1,0 +1,160 @@
+#include "probe_renderer.h"
+
+#include "ggx_prefilter.h"
+
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cstring>
+
+namespace roomprobe {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point p_start) {
+	return std::chrono::duration<double, std::milli>(Clock::now() - p_start).count();
+}
+
+// One face as Godot's RGBAH image with mipmaps wants it: level 0, then each half-size level down
+// to 1x1, RGBA half floats. The levels are the GGX chain's (ggx_prefilter.h), then box halvings
+// of its last level, which no shader reads for roughness.
+std::vector<uint16_t> gpu_face(const std::vector<Cubemap> &p_chain, const cv::Mat &p_distance_m, int p_face) {
+	std::vector<uint16_t> out;
+	cv::Mat level, distance = p_distance_m;
+	for (size_t m = 0;; m++) {
+		if (m < p_chain.size()) {
+			level = p_chain[m].faces[size_t(p_face)];
+		} else {
+			cv::Mat next;
+			cv::resize(level, next, cv::Size(std::max(1, level.cols / 2), std::max(1, level.rows / 2)), 0.0, 0.0, cv::INTER_AREA);
+			level = next;
+		}
+		const cv::Size size = level.size();
+		// Alpha: the distance to the surface each texel shows (envmap/parallax.h), area-averaged
+		// down the chain; 0 where the map has none.
+		if (distance.empty()) {
+			distance = cv::Mat(size, CV_32FC1, cv::Scalar(0.0f));
+		} else if (distance.size() != size) {
+			cv::Mat next;
+			cv::resize(distance, next, size, 0.0, 0.0, cv::INTER_AREA);
+			distance = next;
+		}
+		cv::Mat rgba, half;
+		const cv::Mat channels[2] = { level, distance };
+		rgba.create(level.size(), CV_32FC4);
+		const int pairs[8] = { 0, 0, 1, 1, 2, 2, 3, 3 };
+		cv::mixChannels(channels, 2, &rgba, 1, pairs, 4);
+		rgba.convertTo(half, CV_16F);
+		const size_t n = size_t(half.total()) * 4;
+		const size_t at = out.size();
+		out.resize(at + n);
+		for (int y = 0; y < half.rows; y++) {
+			std::memcpy(out.data() + at + size_t(y) * size_t(half.cols) * 4, half.ptr(y), size_t(half.cols) * 4 * sizeof(uint16_t));
+		}
+		if (level.cols == 1 && level.rows == 1) {
+			break;
+		}
+	}
+	return out;
+}
+
+} // namespace
+
+ProbeRenderer::ProbeRenderer(const RoomMesh *p_room, const ProbeRenderSettings &p_settings) :
+		settings_(p_settings) {
+	if (p_room != nullptr) {
+		coarse_ = std::make_unique<CoarseCubemapRenderer>(*p_room);
+	}
+}
+
+Cubemap ProbeRenderer::render_faces(const glm::dvec3 &p_position, int p_size, const CoarseMapInput *p_coarse, const DenseMapInput &p_dense,
+		DenseRenderStats *r_dense, double *r_coarse_ms, double *r_dense_ms, DenseFaceCache *io_faces) const {
+	Clock::time_point start = Clock::now();
+	Cubemap map;
+	LightingChange cumulative;
+	cumulative.valid = true;
+	std::array<cv::Mat, 6> observed; // which texels the coarse model's fisheye observations show
+	if (coarse_ && p_coarse != nullptr && !p_coarse->atlas.empty()) {
+		const Pose room_from_world = inverse(settings_.world_from_room);
+		const glm::dvec3 in_room = transform_point(room_from_world, p_position);
+		map = coarse_->render(p_coarse->atlas, in_room, p_size, room_from_world.rotation);
+		if (p_dense.slam != nullptr && settings_.coarse_shell_first && !p_coarse->observed.empty()) {
+			observed = coarse_->render_channel(p_coarse->observed, in_room, p_size, room_from_world.rotation);
+		}
+		cumulative = p_coarse->cumulative;
+	} else {
+		// No observation yet (or no room): black, with the dense model over it, and no distances
+		// but the dense model's.
+		map = make_cubemap(p_size);
+		for (cv::Mat &face : map.distance_m) {
+			face = cv::Mat(p_size, p_size, CV_32FC1, cv::Scalar(0.0f));
+		}
+	}
+	*r_coarse_ms = ms_since(start);
+	start = Clock::now();
+	if (p_dense.slam != nullptr) {
+		DenseRenderOptions options;
+		options.scale = settings_.dense_scale;
+		options.far_m = settings_.dense_far_m;
+		options.coarse_observed = observed[0].empty() ? nullptr : &observed;
+		options.lut = settings_.rgb_lut_active ? &settings_.rgb_lut : nullptr;
+		options.faces_per_render = settings_.dense_faces_per_render;
+		const auto reading = p_dense.slam->read_lock(); // no frame half-fused
+		*r_dense = p_dense.lighting->render_over(p_dense.slam->volume(), p_dense.slam->integrated_count(), cumulative, p_position, options, &map, io_faces);
+	}
+	*r_dense_ms = ms_since(start);
+	r_dense->milliseconds = *r_dense_ms;
+	return map;
+}
+
+void ProbeRenderer::render_map(int p_size, const CoarseMapInput *p_coarse, const DenseMapInput &p_dense, const MapOverlay *p_objects,
+		const ProbeMap *p_previous, DenseFaceCache *io_faces, ProbeMap *io_map) const {
+	const Clock::time_point start = Clock::now();
+	io_map->cubemap = render_faces(io_map->position, p_size, p_coarse, p_dense, &io_map->dense, &io_map->coarse_ms, &io_map->dense_ms, io_faces);
+	Clock::time_point t = Clock::now();
+	if (p_objects != nullptr && p_objects->object_count() > 0) {
+		// Lit by the probe's previous map when it has one (it holds the objects too), else by
+		// this map's room alone.
+		const bool reuse = p_previous != nullptr && p_previous->cubemap.size == p_size;
+		const ShCoefficients light = reuse ? p_previous->sh : project_sh(io_map->cubemap);
+		io_map->objects = p_objects->draw(io_map->position, light, reuse ? &p_previous->cubemap : nullptr, &io_map->cubemap);
+	}
+	io_map->sh = project_sh(io_map->cubemap);
+	io_map->sh_ms = ms_since(t) - io_map->objects.milliseconds;
+	t = Clock::now();
+	build_gpu_faces(p_previous, io_map);
+	io_map->mips_ms = ms_since(t);
+	io_map->total_ms = ms_since(start);
+}
+
+// The GGX chain and the faces as Godot takes them. Only what the map changed against the probe's
+// previous one is done again: the chain's texels that read a changed face, and the faces whose
+// chain or distances changed (dense faces take turns, and the coarse model changes with fisheye
+// frames only, so most maps change one or two faces).
+void ProbeRenderer::build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map) const {
+	const int size = io_map->cubemap.size;
+	const std::shared_ptr<const GgxFilter> filter = shared_ggx_filter(size, settings_.wait_for_ggx_filter);
+	const bool same_kind = p_previous != nullptr && p_previous->cubemap.size == size && p_previous->ggx_mips == (filter != nullptr);
+	const uint8_t source_changed = same_kind ? cubemap_changed_faces(p_previous->cubemap, io_map->cubemap) : uint8_t(0x3F);
+	uint8_t chain_changed = source_changed;
+	std::vector<Cubemap> chain;
+	if (filter) {
+		chain = filter->apply(io_map->cubemap, same_kind ? p_previous->ggx_chain : std::vector<Cubemap>{}, source_changed, &chain_changed);
+	} else {
+		chain = { io_map->cubemap };
+	}
+	io_map->ggx_mips = filter != nullptr;
+	tbb::parallel_for(0, 6, [&](int p_face) {
+		const size_t f = size_t(p_face);
+		const cv::Mat &distance = io_map->cubemap.distance_m[f];
+		const bool same = same_kind && !(chain_changed & (1u << p_face)) && p_previous->gpu_faces[f] && same_pixels(distance, p_previous->cubemap.distance_m[f]);
+		io_map->gpu_faces[f] = same ? p_previous->gpu_faces[f] : std::make_shared<const std::vector<uint16_t>>(gpu_face(chain, distance, p_face));
+	});
+	if (filter) {
+		io_map->ggx_chain = std::move(chain);
+	}
+}
+
+} // namespace roomprobe
