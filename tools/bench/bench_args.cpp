@@ -116,6 +116,18 @@ int run_option(cli::Arguments &p_cursor, const std::string &p_arg, Arguments *r_
 	if (p_arg == "--probe-size") {
 		return integer_option(p_cursor, 1, 4096, "--probe-size needs a face size in texels, 1 to 4096", &r_args->probe_size);
 	}
+	if (p_arg == "--compute") {
+		std::string name;
+		p_cursor.value(&name);
+		const ComputeBackend backends[3] = { ComputeBackend::Cpu, ComputeBackend::Vulkan, ComputeBackend::Auto };
+		for (const ComputeBackend backend : backends) {
+			if (name == compute_backend_name(backend)) {
+				r_args->compute = backend;
+				return TAKEN;
+			}
+		}
+		return usage("--compute needs cpu, vulkan or auto");
+	}
 	if (p_arg == "--speed" && r_args->mode == "live") {
 		const std::string error = "--speed needs a playback speed in " + cli::range_text(SPEED_MIN, SPEED_MAX);
 		return p_cursor.number_in(SPEED_MIN, SPEED_MAX, &r_args->speed) ? TAKEN : usage(error.c_str());
@@ -241,6 +253,7 @@ void print_usage(std::FILE *p_out) {
 			"  --frames N            stop after N RGB-D frames, 1 to 10000000 (default: all)\n"
 			"  --threads N           worker threads for OpenCV and TBB, 1 to 1024 (default: the libraries')\n"
 			"  --probe-size N        the probe's cubemap face size (default: slam %d, live %d)\n"
+			"  --compute B           where the GPU-capable kernels (the GGX prefilter) run: cpu (default), vulkan, auto\n"
 			"  --speed X             live: playback speed, 0.01 to 1000 (default 1: real time)\n"
 			"  --intrinsics FX,FY,CX,CY  the RGB-D camera's pinhole intrinsics, pixels, no distortion, instead of the source's\n"
 			"                        (TUM: the freiburg set its folder names, else ROS's default; 7-Scenes: camera-intrinsics.txt)\n"

@@ -147,6 +147,7 @@ struct Arguments {
 	long frames = -1; // RGB-D frames to process; -1: all
 	int threads = 0; // 0: the libraries' defaults
 	int probe_size = 0; // 0: the mode's default
+	ComputeBackend compute = ComputeBackend::Cpu; // --compute: where the GPU-capable kernels run
 	int probes = 1; // slam --recording: probes rendered every frame (the first at the probe, the others around it)
 	double speed = 1.0; // live: playback speed
 	long warmup_frames = 0; // soak: frames before memory and time are judged (0: a fifth of them)

@@ -56,6 +56,7 @@ void apply_bench_settings(const Arguments &p_args, const PinholeParams &p_camera
 	config.coarse.lighting_model = LightingModel::GAIN_ROBUST;
 	config.coarse.cubemap_size = p_probe_size;
 	config.mesh_interval_frames = MESH_INTERVAL;
+	config.compute_backend = p_args.compute;
 }
 
 } // namespace

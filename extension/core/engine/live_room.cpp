@@ -143,6 +143,14 @@ std::string LiveRoom::build_room_locked() {
 	settings.rgb_lut = rgb_lut;
 	settings.rgb_lut_active = rgb_lut_active;
 	settings.wait_for_ggx_filter = cfg.wait_for_ggx_filter;
+	std::string reason;
+	settings.compute = shared_compute_device(cfg.compute_backend, &reason);
+	{
+		const std::lock_guard<std::mutex> lock(stats_mutex);
+		compute_note = settings.compute ? "Vulkan: " + settings.compute->name()
+										 : cfg.compute_backend == ComputeBackend::Cpu ? std::string("CPU")
+																					  : std::string("CPU (") + compute_backend_name(cfg.compute_backend) + ": " + reason + ")";
+	}
 	renderer = std::make_unique<ProbeRenderer>(room_mesh(), settings);
 	room_builds++;
 	const std::lock_guard<std::mutex> lock(placer_mutex);

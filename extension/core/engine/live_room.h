@@ -116,6 +116,10 @@ struct LiveRoomConfig {
 	// built: at once up to 64^2 faces, otherwise in the background (about 3 s at 256^2, once per
 	// process), box-filtered meanwhile. True: wait for it instead (the benchmark, the evaluation).
 	bool wait_for_ggx_filter = false;
+	// Where the kernels that have a GPU twin run (issue #40; so far the GGX prefilter's gather):
+	// Cpu; Vulkan (any Vulkan device, Mesa's lavapipe included); Auto (Vulkan where a device that
+	// is not a CPU exists). No device: the CPU, and stats().compute says why.
+	ComputeBackend compute_backend = ComputeBackend::Cpu;
 };
 
 // One RGB-D frame as the engine saw it: the image the AR view shows behind the virtual objects
@@ -170,6 +174,8 @@ struct LiveRoomStats {
 	size_t dense_frames = 0, dense_fused = 0;
 	size_t relocalisation_attempts = 0, relocalisations = 0; // lost frames searched, and found again
 	TsdfStats tsdf;
+	// Where the GPU-capable kernels run: "CPU", "Vulkan: <device>", or "CPU (<backend>: <why not>)".
+	std::string compute = "CPU";
 };
 
 class LiveRoom {
@@ -383,6 +389,7 @@ private:
 
 	// Counters and latencies.
 	mutable std::mutex stats_mutex;
+	std::string compute_note = "CPU"; // stats().compute
 	LiveRoomStats counters;
 	std::vector<double> rgbd_latencies_ms, fisheye_latencies_ms;
 	std::vector<std::pair<uint64_t, double>> rgbd_arrivals, fisheye_arrivals; // recent (sequence, push time)

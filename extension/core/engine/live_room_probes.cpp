@@ -350,6 +350,7 @@ LiveRoomStats LiveRoom::stats() const {
 	{
 		const std::lock_guard<std::mutex> lock(stats_mutex);
 		s = counters;
+		s.compute = compute_note;
 		s.rgbd_latency = summarise_latency(rgbd_latencies_ms);
 		s.fisheye_latency = summarise_latency(fisheye_latencies_ms);
 	}

@@ -1,6 +1,7 @@
 #include "probe_renderer.h"
 
 #include "ggx_prefilter.h"
+#include "ggx_prefilter_gpu.h"
 
 #include <tbb/parallel_for.h>
 
@@ -140,7 +141,9 @@ void ProbeRenderer::build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map
 	const uint8_t source_changed = same_kind ? cubemap_changed_faces(p_previous->cubemap, io_map->cubemap) : uint8_t(0x3F);
 	uint8_t chain_changed = source_changed;
 	std::vector<Cubemap> chain;
-	if (filter) {
+	if (filter && settings_.compute && gpu_chain(filter.get(), filter, io_map, &chain)) {
+		chain_changed = 0x3F; // the device filters whole chains
+	} else if (filter) {
 		chain = filter->apply(io_map->cubemap, same_kind ? p_previous->ggx_chain : std::vector<Cubemap>{}, source_changed, &chain_changed);
 	} else {
 		chain = { io_map->cubemap };
@@ -155,6 +158,27 @@ void ProbeRenderer::build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map
 	if (filter) {
 		io_map->ggx_chain = std::move(chain);
 	}
+}
+
+bool ProbeRenderer::gpu_chain(const GgxFilter *p_filter, const std::shared_ptr<const GgxFilter> &p_shared, ProbeMap *io_map, std::vector<Cubemap> *r_chain) const {
+	std::shared_ptr<GgxFilterGpu> gpu;
+	std::string error;
+	{
+		const std::lock_guard<std::mutex> lock(gpu_mutex);
+		std::shared_ptr<GgxFilterGpu> &slot = gpu_filters[p_filter->face_size()];
+		if (!slot) {
+			slot = GgxFilterGpu::create(p_shared, settings_.compute, &error);
+		}
+		gpu = slot;
+	}
+	if (gpu) {
+		*r_chain = gpu->apply(io_map->cubemap, &error);
+	}
+	if (!gpu || r_chain->empty()) {
+		gpu_failed++;
+		return false;
+	}
+	return true;
 }
 
 } // namespace roomprobe

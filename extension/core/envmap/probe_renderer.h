@@ -14,14 +14,21 @@
 #include "dense_render.h"
 #include "map_overlay.h"
 
+#include <gpu/compute_device.h>
 #include <slam/dense_slam.h>
 
 #include <array>
+#include <atomic>
+#include <map>
+#include <mutex>
 #include <cstdint>
 #include <memory>
 #include <vector>
 
 namespace roomprobe {
+
+class GgxFilter;
+class GgxFilterGpu;
 
 // One environment map at one probe: the float faces, 25 SH coefficients, and the faces as Godot
 // uploads them (RGBA half floats with the whole mip chain, level 0 first: the GGX prefiltered
@@ -58,6 +65,9 @@ struct ProbeRenderSettings {
 	// Until the GGX filter for a size is built (shared_ggx_filter), mips are box-filtered; true:
 	// wait for it instead (the benchmark, the evaluation).
 	bool wait_for_ggx_filter = false;
+	// The device the GGX chain is filtered on (null: the CPU); a failed dispatch falls back to the
+	// CPU for that map and counts in gpu_failures().
+	std::shared_ptr<ComputeDevice> compute;
 };
 
 // The coarse model's part of a map: its atlas (completed or raw, CV_32FC3; empty: none yet), where
@@ -97,11 +107,18 @@ public:
 	void render_map(int p_size, const CoarseMapInput *p_coarse, const DenseMapInput &p_dense, const MapOverlay *p_objects, const ProbeMap *p_previous,
 			DenseFaceCache *io_faces, ProbeMap *io_map) const;
 
+	size_t gpu_failures() const { return gpu_failed.load(); }
+
 private:
 	void build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map) const;
+	// The GGX chain of io_map's cubemap on the compute device (false: do it on the CPU).
+	bool gpu_chain(const GgxFilter *p_filter, const std::shared_ptr<const GgxFilter> &p_shared, ProbeMap *io_map, std::vector<Cubemap> *r_chain) const;
 
 	ProbeRenderSettings settings_;
 	std::unique_ptr<CoarseCubemapRenderer> coarse_;
+	mutable std::mutex gpu_mutex; // the GPU filters, one per face size, made at the first map
+	mutable std::map<int, std::shared_ptr<GgxFilterGpu>> gpu_filters;
+	mutable std::atomic<size_t> gpu_failed{ 0 };
 };
 
 } // namespace roomprobe

@@ -48,6 +48,11 @@ public:
 		FISHEYE_BACKEND_ARAVIS, // GigE Vision / USB3 Vision
 		FISHEYE_BACKEND_UVC, // a V4L2 webcam (OpenCV's VideoCapture)
 	};
+	enum ComputeBackendMode { // ComputeBackend (gpu/compute_device.h), in its order
+		COMPUTE_BACKEND_CPU,
+		COMPUTE_BACKEND_VULKAN,
+		COMPUTE_BACKEND_AUTO,
+	};
 	enum DeviceState { // drivers::DeviceState, in its order
 		DEVICE_STATE_STOPPED,
 		DEVICE_STATE_CONNECTING,
@@ -78,6 +83,8 @@ public:
 	godot::String get_rgbd_device() const;
 	void set_fisheye_device(const godot::String &p_id);
 	godot::String get_fisheye_device() const;
+	void set_compute_backend(int64_t p_backend);
+	ComputeBackendMode get_compute_backend() const;
 	void set_fisheye_backend(int64_t p_backend);
 	FisheyeBackend get_fisheye_backend() const;
 	void set_fisheye_pixel_format(const godot::String &p_format);
@@ -185,6 +192,7 @@ private:
 	Source source = SOURCE_RECORDING;
 	godot::String rig_file, room_file, rgbd_device, fisheye_device, fisheye_pixel_format;
 	FisheyeBackend fisheye_backend = FISHEYE_BACKEND_ARAVIS;
+	ComputeBackendMode compute_backend = COMPUTE_BACKEND_CPU;
 	bool auto_exposure = true;
 	double exposure_us = 10000.0;
 	double gain = 0.0;
@@ -237,4 +245,5 @@ VARIANT_ENUM_CAST(roomprobe::RigCapture::Pacing)
 VARIANT_ENUM_CAST(roomprobe::RigCapture::Stream)
 VARIANT_ENUM_CAST(roomprobe::RigCapture::Source)
 VARIANT_ENUM_CAST(roomprobe::RigCapture::FisheyeBackend)
+VARIANT_ENUM_CAST(roomprobe::RigCapture::ComputeBackendMode)
 VARIANT_ENUM_CAST(roomprobe::RigCapture::DeviceState)

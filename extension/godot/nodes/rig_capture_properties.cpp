@@ -78,6 +78,17 @@ void RigCapture::set_fisheye_backend(int64_t p_backend) {
 }
 
 RigCapture::FisheyeBackend RigCapture::get_fisheye_backend() const { return fisheye_backend; }
+
+void RigCapture::set_compute_backend(int64_t p_backend) {
+	if (!property_checks::enum_in_range("RigCapture.compute_backend (0 CPU, 1 Vulkan, 2 Auto)", p_backend, 3)) {
+		return;
+	}
+	compute_backend = ComputeBackendMode(p_backend);
+	engine->edit_config([this](LiveRoomConfig &p_config) { p_config.compute_backend = ComputeBackend(compute_backend); });
+	update_configuration_warnings();
+}
+
+RigCapture::ComputeBackendMode RigCapture::get_compute_backend() const { return compute_backend; }
 void RigCapture::set_fisheye_pixel_format(const String &p_format) { fisheye_pixel_format = p_format; }
 String RigCapture::get_fisheye_pixel_format() const { return fisheye_pixel_format; }
 void RigCapture::set_auto_exposure(bool p_on) { auto_exposure = p_on; }
@@ -115,6 +126,8 @@ void RigCapture::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_rgbd_device"), &RigCapture::get_rgbd_device);
 	ClassDB::bind_method(D_METHOD("set_fisheye_device", "id"), &RigCapture::set_fisheye_device);
 	ClassDB::bind_method(D_METHOD("get_fisheye_device"), &RigCapture::get_fisheye_device);
+	ClassDB::bind_method(D_METHOD("set_compute_backend", "backend"), &RigCapture::set_compute_backend);
+	ClassDB::bind_method(D_METHOD("get_compute_backend"), &RigCapture::get_compute_backend);
 	ClassDB::bind_method(D_METHOD("set_fisheye_backend", "backend"), &RigCapture::set_fisheye_backend);
 	ClassDB::bind_method(D_METHOD("get_fisheye_backend"), &RigCapture::get_fisheye_backend);
 	ClassDB::bind_method(D_METHOD("set_fisheye_pixel_format", "format"), &RigCapture::set_fisheye_pixel_format);
@@ -179,6 +192,8 @@ void RigCapture::bind_properties() {
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "auto_exposure"), "set_auto_exposure", "get_auto_exposure");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "exposure_us", PROPERTY_HINT_RANGE, "1,10000000,1,suffix:us"), "set_exposure_us", "get_exposure_us");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "gain", PROPERTY_HINT_RANGE, "0,100,0.1"), "set_gain", "get_gain");
+	ADD_GROUP("Compute", "");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "compute_backend", PROPERTY_HINT_ENUM, "CPU,Vulkan,Auto"), "set_compute_backend", "get_compute_backend");
 	ADD_GROUP("Playback", "");
 	ADD_PROPERTY(PropertyInfo(Variant::INT, "pacing", PROPERTY_HINT_ENUM, "Real Time,Step"), "set_pacing", "get_pacing");
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "loop"), "set_loop", "get_loop");
@@ -192,6 +207,9 @@ void RigCapture::bind_properties() {
 	BIND_ENUM_CONSTANT(SOURCE_LIVE);
 	BIND_ENUM_CONSTANT(FISHEYE_BACKEND_ARAVIS);
 	BIND_ENUM_CONSTANT(FISHEYE_BACKEND_UVC);
+	BIND_ENUM_CONSTANT(COMPUTE_BACKEND_CPU);
+	BIND_ENUM_CONSTANT(COMPUTE_BACKEND_VULKAN);
+	BIND_ENUM_CONSTANT(COMPUTE_BACKEND_AUTO);
 	BIND_ENUM_CONSTANT(DEVICE_STATE_STOPPED);
 	BIND_ENUM_CONSTANT(DEVICE_STATE_CONNECTING);
 	BIND_ENUM_CONSTANT(DEVICE_STATE_STREAMING);

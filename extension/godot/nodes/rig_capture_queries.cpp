@@ -232,6 +232,12 @@ PackedStringArray RigCapture::get_warnings() const {
 			warnings.push_back(String(("rig_file cannot be read: " + rig_problem).c_str()));
 		}
 	}
+	if (compute_backend != COMPUTE_BACKEND_CPU && engine->is_configured()) {
+		const std::string compute = engine->stats().compute;
+		if (compute.rfind("CPU", 0) == 0) {
+			warnings.push_back(String(("compute_backend: the kernels run on the CPU: " + compute).c_str()));
+		}
+	}
 	if (live_open && playing) {
 		for (int s = 0; s < 2; s++) {
 			const drivers::DeviceStatus &status = device_status[s];

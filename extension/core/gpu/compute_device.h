@@ -1,0 +1,131 @@
+#pragma once
+// ComputeDevice: the Vulkan compute backend's device (issue #40): one queue that runs compute
+// kernels (GLSL compiled to SPIR-V by glslc at build time, embedded in the library) over storage
+// buffers. Kernels stay device-agnostic in what they compute: each has a CPU twin that the tests
+// hold it to. A stage asks for the device through the engine's configuration and falls back to
+// its CPU code, with the reason, when there is none.
+//
+// Buffers are host-visible and coherent (mapped once): simple and right on integrated GPUs and
+// lavapipe; a discrete GPU reads them over PCIe, which the figures say. One lock serialises the
+// queue: a batch of dispatches is recorded, submitted and waited for under it.
+
+#include "vulkan_api.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace roomprobe {
+
+enum class ComputeBackend {
+	Cpu, // the CPU kernels only
+	Vulkan, // Vulkan compute; any device, Mesa's lavapipe (a CPU device) included
+	Auto, // Vulkan where a device that is not a CPU exists, else the CPU kernels
+};
+
+const char *compute_backend_name(ComputeBackend p_backend);
+
+struct ComputeDeviceOptions {
+	bool allow_cpu_device = true; // false: refuse a CPU device (lavapipe), as Auto does
+};
+
+class ComputeDevice;
+
+// A storage buffer, mapped for the host.
+class GpuBuffer {
+public:
+	~GpuBuffer();
+	GpuBuffer(const GpuBuffer &) = delete;
+	GpuBuffer &operator=(const GpuBuffer &) = delete;
+	size_t size_bytes() const { return bytes; }
+	void *data() const { return mapped; }
+
+private:
+	friend class ComputeDevice;
+	GpuBuffer() = default;
+	const ComputeDevice *device = nullptr;
+	VkBuffer buffer = VK_NULL_HANDLE;
+	VkDeviceMemory memory = VK_NULL_HANDLE;
+	void *mapped = nullptr;
+	size_t bytes = 0;
+};
+
+// A compute pipeline: SPIR-V with p_buffers storage buffers at bindings 0 .. p_buffers - 1 of set
+// 0, and p_push_bytes of push constants.
+class GpuKernel {
+public:
+	~GpuKernel();
+	GpuKernel(const GpuKernel &) = delete;
+	GpuKernel &operator=(const GpuKernel &) = delete;
+	int buffer_count() const { return buffers; }
+
+private:
+	friend class ComputeDevice;
+	GpuKernel() = default;
+	const ComputeDevice *device = nullptr;
+	VkShaderModule module = VK_NULL_HANDLE;
+	VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
+	VkPipelineLayout layout = VK_NULL_HANDLE;
+	VkPipeline pipeline = VK_NULL_HANDLE;
+	int buffers = 0;
+	uint32_t push_bytes = 0;
+};
+
+// One dispatch of a batch: the kernel, its buffers in binding order, its push constants and the
+// workgroup counts.
+struct GpuDispatch {
+	const GpuKernel *kernel = nullptr;
+	std::vector<const GpuBuffer *> buffers;
+	std::vector<uint8_t> push;
+	uint32_t groups_x = 1, groups_y = 1, groups_z = 1;
+};
+
+class ComputeDevice {
+public:
+	// The first device with a compute queue, GPUs before CPU devices. Null, with r_error naming
+	// what is missing (no loader, no device, a failed call), where there is none.
+	static std::shared_ptr<ComputeDevice> create(const ComputeDeviceOptions &p_options, std::string *r_error);
+	~ComputeDevice();
+	ComputeDevice(const ComputeDevice &) = delete;
+	ComputeDevice &operator=(const ComputeDevice &) = delete;
+
+	const std::string &name() const { return device_name; } // "llvmpipe (LLVM 19.1.7, 256 bits)", ...
+	bool is_cpu() const { return cpu; }
+
+	std::unique_ptr<GpuBuffer> make_buffer(size_t p_bytes, std::string *r_error) const;
+	std::unique_ptr<GpuKernel> make_kernel(const uint32_t *p_spirv, size_t p_words, int p_buffers, uint32_t p_push_bytes, std::string *r_error) const;
+	// Runs the dispatches in order (each sees the writes of those before it) and waits for them.
+	// "" or what failed.
+	std::string run(const std::vector<GpuDispatch> &p_dispatches) const;
+
+	const vk::Api &api() const { return vk_api; }
+	VkDevice handle() const { return device; }
+
+private:
+	ComputeDevice() = default;
+	std::string open(const ComputeDeviceOptions &p_options);
+	int memory_type(uint32_t p_bits) const; // host-visible and coherent; -1: none
+
+	vk::Api vk_api;
+	VkInstance instance = VK_NULL_HANDLE;
+	VkPhysicalDevice physical = VK_NULL_HANDLE;
+	VkDevice device = VK_NULL_HANDLE;
+	VkQueue queue = VK_NULL_HANDLE;
+	VkCommandPool pool = VK_NULL_HANDLE;
+	VkCommandBuffer commands = VK_NULL_HANDLE;
+	VkFence fence = VK_NULL_HANDLE;
+	VkDescriptorPool descriptors = VK_NULL_HANDLE;
+	VkPhysicalDeviceMemoryProperties memory{};
+	std::string device_name;
+	bool cpu = false;
+	mutable std::mutex queue_mutex;
+};
+
+// The process's device for p_backend (created once, shared): null for Cpu, and null with
+// r_reason saying why when Vulkan or Auto find none (Auto also when the only device is a CPU one).
+std::shared_ptr<ComputeDevice> shared_compute_device(ComputeBackend p_backend, std::string *r_reason);
+
+} // namespace roomprobe

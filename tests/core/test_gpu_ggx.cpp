@@ -1,0 +1,133 @@
+// The Vulkan compute backend (gpu/compute_device.h) and its first kernel, the GGX prefilter's
+// gather (envmap/ggx_prefilter_gpu.h), against the CPU's chain. CI runs it on Mesa's lavapipe (a
+// CPU device): without a Vulkan device the test fails, naming why, rather than skip.
+
+#include "engine/live_room.h"
+#include "envmap/ggx_prefilter.h"
+#include "envmap/ggx_prefilter_gpu.h"
+#include "gpu/compute_device.h"
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+using namespace roomprobe;
+
+namespace {
+
+// A sky with a sharp bright light and a gradient: radiance 0.05 .. 20.
+Cubemap test_sky(int p_size) {
+	Cubemap map = make_cubemap(p_size);
+	for (int f = 0; f < 6; f++) {
+		for (int y = 0; y < p_size; y++) {
+			for (int x = 0; x < p_size; x++) {
+				const glm::dvec3 d = cubemap_direction(f, x, y, p_size);
+				const float light = d.y > 0.9 && d.x > 0.1 ? 20.0f : 0.0f;
+				map.faces[size_t(f)].at<cv::Vec3f>(y, x) = cv::Vec3f(float(0.5 + 0.45 * d.x) + light, float(0.3 + 0.25 * d.y), float(0.05 + 0.04 * (d.z + 1.0)));
+			}
+		}
+	}
+	return map;
+}
+
+std::shared_ptr<ComputeDevice> test_device() {
+	ComputeDeviceOptions options;
+	options.allow_cpu_device = true; // lavapipe
+	std::string error;
+	std::shared_ptr<ComputeDevice> device = ComputeDevice::create(options, &error);
+	REQUIRE_MESSAGE(device, "no Vulkan compute device: " << error);
+	MESSAGE("Vulkan device: " << device->name() << std::string(device->is_cpu() ? " (a CPU device)" : ""));
+	return device;
+}
+
+} // namespace
+
+TEST_CASE("GPU GGX: the chain on a Vulkan device equals the CPU's to the float rounding of each texel's taps") {
+	const std::shared_ptr<ComputeDevice> device = test_device();
+	for (const int size : { 8, 32 }) {
+		CAPTURE(size);
+		const Cubemap sky = test_sky(size);
+		const auto filter = std::make_shared<const GgxFilter>(size);
+		const std::vector<Cubemap> cpu = filter->apply(sky);
+		std::string error;
+		const std::unique_ptr<GgxFilterGpu> gpu_filter = GgxFilterGpu::create(filter, device, &error);
+		REQUIRE_MESSAGE(gpu_filter, error);
+		for (int run = 0; run < 2; run++) { // the buffers are reused by the second map
+			const std::vector<Cubemap> gpu = gpu_filter->apply(sky, &error);
+			REQUIRE_MESSAGE(error.empty(), error);
+			REQUIRE(gpu.size() == cpu.size());
+			CHECK(gpu[0].faces[0].data == sky.faces[0].data); // level 0 shares the source's pixels
+			// A texel is a convex sum (the weights sum to 1) of at most 4 taps a sample (bilinear, merged)
+			// of values <= 20: each float addition rounds by at most 2^-24 of the running sum, so two
+			// roundings of the same sums (the CPU may contract into FMAs, the GPU may not) differ by at
+			// most 4 x samples x 2^-23 x 20.
+			const double bound = 4.0 * double(filter->sample_count()) * std::ldexp(1.0, -23) * 20.0;
+			double worst = 0.0;
+			for (size_t level = 1; level < cpu.size(); level++) {
+				REQUIRE(gpu[level].size == cpu[level].size);
+				for (size_t f = 0; f < 6; f++) {
+					worst = std::max(worst, cv::norm(gpu[level].faces[f], cpu[level].faces[f], cv::NORM_INF));
+				}
+			}
+			MESSAGE("largest difference " << worst << " (bound " << bound << ")");
+			CHECK(worst <= bound);
+		}
+	}
+}
+
+TEST_CASE("GPU GGX: the CPU backend asks for no device; a source of another size is refused with the reason") {
+	std::string reason = "unchanged";
+	CHECK(shared_compute_device(ComputeBackend::Cpu, &reason) == nullptr);
+	CHECK(reason.empty());
+	const std::shared_ptr<ComputeDevice> device = test_device();
+	std::string error;
+	const std::unique_ptr<GgxFilterGpu> gpu_filter = GgxFilterGpu::create(std::make_shared<const GgxFilter>(8), device, &error);
+	REQUIRE_MESSAGE(gpu_filter, error);
+	CHECK(gpu_filter->apply(test_sky(16), &error).empty());
+	CHECK(error.find("face size") != std::string::npos);
+}
+
+TEST_CASE("GPU GGX: an engine on the Vulkan backend makes the CPU engine's maps, and says which device it uses") {
+	LiveRoomConfig config;
+	config.has_rig = false;
+	config.dense = false;
+	config.has_room = true;
+	config.floorplan.points = { { 0.0, 0.0 }, { 4.0, 0.0 }, { 4.0, 3.0 }, { 0.0, 3.0 } };
+	config.floorplan.ceiling_height_m = 2.5;
+	config.coarse.texel_size_m = 0.05;
+	config.wait_for_ggx_filter = true;
+	LiveRoom cpu_engine, gpu_engine;
+	REQUIRE(cpu_engine.configure(config) == "");
+	config.compute_backend = ComputeBackend::Vulkan;
+	REQUIRE(gpu_engine.configure(config) == "");
+	CHECK(cpu_engine.stats().compute == "CPU");
+	CHECK(gpu_engine.stats().compute.rfind("Vulkan: ", 0) == 0);
+	const RoomMesh *mesh = cpu_engine.room_mesh();
+	REQUIRE(mesh != nullptr);
+	// A varied atlas: every texel its own colour.
+	cv::Mat atlas(mesh->atlas_height, mesh->atlas_width, CV_32FC3);
+	cv::randu(atlas, cv::Scalar::all(0.0), cv::Scalar::all(4.0));
+	const glm::dvec3 at(2.0, 1.2, 1.5);
+	std::shared_ptr<const ProbeMap> maps[2];
+	LiveRoom *engines[2] = { &cpu_engine, &gpu_engine };
+	for (int e = 0; e < 2; e++) {
+		REQUIRE(engines[e]->set_atlas(atlas));
+		const int probe = engines[e]->add_probe(at, 32);
+		engines[e]->render_probes();
+		maps[e] = engines[e]->probe_map(probe);
+		REQUIRE(maps[e] != nullptr);
+		REQUIRE(maps[e]->ggx_mips);
+	}
+	CHECK(gpu_engine.stats().stage_errors == 0);
+	REQUIRE(maps[0]->ggx_chain.size() == maps[1]->ggx_chain.size());
+	// The same faces in (the coarse render runs on the CPU in both), so the chains differ only by
+	// the float rounding of the taps' sums (the first test's bound, values <= 4 here).
+	const double bound = 4.0 * double(shared_ggx_filter(32, true)->sample_count()) * std::ldexp(1.0, -23) * 4.0;
+	for (size_t level = 0; level < maps[0]->ggx_chain.size(); level++) {
+		for (size_t f = 0; f < 6; f++) {
+			CHECK(cv::norm(maps[0]->ggx_chain[level].faces[f], maps[1]->ggx_chain[level].faces[f], cv::NORM_INF) <= bound);
+		}
+	}
+}
