@@ -75,8 +75,9 @@ struct ColorFrame {
 	int frame_index = 0; // The stream's frame counter.
 };
 
-// A depth and a colour frame read together (each carries its own time stamps).
-struct RgbdFrame {
+// A depth and a colour frame grabbed together, as the device gives them (each with its own time
+// stamps, depth in millimetres): capture/capture_sources.cpp makes the core's RgbdFrame of it.
+struct RgbdGrab {
 	DepthFrame depth;
 	ColorFrame color;
 };

@@ -212,7 +212,7 @@ TEST_CASE("openni2 driver: a recording plays back depth in millimetres and RGB c
 		int frames_read = 0;
 		std::string end_error;
 		while (frames_read <= SmallRecording::FRAMES) {
-			DriverResult<RgbdFrame> frame = device.grab(500);
+			DriverResult<RgbdGrab> frame = device.grab(500);
 			if (!frame.ok()) {
 				end_error = frame.error;
 				break;
@@ -291,7 +291,7 @@ TEST_CASE("openni2 driver: closing a recording mid-stream ends its player thread
 		CHECK(thread_count() > threads_before); // its player
 		// Close after 0, 1 or 2 frames: idle, between frames, mid-recording.
 		for (int f = 0; f < cycle % 3; f++) {
-			DriverResult<RgbdFrame> frame = opened.value->grab(1000);
+			DriverResult<RgbdGrab> frame = opened.value->grab(1000);
 			REQUIRE_MESSAGE(frame.ok(), frame.error);
 			CHECK(frame.value.depth.frame_index == f + 1);
 		}

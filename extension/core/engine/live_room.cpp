@@ -231,7 +231,6 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 		return fail(std::string("configuring the live room failed: ") + e.what());
 	}
 	{
-		const std::lock_guard<std::mutex> lock(pose_mutex);
 		tracked.clear();
 	}
 	{
@@ -325,8 +324,7 @@ void LiveRoom::stop_locked() {
 		probes_dirty.notify_all();
 	}
 	{
-		const std::lock_guard<std::mutex> lock(pose_mutex);
-		pose_advanced.notify_all();
+		tracked.wake_all();
 	}
 	room_finder.wake();
 	mesh_inputs.close();

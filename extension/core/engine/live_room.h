@@ -29,6 +29,7 @@
 
 #include "dense_mesh_stage.h"
 #include "mailbox.h"
+#include "pose_history.h"
 #include "room_finder_stage.h"
 
 #include <envmap/dense_render.h>
@@ -348,10 +349,7 @@ private:
 	std::mutex pending_rgb_mutex;
 	std::optional<PendingRgb> pending_rgb;
 
-	// Pose history (SLAM thread writes, coarse thread reads).
-	mutable std::mutex pose_mutex;
-	std::condition_variable pose_advanced;
-	Trajectory tracked;
+	PoseHistory tracked; // the SLAM thread appends, the coarse thread reads (its own lock)
 	DenseLighting dense_lighting; // thread-safe itself
 
 	// Published results.

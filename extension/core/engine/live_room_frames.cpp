@@ -87,12 +87,7 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence) {
 			out->has_pose = slam->integrated_count() > 0; // the model exists, so the pose means something
 			out->world_from_camera = slam->pose();
 			if (result.tracking.state != TrackingState::Lost && out->has_pose) {
-				std::string error;
-				{
-					const std::lock_guard<std::mutex> lock(pose_mutex);
-					tracked.append({ p_frame.timestamp_s, slam->pose() }, &error); // a repeated timestamp is skipped
-				}
-				pose_advanced.notify_all();
+				tracked.append(p_frame.timestamp_s, slam->pose());
 			}
 			fused = result.integrated;
 		} else if (has_truth) {
@@ -158,12 +153,7 @@ bool LiveRoom::fisheye_pose(double p_fisheye_timestamp_s, Pose *r_world_from_fis
 	if (cfg.coarse_poses == PoseSource::GroundTruth) {
 		return fisheye_pose_at(cfg.ground_truth, cfg.rig, p_fisheye_timestamp_s, r_world_from_fisheye, r_error);
 	}
-	const std::lock_guard<std::mutex> lock(pose_mutex);
-	if (tracked.is_empty()) {
-		*r_error = "no tracked RGB-D pose yet";
-		return false;
-	}
-	return fisheye_pose_at(tracked, cfg.rig, p_fisheye_timestamp_s, r_world_from_fisheye, r_error, cfg.fisheye_extrapolation_s);
+	return tracked.fisheye_pose(cfg.rig, p_fisheye_timestamp_s, cfg.fisheye_extrapolation_s, r_world_from_fisheye, r_error);
 }
 
 void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence, bool p_wait_for_pose) {
@@ -181,13 +171,8 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 			// SLAM may not have reached this instant yet: wait for it while it still has frames
 			// to process, at most fisheye_pose_wait_s. The coarse model then follows SLAM's lag
 			// instead of starving; newer fisheye frames meanwhile replace older ones in the mailbox.
-			const double t_rgbd = p_frame.timestamp_s + cfg.rig.fisheye_time_offset_s;
-			const double deadline = now_s() + cfg.fisheye_pose_wait_s;
-			std::unique_lock<std::mutex> lock(pose_mutex);
-			while (!stopping && (tracked.is_empty() || tracked.get_end_s() < t_rgbd) && now_s() < deadline &&
-					frames->rgbd_outstanding()) {
-				pose_advanced.wait_for(lock, std::chrono::milliseconds(10));
-			}
+			tracked.wait_until_reaches(p_frame.timestamp_s + cfg.rig.fisheye_time_offset_s, cfg.fisheye_pose_wait_s,
+					[this] { return !stopping && frames->rgbd_outstanding(); });
 		}
 		Pose pose;
 		std::string error;

@@ -276,8 +276,7 @@ void LiveRoom::update_dense_mesh() {
 }
 
 Trajectory LiveRoom::trajectory() const {
-	const std::lock_guard<std::mutex> lock(pose_mutex);
-	return tracked;
+	return tracked.copy();
 }
 
 const RoomMesh *LiveRoom::room_mesh() const {

@@ -90,7 +90,7 @@ public:
 		if (!device) {
 			return outcome(GrabOutcome::Lost, name() + ": not open");
 		}
-		DriverResult<RgbdFrame> grabbed = device->grab(p_timeout_ms);
+		DriverResult<RgbdGrab> grabbed = device->grab(p_timeout_ms);
 		const auto arrived = std::chrono::steady_clock::now();
 		if (!grabbed.ok()) {
 			return outcome(device->is_disconnected() ? GrabOutcome::Lost : GrabOutcome::Timeout, grabbed.error);

@@ -519,8 +519,8 @@ DriverResult<ColorFrame> OpenNI2Device::grab_color(int p_timeout_ms) {
 	return Result::success(std::move(frame));
 }
 
-DriverResult<RgbdFrame> OpenNI2Device::grab(int p_timeout_ms) {
-	using Result = DriverResult<RgbdFrame>;
+DriverResult<RgbdGrab> OpenNI2Device::grab(int p_timeout_ms) {
+	using Result = DriverResult<RgbdGrab>;
 	using Clock = std::chrono::steady_clock;
 	const Clock::time_point start = Clock::now();
 	DriverResult<DepthFrame> depth = grab_depth(p_timeout_ms);

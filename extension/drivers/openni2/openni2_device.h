@@ -57,7 +57,7 @@ public:
 	DriverResult<DepthFrame> grab_depth(int p_timeout_ms);
 	DriverResult<ColorFrame> grab_color(int p_timeout_ms);
 	// The next depth frame, then the next colour frame, within p_timeout_ms in all.
-	DriverResult<RgbdFrame> grab(int p_timeout_ms);
+	DriverResult<RgbdGrab> grab(int p_timeout_ms);
 
 	DeviceInfo get_info() const; // Serial filled in where the device reports one.
 	bool is_file() const; // Playing back a recording.
