@@ -27,6 +27,23 @@ func test_a_scene_with_no_script_shows_a_reflecting_sphere_over_the_camera_image
 	await _play_and_check(scene, "no_code_scene.png")
 
 
+## Issue #40: the same scene with the maps' GGX prefilter on Vulkan compute (lavapipe here), in
+## the same process as Godot's own Vulkan renderer: it renders as on the CPU, and RigCapture has
+## no warning that the kernels fell back to the CPU.
+func test_the_scene_with_the_vulkan_compute_backend_renders_without_falling_back() -> void:
+	if not rendering:
+		return skip("needs a renderer (rendering suite: --rendering under a display)")
+	if not need_fixture_recording():
+		return
+	var scene: Node3D = load("res://demo_scenes/no_code.tscn").instantiate()
+	var rig = scene.get_node("Rig")
+	rig.recording_path = fixture_recording()
+	rig.compute_backend = 1  # COMPUTE_BACKEND_VULKAN
+	await _play_and_check(scene, "no_code_scene_vulkan.png")
+	for warning in rig.get_warnings():
+		assert_false(warning.contains("compute_backend"), "the GGX prefilter ran on the Vulkan device: %s" % warning)
+
+
 ## Issue #37: README's quick start, followed literally, gave a grey screen. The scene built here
 ## from its step 2 alone: the nodes it names, no NodePath between them, and only the settings it
 ## names (the recording, the room from the recording, the probe's world_environment and Always).
