@@ -151,6 +151,7 @@ TEST_CASE("frame source: a paced player on a clock its owner advances sinks the 
 		}
 	};
 	wait_for(1); // the first frame is due at clock 0
+	CHECK(paced.step().error == "running"); // one reader at a time
 	paced.advance(0.55); // everything to 0.5 s is due at once: the newest of each stream is read
 	wait_for(3);
 	paced.advance(10.0);
@@ -192,6 +193,31 @@ TEST_CASE("frame source: on the wall clock with no drops every frame is sunk, no
 		CHECK(sunk_at_s[i] >= due_s[i] - 1e-3); // never early
 	}
 	CHECK(paced.dropped() == 0);
+
+	// Stopped part way on the wall clock, it goes on from where it stood.
+	paced.rewind();
+	sunk_at_s.clear();
+	due_s.clear();
+	ended = false;
+	const auto restart = std::chrono::steady_clock::now();
+	paced.start(options, [&](SourceFrame &&p_frame) {
+		sunk_at_s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - restart).count());
+		due_s.push_back((p_frame.event.time_s - FIRST_S) / 4.0);
+	});
+	std::this_thread::sleep_for(std::chrono::milliseconds(100));
+	paced.stop();
+	const double stopped_at_s = paced.clock_s();
+	CHECK(stopped_at_s > 0.0);
+	const size_t before = sunk_at_s.size();
+	paced.start(options, [&](SourceFrame &&p_frame) { sunk_at_s.push_back(p_frame.event.time_s - FIRST_S); });
+	CHECK(paced.clock_s() >= stopped_at_s); // the clock goes on, not from 0
+	for (int i = 0; i < 400 && !ended; i++) {
+		std::this_thread::sleep_for(std::chrono::milliseconds(5));
+	}
+	paced.stop();
+	CHECK(ended);
+	CHECK(sunk_at_s.size() == size_t(RGBD_FRAMES + FISHEYE_FRAMES)); // every frame once, across the pause
+	CHECK(sunk_at_s.size() > before);
 
 	paced.rewind();
 	const SourceFrame first = paced.step();

@@ -353,6 +353,7 @@ std::shared_ptr<const FoundRoom> LiveRoom::find_room_now(const std::vector<Fishe
 // at their poses. The room worker calls this without the lifecycle lock: stop_locked joins it
 // before the configuration changes.
 std::shared_ptr<const FoundRoom> LiveRoom::find_room_locked(const std::vector<FisheyeFrame> *p_views) {
+	const auto start = std::chrono::steady_clock::now();
 	if (!running) {
 		update_dense_mesh();
 	}
@@ -380,7 +381,7 @@ std::shared_ptr<const FoundRoom> LiveRoom::find_room_locked(const std::vector<Fi
 			observed.fisheye_views.push_back({ frame.image, world_from_fisheye });
 		}
 	}
-	return room_finder.estimate(std::move(observed), slam != nullptr, slam ? slam->integrated_count() : 0, mesh ? mesh->version : 0, cfg.room_estimation);
+	return room_finder.estimate(std::move(observed), slam != nullptr, slam ? slam->integrated_count() : 0, mesh ? mesh->version : 0, cfg.room_estimation, start);
 }
 
 void LiveRoom::room_worker() {

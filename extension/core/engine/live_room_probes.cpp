@@ -163,6 +163,11 @@ std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dve
 		renderer->render_map(p_size, snapshot ? &coarse_part : nullptr, dense_input(true), objects.get(), previous.get(), probe ? &probe->dense_faces : nullptr,
 				map.get());
 		map->total_ms = ms_since(start);
+		if (renderer->gpu_failures() > 0) {
+			const std::string problem = renderer->gpu_problem();
+			const std::lock_guard<std::mutex> lock(stats_mutex);
+			compute_note = std::string("CPU (") + compute_backend_name(cfg.compute_backend) + ": " + problem + ")";
+		}
 		{
 			const std::lock_guard<std::mutex> lock(probe_mutex);
 			const auto it = probes.find(p_probe);

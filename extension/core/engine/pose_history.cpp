@@ -1,5 +1,6 @@
 #include "pose_history.h"
 
+#include <algorithm>
 #include <chrono>
 
 namespace roomprobe {
@@ -33,7 +34,9 @@ bool PoseHistory::fisheye_pose(const Rig &p_rig, double p_fisheye_timestamp_s, d
 }
 
 void PoseHistory::wait_until_reaches(double p_time_s, double p_max_wait_s, const std::function<bool()> &p_keep_waiting) const {
-	const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(p_max_wait_s));
+	// At most an hour: a longer (or infinite) wait would overflow the clock's nanoseconds.
+	const double wait_s = std::min(p_max_wait_s, 3600.0);
+	const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(wait_s));
 	std::unique_lock<std::mutex> lock(mutex);
 	while ((poses.is_empty() || poses.get_end_s() < p_time_s) && std::chrono::steady_clock::now() < deadline && p_keep_waiting()) {
 		advanced.wait_for(lock, std::chrono::milliseconds(10));

@@ -41,8 +41,7 @@ std::vector<FisheyeFrame> RoomFinderStage::views() const {
 }
 
 std::shared_ptr<const FoundRoom> RoomFinderStage::estimate(SweepObservations p_observed, bool p_has_dense, size_t p_fused_frames, uint64_t p_mesh_version,
-		const RoomEstimationOptions &p_options) {
-	const auto start = std::chrono::steady_clock::now();
+		const RoomEstimationOptions &p_options, std::chrono::steady_clock::time_point p_start) {
 	auto found = std::make_shared<FoundRoom>();
 	found->fisheye_views = p_observed.fisheye_views.size();
 	if (!p_has_dense) {
@@ -52,7 +51,7 @@ std::shared_ptr<const FoundRoom> RoomFinderStage::estimate(SweepObservations p_o
 	}
 	found->samples = std::move(p_observed.samples);
 	found->fused_frames = p_fused_frames;
-	found->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+	found->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - p_start).count();
 	return publish(std::move(found), p_mesh_version);
 }
 

@@ -8,6 +8,7 @@
 #include <room/room_from_sweep.h>
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -40,8 +41,9 @@ public:
 	// Estimates from p_observed (the caller fills everything but the fisheye views' poses' source)
 	// and publishes the estimate with the dense mesh version it saw. p_has_dense false: an estimate
 	// that says dense SLAM is needed.
+	// p_start: when gathering p_observed began (FoundRoom::seconds counts from it).
 	std::shared_ptr<const FoundRoom> estimate(SweepObservations p_observed, bool p_has_dense, size_t p_fused_frames, uint64_t p_mesh_version,
-			const RoomEstimationOptions &p_options);
+			const RoomEstimationOptions &p_options, std::chrono::steady_clock::time_point p_start);
 	// Publishes an estimate that failed with p_message.
 	std::shared_ptr<const FoundRoom> publish_failure(const std::string &p_message);
 	std::shared_ptr<const FoundRoom> found() const;

@@ -2,6 +2,7 @@
 
 #include <spirv/ggx_prefilter.h>
 
+#include <algorithm>
 #include <cstring>
 
 namespace roomprobe {
@@ -30,6 +31,18 @@ std::unique_ptr<GgxFilterGpu> GgxFilterGpu::create(std::shared_ptr<const GgxFilt
 	out->compute = std::move(p_device);
 	out->filter = std::move(p_filter);
 	const ComputeDevice &device = *out->compute;
+	// The device's limits: a level's workgroups, and each storage buffer's range.
+	const VkPhysicalDeviceLimits &limits = device.limits();
+	for (const GgxFilter::Level &level : out->filter->levels) {
+		const uint64_t groups = (uint64_t(level.first.size() - 1) + GROUP_SIZE - 1) / GROUP_SIZE;
+		const uint64_t largest = std::max<uint64_t>(level.texel.size() * sizeof(uint32_t), uint64_t(level.first.size() - 1) * 3 * sizeof(float));
+		if (groups > limits.maxComputeWorkGroupCount[0] || largest > limits.maxStorageBufferRange ||
+				out->filter->pyramid_texels() * 3 * sizeof(float) > limits.maxStorageBufferRange) {
+			*r_error = "a " + std::to_string(out->filter->face_size()) + "^2 GGX filter exceeds the Vulkan device's limits (" + std::to_string(groups) +
+					" workgroups, " + std::to_string(largest) + "-byte buffers)";
+			return nullptr;
+		}
+	}
 	out->kernel = device.make_kernel(spirv::ggx_prefilter, sizeof(spirv::ggx_prefilter) / sizeof(uint32_t), 5, sizeof(uint32_t), r_error);
 	out->pyramid = device.make_buffer(out->filter->pyramid_texels() * 3 * sizeof(float), r_error);
 	if (!out->kernel || !out->pyramid) {

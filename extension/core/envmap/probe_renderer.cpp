@@ -165,20 +165,37 @@ bool ProbeRenderer::gpu_chain(const GgxFilter *p_filter, const std::shared_ptr<c
 	std::string error;
 	{
 		const std::lock_guard<std::mutex> lock(gpu_mutex);
-		std::shared_ptr<GgxFilterGpu> &slot = gpu_filters[p_filter->face_size()];
+		const int size = p_filter->face_size();
+		const auto refused = gpu_refused.find(size);
+		if (refused != gpu_refused.end()) {
+			gpu_failed++;
+			return false;
+		}
+		std::shared_ptr<GgxFilterGpu> &slot = gpu_filters[size];
 		if (!slot) {
 			slot = GgxFilterGpu::create(p_shared, settings_.compute, &error);
+			if (!slot) {
+				gpu_refused[size] = error; // a filter the device cannot hold is not uploaded again every map
+				gpu_error = error;
+				gpu_failed++;
+				return false;
+			}
 		}
 		gpu = slot;
 	}
-	if (gpu) {
-		*r_chain = gpu->apply(io_map->cubemap, &error);
-	}
-	if (!gpu || r_chain->empty()) {
+	*r_chain = gpu->apply(io_map->cubemap, &error);
+	if (r_chain->empty()) {
+		const std::lock_guard<std::mutex> lock(gpu_mutex);
+		gpu_error = error;
 		gpu_failed++;
 		return false;
 	}
 	return true;
+}
+
+std::string ProbeRenderer::gpu_problem() const {
+	const std::lock_guard<std::mutex> lock(gpu_mutex);
+	return gpu_error;
 }
 
 } // namespace roomprobe

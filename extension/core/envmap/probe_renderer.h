@@ -108,6 +108,7 @@ public:
 			DenseFaceCache *io_faces, ProbeMap *io_map) const;
 
 	size_t gpu_failures() const { return gpu_failed.load(); }
+	std::string gpu_problem() const; // why the last map that asked for the device was made on the CPU
 
 private:
 	void build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map) const;
@@ -118,6 +119,8 @@ private:
 	std::unique_ptr<CoarseCubemapRenderer> coarse_;
 	mutable std::mutex gpu_mutex; // the GPU filters, one per face size, made at the first map
 	mutable std::map<int, std::shared_ptr<GgxFilterGpu>> gpu_filters;
+	mutable std::map<int, std::string> gpu_refused; // face sizes the device cannot filter, and why (not tried again)
+	mutable std::string gpu_error;
 	mutable std::atomic<size_t> gpu_failed{ 0 };
 };
 

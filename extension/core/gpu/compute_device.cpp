@@ -54,6 +54,9 @@ const char *compute_backend_name(ComputeBackend p_backend) {
 
 GpuBuffer::~GpuBuffer() {
 	const vk::Api &api = device->api();
+	if (device->is_lost()) {
+		api.DeviceWaitIdle(device->handle()); // a batch that did not finish may still use it
+	}
 	if (mapped != nullptr) {
 		api.UnmapMemory(device->handle(), memory);
 	}
@@ -116,6 +119,7 @@ std::string ComputeDevice::open(const ComputeDeviceOptions &p_options) {
 				family = f;
 				best_rank = rank;
 				device_name = properties.deviceName;
+				device_limits = properties.limits;
 				cpu = properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
 				break;
 			}
@@ -224,7 +228,10 @@ std::unique_ptr<GpuBuffer> ComputeDevice::make_buffer(size_t p_bytes, std::strin
 		*r_error = failed("vkAllocateMemory", result) + " (" + std::to_string(needs.size) + " bytes)";
 		return nullptr;
 	}
-	vk_api.BindBufferMemory(device, out->buffer, out->memory, 0);
+	if ((result = vk_api.BindBufferMemory(device, out->buffer, out->memory, 0)) != VK_SUCCESS) {
+		*r_error = failed("vkBindBufferMemory", result);
+		return nullptr;
+	}
 	if ((result = vk_api.MapMemory(device, out->memory, 0, VK_WHOLE_SIZE, 0, &out->mapped)) != VK_SUCCESS) {
 		out->mapped = nullptr;
 		*r_error = failed("vkMapMemory", result);
@@ -282,11 +289,21 @@ std::string ComputeDevice::run(const std::vector<GpuDispatch> &p_dispatches) con
 		return "a batch of " + std::to_string(p_dispatches.size()) + " dispatches (at most " + std::to_string(MAX_SETS) + ")";
 	}
 	const std::lock_guard<std::mutex> lock(queue_mutex);
-	vk_api.ResetDescriptorPool(device, descriptors, 0);
-	vk_api.ResetCommandBuffer(commands, 0);
+	if (lost) {
+		return "the Vulkan device was lost (an earlier batch did not finish)";
+	}
+	VkResult reset = vk_api.ResetDescriptorPool(device, descriptors, 0);
+	if (reset == VK_SUCCESS) {
+		reset = vk_api.ResetCommandBuffer(commands, 0);
+	}
+	if (reset != VK_SUCCESS) {
+		return failed("resetting the command buffer", reset);
+	}
 	VkCommandBufferBeginInfo begin = vk_struct<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
 	begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-	vk_api.BeginCommandBuffer(commands, &begin);
+	if ((reset = vk_api.BeginCommandBuffer(commands, &begin)) != VK_SUCCESS) {
+		return failed("vkBeginCommandBuffer", reset);
+	}
 	for (size_t d = 0; d < p_dispatches.size(); d++) {
 		const GpuDispatch &dispatch = p_dispatches[d];
 		const GpuKernel &kernel = *dispatch.kernel;
@@ -330,7 +347,9 @@ std::string ComputeDevice::run(const std::vector<GpuDispatch> &p_dispatches) con
 	to_host.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
 	to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
 	vk_api.CmdPipelineBarrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &to_host, 0, nullptr, 0, nullptr);
-	vk_api.EndCommandBuffer(commands);
+	if ((reset = vk_api.EndCommandBuffer(commands)) != VK_SUCCESS) {
+		return failed("vkEndCommandBuffer", reset);
+	}
 	VkSubmitInfo submit = vk_struct<VkSubmitInfo>(VK_STRUCTURE_TYPE_SUBMIT_INFO);
 	submit.commandBufferCount = 1;
 	submit.pCommandBuffers = &commands;
@@ -341,7 +360,11 @@ std::string ComputeDevice::run(const std::vector<GpuDispatch> &p_dispatches) con
 	}
 	constexpr uint64_t TIMEOUT_NS = 10'000'000'000ull; // a hung device is an error, not a hang
 	result = vk_api.WaitForFences(device, 1, &fence, VK_TRUE, TIMEOUT_NS);
-	return result == VK_SUCCESS ? std::string() : failed("vkWaitForFences", result);
+	if (result != VK_SUCCESS) {
+		lost = true; // the batch may still run: nothing it uses may be reset or freed by a next one
+		return failed("vkWaitForFences", result);
+	}
+	return std::string();
 }
 
 std::shared_ptr<ComputeDevice> shared_compute_device(ComputeBackend p_backend, std::string *r_reason) {

@@ -11,6 +11,7 @@
 
 #include "vulkan_api.h"
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -102,6 +103,10 @@ public:
 	std::string run(const std::vector<GpuDispatch> &p_dispatches) const;
 
 	const vk::Api &api() const { return vk_api; }
+	const VkPhysicalDeviceLimits &limits() const { return device_limits; }
+	// A batch whose wait failed (timeout, device lost) may still be running: the device refuses
+	// every later batch, and the stages stay on the CPU.
+	bool is_lost() const { return lost.load(); }
 	VkDevice handle() const { return device; }
 
 private:
@@ -119,6 +124,8 @@ private:
 	VkFence fence = VK_NULL_HANDLE;
 	VkDescriptorPool descriptors = VK_NULL_HANDLE;
 	VkPhysicalDeviceMemoryProperties memory{};
+	VkPhysicalDeviceLimits device_limits{};
+	mutable std::atomic<bool> lost{ false };
 	std::string device_name;
 	bool cpu = false;
 	mutable std::mutex queue_mutex;

@@ -29,7 +29,8 @@ bool take(T *r_function, PFN_vkVoidFunction p_found, const char *p_name, std::st
 bool load_loader(Api *r_api, std::string *r_error) {
 	void *library = loader_library();
 	if (library == nullptr) {
-		*r_error = "no Vulkan loader (libvulkan.so.1 could not be opened: " + std::string(dlerror() ? dlerror() : "not found") + ")";
+		const char *why = dlerror(); // once: a second call returns null
+		*r_error = "no Vulkan loader (libvulkan.so.1 could not be opened: " + std::string(why != nullptr ? why : "not found") + ")";
 		return false;
 	}
 	r_api->GetInstanceProcAddr = reinterpret_cast<PFN_vkGetInstanceProcAddr>(dlsym(library, "vkGetInstanceProcAddr"));
@@ -40,7 +41,8 @@ bool load_loader(Api *r_api, std::string *r_error) {
 	r_error->clear();
 	const auto global = [&](const char *p_name) { return r_api->GetInstanceProcAddr(VK_NULL_HANDLE, p_name); };
 	take(&r_api->CreateInstance, global("vkCreateInstance"), "vkCreateInstance", r_error);
-	take(&r_api->EnumerateInstanceVersion, global("vkEnumerateInstanceVersion"), "vkEnumerateInstanceVersion", r_error);
+	// Optional: a Vulkan 1.0 loader has none.
+	r_api->EnumerateInstanceVersion = reinterpret_cast<PFN_vkEnumerateInstanceVersion>(global("vkEnumerateInstanceVersion"));
 	return r_error->empty();
 }
 

@@ -1,5 +1,8 @@
 #include "paced_player.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace roomprobe {
 
 void PacedPlayer::open(RecordingPlayer p_player) {
@@ -7,6 +10,7 @@ void PacedPlayer::open(RecordingPlayer p_player) {
 	const std::lock_guard<std::mutex> lock(mutex);
 	player = std::move(p_player);
 	player.rewind();
+	pass++;
 	clock = 0.0;
 	dropped_count = 0;
 	end_reached = false;
@@ -17,6 +21,8 @@ void PacedPlayer::start(const PacedOptions &p_options, Sink p_sink) {
 	{
 		const std::lock_guard<std::mutex> lock(mutex);
 		options = p_options;
+		// A speed of 0, below 0 or not a number would stop the wall clock (or run it backwards).
+		options.speed = std::isfinite(options.speed) ? std::clamp(options.speed, 1e-3, 1e6) : 1.0;
 		sink = std::move(p_sink);
 		stopping = false;
 		running = true;
@@ -30,9 +36,15 @@ void PacedPlayer::start(const PacedOptions &p_options, Sink p_sink) {
 void PacedPlayer::stop() {
 	{
 		const std::lock_guard<std::mutex> lock(mutex);
+		if (running && options.clock == PaceClock::Wall) {
+			clock = elapsed_locked(); // a later start() goes on from here
+		}
 		stopping = true;
 	}
 	wake.notify_all();
+	if (thread.joinable() && thread.get_id() == std::this_thread::get_id()) {
+		return; // from the sink or on_end: the thread ends after it; the owner's stop() or the destructor joins
+	}
 	if (thread.joinable()) {
 		thread.join();
 	}
@@ -52,6 +64,7 @@ void PacedPlayer::rewind() {
 	{
 		const std::lock_guard<std::mutex> lock(mutex);
 		player.rewind();
+		pass++;
 		clock = 0.0;
 		dropped_count = 0;
 		end_reached = false;
@@ -96,6 +109,11 @@ SourceFrame PacedPlayer::step(bool p_loop) {
 	size_t event = 0;
 	{
 		const std::lock_guard<std::mutex> lock(mutex);
+		if (running) {
+			SourceFrame busy;
+			busy.error = "running";
+			return busy;
+		}
 		if (player.at_end() && p_loop) {
 			player.rewind();
 			end_reached = false;
@@ -135,20 +153,29 @@ void PacedPlayer::run() {
 			if (options.clock == PaceClock::Manual) {
 				wake.wait(lock);
 			} else {
-				const double wait_s = (player.next_due_s() - elapsed) / std::max(1e-9, options.speed);
+				// At most 0.1 s at a time: the clock is looked at again, whatever the speed.
+				const double wait_s = std::clamp((player.next_due_s() - elapsed) / options.speed, 0.0, 0.1);
 				wake.wait_for(lock, std::chrono::duration<double>(wait_s));
 			}
 			continue;
 		}
 		const double start_s = player.start_s();
-		const std::vector<PlaybackEvent> &events = player.events();
+		const std::vector<PlaybackEvent> &events = player.events(); // open() joins first: never replaced meanwhile
+		const std::chrono::steady_clock::time_point batch_wall_start = wall_start;
+		const uint64_t batch_pass = pass;
 		lock.unlock();
 		for (size_t e : due) {
 			SourceFrame frame = player.read(e);
 			if (options.clock == PaceClock::Wall) {
-				const double due_s = (events[e].time_s - start_s) / std::max(1e-9, options.speed);
-				const double now_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+				const double due_s = (events[e].time_s - start_s) / options.speed;
+				const double now_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - batch_wall_start).count();
 				frame.late_ms = 1000.0 * (now_s - due_s) - frame.read_ms;
+			}
+			{
+				const std::lock_guard<std::mutex> check(mutex);
+				if (pass != batch_pass) {
+					break; // rewound meanwhile: the rest of the batch is the old pass's
+				}
 			}
 			sink(std::move(frame));
 		}

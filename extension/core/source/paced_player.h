@@ -24,7 +24,7 @@ enum class PaceClock {
 
 struct PacedOptions {
 	PaceClock clock = PaceClock::Manual;
-	double speed = 1.0; // Wall: recording seconds per second
+	double speed = 1.0; // Wall: recording seconds per second, held to [0.001, 1e6]
 	DropPolicy drop = DropPolicy::KeepNewest;
 	std::function<void()> on_end; // called on the thread when the last frame has been sunk
 };
@@ -47,7 +47,7 @@ public:
 
 	// Starts the thread at the current position and clock. Frames go to p_sink, in time order.
 	void start(const PacedOptions &p_options, Sink p_sink);
-	void stop(); // joins; frames being read are sunk first
+	void stop(); // joins; frames being read are sunk first. From the sink itself: stops without joining
 	bool is_running() const { return thread.joinable(); }
 
 	void advance(double p_delta_s); // Manual clock
@@ -57,7 +57,8 @@ public:
 	double clock_s() const;
 
 	// No thread running: reads the next frame, sets the clock to its time and moves on. At the
-	// end: ok false, error "end". p_loop: at the end, rewinds first.
+	// end: ok false, error "end"; while the thread runs: ok false, error "running". p_loop: at the
+	// end, rewinds first.
 	SourceFrame step(bool p_loop = false);
 	bool at_end() const;
 	size_t position() const; // the next event to read (thread-safe)
@@ -78,6 +79,7 @@ private:
 	double clock = 0.0; // Manual: recording seconds since the first event
 	std::chrono::steady_clock::time_point wall_start; // Wall: when the clock was at 0
 	size_t dropped_count = 0;
+	uint64_t pass = 0; // counts rewinds and opens: a batch read before one is not sunk after it
 };
 
 } // namespace roomprobe

@@ -19,8 +19,8 @@
 namespace roomprobe {
 
 struct PlayerOptions {
-	double max_seconds = 0.0; // play only the events this long after the first (0: all)
-	size_t max_rgbd_frames = 0; // stop before the RGB-D event after this many (0: all)
+	double max_seconds = 0.0; // play only the events this long after the recording's first, of either stream (0: all)
+	size_t max_rgbd_frames = 0; // stop before the RGB-D event after this many played (0: all; no limit when rgbd is false)
 	bool rgbd = true, fisheye = true; // the streams played (the others' events are left out)
 };
 
