@@ -121,6 +121,16 @@ TEST_CASE("GPU GGX: an engine on the Vulkan backend makes the CPU engine's maps,
 		REQUIRE(maps[e]->ggx_mips);
 	}
 	CHECK(gpu_engine.stats().stage_errors == 0);
+	// The same atlas again: a new map whose faces are all the last one's (nothing filtered again,
+	// converted or uploaded).
+	REQUIRE(gpu_engine.set_atlas(atlas));
+	gpu_engine.render_probes();
+	const std::shared_ptr<const ProbeMap> again = gpu_engine.probe_map(maps[1]->probe);
+	REQUIRE(again != nullptr);
+	CHECK(again->version == maps[1]->version + 1);
+	for (size_t f = 0; f < 6; f++) {
+		CHECK(again->gpu_faces[f] == maps[1]->gpu_faces[f]);
+	}
 	REQUIRE(maps[0]->ggx_chain.size() == maps[1]->ggx_chain.size());
 	// The same faces in (the coarse render runs on the CPU in both), so the chains differ only by
 	// the float rounding of the taps' sums (the first test's bound, values <= 4 here).

@@ -48,7 +48,14 @@ std::unique_ptr<GgxFilterGpu> GgxFilterGpu::create(std::shared_ptr<const GgxFilt
 	if (!out->kernel || !out->pyramid) {
 		return nullptr;
 	}
+	for (int f = 0; f < 6; f++) {
+		out->reads[size_t(f)] = uint8_t(1u << f); // level 0 is the source face itself
+	}
 	for (const GgxFilter::Level &level : out->filter->levels) {
+		const size_t face_texels = size_t(level.size) * size_t(level.size);
+		for (size_t t = 0; t < level.source_faces.size(); t++) {
+			out->reads[t / face_texels] |= level.source_faces[t];
+		}
 		Level gpu;
 		gpu.size = level.size;
 		gpu.texels = uint32_t(level.first.size() - 1);
@@ -60,6 +67,14 @@ std::unique_ptr<GgxFilterGpu> GgxFilterGpu::create(std::shared_ptr<const GgxFilt
 			return nullptr;
 		}
 		out->levels.push_back(std::move(gpu));
+	}
+	return out;
+}
+
+uint8_t GgxFilterGpu::dependent_faces(uint8_t p_changed_faces) const {
+	uint8_t out = 0;
+	for (size_t f = 0; f < 6; f++) {
+		out |= (reads[f] & p_changed_faces) ? uint8_t(1u << f) : uint8_t(0);
 	}
 	return out;
 }

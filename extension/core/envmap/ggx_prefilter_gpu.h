@@ -8,6 +8,8 @@
 
 #include <gpu/compute_device.h>
 
+#include <array>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -25,6 +27,9 @@ public:
 	// The chain of p_source (level 0 shares its pixels), as GgxFilter::apply(p_source) gives it.
 	// Empty, with r_error, when the device fails or p_source is not of face_size().
 	std::vector<Cubemap> apply(const Cubemap &p_source, std::string *r_error) const;
+	// The output faces (a bit each) some level of which reads a source face of p_changed_faces:
+	// the others come out as they were, so a map need not convert or upload them again.
+	uint8_t dependent_faces(uint8_t p_changed_faces) const;
 
 private:
 	GgxFilterGpu() = default;
@@ -38,6 +43,7 @@ private:
 	std::unique_ptr<GpuKernel> kernel;
 	std::unique_ptr<GpuBuffer> pyramid;
 	std::vector<Level> levels;
+	std::array<uint8_t, 6> reads{}; // per output face: the source faces its levels read
 	mutable std::mutex mutex; // one map at a time through the pyramid and result buffers
 };
 

@@ -141,8 +141,9 @@ void ProbeRenderer::build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map
 	const uint8_t source_changed = same_kind ? cubemap_changed_faces(p_previous->cubemap, io_map->cubemap) : uint8_t(0x3F);
 	uint8_t chain_changed = source_changed;
 	std::vector<Cubemap> chain;
-	if (filter && settings_.compute && gpu_chain(filter.get(), filter, io_map, &chain)) {
-		chain_changed = 0x3F; // the device filters whole chains
+	// The device filters whole chains; with nothing changed the CPU path copies the previous one.
+	if (filter && settings_.compute && source_changed != 0 && gpu_chain(filter.get(), filter, source_changed, io_map, &chain, &chain_changed)) {
+		chain_changed = same_kind ? chain_changed : uint8_t(0x3F);
 	} else if (filter) {
 		chain = filter->apply(io_map->cubemap, same_kind ? p_previous->ggx_chain : std::vector<Cubemap>{}, source_changed, &chain_changed);
 	} else {
@@ -160,7 +161,8 @@ void ProbeRenderer::build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map
 	}
 }
 
-bool ProbeRenderer::gpu_chain(const GgxFilter *p_filter, const std::shared_ptr<const GgxFilter> &p_shared, ProbeMap *io_map, std::vector<Cubemap> *r_chain) const {
+bool ProbeRenderer::gpu_chain(const GgxFilter *p_filter, const std::shared_ptr<const GgxFilter> &p_shared, uint8_t p_source_changed, ProbeMap *io_map,
+		std::vector<Cubemap> *r_chain, uint8_t *r_changed) const {
 	std::shared_ptr<GgxFilterGpu> gpu;
 	std::string error;
 	{
@@ -184,6 +186,7 @@ bool ProbeRenderer::gpu_chain(const GgxFilter *p_filter, const std::shared_ptr<c
 		gpu = slot;
 	}
 	*r_chain = gpu->apply(io_map->cubemap, &error);
+	*r_changed = gpu->dependent_faces(p_source_changed);
 	if (r_chain->empty()) {
 		const std::lock_guard<std::mutex> lock(gpu_mutex);
 		gpu_error = error;

@@ -113,7 +113,10 @@ public:
 private:
 	void build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map) const;
 	// The GGX chain of io_map's cubemap on the compute device (false: do it on the CPU).
-	bool gpu_chain(const GgxFilter *p_filter, const std::shared_ptr<const GgxFilter> &p_shared, ProbeMap *io_map, std::vector<Cubemap> *r_chain) const;
+	// r_changed: the output faces that can differ from a previous chain whose source differs in
+	// p_source_changed.
+	bool gpu_chain(const GgxFilter *p_filter, const std::shared_ptr<const GgxFilter> &p_shared, uint8_t p_source_changed, ProbeMap *io_map,
+			std::vector<Cubemap> *r_chain, uint8_t *r_changed) const;
 
 	ProbeRenderSettings settings_;
 	std::unique_ptr<CoarseCubemapRenderer> coarse_;
