@@ -2,6 +2,7 @@
 
 #include "ggx_prefilter.h"
 #include "ggx_prefilter_gpu.h"
+#include "sh_project_gpu.h"
 
 #include <tbb/parallel_for.h>
 
@@ -119,10 +120,10 @@ void ProbeRenderer::render_map(int p_size, const CoarseMapInput *p_coarse, const
 		// Lit by the probe's previous map when it has one (it holds the objects too), else by
 		// this map's room alone.
 		const bool reuse = p_previous != nullptr && p_previous->cubemap.size == p_size;
-		const ShCoefficients light = reuse ? p_previous->sh : project_sh(io_map->cubemap);
+		const ShCoefficients light = reuse ? p_previous->sh : project(io_map->cubemap);
 		io_map->objects = p_objects->draw(io_map->position, light, reuse ? &p_previous->cubemap : nullptr, &io_map->cubemap);
 	}
-	io_map->sh = project_sh(io_map->cubemap);
+	io_map->sh = project(io_map->cubemap);
 	io_map->sh_ms = ms_since(t) - io_map->objects.milliseconds;
 	t = Clock::now();
 	build_gpu_faces(p_previous, io_map);
@@ -194,6 +195,40 @@ bool ProbeRenderer::gpu_chain(const GgxFilter *p_filter, const std::shared_ptr<c
 		return false;
 	}
 	return true;
+}
+
+ShCoefficients ProbeRenderer::project(const Cubemap &p_cubemap) const {
+	if (!settings_.compute || !is_valid_cubemap(p_cubemap)) {
+		return project_sh(p_cubemap);
+	}
+	const int size = std::min(p_cubemap.size, SH_PROJECTION_FACE_SIZE);
+	std::shared_ptr<ShProjectorGpu> gpu;
+	std::string error;
+	{
+		const std::lock_guard<std::mutex> lock(gpu_mutex);
+		std::shared_ptr<ShProjectorGpu> &slot = gpu_sh[size];
+		if (!slot) {
+			slot = ShProjectorGpu::create(size, settings_.compute, &error);
+		}
+		gpu = slot;
+		if (!gpu) {
+			gpu_sh.erase(size); // not kept: it is small, and tried again at the next map
+			note_gpu_failure(error);
+			return project_sh(p_cubemap);
+		}
+	}
+	ShCoefficients sh;
+	if (!gpu->project(p_cubemap, &sh, &error)) {
+		const std::lock_guard<std::mutex> lock(gpu_mutex);
+		note_gpu_failure(error);
+		return project_sh(p_cubemap);
+	}
+	return sh;
+}
+
+void ProbeRenderer::note_gpu_failure(const std::string &p_error) const {
+	gpu_error = p_error;
+	gpu_failed++;
 }
 
 std::string ProbeRenderer::gpu_problem() const {

@@ -29,6 +29,7 @@ namespace roomprobe {
 
 class GgxFilter;
 class GgxFilterGpu;
+class ShProjectorGpu;
 
 // One environment map at one probe: the float faces, 25 SH coefficients, and the faces as Godot
 // uploads them (RGBA half floats with the whole mip chain, level 0 first: the GGX prefiltered
@@ -112,6 +113,9 @@ public:
 
 private:
 	void build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map) const;
+	// project_sh, on the compute device when there is one (the CPU when it fails).
+	ShCoefficients project(const Cubemap &p_cubemap) const;
+	void note_gpu_failure(const std::string &p_error) const; // under gpu_mutex
 	// The GGX chain of io_map's cubemap on the compute device (false: do it on the CPU).
 	// r_changed: the output faces that can differ from a previous chain whose source differs in
 	// p_source_changed.
@@ -122,6 +126,7 @@ private:
 	std::unique_ptr<CoarseCubemapRenderer> coarse_;
 	mutable std::mutex gpu_mutex; // the GPU filters, one per face size, made at the first map
 	mutable std::map<int, std::shared_ptr<GgxFilterGpu>> gpu_filters;
+	mutable std::map<int, std::shared_ptr<ShProjectorGpu>> gpu_sh;
 	mutable std::map<int, std::string> gpu_refused; // face sizes the device cannot filter, and why (not tried again)
 	mutable std::string gpu_error;
 	mutable std::atomic<size_t> gpu_failed{ 0 };

@@ -118,25 +118,34 @@ std::shared_ptr<const ShTexelTable> sh_texel_table(int p_size) {
 
 } // namespace
 
+std::shared_ptr<const std::vector<float>> sh_texel_weights(int p_size) {
+	const std::shared_ptr<const ShTexelTable> table = sh_texel_table(p_size);
+	return std::shared_ptr<const std::vector<float>>(table, &table->weights);
+}
+
+std::array<cv::Mat, 6> sh_projection_faces(const Cubemap &p_cubemap, int p_max_face_size) {
+	// Five bands vary over tens of degrees: box-filtering the faces down first changes the
+	// coefficients by the texel-centre quadrature error of the smaller size (a few 1e-4 at 64^2),
+	// and costs a sixteenth of the products at 256^2.
+	if (p_max_face_size <= 0 || p_cubemap.size <= p_max_face_size) {
+		return p_cubemap.faces;
+	}
+	std::array<cv::Mat, 6> small;
+	for (int f = 0; f < 6; f++) {
+		cv::resize(p_cubemap.faces[size_t(f)], small[size_t(f)], cv::Size(p_max_face_size, p_max_face_size), 0.0, 0.0, cv::INTER_AREA);
+	}
+	return small;
+}
+
 ShCoefficients project_sh(const Cubemap &p_cubemap, int p_max_face_size) {
 	ShCoefficients total;
 	total.fill(glm::dvec3(0.0));
 	if (!is_valid_cubemap(p_cubemap)) {
 		return total;
 	}
-	// Five bands vary over tens of degrees: box-filtering the faces down first changes the
-	// coefficients by the texel-centre quadrature error of the smaller size (a few 1e-4 at 64^2),
-	// and costs a sixteenth of the products at 256^2.
-	int n = p_cubemap.size;
-	std::array<cv::Mat, 6> small;
-	const std::array<cv::Mat, 6> *faces = &p_cubemap.faces;
-	if (p_max_face_size > 0 && n > p_max_face_size) {
-		for (int f = 0; f < 6; f++) {
-			cv::resize(p_cubemap.faces[size_t(f)], small[size_t(f)], cv::Size(p_max_face_size, p_max_face_size), 0.0, 0.0, cv::INTER_AREA);
-		}
-		n = p_max_face_size;
-		faces = &small;
-	}
+	const std::array<cv::Mat, 6> small = sh_projection_faces(p_cubemap, p_max_face_size);
+	const std::array<cv::Mat, 6> *faces = &small;
+	const int n = small[0].cols;
 	const std::shared_ptr<const ShTexelTable> table = sh_texel_table(n);
 	std::vector<ShCoefficients> rows(size_t(6 * n));
 	tbb::parallel_for(tbb::blocked_range<int>(0, 6 * n), [&](const tbb::blocked_range<int> &p_rows) {

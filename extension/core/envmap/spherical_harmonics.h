@@ -23,6 +23,8 @@
 #include <glm/vec3.hpp>
 
 #include <array>
+#include <memory>
+#include <vector>
 
 namespace roomprobe {
 
@@ -48,6 +50,11 @@ std::array<double, SH_COEFFICIENTS> sh_basis(const glm::dvec3 &p_direction);
 // y_i dOmega of each size is computed once and kept.
 inline constexpr int SH_PROJECTION_FACE_SIZE = 64;
 ShCoefficients project_sh(const Cubemap &p_cubemap, int p_max_face_size = SH_PROJECTION_FACE_SIZE);
+// project_sh's parts, shared with its GPU twin (sh_project_gpu.h): the faces it projects (box-
+// filtered to p_max_face_size when larger), and y_i dOmega of every texel of a p_size cubemap,
+// [face][v][u][i] (kept per size, like project_sh's).
+std::array<cv::Mat, 6> sh_projection_faces(const Cubemap &p_cubemap, int p_max_face_size = SH_PROJECTION_FACE_SIZE);
+std::shared_ptr<const std::vector<float>> sh_texel_weights(int p_size);
 
 // sum_i c_i y_i(p_direction): the band-limited function at a direction.
 glm::dvec3 evaluate_sh(const ShCoefficients &p_coefficients, const glm::dvec3 &p_direction);

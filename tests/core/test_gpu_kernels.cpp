@@ -1,10 +1,11 @@
-// The Vulkan compute backend (gpu/compute_device.h) and its first kernel, the GGX prefilter's
-// gather (envmap/ggx_prefilter_gpu.h), against the CPU's chain. CI runs it on Mesa's lavapipe (a
+// The Vulkan compute backend (gpu/compute_device.h) and its kernels, the GGX prefilter's gather
+// (envmap/ggx_prefilter_gpu.h) and SH projection (envmap/sh_project_gpu.h), against their CPU twins. CI runs it on Mesa's lavapipe (a
 // CPU device): without a Vulkan device the test fails, naming why, rather than skip.
 
 #include "engine/live_room.h"
 #include "envmap/ggx_prefilter.h"
 #include "envmap/ggx_prefilter_gpu.h"
+#include "envmap/sh_project_gpu.h"
 #include "gpu/compute_device.h"
 
 #include <doctest/doctest.h>
@@ -12,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <numbers>
 
 using namespace roomprobe;
 
@@ -121,6 +123,10 @@ TEST_CASE("GPU GGX: an engine on the Vulkan backend makes the CPU engine's maps,
 		REQUIRE(maps[e]->ggx_mips);
 	}
 	CHECK(gpu_engine.stats().stage_errors == 0);
+	// Its SH came from the device too (the same rounding bound as the SH test, radiance <= 4 here).
+	for (int i = 0; i < SH_COEFFICIENTS; i++) {
+		CHECK(glm::length(maps[0]->sh[size_t(i)] - maps[1]->sh[size_t(i)]) <= 64.0 * std::ldexp(1.0, -24) * 4.0 * 0.7 * 4.0 * std::numbers::pi);
+	}
 	// The same atlas again: a new map whose faces are all the last one's (nothing filtered again,
 	// converted or uploaded).
 	REQUIRE(gpu_engine.set_atlas(atlas));
@@ -140,4 +146,34 @@ TEST_CASE("GPU GGX: an engine on the Vulkan backend makes the CPU engine's maps,
 			CHECK(cv::norm(maps[0]->ggx_chain[level].faces[f], maps[1]->ggx_chain[level].faces[f], cv::NORM_INF) <= bound);
 		}
 	}
+}
+
+TEST_CASE("GPU SH: the projection on a Vulkan device equals project_sh to the float rounding of a row's sums") {
+	const std::shared_ptr<ComputeDevice> device = test_device();
+	for (const int size : { 16, 128 }) { // 128: box-filtered to 64 first, as project_sh does
+		CAPTURE(size);
+		const Cubemap sky = test_sky(size);
+		const ShCoefficients cpu = project_sh(sky);
+		std::string error;
+		const std::unique_ptr<ShProjectorGpu> gpu = ShProjectorGpu::create(std::min(size, SH_PROJECTION_FACE_SIZE), device, &error);
+		REQUIRE_MESSAGE(gpu, error);
+		ShCoefficients sh;
+		REQUIRE_MESSAGE(gpu->project(sky, &sh, &error), error);
+		// A row's float sum of at most 64 products rounds by at most 64 x 2^-24 of the sum of their
+		// magnitudes; over all rows that sum is at most max L x max |y| x 4 pi = 20 x 0.7 x 4 pi.
+		double worst = 0.0;
+		for (int i = 0; i < SH_COEFFICIENTS; i++) {
+			for (int c = 0; c < 3; c++) {
+				worst = std::max(worst, std::abs(sh[size_t(i)][c] - cpu[size_t(i)][c]));
+			}
+		}
+		MESSAGE("largest SH difference " << worst);
+		CHECK(worst <= 64.0 * std::ldexp(1.0, -24) * 20.0 * 0.7 * 4.0 * std::numbers::pi);
+	}
+	std::string error;
+	const std::unique_ptr<ShProjectorGpu> wrong = ShProjectorGpu::create(32, device, &error);
+	REQUIRE(wrong);
+	ShCoefficients sh;
+	CHECK_FALSE(wrong->project(test_sky(16), &sh, &error));
+	CHECK(error.find("size") != std::string::npos);
 }
