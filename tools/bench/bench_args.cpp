@@ -253,7 +253,7 @@ void print_usage(std::FILE *p_out) {
 			"  --frames N            stop after N RGB-D frames, 1 to 10000000 (default: all)\n"
 			"  --threads N           worker threads for OpenCV and TBB, 1 to 1024 (default: the libraries')\n"
 			"  --probe-size N        the probe's cubemap face size (default: slam %d, live %d)\n"
-			"  --compute B           where the GPU-capable kernels (the GGX prefilter) run: cpu (default), vulkan, auto\n"
+			"  --compute B           where the GPU-capable kernels (the GGX prefilter, SH) run: cpu (default), vulkan, auto\n"
 			"  --speed X             live: playback speed, 0.01 to 1000 (default 1: real time)\n"
 			"  --intrinsics FX,FY,CX,CY  the RGB-D camera's pinhole intrinsics, pixels, no distortion, instead of the source's\n"
 			"                        (TUM: the freiburg set its folder names, else ROS's default; 7-Scenes: camera-intrinsics.txt)\n"

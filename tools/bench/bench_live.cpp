@@ -288,7 +288,7 @@ int bench_live(const Arguments &p_args) {
 	}
 	const int probe_id = engine.add_probe(setup.probe, setup.probe_size);
 	print_recording_header("live", p_args, setup);
-	std::printf("  compute (the GGX prefilter): %s\n", engine.stats().compute.c_str());
+	std::printf("  compute (the GGX prefilter and SH): %s\n", engine.stats().compute.c_str());
 
 	// The player's events stop before the RGB-D event after the last one wanted (--frames).
 	const std::vector<PlaybackEvent> &events = setup.player.events();
