@@ -18,16 +18,20 @@ void config_from_rig(const Rig &p_rig, const RigPhotometry &p_photometry, const 
 	}
 }
 
+void config_from_recording(const RecordingReader &p_reader, const RigPhotometry &p_photometry, bool p_take_room, LiveRoomConfig *io_config) {
+	config_from_rig(p_reader.get_rig(), p_photometry, p_reader.has_room() ? &p_reader.get_room() : nullptr, p_take_room, io_config);
+	if (p_reader.has_ground_truth_trajectory(RecordingStream::Rgbd)) {
+		io_config->ground_truth = p_reader.ground_truth_trajectory(RecordingStream::Rgbd);
+	}
+}
+
 std::string config_from_recording(const RecordingReader &p_reader, bool p_take_room, LiveRoomConfig *io_config) {
 	RigPhotometry photometry;
 	std::string error;
 	if (!read_recording_photometry(p_reader.get_folder(), p_reader.get_rig().photometry, &photometry, &error)) {
 		return error;
 	}
-	config_from_rig(p_reader.get_rig(), photometry, p_reader.has_room() ? &p_reader.get_room() : nullptr, p_take_room, io_config);
-	if (p_reader.has_ground_truth_trajectory(RecordingStream::Rgbd)) {
-		io_config->ground_truth = p_reader.ground_truth_trajectory(RecordingStream::Rgbd);
-	}
+	config_from_recording(p_reader, photometry, p_take_room, io_config);
 	return std::string();
 }
 

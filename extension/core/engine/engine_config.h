@@ -17,8 +17,11 @@ namespace roomprobe {
 // also the room's floorplan (has_room follows p_room), else has_room and floorplan stay as they are.
 void config_from_rig(const Rig &p_rig, const RigPhotometry &p_photometry, const RoomInfo *p_room, bool p_take_room, LiveRoomConfig *io_config);
 
-// From an open recording: its rig, photometry.yaml (or the rig's photometry), room.yaml and its
-// ground-truth RGB-D trajectory. The error (empty on success) names the photometry file's problem.
+// From an open recording: its rig, room.yaml and its ground-truth RGB-D trajectory, with
+// p_photometry (read_recording_photometry's, or none where the frames are taken as recorded).
+void config_from_recording(const RecordingReader &p_reader, const RigPhotometry &p_photometry, bool p_take_room, LiveRoomConfig *io_config);
+// The same with the recording's own photometry (read_recording_photometry: synth.yaml's, else the
+// rig's). The error (empty on success) names the photometry file's problem.
 std::string config_from_recording(const RecordingReader &p_reader, bool p_take_room, LiveRoomConfig *io_config);
 
 } // namespace roomprobe

@@ -42,14 +42,10 @@ glm::dvec3 default_probe(const RoomInfo &p_room) {
 }
 
 // The engine's configuration for the sweep: dense SLAM alone, finding the room.
-std::string sweep_config(const RecordingReader &p_reader, const RoomSweepOptions &p_options, LiveRoomConfig *r_config) {
-	const std::string config_error = config_from_recording(p_reader, false, r_config);
-	if (!config_error.empty()) {
-		return config_error;
-	}
+void sweep_config(const RecordingReader &p_reader, const RoomSweepOptions &p_options, LiveRoomConfig *r_config) {
 	// The room is what is sought: nothing of room.yaml, and no photometry (the fisheye views are
-	// searched for edges as recorded).
-	r_config->photometry = RigPhotometry();
+	// searched for edges as recorded, so the recording's photometry is not read).
+	config_from_recording(p_reader, RigPhotometry(), false, r_config);
 	r_config->keep_points.clear();
 	r_config->initial_rgb_pose = Pose(); // the dense model's frame: the first RGB-D frame's camera
 	r_config->has_room = false;
@@ -64,7 +60,6 @@ std::string sweep_config(const RecordingReader &p_reader, const RoomSweepOptions
 		r_config->dense_poses = PoseSource::GroundTruth;
 		r_config->coarse_poses = PoseSource::GroundTruth;
 	}
-	return std::string();
 }
 
 } // namespace
@@ -86,11 +81,7 @@ RoomSweepResult sweep_room(const RoomSweepOptions &p_options) {
 		return failed;
 	}
 	LiveRoomConfig config;
-	const std::string config_error = sweep_config(reader, p_options, &config);
-	if (!config_error.empty()) {
-		failed.error = config_error;
-		return failed;
-	}
+	sweep_config(reader, p_options, &config);
 	LiveRoom engine;
 	const std::string configured = engine.configure(config);
 	if (!configured.empty()) {

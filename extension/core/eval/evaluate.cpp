@@ -187,13 +187,14 @@ bool RecordingEvaluation::read_light_switch() {
 // What the variants share: the recording's configuration (its photometry a perfect photometric
 // calibration), the room (or options.room_file's), the true poses and options' settings.
 bool RecordingEvaluation::build_base_config() {
-	const std::string config_error = config_from_recording(reader(), true, &base);
-	if (!config_error.empty()) {
-		result.error = config_error;
-		return false;
-	}
-	if (!options.linearise) {
-		base.photometry = RigPhotometry(); // the frames as recorded
+	if (options.linearise) {
+		const std::string config_error = config_from_recording(reader(), true, &base);
+		if (!config_error.empty()) {
+			result.error = config_error;
+			return false;
+		}
+	} else {
+		config_from_recording(reader(), RigPhotometry(), true, &base); // the frames as recorded
 	}
 	result.linearised = base.photometry.known;
 	linearizer.configure(base.photometry, reader().get_rig().fisheye);

@@ -55,17 +55,17 @@ bool RigCapture::open() {
 	}
 	RecordingPlayer opened;
 	std::string error = open_player(folder, PlayerOptions(), &opened);
+	// Read before the engine is touched: a photometry file that cannot be read leaves it as it was.
+	RigPhotometry photometry;
 	if (error.empty()) {
-		// Checked on a copy first: a photometry file that cannot be read leaves the engine untouched.
-		LiveRoomConfig checked;
-		error = config_from_recording(opened.reader(), false, &checked);
+		read_recording_photometry(folder, opened.reader().get_rig().photometry, &photometry, &error);
 	}
 	if (!error.empty()) {
 		fail(error);
 		return false;
 	}
 	player.open(std::move(opened));
-	engine->edit_config([this](LiveRoomConfig &p_config) { config_from_recording(player.recording().reader(), false, &p_config); });
+	engine->edit_config([&](LiveRoomConfig &p_config) { config_from_recording(player.recording().reader(), photometry, false, &p_config); });
 	last_error.clear();
 	update_configuration_warnings();
 	return true;
