@@ -162,36 +162,47 @@ void ProbeRenderer::build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map
 	}
 }
 
+namespace {
+
+// p_objects' object for p_size, made by p_make(r_error) at the first call; null when the device
+// refused it, then or before (r_error says why the first time). Under the renderer's gpu_mutex.
+template <typename Objects, typename Make>
+auto device_object(Objects &io_objects, int p_size, const Make &p_make, std::string *r_error) -> decltype(p_make(r_error)) {
+	if (io_objects.refused.count(p_size) > 0) {
+		return nullptr;
+	}
+	auto &slot = io_objects.made[p_size];
+	if (!slot) {
+		slot = p_make(r_error);
+		if (!slot) {
+			io_objects.made.erase(p_size);
+			io_objects.refused.insert(p_size);
+			return nullptr;
+		}
+	}
+	return slot;
+}
+
+} // namespace
+
 bool ProbeRenderer::gpu_chain(const GgxFilter *p_filter, const std::shared_ptr<const GgxFilter> &p_shared, uint8_t p_source_changed, ProbeMap *io_map,
 		std::vector<Cubemap> *r_chain, uint8_t *r_changed) const {
 	std::shared_ptr<GgxFilterGpu> gpu;
 	std::string error;
 	{
 		const std::lock_guard<std::mutex> lock(gpu_mutex);
-		const int size = p_filter->face_size();
-		const auto refused = gpu_refused.find(size);
-		if (refused != gpu_refused.end()) {
-			gpu_failed++;
+		gpu = device_object(gpu_filters, p_filter->face_size(),
+				[&](std::string *r_error) { return std::shared_ptr<GgxFilterGpu>(GgxFilterGpu::create(p_shared, settings_.compute, r_error)); }, &error);
+		if (!gpu) {
+			note_gpu_failure(error);
 			return false;
 		}
-		std::shared_ptr<GgxFilterGpu> &slot = gpu_filters[size];
-		if (!slot) {
-			slot = GgxFilterGpu::create(p_shared, settings_.compute, &error);
-			if (!slot) {
-				gpu_refused[size] = error; // a filter the device cannot hold is not uploaded again every map
-				gpu_error = error;
-				gpu_failed++;
-				return false;
-			}
-		}
-		gpu = slot;
 	}
 	*r_chain = gpu->apply(io_map->cubemap, &error);
 	*r_changed = gpu->dependent_faces(p_source_changed);
 	if (r_chain->empty()) {
 		const std::lock_guard<std::mutex> lock(gpu_mutex);
-		gpu_error = error;
-		gpu_failed++;
+		note_gpu_failure(error);
 		return false;
 	}
 	return true;
@@ -206,13 +217,9 @@ ShCoefficients ProbeRenderer::project(const Cubemap &p_cubemap) const {
 	std::string error;
 	{
 		const std::lock_guard<std::mutex> lock(gpu_mutex);
-		std::shared_ptr<ShProjectorGpu> &slot = gpu_sh[size];
-		if (!slot) {
-			slot = ShProjectorGpu::create(size, settings_.compute, &error);
-		}
-		gpu = slot;
+		gpu = device_object(gpu_sh, size,
+				[&](std::string *r_error) { return std::shared_ptr<ShProjectorGpu>(ShProjectorGpu::create(size, settings_.compute, r_error)); }, &error);
 		if (!gpu) {
-			gpu_sh.erase(size); // not kept: it is small, and tried again at the next map
 			note_gpu_failure(error);
 			return project_sh(p_cubemap);
 		}
@@ -227,7 +234,9 @@ ShCoefficients ProbeRenderer::project(const Cubemap &p_cubemap) const {
 }
 
 void ProbeRenderer::note_gpu_failure(const std::string &p_error) const {
-	gpu_error = p_error;
+	if (!p_error.empty()) {
+		gpu_error = p_error;
+	}
 	gpu_failed++;
 }
 

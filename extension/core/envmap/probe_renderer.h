@@ -20,6 +20,7 @@
 #include <array>
 #include <atomic>
 #include <map>
+#include <set>
 #include <mutex>
 #include <cstdint>
 #include <memory>
@@ -115,7 +116,7 @@ private:
 	void build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map) const;
 	// project_sh, on the compute device when there is one (the CPU when it fails).
 	ShCoefficients project(const Cubemap &p_cubemap) const;
-	void note_gpu_failure(const std::string &p_error) const; // under gpu_mutex
+	void note_gpu_failure(const std::string &p_error) const; // under gpu_mutex; "": the reason stays
 	// The GGX chain of io_map's cubemap on the compute device (false: do it on the CPU).
 	// r_changed: the output faces that can differ from a previous chain whose source differs in
 	// p_source_changed.
@@ -124,10 +125,16 @@ private:
 
 	ProbeRenderSettings settings_;
 	std::unique_ptr<CoarseCubemapRenderer> coarse_;
-	mutable std::mutex gpu_mutex; // the GPU filters, one per face size, made at the first map
-	mutable std::map<int, std::shared_ptr<GgxFilterGpu>> gpu_filters;
-	mutable std::map<int, std::shared_ptr<ShProjectorGpu>> gpu_sh;
-	mutable std::map<int, std::string> gpu_refused; // face sizes the device cannot filter, and why (not tried again)
+	// The device's objects of one kind, one per face size, made at the first map that needs one; a
+	// size the device refused is remembered, not made again every map.
+	template <typename T>
+	struct DeviceObjects {
+		std::map<int, std::shared_ptr<T>> made;
+		std::set<int> refused;
+	};
+	mutable std::mutex gpu_mutex; // the device objects, gpu_error
+	mutable DeviceObjects<GgxFilterGpu> gpu_filters;
+	mutable DeviceObjects<ShProjectorGpu> gpu_sh;
 	mutable std::string gpu_error;
 	mutable std::atomic<size_t> gpu_failed{ 0 };
 };
