@@ -287,8 +287,7 @@ int bench_live(const Arguments &p_args) {
 		return 1;
 	}
 	const int probe_id = engine.add_probe(setup.probe, setup.probe_size);
-	print_recording_header("live", p_args, setup);
-	std::printf("  compute (the GGX prefilter and SH): %s\n", engine.stats().compute.c_str());
+	print_recording_header("live", p_args, setup, engine);
 
 	// The player's events stop before the RGB-D event after the last one wanted (--frames).
 	const std::vector<PlaybackEvent> &events = setup.player.events();

@@ -83,8 +83,7 @@ bool start_run(StepRun *r_run) {
 	for (int i = 1; i < args.probes; i++) {
 		r_run->engine.add_probe(probe + extra_probe_offset(i, args.probes), r_run->setup.probe_size);
 	}
-	print_recording_header("slam", args, r_run->setup);
-	std::printf("  compute (the GGX prefilter and SH): %s\n", r_run->engine.stats().compute.c_str());
+	print_recording_header("slam", args, r_run->setup, r_run->engine);
 	if (args.probes > 1) {
 		std::printf("  %d probes: the first at the probe, %d on a ring of %.2f m around it (render_probes times all of them)\n", args.probes,
 				args.probes - 1, EXTRA_PROBE_RING_M);

@@ -132,7 +132,7 @@ bool configure_engine(const RecordingSetup &p_setup, const std::string &p_what, 
 	return true;
 }
 
-void print_recording_header(const char *p_mode, const Arguments &p_args, const RecordingSetup &p_setup) {
+void print_recording_header(const char *p_mode, const Arguments &p_args, const RecordingSetup &p_setup, const LiveRoom &p_engine) {
 	const Rig &rig = p_setup.config.rig;
 	const RecordingReader &reader = p_setup.reader();
 	const RigPhotometry &photometry = p_setup.config.photometry;
@@ -157,6 +157,7 @@ void print_recording_header(const char *p_mode, const Arguments &p_args, const R
 	}
 	std::printf("  engine: LiveRoom, tracked poses for both models, re-mesh every %d fused frames, dense pass at 1/%d, %d render thread(s)\n",
 			p_setup.config.mesh_interval_frames, p_setup.config.dense_render_scale, p_setup.config.render_threads);
+	std::printf("  compute (the GGX prefilter and SH): %s\n", p_engine.stats().compute.c_str());
 	print_threads();
 }
 

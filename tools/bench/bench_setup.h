@@ -39,7 +39,8 @@ struct RecordingSetup {
 bool open_recording(const Arguments &p_args, int p_default_probe_size, RecordingSetup *r_setup);
 // Configures r_engine from p_setup; false after printing the problem, p_what naming the run.
 bool configure_engine(const RecordingSetup &p_setup, const std::string &p_what, LiveRoom *r_engine);
-void print_recording_header(const char *p_mode, const Arguments &p_args, const RecordingSetup &p_setup);
+// p_engine: configured from p_setup (it says where the GPU-capable kernels run).
+void print_recording_header(const char *p_mode, const Arguments &p_args, const RecordingSetup &p_setup, const LiveRoom &p_engine);
 
 // What dense SLAM alone runs on: a TUM sequence, a 7-Scenes-layout folder or a SLAM-only recording.
 struct DenseSource {

@@ -28,7 +28,7 @@ void PacedPlayer::start(const PacedOptions &p_options, Sink p_sink) {
 		running = true;
 		// The wall clock goes on from where the clock stands (0 after a rewind).
 		wall_start = std::chrono::steady_clock::now() - std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-																  std::chrono::duration<double>(clock / std::max(1e-9, options.speed)));
+																  std::chrono::duration<double>(clock / options.speed));
 	}
 	thread = std::thread([this] { run(); });
 }

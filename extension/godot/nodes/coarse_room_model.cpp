@@ -3,7 +3,6 @@
 // coarse_room_model_properties.cpp, the room found from a sweep in coarse_room_model_found_room.cpp
 // (split by concern to keep each file short).
 #include "coarse_room_model.h"
-#include "coarse_room_model_internal.h"
 
 #include "../convert/image_convert.h"
 #include "../convert/mesh_convert.h"

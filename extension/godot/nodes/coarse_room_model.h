@@ -8,12 +8,15 @@
 #include "live_room_link.h"
 
 #include <engine/live_room.h>
+#include <engine/room_sweep.h>
 #include <room/floorplan.h>
 #include <room/room_mesh.h>
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <thread>
 
 #include <rp_godot/godot.h>
 
@@ -163,7 +166,14 @@ private:
 	void apply_found_room(const FoundRoom &p_found, const Pose &p_world_from_model = Pose());
 	void take_room_search(); // a finished search's room, applied (main thread)
 	bool worse_than_shown(const FoundRoom &p_candidate) const;
-	struct RoomSearch;
+	// A room search on a recording (find_room_in_recording): the worker writes result, then done.
+	struct RoomSearch {
+		std::thread thread;
+		std::atomic<bool> cancel{ false };
+		std::atomic<bool> done{ false };
+		std::string recording;
+		RoomSweepResult result;
+	};
 	std::unique_ptr<RoomSearch> search;
 	void stop_room_search(); // cancels and joins (the node's destruction; leaving the tree keeps it running)
 	std::shared_ptr<const FoundRoom> looked_at; // the engine's estimate last looked at

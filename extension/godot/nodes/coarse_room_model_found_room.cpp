@@ -2,7 +2,6 @@
 // estimates taken as they come (floorplan_source Automatic), and a search over a recording on a
 // thread of its own. Split from coarse_room_model.cpp to keep each file short.
 #include "coarse_room_model.h"
-#include "coarse_room_model_internal.h"
 
 #include "../convert/pose_convert.h"
 #include "../convert/project_paths.h"

@@ -9,7 +9,6 @@
 
 #include <recording/room_file.h>
 
-#include <algorithm>
 #include <filesystem>
 
 using namespace godot;
