@@ -1,10 +1,11 @@
 #pragma once
 // Synthetic RGB-D frames of the living room at known poses, for the dense SLAM tests
-// (test_slam_tracking.cpp, test_slam_dense.cpp). Frames are rendered at 320x240 (the test rig's
+// (test_slam_tracking.cpp, test_slam_dense.cpp, test_gpu_tracking.cpp). Frames are rendered at 320x240 (the test rig's
 // camera at half size) to keep the suite fast.
 
 #include "synth_test_rig.h"
 
+#include "math/pose.h"
 #include "recording/recording_types.h"
 #include "synth/synth_renderer.h"
 #include "synth/synth_scene.h"
@@ -12,8 +13,12 @@
 
 #include <doctest/doctest.h>
 
+#include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
+
 #include <limits>
 #include <memory>
+#include <numbers>
 
 namespace synth_frames {
 
@@ -94,6 +99,14 @@ inline Frame render(const SynthRenderer &p_renderer, const PinholeParams &p_came
 
 inline Frame render_living_room(const Pose &p_pose, double p_time_s, bool p_noisy, uint64_t p_seed = 7) {
 	return render(*living_room().renderer, half_camera(), p_pose, p_time_s, p_noisy, p_seed);
+}
+
+// p_pose moved in its own camera frame: rotated by p_angle_deg about p_axis, then translated.
+inline Pose moved(const Pose &p_pose, const glm::dvec3 &p_axis, double p_angle_deg, const glm::dvec3 &p_translation_m) {
+	Pose delta;
+	delta.rotation = glm::angleAxis(p_angle_deg * std::numbers::pi / 180.0, glm::normalize(p_axis));
+	delta.translation = p_translation_m;
+	return compose(p_pose, delta);
 }
 
 } // namespace synth_frames

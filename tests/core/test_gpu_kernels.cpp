@@ -1,12 +1,13 @@
 // The Vulkan compute backend (gpu/compute_device.h) and its kernels, the GGX prefilter's gather
-// (envmap/ggx_prefilter_gpu.h) and SH projection (envmap/sh_project_gpu.h), against their CPU twins. CI runs it on Mesa's lavapipe (a
-// CPU device): without a Vulkan device the test fails, naming why, rather than skip.
+// (envmap/ggx_prefilter_gpu.h) and SH projection (envmap/sh_project_gpu.h), against their CPU
+// twins, on gpu_test_device() (lavapipe in CI).
 
 #include "engine/live_room.h"
 #include "envmap/ggx_prefilter.h"
 #include "envmap/ggx_prefilter_gpu.h"
 #include "envmap/sh_project_gpu.h"
 #include "gpu/compute_device.h"
+#include "gpu_test_device.h"
 
 #include <doctest/doctest.h>
 
@@ -34,20 +35,10 @@ Cubemap test_sky(int p_size) {
 	return map;
 }
 
-std::shared_ptr<ComputeDevice> test_device() {
-	ComputeDeviceOptions options;
-	options.allow_cpu_device = true; // lavapipe
-	std::string error;
-	std::shared_ptr<ComputeDevice> device = ComputeDevice::create(options, &error);
-	REQUIRE_MESSAGE(device, "no Vulkan compute device: " << error);
-	MESSAGE("Vulkan device: " << device->name() << std::string(device->is_cpu() ? " (a CPU device)" : ""));
-	return device;
-}
-
 } // namespace
 
 TEST_CASE("GPU GGX: the chain on a Vulkan device equals the CPU's to the float rounding of each texel's taps") {
-	const std::shared_ptr<ComputeDevice> device = test_device();
+	const std::shared_ptr<ComputeDevice> device = gpu_test_device();
 	for (const int size : { 8, 32 }) {
 		CAPTURE(size);
 		const Cubemap sky = test_sky(size);
@@ -83,7 +74,7 @@ TEST_CASE("GPU GGX: the CPU backend asks for no device; a source of another size
 	std::string reason = "unchanged";
 	CHECK(shared_compute_device(ComputeBackend::Cpu, &reason) == nullptr);
 	CHECK(reason.empty());
-	const std::shared_ptr<ComputeDevice> device = test_device();
+	const std::shared_ptr<ComputeDevice> device = gpu_test_device();
 	std::string error;
 	const std::unique_ptr<GgxFilterGpu> gpu_filter = GgxFilterGpu::create(std::make_shared<const GgxFilter>(8), device, &error);
 	REQUIRE_MESSAGE(gpu_filter, error);
@@ -149,7 +140,7 @@ TEST_CASE("GPU GGX: an engine on the Vulkan backend makes the CPU engine's maps,
 }
 
 TEST_CASE("GPU SH: the projection on a Vulkan device equals project_sh to the float rounding of a row's sums") {
-	const std::shared_ptr<ComputeDevice> device = test_device();
+	const std::shared_ptr<ComputeDevice> device = gpu_test_device();
 	for (const int size : { 16, 128 }) { // 128: box-filtered to 64 first, as project_sh does
 		CAPTURE(size);
 		const Cubemap sky = test_sky(size);

@@ -17,6 +17,12 @@
 
 #include <doctest/doctest.h>
 
+// OpenCV's codecs, for fixtures and as the reference (io/opencv.h leaves imgcodecs out).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wdeprecated-enum-enum-conversion"
+#include <opencv2/imgcodecs.hpp>
+#pragma GCC diagnostic pop
+
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>

@@ -37,14 +37,6 @@ namespace {
 
 constexpr double FRAME_S = 1.0 / 30.0;
 
-// p_pose moved in its own camera frame: rotated by p_angle_deg about p_axis, then translated.
-Pose moved(const Pose &p_pose, const glm::dvec3 &p_axis, double p_angle_deg, const glm::dvec3 &p_translation_m) {
-	Pose delta;
-	delta.rotation = glm::angleAxis(p_angle_deg * std::numbers::pi / 180.0, glm::normalize(p_axis));
-	delta.translation = p_translation_m;
-	return compose(p_pose, delta);
-}
-
 struct Step {
 	Pose reference, current;
 	double time_s = 0.0;

@@ -14,6 +14,12 @@
 
 #include <doctest/doctest.h>
 
+// OpenCV's codecs, for fixtures and as the reference (io/opencv.h leaves imgcodecs out).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wdeprecated-enum-enum-conversion"
+#include <opencv2/imgcodecs.hpp>
+#pragma GCC diagnostic pop
+
 #include <opencv2/calib3d.hpp>
 
 #include <glm/geometric.hpp>

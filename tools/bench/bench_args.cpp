@@ -116,17 +116,17 @@ int run_option(cli::Arguments &p_cursor, const std::string &p_arg, Arguments *r_
 	if (p_arg == "--probe-size") {
 		return integer_option(p_cursor, 1, 4096, "--probe-size needs a face size in texels, 1 to 4096", &r_args->probe_size);
 	}
-	if (p_arg == "--compute") {
+	if (p_arg == "--backend") {
 		std::string name;
 		p_cursor.value(&name);
 		const ComputeBackend backends[3] = { ComputeBackend::Cpu, ComputeBackend::Vulkan, ComputeBackend::Auto };
 		for (const ComputeBackend backend : backends) {
 			if (name == compute_backend_name(backend)) {
-				r_args->compute = backend;
+				r_args->backend = backend;
 				return TAKEN;
 			}
 		}
-		return usage("--compute needs cpu, vulkan or auto");
+		return usage("--backend needs cpu, vulkan or auto");
 	}
 	if (p_arg == "--speed" && r_args->mode == "live") {
 		const std::string error = "--speed needs a playback speed in " + cli::range_text(SPEED_MIN, SPEED_MAX);
@@ -253,7 +253,8 @@ void print_usage(std::FILE *p_out) {
 			"  --frames N            stop after N RGB-D frames, 1 to 10000000 (default: all)\n"
 			"  --threads N           worker threads for OpenCV and TBB, 1 to 1024 (default: the libraries')\n"
 			"  --probe-size N        the probe's cubemap face size (default: slam %d, live %d)\n"
-			"  --compute B           where the GPU-capable kernels (the GGX prefilter, SH) run: cpu (default), vulkan, auto\n"
+			"  --backend B           where the kernels with a GPU twin (tracking's sums, the GGX prefilter, SH) run: cpu\n"
+			"                        (default), vulkan, auto; the summary's backend key says where they ran\n"
 			"  --speed X             live: playback speed, 0.01 to 1000 (default 1: real time)\n"
 			"  --intrinsics FX,FY,CX,CY  the RGB-D camera's pinhole intrinsics, pixels, no distortion, instead of the source's\n"
 			"                        (TUM: the freiburg set its folder names, else ROS's default; 7-Scenes: camera-intrinsics.txt)\n"

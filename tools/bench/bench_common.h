@@ -133,6 +133,12 @@ struct Accuracy {
 Accuracy print_accuracy(const Trajectory &p_estimate, const Trajectory &p_truth, const SlamFigures &p_figures, bool p_targets, const char *p_what);
 // The accuracy keys of a summary line.
 std::string accuracy_summary(const Accuracy &p_accuracy);
+// The summary's backend key: "backend=cpu" or "backend=vulkan" where the kernels ran, or
+// "backend=cpu_fallback" when p_asked was not the CPU and they ran there (the header says why).
+std::string backend_summary(ComputeBackend p_asked, bool p_on_device);
+// The same from the engine's note (LiveRoomStats::compute): on the device when it names Vulkan
+// and nothing was put back on the CPU.
+std::string backend_summary(ComputeBackend p_asked, const std::string &p_compute_note);
 void print_memory(const TsdfStats &p_stats);
 void print_slam_rows(const SlamFigures &p_figures, const char *p_mesh_name);
 void print_slam_target(const SlamFigures &p_figures, int p_width, int p_height);
@@ -147,7 +153,7 @@ struct Arguments {
 	long frames = -1; // RGB-D frames to process; -1: all
 	int threads = 0; // 0: the libraries' defaults
 	int probe_size = 0; // 0: the mode's default
-	ComputeBackend compute = ComputeBackend::Cpu; // --compute: where the GPU-capable kernels run
+	ComputeBackend backend = ComputeBackend::Cpu; // --backend: where the kernels with a GPU twin run
 	int probes = 1; // slam --recording: probes rendered every frame (the first at the probe, the others around it)
 	double speed = 1.0; // live: playback speed
 	long warmup_frames = 0; // soak: frames before memory and time are judged (0: a fifth of them)

@@ -52,6 +52,17 @@ void print_dense_header(const DenseSource &p_source, const DenseSlamOptions &p_s
 	print_threads();
 }
 
+// Puts r_slam's tracking on p_backend's device: where it runs, as the engine's note says it.
+std::string set_backend(ComputeBackend p_backend, DenseSlam *r_slam) {
+	std::string reason;
+	const std::shared_ptr<ComputeDevice> device = shared_compute_device(p_backend, &reason);
+	const std::string error = r_slam->set_compute(device);
+	if (device && error.empty()) {
+		return "Vulkan: " + device->name();
+	}
+	return p_backend == ComputeBackend::Cpu ? std::string("CPU") : std::string("CPU (") + compute_backend_name(p_backend) + ": " + (device ? error : reason) + ")";
+}
+
 // The RGB-D frames from p_first on through SLAM; the frames processed (r_failed: unreadable).
 size_t process_frames(const DenseSource &p_source, size_t p_first, size_t p_total, DenseSlam *r_slam, SlamFigures *r_figures,
 		TrajectoryFile *r_trajectory_file, size_t *r_failed) {
@@ -98,11 +109,11 @@ Accuracy print_dense_results(const DenseSource &p_source, const SlamFigures &p_f
 	return accuracy;
 }
 
-void print_dense_summary(const DenseSource &p_source, const SlamFigures &p_figures, const Accuracy &p_accuracy, size_t p_done) {
-	std::printf("summary: mode=%s frames=%zu track_ms_p50=%.2f integrate_ms_p50=%.2f slam_ms_p50=%.2f track_integrate_ms_p50=%.2f %s good=%d "
+void print_dense_summary(const DenseSource &p_source, const SlamFigures &p_figures, const Accuracy &p_accuracy, size_t p_done, const std::string &p_backend) {
+	std::printf("summary: mode=%s frames=%zu track_ms_p50=%.2f integrate_ms_p50=%.2f slam_ms_p50=%.2f track_integrate_ms_p50=%.2f %s %s good=%d "
 				"poor=%d lost=%d\n",
 			p_source.mode, p_done, p_figures.track.median(), p_figures.integrate.median(), p_figures.process.median(), p_figures.track_integrate.median(),
-			accuracy_summary(p_accuracy).c_str(), p_figures.good, p_figures.poor, p_figures.lost);
+			accuracy_summary(p_accuracy).c_str(), p_backend.c_str(), p_figures.good, p_figures.poor, p_figures.lost);
 }
 
 // Dense SLAM over a dataset the caller opened into p_reader (--tum, --7scenes): the error of
@@ -143,6 +154,7 @@ int bench_dense(const Arguments &p_args, const DenseSource &p_source) {
 	const size_t available = reader.rgbd_count() - first;
 	const size_t total = p_args.frames > 0 ? std::min(available, size_t(p_args.frames)) : available;
 	print_dense_header(p_source, p_args.slam, total, first, start);
+	std::printf("  backend (tracking's sums): %s\n", set_backend(p_args.backend, &slam).c_str());
 	TrajectoryFile trajectory_file;
 	if (!trajectory_file.open(p_args.save_trajectory, "slam " + p_source.option,
 				p_source.has_start_pose ? "the room's (room.yaml's initial pose)" : "the ground truth's (SLAM starts at its pose of the first frame it covers)")) {
@@ -157,7 +169,11 @@ int bench_dense(const Arguments &p_args, const DenseSource &p_source) {
 	}
 	const Accuracy accuracy = print_dense_results(p_source, figures, truth, slam, done, failed);
 	trajectory_file.close(p_args.save_trajectory);
-	print_dense_summary(p_source, figures, accuracy, done);
+	const std::string problem = slam.compute_problem();
+	if (!problem.empty() && p_args.backend != ComputeBackend::Cpu) {
+		std::printf("  backend: tracking's sums went back to the CPU: %s\n", problem.c_str());
+	}
+	print_dense_summary(p_source, figures, accuracy, done, backend_summary(p_args.backend, slam.tracks_on_gpu()));
 	return 0;
 }
 

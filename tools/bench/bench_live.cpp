@@ -229,12 +229,12 @@ double print_capture(const CaptureFigures &p_capture, const MainLoop &p_loop, Cl
 	return real_time_factor;
 }
 
-void print_summary(const LiveRoomStats &p_stats, const MainLoop &p_loop, double p_real_time_factor, const Accuracy &p_accuracy) {
+void print_summary(const LiveRoomStats &p_stats, ComputeBackend p_backend, const MainLoop &p_loop, double p_real_time_factor, const Accuracy &p_accuracy) {
 	const LiveRoomStats &stats = p_stats;
 	const bool has_rgbd_latency = stats.rgbd_latency.count > 0, has_fisheye_latency = stats.fisheye_latency.count > 0;
 	std::printf("summary: mode=live latency_ms_p50=%s latency_ms_p95=%s fisheye_latency_ms_p50=%s fisheye_latency_ms_p95=%s dropped_rgbd=%llu "
 				"dropped_fisheye=%llu fisheye_without_pose=%llu pushed_rgbd=%llu pushed_fisheye=%llu processed_rgbd=%llu integrated_fisheye=%llu "
-				"probe_renders=%llu probe_ms_p50=%s main_copy_ms_p50=%.3f main_copy_ms_p95=%.3f real_time_factor=%.3f %s good=%llu "
+				"probe_renders=%llu probe_ms_p50=%s main_copy_ms_p50=%.3f main_copy_ms_p95=%.3f real_time_factor=%.3f %s %s good=%llu "
 				"poor=%llu lost=%llu\n",
 			figure(has_rgbd_latency, stats.rgbd_latency.p50_ms).c_str(), figure(has_rgbd_latency, stats.rgbd_latency.p95_ms).c_str(),
 			figure(has_fisheye_latency, stats.fisheye_latency.p50_ms).c_str(), figure(has_fisheye_latency, stats.fisheye_latency.p95_ms).c_str(),
@@ -242,6 +242,7 @@ void print_summary(const LiveRoomStats &p_stats, const MainLoop &p_loop, double 
 			(unsigned long long)stats.rgbd_pushed, (unsigned long long)stats.fisheye_pushed, (unsigned long long)stats.rgbd_processed,
 			(unsigned long long)stats.fisheye_integrated, (unsigned long long)stats.probe_renders, figure(!p_loop.map.total.empty(), p_loop.map.total.median()).c_str(),
 			p_loop.copy_ms.median(), p_loop.copy_ms.percentile(0.95), p_real_time_factor, accuracy_summary(p_accuracy).c_str(),
+			backend_summary(p_backend, stats.compute).c_str(),
 			(unsigned long long)stats.good, (unsigned long long)stats.poor, (unsigned long long)stats.lost);
 }
 
@@ -267,7 +268,7 @@ void print_results(const Arguments &p_args, const RecordingSetup &p_setup, const
 	const Accuracy accuracy = print_accuracy(tracked, p_setup.config.ground_truth, figures, p_setup.synthetic, "the tracked trajectory, whose poses lost frames do not enter");
 	std::printf("\n");
 	print_memory(stats.tsdf);
-	print_summary(stats, p_loop, real_time_factor, accuracy);
+	print_summary(stats, p_setup.config.compute_backend, p_loop, real_time_factor, accuracy);
 }
 
 } // namespace

@@ -56,7 +56,7 @@ void apply_bench_settings(const Arguments &p_args, const PinholeParams &p_camera
 	config.coarse.lighting_model = LightingModel::GAIN_ROBUST;
 	config.coarse.cubemap_size = p_probe_size;
 	config.mesh_interval_frames = MESH_INTERVAL;
-	config.compute_backend = p_args.compute;
+	config.compute_backend = p_args.backend;
 }
 
 } // namespace
@@ -157,7 +157,7 @@ void print_recording_header(const char *p_mode, const Arguments &p_args, const R
 	}
 	std::printf("  engine: LiveRoom, tracked poses for both models, re-mesh every %d fused frames, dense pass at 1/%d, %d render thread(s)\n",
 			p_setup.config.mesh_interval_frames, p_setup.config.dense_render_scale, p_setup.config.render_threads);
-	std::printf("  compute (the GGX prefilter and SH): %s\n", p_engine.stats().compute.c_str());
+	std::printf("  backend (tracking's sums, the GGX prefilter, SH): %s\n", p_engine.stats().compute.c_str());
 	print_threads();
 }
 

@@ -217,6 +217,8 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 				return fail("dense SLAM: " + error);
 			}
 			fresh->volume().set_keep_points(cfg.keep_points);
+			std::string no_device; // said by the note build_room_locked makes
+			fresh->set_compute(shared_compute_device(cfg.compute_backend, &no_device)); // its failure: stats().compute
 			slam = std::move(fresh);
 		}
 		{

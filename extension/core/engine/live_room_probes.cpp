@@ -362,6 +362,10 @@ LiveRoomStats LiveRoom::stats() const {
 	s.rgbd_dropped = frames->rgbd.dropped_count();
 	s.fisheye_dropped = frames->fisheye.dropped_count();
 	if (slam) {
+		const std::string tracking_problem = slam->compute_problem();
+		if (!tracking_problem.empty() && s.compute.rfind("Vulkan", 0) == 0) {
+			s.compute += "; tracking on the CPU (" + tracking_problem + ")";
+		}
 		s.dense_frames = slam->frame_count();
 		s.dense_fused = slam->integrated_count();
 		s.relocalisation_attempts = slam->relocalisation_attempts();

@@ -1,5 +1,7 @@
 #include "dense_slam.h"
 
+#include "icp_reduce_gpu.h"
+
 #include <parallel/parallel_for.h>
 
 #include <glm/gtc/quaternion.hpp>
@@ -87,6 +89,23 @@ std::string DenseSlam::faster_than_a_hand(const TrackingResult &p_tracking, doub
 DenseSlam::DenseSlam(const DenseSlamOptions &p_options) :
 		opts(p_options), tracker(p_options.icp), tsdf(p_options.tsdf) {}
 
+std::string DenseSlam::set_compute(std::shared_ptr<ComputeDevice> p_device) {
+	compute_error.clear();
+	if (!p_device) {
+		tracker.set_gpu(nullptr);
+		return "";
+	}
+	std::string error;
+	std::shared_ptr<IcpReducerGpu> reducer = IcpReducerGpu::create(std::move(p_device), &error);
+	tracker.set_gpu(reducer);
+	compute_error = reducer ? "" : "ICP on the GPU: " + error;
+	return compute_error;
+}
+
+std::string DenseSlam::compute_problem() const {
+	return compute_error.empty() ? tracker.compute_problem() : compute_error;
+}
+
 std::string DenseSlam::configure(const PinholeParams &p_camera, const Pose &p_initial_world_from_camera) {
 	configured = false;
 	if (p_camera.width <= 0 || p_camera.height <= 0 || !(p_camera.fx > 0.0) || !(p_camera.fy > 0.0)) {
@@ -173,7 +192,8 @@ TrackingResult DenseSlam::relocalise(const cv::Mat &p_depth_m, const cv::Mat &p_
 	coarse.iterations[0] = 0;
 	coarse.max_jump_m = opts.relocalise_max_m;
 	coarse.max_jump_deg = opts.relocalise_max_deg;
-	const IcpTracker search(coarse);
+	IcpTracker search = tracker; // on the tracker's device, if it has one
+	search.set_options(coarse);
 	std::vector<Pose> starts = { last_pose };
 	const double step_rad = opts.relocalise_step_deg * std::numbers::pi / 180.0;
 	for (int axis = 0; axis < 3; axis++) {

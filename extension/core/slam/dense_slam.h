@@ -25,9 +25,11 @@
 #include "tsdf_volume.h"
 
 #include <camera/camera_params.h>
+#include <gpu/compute_device.h>
 #include <types/frames.h>
 
 #include <atomic>
+#include <memory>
 #include <shared_mutex>
 #include <string>
 
@@ -110,6 +112,13 @@ public:
 	// of the first frame, and empties the model. The error (empty on success) names the problem.
 	std::string configure(const PinholeParams &p_camera, const Pose &p_initial_world_from_camera);
 	bool is_configured() const { return configured; }
+	// Where tracking's normal equations are summed (issue #40): on p_device (icp_reduce_gpu.h), or
+	// on the CPU when it is null. "" or why the device cannot (tracking then stays on the CPU).
+	std::string set_compute(std::shared_ptr<ComputeDevice> p_device);
+	// Whether tracking's sums run on a device now, and, when set_compute's device refused the
+	// kernel or a dispatch failed and put them back on the CPU, why ("" otherwise).
+	bool tracks_on_gpu() const { return tracker.uses_gpu(); }
+	std::string compute_problem() const;
 
 	// The four verbs, on undistorted images (p_depth_m CV_32FC1 z metres, NaN or 0 = none;
 	// p_rgb CV_8UC3 R, G, B, same size).
@@ -163,6 +172,7 @@ private:
 	PinholeIntrinsics intrinsics;
 	cv::Mat undistort_map_x, undistort_map_y; // empty when the camera has no distortion
 	IcpTracker tracker;
+	std::string compute_error; // set_compute's
 	TsdfVolume tsdf;
 	ModelMaps reference; // the model raycast from last_pose
 	Pose last_pose;

@@ -4,13 +4,15 @@
 
 #include "depth_pyramid.h"
 #include "icp_kernels.h"
+#include "icp_reduce_gpu.h"
 
 #include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
 #include <cstdio>
-#include <limits>
 #include <cmath>
+#include <limits>
+#include <mutex>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -180,6 +182,27 @@ NormalSystem accumulate(const FramePyramid &p_frame, int p_level, int p_stride, 
 		total += p;
 	}
 	return total;
+}
+
+// The normal equations from the device's row sums (IcpReducerGpu::ROW_FLOATS each), added in
+// double in row order as accumulate adds its rows.
+NormalSystem system_from_rows(const float *p_rows, int p_row_count) {
+	NormalSystem system;
+	for (int r = 0; r < p_row_count; r++) {
+		const float *row = p_rows + size_t(r) * IcpReducerGpu::ROW_FLOATS;
+		int k = 0;
+		for (int a = 0; a < 6; ++a) {
+			for (int b = a; b < 6; ++b) {
+				system.h[a][b] += double(row[k++]);
+			}
+			system.g[a] += double(row[21 + a]);
+		}
+		system.geometry_trace_rotation += double(row[27]);
+		system.geometry_trace_translation += double(row[28]);
+		system.sum_squared += double(row[29]);
+		system.inliers += int(row[30]);
+	}
+	return system;
 }
 
 // Valid (non-NaN) depths among every p_stride-th pixel of every p_stride-th row.
@@ -355,6 +378,14 @@ TrackingResult lost(const Pose &p_initial, const std::string &p_reason, int p_it
 
 } // namespace
 
+bool IcpTracker::uses_gpu() const {
+	return gpu && !gpu->has_failed();
+}
+
+std::string IcpTracker::compute_problem() const {
+	return gpu ? gpu->failure() : std::string();
+}
+
 double rotation_difference_deg(const Pose &p_a, const Pose &p_b) {
 	const glm::dquat d = glm::inverse(p_a.rotation) * p_b.rotation;
 	const double w = std::min(1.0, std::abs(d.w) / glm::length(d));
@@ -391,12 +422,39 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 	ModelIntensity intensity; // made when the colour term is first needed
 	const IcpModelView geometry_model = model_view(p_model, nullptr);
 	IcpModelView colour_model = geometry_model;
+	// The sums on the device when there is one: the same pairs, rows and sums (icp_reduce_gpu.h);
+	// a failure puts this call and later ones back on the CPU.
+	IcpReducerGpu *reducer = uses_gpu() ? gpu.get() : nullptr;
+	std::unique_lock<std::mutex> reducer_lock;
+	std::string gpu_error;
+	auto give_up_gpu = [&]() {
+		reducer->set_failed("ICP on the GPU: " + gpu_error);
+		reducer = nullptr;
+	};
+	if (reducer != nullptr) {
+		reducer_lock = std::unique_lock<std::mutex>(reducer->mutex());
+		if (!reducer->set_frame(frame, levels, finest_stride, &gpu_error) || !reducer->set_model(geometry_model, &gpu_error)) {
+			give_up_gpu();
+		}
+	}
 	auto system_at = [&](int p_level, const Pose &p_pose, bool p_colour) {
 		if (p_colour && intensity.intensity.empty()) {
 			intensity = model_intensity(p_model);
 			colour_model = model_view(p_model, &intensity);
+			if (reducer != nullptr && !reducer->set_model(colour_model, &gpu_error)) {
+				give_up_gpu();
+			}
 		}
-		return accumulate(frame, p_level, stride_at(p_level), kernel_params(options, p_pose, p_level, p_colour), p_colour ? colour_model : geometry_model);
+		const IcpKernelParams params = kernel_params(options, p_pose, p_level, p_colour);
+		if (reducer != nullptr) {
+			const float *rows = nullptr;
+			int row_count = 0;
+			if (reducer->reduce(p_level, params, &rows, &row_count, &gpu_error)) {
+				return system_from_rows(rows, row_count);
+			}
+			give_up_gpu();
+		}
+		return accumulate(frame, p_level, stride_at(p_level), params, p_colour ? colour_model : geometry_model);
 	};
 
 	Pose pose = p_initial_world_from_camera;

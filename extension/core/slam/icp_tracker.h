@@ -14,8 +14,12 @@
 #include <math/pose.h>
 
 #include <array>
+#include <memory>
+#include <string>
 
 namespace roomprobe {
+
+class IcpReducerGpu;
 
 struct IcpOptions {
 	static constexpr int MAX_LEVELS = 4;
@@ -81,6 +85,12 @@ public:
 
 	const IcpOptions &get_options() const { return options; }
 	void set_options(const IcpOptions &p_options) { options = p_options; }
+	// The normal equations on a Vulkan device (icp_reduce_gpu.h), shared by copies of this tracker;
+	// null: on the CPU. After a failed dispatch the tracker is back on the CPU, and
+	// compute_problem() says why.
+	void set_gpu(std::shared_ptr<IcpReducerGpu> p_gpu) { gpu = std::move(p_gpu); }
+	bool uses_gpu() const;
+	std::string compute_problem() const;
 
 	// The pose of the camera that took p_depth_m (CV_32FC1, z metres, NaN or 0 = none; undistorted,
 	// p_camera's size) and p_rgb (CV_8UC3 R, G, B; may be empty when colour_weight is 0) relative to
@@ -91,6 +101,7 @@ public:
 
 private:
 	IcpOptions options;
+	std::shared_ptr<IcpReducerGpu> gpu;
 };
 
 // The reference a depth frame gives at a pose (frame-to-frame tracking, and tests without a

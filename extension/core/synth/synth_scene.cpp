@@ -2,7 +2,10 @@
 
 #include "synth_scene.h"
 
+#include <io/image_codec.h>
 #include <io/input_path.h>
+#include <io/radiance_hdr.h>
+#include <recording/recording_io.h>
 #include <room/reference_rooms.h>
 
 
@@ -11,6 +14,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <cmath>
+#include <fstream>
 #include <numbers>
 
 namespace roomprobe::synth {
@@ -157,6 +161,49 @@ Color Panorama::lookup(const glm::dvec3 &p_direction) const {
 	return mix(mix(at(x0, y0), at(x1, y0), tx), mix(at(x0, y1), at(x1, y1), tx), ty);
 }
 
+namespace {
+
+// A panorama's pixels as linear R, G, B floats (CV_32FC3), the format told by the first bytes,
+// not the name: a Radiance .hdr ("#?"), an OpenEXR, or a PNG or JPEG (sRGB, undone approximately).
+// Errors name p_path.
+std::string read_panorama_rgb(const std::string &p_path, cv::Mat *r_rgb) {
+	uint8_t magic[4] = { 0 };
+	std::ifstream file(p_path, std::ios::binary);
+	if (!file) {
+		return p_path + ": cannot be opened for reading";
+	}
+	file.read(reinterpret_cast<char *>(magic), sizeof(magic));
+	if (file.gcount() == 0) {
+		return p_path + ": an empty file, not an image";
+	}
+	file.close();
+	if (magic[0] == '#' && magic[1] == '?') {
+		return radiance_hdr_read(p_path, r_rgb);
+	}
+	if (magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01) {
+		return recording_io::read_exr_rgb(p_path, r_rgb);
+	}
+	const bool png = magic[0] == 0x89 && magic[1] == 'P' && magic[2] == 'N' && magic[3] == 'G';
+	if (!png && !(magic[0] == 0xFF && magic[1] == 0xD8 && magic[2] == 0xFF)) {
+		return p_path + ": not a Radiance .hdr, OpenEXR, PNG or JPEG file";
+	}
+	cv::Mat image;
+	const std::string error = image_read(p_path, ImageReadMode::Unchanged, &image);
+	if (!error.empty()) {
+		return error;
+	}
+	if (image.channels() != 3) {
+		return p_path + ": the panorama must have 3 channels, it has " + std::to_string(image.channels());
+	}
+	// An LDR image: undo sRGB approximately (gamma 2.2). OpenCV's order is B, G, R.
+	image.convertTo(image, CV_32F, 1.0 / (image.depth() == CV_16U ? 65535.0 : 255.0));
+	cv::pow(image, 2.2, image);
+	cv::cvtColor(image, *r_rgb, cv::COLOR_BGR2RGB);
+	return "";
+}
+
+} // namespace
+
 PanoramaLoadResult load_panorama(const std::string &p_path) {
 	PanoramaLoadResult result;
 	const std::string not_a_file = input_file_problem(p_path, "no such file");
@@ -164,22 +211,11 @@ PanoramaLoadResult load_panorama(const std::string &p_path) {
 		result.error = not_a_file + ", so the panorama cannot be read";
 		return result;
 	}
-	cv::Mat image = cv::imread(p_path, cv::IMREAD_UNCHANGED | cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
-	if (image.empty()) {
-		result.error = p_path + ": cannot read the panorama (missing, or not an image OpenCV reads)";
-		return result;
-	}
-	if (image.channels() != 3) {
-		result.error = p_path + ": the panorama must have 3 channels, it has " + std::to_string(image.channels());
-		return result;
-	}
 	cv::Mat linear;
-	if (image.depth() == CV_32F) {
-		linear = image;
-	} else {
-		// An LDR image: undo sRGB approximately (gamma 2.2).
-		image.convertTo(linear, CV_32F, 1.0 / (image.depth() == CV_16U ? 65535.0 : 255.0));
-		cv::pow(linear, 2.2, linear);
+	const std::string error = read_panorama_rgb(p_path, &linear);
+	if (!error.empty()) {
+		result.error = error + ", so the panorama cannot be read";
+		return result;
 	}
 	auto panorama = std::make_shared<Panorama>();
 	panorama->width = linear.cols;
@@ -189,10 +225,10 @@ PanoramaLoadResult load_panorama(const std::string &p_path) {
 		const cv::Vec3f *row = linear.ptr<cv::Vec3f>(y);
 		for (int x = 0; x < linear.cols; ++x) {
 			float *p = &panorama->rgb[(static_cast<size_t>(y) * linear.cols + x) * 3];
-			// OpenCV is BGR.
-			p[0] = std::max(0.0f, row[x][2]);
+			// Negative values (and NaN) as 0.
+			p[0] = std::max(0.0f, row[x][0]);
 			p[1] = std::max(0.0f, row[x][1]);
-			p[2] = std::max(0.0f, row[x][0]);
+			p[2] = std::max(0.0f, row[x][2]);
 		}
 	}
 	result.ok = true;

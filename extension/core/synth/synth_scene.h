@@ -66,7 +66,9 @@ struct PanoramaLoadResult {
 	std::shared_ptr<const Panorama> panorama;
 };
 
-// Reads a Radiance .hdr (or anything cv::imread reads as float).
+// Reads a Radiance .hdr (io/radiance_hdr.h) or an OpenEXR's R, G, B as they are (linear), or an
+// 8- or 16-bit PNG or JPEG of 3 channels as sRGB (undone approximately, gamma 2.2): told apart by
+// their first bytes. Negative values and NaN become 0. The error names p_path.
 PanoramaLoadResult load_panorama(const std::string &p_path);
 
 // ---------------------------------------------------------------- materials

@@ -235,6 +235,8 @@ PackedStringArray RigCapture::get_warnings() const {
 		const std::string compute = engine->stats().compute;
 		if (compute.rfind("CPU", 0) == 0) {
 			warnings.push_back(String(("compute_backend: the kernels run on the CPU: " + compute).c_str()));
+		} else if (compute.find("on the CPU") != std::string::npos) {
+			warnings.push_back(String(("compute_backend: some kernels went back to the CPU: " + compute).c_str()));
 		}
 	}
 	if (live_open && playing) {

@@ -1,0 +1,76 @@
+#pragma once
+// ICP's normal equations on a Vulkan compute device (issue #40): the sums IcpTracker's accumulate
+// makes of every sampled pixel's rows (icp_correspondence), made per image row by icp_reduce.comp
+// and returned for the tracker to add in double, in row order. The tracker still builds the
+// frame's pyramid and solves each 6x6 system on the CPU: per Gauss-Newton iteration one dispatch.
+//
+// Tolerance against the CPU: each row's float sums are added in a tree rather than pixel by pixel,
+// and a driver may fuse multiply-adds, so a row's sums differ by float rounding (about 1e-6 of
+// their size); the solved pose then differs by far less than ICP's convergence threshold
+// (IcpOptions::min_update_m), which is what the tests allow.
+
+#include "depth_pyramid.h"
+#include "icp_kernels.h"
+
+#include <gpu/compute_device.h>
+
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace roomprobe {
+
+class IcpReducerGpu {
+public:
+	// Per sampled row: J^T J's upper triangle (21), J^T r (6), the traces of the rotation and
+	// translation blocks of the point-to-plane rows, their sum of squared residuals, the inliers, 0.
+	static constexpr int ROW_FLOATS = 32;
+
+	// Null, with r_error, when the kernel cannot be made on p_device.
+	static std::unique_ptr<IcpReducerGpu> create(std::shared_ptr<ComputeDevice> p_device, std::string *r_error);
+
+	// One tracking call at a time goes through the buffers: hold this lock from set_frame to the
+	// last reduce.
+	std::mutex &mutex() const { return busy; }
+	// The frame's first p_levels levels; level 0 only every p_finest_stride-th pixel of every
+	// p_finest_stride-th row, as the CPU pairs it.
+	bool set_frame(const FramePyramid &p_frame, int p_levels, int p_finest_stride, std::string *r_error);
+	// The reference, with its intensity and gradients when p_model has them (else geometry only).
+	bool set_model(const IcpModelView &p_model, std::string *r_error);
+	// The rows of level p_level at p_params (colour rows when p_params.colour_weight is not 0 and
+	// the model has intensity): r_rows points at *r_row_count rows of ROW_FLOATS, valid until
+	// the next call.
+	bool reduce(int p_level, const IcpKernelParams &p_params, const float **r_rows, int *r_row_count, std::string *r_error);
+
+	const ComputeDevice &device() const { return *compute; }
+	// After a failed dispatch the reducer is not used again (its device may be lost): why.
+	void set_failed(const std::string &p_reason);
+	bool has_failed() const { return failed.load(); }
+	std::string failure() const;
+
+private:
+	IcpReducerGpu() = default;
+	bool ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error) const;
+
+	struct Level {
+		int cols = 0, rows = 0; // sampled
+		size_t first_float = 0; // in the frame buffer
+	};
+	std::shared_ptr<ComputeDevice> compute; // outlives the buffers below
+	std::unique_ptr<GpuKernel> kernel;
+	std::unique_ptr<GpuBuffer> params, frame, model, rows;
+	std::vector<Level> levels;
+	bool model_colour = false;
+	// The model's camera and pose, for the parameters.
+	PinholeIntrinsics model_camera;
+	glm::mat3 model_rotation = glm::mat3(1.0f);
+	glm::vec3 model_translation = glm::vec3(0.0f);
+	mutable std::mutex busy;
+	std::atomic<bool> failed{ false };
+	std::string failure_reason;
+	mutable std::mutex failure_mutex;
+};
+
+} // namespace roomprobe
