@@ -1,5 +1,6 @@
-// Tracking's normal equations on a Vulkan device (slam/icp_reduce_gpu.h) against the CPU's, on
-// the synthetic living room at 320x240, on gpu_test_device() (lavapipe in CI).
+// Tracking on a Vulkan device (slam/icp_reduce_gpu.h: the frame's pyramid and the normal
+// equations) against the CPU's, on the synthetic living room at 320x240, on gpu_test_device()
+// (lavapipe in CI).
 //
 // The tolerance: the device sums each image row's float rows in a tree, not pixel by pixel, and
 // a driver may fuse multiply-adds, so a system differs from the CPU's by float rounding. That
@@ -12,6 +13,7 @@
 
 #include "gpu_test_device.h"
 #include "slam/dense_slam.h"
+#include "slam/depth_pyramid.h"
 #include "slam/icp_reduce_gpu.h"
 #include "slam/icp_tracker.h"
 #include "synth_test_frames.h"
@@ -22,6 +24,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include <cmath>
+#include <algorithm>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -86,6 +89,61 @@ TEST_CASE("GPU ICP: tracking on a Vulkan device gives the CPU's pose to within I
 		}
 	}
 	CHECK(!reducer->has_failed());
+}
+
+TEST_CASE("GPU ICP: the frame's pyramid made on the device is the CPU's to float rounding") {
+	// The bound: the smoothed depth is a weighted mean of at most 25 taps, so it differs by a few
+	// ulps (relative 25 x 2^-24 at most, 1.5e-6); a vertex carries that relative error (its x and
+	// y are z times a ray's slope, at most 0.7 here), so 2e-6 of its depth. A normal is the cross
+	// product of two differences of neighbouring vertices, each about z / f (a pixel's footprint,
+	// 1/262.5 of z at level 0, twice that and more above): their relative error 2e-6 z / (z / 262.5)
+	// = 5.3e-4, which bounds the normal's change. Flags differ only where a depth step or a
+	// smoothing tap sits on its threshold: a handful of pixels, at most 1 in 1000 here.
+	const std::shared_ptr<ComputeDevice> device = gpu_test_device();
+	std::string error;
+	const std::unique_ptr<IcpReducerGpu> reducer = IcpReducerGpu::create(device, &error);
+	REQUIRE_MESSAGE(reducer, error);
+	const PinholeIntrinsics camera = pinhole_intrinsics(half_camera());
+	const IcpOptions options;
+	for (const bool with_colour : { false, true }) {
+		CAPTURE(with_colour);
+		const Frame shot = render_living_room(living_room().trajectory.world_from_rgb(2.0), 2.0, true, 5);
+		const cv::Mat depth = clean_depth(shot.depth_m, float(options.min_depth_m), float(options.max_depth_m));
+		const cv::Mat rgb = with_colour ? shot.rgb : cv::Mat();
+		const FramePyramid cpu = build_frame_pyramid(depth, rgb, camera, options.levels, float(options.pyramid_band_m), options.surface, options.finest_stride_px);
+		REQUIRE(reducer->set_frame(cpu, options.levels, options.finest_stride_px, &error));
+		const std::vector<float> expected = reducer->frame_floats();
+		REQUIRE_MESSAGE(reducer->build_frame(depth, rgb, camera, options.levels, float(options.pyramid_band_m), options.surface, options.finest_stride_px, &error),
+				error);
+		const std::vector<float> made = reducer->frame_floats();
+		REQUIRE(made.size() == expected.size());
+		const size_t pixels = made.size() / IcpReducerGpu::FRAME_FLOATS;
+		size_t valid = 0, flags_differ = 0;
+		float vertex_error = 0.0f, normal_error = 0.0f, intensity_error = 0.0f;
+		for (size_t p = 0; p < pixels; p++) {
+			const float *a = &expected[p * IcpReducerGpu::FRAME_FLOATS], *b = &made[p * IcpReducerGpu::FRAME_FLOATS];
+			if (a[7] != b[7]) {
+				flags_differ++;
+				continue;
+			}
+			if (a[7] == 0.0f) {
+				continue;
+			}
+			valid++;
+			for (int k = 0; k < 3; k++) {
+				vertex_error = std::max(vertex_error, std::abs(a[k] - b[k]) / a[2]);
+				normal_error = std::max(normal_error, std::abs(a[3 + k] - b[3 + k]));
+			}
+			intensity_error = std::max(intensity_error, std::abs(a[6] - b[6]));
+		}
+		MESSAGE("pyramid: ", valid, " valid sampled pixels, ", flags_differ, " with other flags; vertex error ", vertex_error, " of z, normal ",
+				normal_error, ", intensity ", intensity_error);
+		CHECK(valid > pixels / 2);
+		CHECK(flags_differ <= pixels / 1000);
+		CHECK(vertex_error <= 2e-6f);
+		CHECK(normal_error <= 5.3e-4f);
+		CHECK(intensity_error <= 2e-6f); // a mean of four values in [0, 1], in another order
+	}
 }
 
 TEST_CASE("GPU ICP: dense SLAM with tracking on the device follows the CPU's trajectory, ATE within 0.5 mm of it") {

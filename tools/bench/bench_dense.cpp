@@ -154,7 +154,7 @@ int bench_dense(const Arguments &p_args, const DenseSource &p_source) {
 	const size_t available = reader.rgbd_count() - first;
 	const size_t total = p_args.frames > 0 ? std::min(available, size_t(p_args.frames)) : available;
 	print_dense_header(p_source, p_args.slam, total, first, start);
-	std::printf("  backend (tracking's sums): %s\n", set_backend(p_args.backend, &slam).c_str());
+	std::printf("  backend (tracking): %s\n", set_backend(p_args.backend, &slam).c_str());
 	TrajectoryFile trajectory_file;
 	if (!trajectory_file.open(p_args.save_trajectory, "slam " + p_source.option,
 				p_source.has_start_pose ? "the room's (room.yaml's initial pose)" : "the ground truth's (SLAM starts at its pose of the first frame it covers)")) {
@@ -171,7 +171,7 @@ int bench_dense(const Arguments &p_args, const DenseSource &p_source) {
 	trajectory_file.close(p_args.save_trajectory);
 	const std::string problem = slam.compute_problem();
 	if (!problem.empty() && p_args.backend != ComputeBackend::Cpu) {
-		std::printf("  backend: tracking's sums went back to the CPU: %s\n", problem.c_str());
+		std::printf("  backend: tracking went back to the CPU: %s\n", problem.c_str());
 	}
 	print_dense_summary(p_source, figures, accuracy, done, backend_summary(p_args.backend, slam.tracks_on_gpu()));
 	return 0;

@@ -118,7 +118,7 @@ struct LiveRoomConfig {
 	// process), box-filtered meanwhile. True: wait for it instead (the benchmark, the evaluation).
 	bool wait_for_ggx_filter = false;
 	// Where the kernels that have a GPU twin run (issue #40; so far the GGX prefilter, SH and
-	// tracking's normal equations):
+	// tracking's depth pyramid and normal equations):
 	// Cpu; Vulkan (any Vulkan device, Mesa's lavapipe included); Auto (Vulkan where a device that
 	// is not a CPU exists). No device: the CPU, and stats().compute says why.
 	ComputeBackend compute_backend = ComputeBackend::Cpu;

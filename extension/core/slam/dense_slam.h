@@ -112,11 +112,12 @@ public:
 	// of the first frame, and empties the model. The error (empty on success) names the problem.
 	std::string configure(const PinholeParams &p_camera, const Pose &p_initial_world_from_camera);
 	bool is_configured() const { return configured; }
-	// Where tracking's normal equations are summed (issue #40): on p_device (icp_reduce_gpu.h), or
-	// on the CPU when it is null. "" or why the device cannot (tracking then stays on the CPU).
+	// Where tracking's pyramid and normal equations are made (issue #40): on p_device
+	// (icp_reduce_gpu.h), or on the CPU when it is null. "" or why the device cannot (tracking
+	// then stays on the CPU).
 	std::string set_compute(std::shared_ptr<ComputeDevice> p_device);
-	// Whether tracking's sums run on a device now, and, when set_compute's device refused the
-	// kernel or a dispatch failed and put them back on the CPU, why ("" otherwise).
+	// Whether tracking runs on a device now, and, when set_compute's device refused the kernel or
+	// a dispatch failed and put tracking back on the CPU, why ("" otherwise).
 	bool tracks_on_gpu() const { return tracker.uses_gpu(); }
 	std::string compute_problem() const;
 

@@ -115,19 +115,25 @@ cv::Mat downsample_depth(const cv::Mat &p_depth_m, float p_band_m) {
 	return half;
 }
 
+std::vector<float> smoothing_weights(int p_radius) {
+	const int radius = std::max(0, p_radius);
+	const int side = 2 * radius + 1;
+	const float sigma = 0.5f * float(radius) + 0.5f;
+	std::vector<float> weights(static_cast<size_t>(side * side));
+	for (int dy = -radius; dy <= radius; ++dy) {
+		for (int dx = -radius; dx <= radius; ++dx) {
+			weights[size_t((dy + radius) * side + dx + radius)] = std::exp(-float(dx * dx + dy * dy) / (2.0f * sigma * sigma));
+		}
+	}
+	return weights;
+}
+
 cv::Mat smooth_depth(const cv::Mat &p_depth_m, int p_radius, float p_band_m) {
 	CV_Assert(p_depth_m.type() == CV_32FC1);
 	if (p_radius <= 0) {
 		return p_depth_m.clone();
 	}
-	const int side = 2 * p_radius + 1;
-	const float sigma = 0.5f * float(p_radius) + 0.5f;
-	std::vector<float> weights(static_cast<size_t>(side * side));
-	for (int dy = -p_radius; dy <= p_radius; ++dy) {
-		for (int dx = -p_radius; dx <= p_radius; ++dx) {
-			weights[size_t((dy + p_radius) * side + dx + p_radius)] = std::exp(-float(dx * dx + dy * dy) / (2.0f * sigma * sigma));
-		}
-	}
+	const std::vector<float> weights = smoothing_weights(p_radius);
 	cv::Mat smooth(p_depth_m.size(), CV_32FC1);
 	const int width = p_depth_m.cols, height = p_depth_m.rows;
 	const int stripes = (height + ROWS_PER_STRIPE - 1) / ROWS_PER_STRIPE;

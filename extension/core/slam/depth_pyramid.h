@@ -23,6 +23,9 @@ cv::Mat clean_depth(const cv::Mat &p_depth_m, float p_min_depth_m, float p_max_d
 // the block has none.
 cv::Mat downsample_depth(const cv::Mat &p_depth_m, float p_band_m);
 
+// smooth_depth's spatial weights, (2 p_radius + 1)^2 row by row (also the GPU's, icp_reduce_gpu.h).
+std::vector<float> smoothing_weights(int p_radius);
+
 // Edge-preserving smoothing of a clean CV_32FC1 depth image (smooth_depth_pixel): Gaussian
 // spatial weights of sigma 0.5 p_radius + 0.5 pixels over a (2 p_radius + 1)^2 window, only
 // depths within p_band_m (metres) of the centre's; holes stay holes. p_radius 0: a copy.

@@ -10,7 +10,6 @@ namespace roomprobe {
 
 namespace {
 
-constexpr int FRAME_FLOATS = 8; // per sampled pixel, icp_reduce.comp's Frame
 constexpr int MODEL_FLOATS = 12; // per model pixel, its Model
 
 // icp_reduce.comp's Params, std430.
@@ -79,18 +78,23 @@ bool IcpReducerGpu::ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes,
 	return bool(*r_buffer);
 }
 
-bool IcpReducerGpu::set_frame(const FramePyramid &p_frame, int p_levels, int p_finest_stride, std::string *r_error) {
+size_t IcpReducerGpu::plan_levels(const PinholeIntrinsics &p_camera, int p_levels, int p_finest_stride) {
 	levels.assign(size_t(p_levels), Level());
 	size_t floats = 0;
 	for (int l = 0; l < p_levels; l++) {
 		const int stride = l == 0 ? p_finest_stride : 1;
-		const cv::Mat &vertices = p_frame.vertices[size_t(l)];
+		const PinholeIntrinsics camera = p_camera.level(l);
 		Level &level = levels[size_t(l)];
-		level.cols = (vertices.cols + stride - 1) / stride;
-		level.rows = (vertices.rows + stride - 1) / stride;
+		level.cols = (camera.width + stride - 1) / stride;
+		level.rows = (camera.height + stride - 1) / stride;
 		level.first_float = floats;
 		floats += size_t(level.cols) * size_t(level.rows) * FRAME_FLOATS;
 	}
+	return floats;
+}
+
+bool IcpReducerGpu::set_frame(const FramePyramid &p_frame, int p_levels, int p_finest_stride, std::string *r_error) {
+	const size_t floats = plan_levels(p_frame.cameras[0], p_levels, p_finest_stride);
 	if (!ensure(&frame, floats * sizeof(float), r_error)) {
 		return false;
 	}
@@ -121,6 +125,16 @@ bool IcpReducerGpu::set_frame(const FramePyramid &p_frame, int p_levels, int p_f
 		}
 	}
 	return true;
+}
+
+std::vector<float> IcpReducerGpu::frame_floats() const {
+	if (!frame || levels.empty()) {
+		return {};
+	}
+	const Level &last = levels.back();
+	const size_t floats = last.first_float + size_t(last.cols) * size_t(last.rows) * FRAME_FLOATS;
+	const float *data = static_cast<const float *>(frame->data());
+	return std::vector<float>(data, data + floats);
 }
 
 bool IcpReducerGpu::set_model(const IcpModelView &p_model, std::string *r_error) {

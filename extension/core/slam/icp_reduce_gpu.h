@@ -1,8 +1,9 @@
 #pragma once
-// ICP's normal equations on a Vulkan compute device (issue #40): the sums IcpTracker's accumulate
-// makes of every sampled pixel's rows (icp_correspondence), made per image row by icp_reduce.comp
-// and returned for the tracker to add in double, in row order. The tracker still builds the
-// frame's pyramid and solves each 6x6 system on the CPU: per Gauss-Newton iteration one dispatch.
+// ICP on a Vulkan compute device (issue #40): the frame's pyramid (build_frame: depth_smooth.comp,
+// depth_downsample.comp, depth_surface.comp, build_frame_pyramid's steps) and the sums
+// IcpTracker's accumulate makes of every sampled pixel's rows (icp_correspondence), made per
+// image row by icp_reduce.comp and returned for the tracker to add in double, in row order. The
+// tracker solves each 6x6 system on the CPU: per Gauss-Newton iteration one dispatch.
 //
 // Tolerance against the CPU: each row's float sums are added in a tree rather than pixel by pixel,
 // and a driver may fuse multiply-adds, so a row's sums differ by float rounding (about 1e-6 of
@@ -27,6 +28,8 @@ public:
 	// Per sampled row: J^T J's upper triangle (21), J^T r (6), the traces of the rotation and
 	// translation blocks of the point-to-plane rows, their sum of squared residuals, the inliers, 0.
 	static constexpr int ROW_FLOATS = 32;
+	// Per sampled pixel of the frame: vertex, normal, intensity, flags (icp_reduce.comp's Frame).
+	static constexpr int FRAME_FLOATS = 8;
 
 	// Null, with r_error, when the kernel cannot be made on p_device.
 	static std::unique_ptr<IcpReducerGpu> create(std::shared_ptr<ComputeDevice> p_device, std::string *r_error);
@@ -37,6 +40,14 @@ public:
 	// The frame's first p_levels levels; level 0 only every p_finest_stride-th pixel of every
 	// p_finest_stride-th row, as the CPU pairs it.
 	bool set_frame(const FramePyramid &p_frame, int p_levels, int p_finest_stride, std::string *r_error);
+	// The same levels made on the device from the frame itself, as build_frame_pyramid makes
+	// them: p_clean_depth_m (clean_depth's) and, for the colour term, p_rgb (CV_8UC3; may be empty).
+	// Differs from set_frame's by float rounding (a driver may fuse multiply-adds), and so by a
+	// normal or two whose depth step sits on max_jump_relative.
+	bool build_frame(const cv::Mat &p_clean_depth_m, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, int p_levels, float p_band_m,
+			const SurfaceOptions &p_surface, int p_finest_stride, std::string *r_error);
+	// The frame as icp_reduce.comp reads it (8 floats per sampled pixel, level after level).
+	std::vector<float> frame_floats() const;
 	// The reference, with its intensity and gradients when p_model has them (else geometry only).
 	bool set_model(const IcpModelView &p_model, std::string *r_error);
 	// The rows of level p_level at p_params (colour rows when p_params.colour_weight is not 0 and
@@ -53,6 +64,10 @@ public:
 private:
 	IcpReducerGpu() = default;
 	bool ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error) const;
+	// Sizes levels for p_levels levels of p_camera (level 0 sampled every p_finest_stride-th
+	// pixel); the frame's floats.
+	size_t plan_levels(const PinholeIntrinsics &p_camera, int p_levels, int p_finest_stride);
+	bool make_pyramid_kernels(std::string *r_error);
 
 	struct Level {
 		int cols = 0, rows = 0; // sampled
@@ -61,6 +76,10 @@ private:
 	std::shared_ptr<ComputeDevice> compute; // outlives the buffers below
 	std::unique_ptr<GpuKernel> kernel;
 	std::unique_ptr<GpuBuffer> params, frame, model, rows;
+	// build_frame's: made at its first call.
+	std::unique_ptr<GpuKernel> smooth_kernel, downsample_kernel, surface_kernel;
+	std::unique_ptr<GpuBuffer> depth, intensity, weights;
+	int weights_radius = -1; // the radius the weights buffer holds
 	std::vector<Level> levels;
 	bool model_colour = false;
 	// The model's camera and pose, for the parameters.

@@ -14,6 +14,7 @@
 #include <limits>
 #include <mutex>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -417,8 +418,15 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 	const int finest_stride = std::max(1, options.finest_stride_px);
 	auto stride_at = [&](int p_level) { return p_level == 0 ? finest_stride : 1; };
 	const int sampled_valid = finest_stride == 1 ? valid : count_sampled_valid(depth, finest_stride);
-	const FramePyramid frame =
-			build_frame_pyramid(depth, colour ? p_rgb : cv::Mat(), p_camera, levels, float(options.pyramid_band_m), options.surface, finest_stride);
+	// The frame's pyramid: on the device when the sums are made there, on the CPU otherwise (and
+	// when the device fails midway).
+	std::optional<FramePyramid> cpu_frame;
+	auto frame = [&]() -> const FramePyramid & {
+		if (!cpu_frame) {
+			cpu_frame = build_frame_pyramid(depth, colour ? p_rgb : cv::Mat(), p_camera, levels, float(options.pyramid_band_m), options.surface, finest_stride);
+		}
+		return *cpu_frame;
+	};
 	ModelIntensity intensity; // made when the colour term is first needed
 	const IcpModelView geometry_model = model_view(p_model, nullptr);
 	IcpModelView colour_model = geometry_model;
@@ -433,7 +441,9 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 	};
 	if (reducer != nullptr) {
 		reducer_lock = std::unique_lock<std::mutex>(reducer->mutex());
-		if (!reducer->set_frame(frame, levels, finest_stride, &gpu_error) || !reducer->set_model(geometry_model, &gpu_error)) {
+		if (!reducer->build_frame(depth, colour ? p_rgb : cv::Mat(), p_camera, levels, float(options.pyramid_band_m), options.surface, finest_stride,
+					&gpu_error) ||
+				!reducer->set_model(geometry_model, &gpu_error)) {
 			give_up_gpu();
 		}
 	}
@@ -454,7 +464,7 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 			}
 			give_up_gpu();
 		}
-		return accumulate(frame, p_level, stride_at(p_level), params, p_colour ? colour_model : geometry_model);
+		return accumulate(frame(), p_level, stride_at(p_level), params, p_colour ? colour_model : geometry_model);
 	};
 
 	Pose pose = p_initial_world_from_camera;
