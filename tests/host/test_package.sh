@@ -76,6 +76,16 @@ test_gdextension_lists_dependencies() {
 	check "the library's RUNPATH is not \$ORIGIN" says 'Library runpath: [$ORIGIN]'
 	logged rp_run_in_root "$RP_SHIP_ROOT" readelf -S -W "$addon/bin/libroomprobe.linux.release.x86_64.so"
 	check "the library is not stripped (it has a .symtab)" bash -c '! grep -q "] \.symtab " <<<"$0"' "$out"
+	# The GPU path (issue #40): Vulkan is opened at run time through the driver's loader, never
+	# linked or bundled, and every compute kernel rides inside the library as SPIR-V.
+	logged rp_run_in_root "$RP_SHIP_ROOT" readelf -d "$addon/bin/libroomprobe.linux.release.x86_64.so"
+	check "the library links the Vulkan loader (it must open it at run time)" bash -c '! grep -q "NEEDED.*libvulkan" <<<"$0"' "$out"
+	check "the addon bundles a Vulkan library" bash -c '! find "$0/bin" -name "libvulkan*" | grep -q .' "$addon"
+	local kernels spirv
+	kernels=$(find extension/core -name '*.comp' | wc -l)
+	spirv=$(python3 -c 'import sys; d = open(sys.argv[1], "rb").read(); print(sum(1 for i in range(0, len(d) - 3, 4) if d[i:i + 4] == b"\x03\x02\x23\x07"))' \
+		"$addon/bin/libroomprobe.linux.release.x86_64.so")
+	check "the library holds $spirv SPIR-V modules, fewer than the $kernels kernels in extension/core" test "${spirv:-0}" -ge "$kernels"
 }
 
 # The addon on a bare Debian 12: dlopen binds every symbol and finds the entry, as Godot would.

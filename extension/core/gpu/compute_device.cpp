@@ -1,5 +1,6 @@
 #include "compute_device.h"
 
+#include <algorithm>
 #include <map>
 
 namespace roomprobe {
@@ -100,45 +101,73 @@ std::string ComputeDevice::open(const ComputeDeviceOptions &p_options) {
 	vk_api.EnumeratePhysicalDevices(instance, &count, nullptr);
 	std::vector<VkPhysicalDevice> devices(count);
 	vk_api.EnumeratePhysicalDevices(instance, &count, devices.data());
-	int best_rank = 99;
-	uint32_t family = 0;
-	for (VkPhysicalDevice candidate : devices) {
+	const std::vector<Candidate> candidates = rank_devices(devices, p_options);
+	if (candidates.empty()) {
+		return count == 0 ? std::string("no Vulkan device (the loader lists none)")
+						  : std::string("no Vulkan device with a compute queue") + (p_options.allow_cpu_device ? "" : " that is not a CPU device");
+	}
+	// Best first; a device whose driver refuses (a broken install, an exhausted GPU) gives way to
+	// the next, and the reasons of all that refused are kept.
+	std::string refusals;
+	for (const Candidate &candidate : candidates) {
+		const std::string problem = open_device(candidate);
+		if (problem.empty()) {
+			return std::string();
+		}
+		close_device();
+		refusals += (refusals.empty() ? "" : "; ") + candidate.name + ": " + problem;
+	}
+	return "no Vulkan device could be opened (" + refusals + ")";
+}
+
+std::vector<ComputeDevice::Candidate> ComputeDevice::rank_devices(const std::vector<VkPhysicalDevice> &p_devices, const ComputeDeviceOptions &p_options) const {
+	std::vector<Candidate> candidates;
+	for (VkPhysicalDevice physical_device : p_devices) {
 		VkPhysicalDeviceProperties properties;
-		vk_api.GetPhysicalDeviceProperties(candidate, &properties);
-		const int rank = device_rank(properties.deviceType);
-		if (rank >= best_rank || (properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU && !p_options.allow_cpu_device)) {
+		vk_api.GetPhysicalDeviceProperties(physical_device, &properties);
+		if (properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU && !p_options.allow_cpu_device) {
 			continue;
 		}
 		uint32_t families = 0;
-		vk_api.GetPhysicalDeviceQueueFamilyProperties(candidate, &families, nullptr);
+		vk_api.GetPhysicalDeviceQueueFamilyProperties(physical_device, &families, nullptr);
 		std::vector<VkQueueFamilyProperties> family_properties(families);
-		vk_api.GetPhysicalDeviceQueueFamilyProperties(candidate, &families, family_properties.data());
+		vk_api.GetPhysicalDeviceQueueFamilyProperties(physical_device, &families, family_properties.data());
 		for (uint32_t f = 0; f < families; f++) {
 			if (family_properties[f].queueFlags & VK_QUEUE_COMPUTE_BIT) {
-				physical = candidate;
-				family = f;
-				best_rank = rank;
-				device_name = properties.deviceName;
-				device_limits = properties.limits;
-				cpu = properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+				Candidate candidate;
+				candidate.physical = physical_device;
+				candidate.family = f;
+				candidate.rank = device_rank(properties.deviceType);
+				candidate.properties = properties;
+				candidate.name = properties.deviceName;
+				candidates.push_back(candidate);
 				break;
 			}
 		}
 	}
-	if (physical == VK_NULL_HANDLE) {
-		return count == 0 ? std::string("no Vulkan device (the loader lists none)")
-						  : std::string("no Vulkan device with a compute queue") + (p_options.allow_cpu_device ? "" : " that is not a CPU device");
-	}
+	std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate &p_a, const Candidate &p_b) { return p_a.rank < p_b.rank; });
+	return candidates;
+}
+
+std::string ComputeDevice::open_device(const Candidate &p_candidate) {
+	physical = p_candidate.physical;
+	device_name = p_candidate.name;
+	device_limits = p_candidate.properties.limits;
+	cpu = p_candidate.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
 	vk_api.GetPhysicalDeviceMemoryProperties(physical, &memory);
+	if (memory_type(~0u) < 0) {
+		return "no host-visible, coherent memory";
+	}
+	std::string error;
 	const float priority = 1.0f;
 	VkDeviceQueueCreateInfo queue_info = vk_struct<VkDeviceQueueCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO);
-	queue_info.queueFamilyIndex = family;
+	queue_info.queueFamilyIndex = p_candidate.family;
 	queue_info.queueCount = 1;
 	queue_info.pQueuePriorities = &priority;
 	VkDeviceCreateInfo device_info = vk_struct<VkDeviceCreateInfo>(VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO);
 	device_info.queueCreateInfoCount = 1;
 	device_info.pQueueCreateInfos = &queue_info;
-	result = vk_api.CreateDevice(physical, &device_info, nullptr, &device);
+	VkResult result = vk_api.CreateDevice(physical, &device_info, nullptr, &device);
 	if (result != VK_SUCCESS) {
 		device = VK_NULL_HANDLE;
 		return failed("vkCreateDevice", result);
@@ -146,10 +175,10 @@ std::string ComputeDevice::open(const ComputeDeviceOptions &p_options) {
 	if (!vk::load_device(device, &vk_api, &error)) {
 		return error;
 	}
-	vk_api.GetDeviceQueue(device, family, 0, &queue);
+	vk_api.GetDeviceQueue(device, p_candidate.family, 0, &queue);
 	VkCommandPoolCreateInfo pool_info = vk_struct<VkCommandPoolCreateInfo>(VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO);
 	pool_info.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-	pool_info.queueFamilyIndex = family;
+	pool_info.queueFamilyIndex = p_candidate.family;
 	if ((result = vk_api.CreateCommandPool(device, &pool_info, nullptr, &pool)) != VK_SUCCESS) {
 		return failed("vkCreateCommandPool", result);
 	}
@@ -175,8 +204,8 @@ std::string ComputeDevice::open(const ComputeDeviceOptions &p_options) {
 	return std::string();
 }
 
-ComputeDevice::~ComputeDevice() {
-	// A device whose functions did not all load is only destroyed (open() failed part way).
+void ComputeDevice::close_device() {
+	// A device whose functions did not all load is only destroyed (open_device failed part way).
 	if (device != VK_NULL_HANDLE && vk_api.DestroyDevice != nullptr && vk_api.QueueSubmit != nullptr) {
 		vk_api.DeviceWaitIdle(device);
 		vk_api.DestroyDescriptorPool(device, descriptors, nullptr);
@@ -186,6 +215,17 @@ ComputeDevice::~ComputeDevice() {
 	} else if (device != VK_NULL_HANDLE && vk_api.DestroyDevice != nullptr) {
 		vk_api.DestroyDevice(device, nullptr);
 	}
+	device = VK_NULL_HANDLE;
+	descriptors = VK_NULL_HANDLE;
+	fence = VK_NULL_HANDLE;
+	pool = VK_NULL_HANDLE;
+	commands = VK_NULL_HANDLE;
+	queue = VK_NULL_HANDLE;
+	physical = VK_NULL_HANDLE;
+}
+
+ComputeDevice::~ComputeDevice() {
+	close_device();
 	if (instance != VK_NULL_HANDLE && vk_api.DestroyInstance != nullptr) {
 		vk_api.DestroyInstance(instance, nullptr);
 	}

@@ -86,8 +86,9 @@ struct GpuDispatch {
 
 class ComputeDevice {
 public:
-	// The first device with a compute queue, GPUs before CPU devices. Null, with r_error naming
-	// what is missing (no loader, no device, a failed call), where there is none.
+	// A device with a compute queue, GPUs before CPU devices, the next tried where one's driver
+	// refuses. Null, with r_error naming what is missing (no loader, no device, each device's
+	// failed call), where there is none.
 	static std::shared_ptr<ComputeDevice> create(const ComputeDeviceOptions &p_options, std::string *r_error);
 	~ComputeDevice();
 	ComputeDevice(const ComputeDevice &) = delete;
@@ -111,7 +112,18 @@ public:
 
 private:
 	ComputeDevice() = default;
+	// A physical device that can run compute, and its rank (GPUs first).
+	struct Candidate {
+		VkPhysicalDevice physical = VK_NULL_HANDLE;
+		uint32_t family = 0; // a queue family with compute
+		int rank = 0;
+		VkPhysicalDeviceProperties properties{};
+		std::string name;
+	};
 	std::string open(const ComputeDeviceOptions &p_options);
+	std::vector<Candidate> rank_devices(const std::vector<VkPhysicalDevice> &p_devices, const ComputeDeviceOptions &p_options) const;
+	std::string open_device(const Candidate &p_candidate); // "" or why it cannot be used
+	void close_device(); // what open_device made, so that the next candidate can be tried
 	int memory_type(uint32_t p_bits) const; // host-visible and coherent; -1: none
 
 	vk::Api vk_api;
