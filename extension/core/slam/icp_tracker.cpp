@@ -352,6 +352,73 @@ IcpKernelParams kernel_params(const IcpOptions &p_options, const Pose &p_pose, i
 	return params;
 }
 
+// The normal equations of one frame against one reference, at any level and pose: on the device
+// when the tracker has one (the same pairs, rows and sums: icp_reduce_gpu.h), else on the CPU. A
+// device failure puts this frame and later ones back on the CPU. The CPU pyramid and the
+// reference's intensity are made when first needed.
+class FrameSystems {
+public:
+	FrameSystems(const IcpOptions &p_options, const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, const ModelMaps &p_model,
+			int p_levels, int p_finest_stride, IcpReducerGpu *p_reducer) :
+			options(p_options), depth(p_depth_m), rgb(p_rgb), camera(p_camera), model(p_model), levels(p_levels), finest_stride(p_finest_stride),
+			reducer(p_reducer), geometry_model(model_view(p_model, nullptr)), colour_model(geometry_model) {
+		if (reducer == nullptr) {
+			return;
+		}
+		reducer_lock = std::unique_lock<std::mutex>(reducer->mutex());
+		if (!reducer->build_frame(depth, rgb, camera, levels, float(options.pyramid_band_m), options.surface, finest_stride, &gpu_error) ||
+				!reducer->set_model(geometry_model, &gpu_error)) {
+			give_up_gpu();
+		}
+	}
+
+	NormalSystem at(int p_level, const Pose &p_pose, bool p_colour) {
+		if (p_colour && intensity.intensity.empty()) {
+			intensity = model_intensity(model);
+			colour_model = model_view(model, &intensity);
+			if (reducer != nullptr && !reducer->set_model(colour_model, &gpu_error)) {
+				give_up_gpu();
+			}
+		}
+		const IcpKernelParams params = kernel_params(options, p_pose, p_level, p_colour);
+		if (reducer != nullptr) {
+			const float *rows = nullptr;
+			int row_count = 0;
+			if (reducer->reduce(p_level, params, &rows, &row_count, &gpu_error)) {
+				return system_from_rows(rows, row_count);
+			}
+			give_up_gpu();
+		}
+		return accumulate(cpu_frame(), p_level, p_level == 0 ? finest_stride : 1, params, p_colour ? colour_model : geometry_model);
+	}
+
+private:
+	const FramePyramid &cpu_frame() {
+		if (!pyramid) {
+			pyramid = build_frame_pyramid(depth, rgb, camera, levels, float(options.pyramid_band_m), options.surface, finest_stride);
+		}
+		return *pyramid;
+	}
+	void give_up_gpu() {
+		reducer->set_failed("ICP on the GPU: " + gpu_error);
+		reducer = nullptr;
+	}
+
+	const IcpOptions &options;
+	const cv::Mat &depth;
+	const cv::Mat rgb; // empty: no colour term
+	const PinholeIntrinsics camera;
+	const ModelMaps &model;
+	const int levels, finest_stride;
+	IcpReducerGpu *reducer; // null: the CPU
+	std::unique_lock<std::mutex> reducer_lock; // its buffers are this frame's while held
+	std::string gpu_error;
+	std::optional<FramePyramid> pyramid;
+	ModelIntensity intensity; // made when the colour term is first needed
+	const IcpModelView geometry_model;
+	IcpModelView colour_model;
+};
+
 std::string check_inputs(const cv::Mat &p_depth, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, const ModelMaps &p_model, bool p_colour) {
 	if (p_depth.type() != CV_32FC1 || p_depth.cols != p_camera.width || p_depth.rows != p_camera.height) {
 		return "depth must be CV_32FC1 of the camera's size " + std::to_string(p_camera.width) + "x" + std::to_string(p_camera.height);
@@ -416,56 +483,9 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 	// The finest level pairs a sample of its pixels (IcpOptions::finest_stride_px); the inlier
 	// fraction is of the valid pixels sampled.
 	const int finest_stride = std::max(1, options.finest_stride_px);
-	auto stride_at = [&](int p_level) { return p_level == 0 ? finest_stride : 1; };
 	const int sampled_valid = finest_stride == 1 ? valid : count_sampled_valid(depth, finest_stride);
-	// The frame's pyramid: on the device when the sums are made there, on the CPU otherwise (and
-	// when the device fails midway).
-	std::optional<FramePyramid> cpu_frame;
-	auto frame = [&]() -> const FramePyramid & {
-		if (!cpu_frame) {
-			cpu_frame = build_frame_pyramid(depth, colour ? p_rgb : cv::Mat(), p_camera, levels, float(options.pyramid_band_m), options.surface, finest_stride);
-		}
-		return *cpu_frame;
-	};
-	ModelIntensity intensity; // made when the colour term is first needed
-	const IcpModelView geometry_model = model_view(p_model, nullptr);
-	IcpModelView colour_model = geometry_model;
-	// The sums on the device when there is one: the same pairs, rows and sums (icp_reduce_gpu.h);
-	// a failure puts this call and later ones back on the CPU.
-	IcpReducerGpu *reducer = uses_gpu() ? gpu.get() : nullptr;
-	std::unique_lock<std::mutex> reducer_lock;
-	std::string gpu_error;
-	auto give_up_gpu = [&]() {
-		reducer->set_failed("ICP on the GPU: " + gpu_error);
-		reducer = nullptr;
-	};
-	if (reducer != nullptr) {
-		reducer_lock = std::unique_lock<std::mutex>(reducer->mutex());
-		if (!reducer->build_frame(depth, colour ? p_rgb : cv::Mat(), p_camera, levels, float(options.pyramid_band_m), options.surface, finest_stride,
-					&gpu_error) ||
-				!reducer->set_model(geometry_model, &gpu_error)) {
-			give_up_gpu();
-		}
-	}
-	auto system_at = [&](int p_level, const Pose &p_pose, bool p_colour) {
-		if (p_colour && intensity.intensity.empty()) {
-			intensity = model_intensity(p_model);
-			colour_model = model_view(p_model, &intensity);
-			if (reducer != nullptr && !reducer->set_model(colour_model, &gpu_error)) {
-				give_up_gpu();
-			}
-		}
-		const IcpKernelParams params = kernel_params(options, p_pose, p_level, p_colour);
-		if (reducer != nullptr) {
-			const float *rows = nullptr;
-			int row_count = 0;
-			if (reducer->reduce(p_level, params, &rows, &row_count, &gpu_error)) {
-				return system_from_rows(rows, row_count);
-			}
-			give_up_gpu();
-		}
-		return accumulate(frame(), p_level, stride_at(p_level), params, p_colour ? colour_model : geometry_model);
-	};
+	FrameSystems systems(options, depth, colour ? p_rgb : cv::Mat(), p_camera, p_model, levels, finest_stride, uses_gpu() ? gpu.get() : nullptr);
+	auto system_at = [&](int p_level, const Pose &p_pose, bool p_colour) { return systems.at(p_level, p_pose, p_colour); };
 
 	Pose pose = p_initial_world_from_camera;
 	int iterations = 0;
