@@ -14,6 +14,10 @@
 # every run's whole output goes to $RESULTS (default roomprobe-bench/results).
 #
 # Usage, on this machine from the clone: tools/bench/device_bench.sh [--check] OUT.tar.xz [FRAMES]  (FRAMES: 200)
+# On the lent device machine (its tool carries at most 64 MiB and returns at most 8 files), one call:
+#   carry out/devbench.tar.xz; command: mkdir -p /tmp/rb && tar xJf out/devbench.tar.xz -C /tmp/rb &&
+#   RESULTS=/tmp/rb/results /tmp/rb/roomprobe-bench/run.sh all; tar czf $OUT/results.tgz -C /tmp/rb results
+# (about 5 minutes of runs; the summary lines are in its output).
 # --check: also run the bundle's backends here, inside the toolchain's root (Vulkan on lavapipe).
 set -euo pipefail
 repo=$(cd "$(dirname "$(readlink -f "$0")")/../.." && pwd)

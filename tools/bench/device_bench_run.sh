@@ -28,9 +28,16 @@ command -v nvidia-smi >/dev/null 2>&1 && gpu=$(nvidia-smi --query-gpu=name,drive
 echo "machine: $cores cores, $(awk '/MemTotal/ { printf "%.0f GiB", $2 / 1048576 }' /proc/meminfo), GPU: ${gpu:-none}"
 icds=$(ls /etc/vulkan/icd.d/*.json /usr/share/vulkan/icd.d/*.json /usr/local/share/vulkan/icd.d/*.json 2>/dev/null | tr '\n' ' ')
 echo "Vulkan driver files: ${icds:-none}"
-# A container given the GPU for compute only may have the NVIDIA driver's library but no driver
-# file for the Vulkan loader: name the library in one, for this run only.
-if [[ $icds != *nvidia* ]]; then
+# NVIDIA's container runtime may put the driver file where the loader does not look
+# (/usr/local/nvidia/...): name it for this run. Where there is none at all but the driver's
+# library is there (a container given the GPU for compute only), write one naming the library.
+nvidia_icd=$(ls /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json /usr/local/nvidia/etc/vulkan/icd.d/nvidia_icd.json 2>/dev/null | head -1)
+if [[ $icds != *nvidia* && -n $nvidia_icd && -z ${VK_DRIVER_FILES:-} ]]; then
+	export VK_DRIVER_FILES=$nvidia_icd VK_ICD_FILENAMES=$nvidia_icd
+	icds="$icds $nvidia_icd"
+	echo "Vulkan driver file outside the loader's search: $nvidia_icd"
+fi
+if [[ $icds != *nvidia* && -z ${VK_DRIVER_FILES:-} ]]; then
 	driver=$( (ldconfig -p 2>/dev/null | awk '/libGLX_nvidia\.so\.0 / { print $NF; exit }'; ls /usr/lib/x86_64-linux-gnu/libGLX_nvidia.so.0 /usr/lib64/libGLX_nvidia.so.0 2>/dev/null) | head -1)
 	if [[ -n $driver ]]; then
 		printf '{ "file_format_version": "1.0.0", "ICD": { "library_path": "%s", "api_version": "1.3.0" } }\n' "$driver" >"$results/nvidia_icd.json"
