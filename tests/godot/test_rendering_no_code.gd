@@ -41,7 +41,7 @@ func test_the_scene_with_the_vulkan_compute_backend_renders_without_falling_back
 	rig.compute_backend = 1  # COMPUTE_BACKEND_VULKAN
 	await _play_and_check(scene, "no_code_scene_vulkan.png")
 	for warning in rig.get_warnings():
-		assert_false(warning.contains("compute_backend"), "the GGX prefilter ran on the Vulkan device: %s" % warning)
+		assert_false(warning.contains("compute_backend"), "tracking, SH and the GGX prefilter stayed on the Vulkan device: %s" % warning)
 
 
 ## Issue #37: README's quick start, followed literally, gave a grey screen. The scene built here
