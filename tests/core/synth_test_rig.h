@@ -32,6 +32,17 @@ inline roomprobe::Rig test_rig() {
 	return rig;
 }
 
+// The test rig's fisheye at 1 / p_divisor of its size (1024 / p_divisor pixels square, the same
+// field of view), for faster renders.
+inline roomprobe::OmniParams scaled_test_fisheye(int p_divisor) {
+	roomprobe::OmniParams f = test_rig().fisheye;
+	f.width = f.height = f.width / p_divisor;
+	f.fx = f.fy = f.fx / p_divisor;
+	f.cx = f.cy = f.circle_cx = f.circle_cy = (f.width - 1) * 0.5;
+	f.circle_radius /= p_divisor;
+	return f;
+}
+
 // test_rig() shrunk for live and recording tests: a p_rgb_width x p_rgb_height RGB camera (focal
 // 50 px) and a p_fisheye_width x p_fisheye_height fisheye whose image circle fills 90 % of it,
 // both on one clock (fisheye_time_offset_s 0, as a live rig is).

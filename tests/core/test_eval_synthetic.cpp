@@ -33,12 +33,7 @@ struct EvalTempFolder {
 // The synthetic rig with a half-resolution (512 x 512) fisheye, to render faster.
 Rig half_fisheye_rig() {
 	Rig rig = test_rig();
-	OmniParams &f = rig.fisheye;
-	f.width = f.height = 512;
-	f.fx = f.fy = f.fx / 2.0;
-	f.cx = f.cy = 255.5;
-	f.circle_cx = f.circle_cy = 255.5;
-	f.circle_radius = 250.0;
+	rig.fisheye = scaled_test_fisheye(2);
 	return rig;
 }
 

@@ -3,6 +3,7 @@
 #include <io/opencv.h>
 
 #include "pipeline/coarse_pipeline.h"
+#include "synth_test_rig.h"
 
 #include <doctest/doctest.h>
 
@@ -17,15 +18,7 @@ using namespace roomprobe;
 namespace {
 
 OmniParams small_fisheye() {
-	OmniParams f;
-	f.width = f.height = 256;
-	f.xi = 1.0;
-	f.fx = f.fy = 478.645871127404 / 4.0;
-	f.cx = f.cy = 127.5;
-	f.circle_cx = f.circle_cy = 127.5;
-	f.circle_radius = 125.0;
-	f.max_angle_deg = 92.5;
-	return f;
+	return scaled_test_fisheye(4); // 256 x 256
 }
 
 Floorplan box_room() {

@@ -50,11 +50,7 @@ Rig small_rig() {
 	rig.rgb.fx = rig.rgb.fy = 525.0 / 4.0;
 	rig.rgb.cx = 79.5;
 	rig.rgb.cy = 59.5;
-	OmniParams &f = rig.fisheye;
-	f.width = f.height = 256;
-	f.fx = f.fy = 478.645871127404 / 4.0;
-	f.cx = f.cy = f.circle_cx = f.circle_cy = 127.5;
-	f.circle_radius = 125.0;
+	rig.fisheye = scaled_test_fisheye(4); // 256 x 256
 	return rig;
 }
 
