@@ -97,6 +97,8 @@ TEST_CASE("GPU GGX: an engine on the Vulkan backend makes the CPU engine's maps,
 	REQUIRE(gpu_engine.configure(config) == "");
 	CHECK(cpu_engine.stats().compute == "CPU");
 	CHECK(gpu_engine.stats().compute.rfind("Vulkan: ", 0) == 0);
+	CHECK(gpu_engine.stats().compute_on_device);
+	CHECK_FALSE(cpu_engine.stats().compute_on_device);
 	const RoomMesh *mesh = cpu_engine.room_mesh();
 	REQUIRE(mesh != nullptr);
 	// A varied atlas: every texel its own colour.

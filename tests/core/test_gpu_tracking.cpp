@@ -38,6 +38,14 @@ namespace {
 
 constexpr double FRAME_S = 1.0 / 30.0;
 
+// The tracker's kernels on gpu_test_device().
+std::shared_ptr<IcpReducerGpu> test_reducer() {
+	std::string error;
+	std::shared_ptr<IcpReducerGpu> reducer = IcpReducerGpu::create(gpu_test_device(), &error);
+	REQUIRE_MESSAGE(reducer, error);
+	return reducer;
+}
+
 void check_same_tracking(const TrackingResult &p_cpu, const TrackingResult &p_gpu, const IcpOptions &p_options) {
 	CAPTURE(p_cpu.reason);
 	CAPTURE(p_gpu.reason);
@@ -54,10 +62,7 @@ void check_same_tracking(const TrackingResult &p_cpu, const TrackingResult &p_gp
 } // namespace
 
 TEST_CASE("GPU ICP: tracking on a Vulkan device gives the CPU's pose to within ICP's stopping step, with and without colour") {
-	const std::shared_ptr<ComputeDevice> device = gpu_test_device();
-	std::string error;
-	const std::shared_ptr<IcpReducerGpu> reducer = IcpReducerGpu::create(device, &error);
-	REQUIRE_MESSAGE(reducer, error);
+	const std::shared_ptr<IcpReducerGpu> reducer = test_reducer();
 	const PinholeIntrinsics camera = pinhole_intrinsics(half_camera());
 	const HandheldTrajectory &trajectory = living_room().trajectory;
 	IcpOptions geometry, colour, every_pixel;
@@ -101,10 +106,8 @@ TEST_CASE("GPU ICP: the frame's pyramid made on the device is the CPU's to float
 	// 1/262.5 of z at level 0, twice that and more above): their relative error 2e-6 z / (z / 262.5)
 	// = 5.3e-4, which bounds the normal's change. Flags differ only where a depth step or a
 	// smoothing tap sits on its threshold: a handful of pixels, at most 1 in 1000 here.
-	const std::shared_ptr<ComputeDevice> device = gpu_test_device();
+	const std::shared_ptr<IcpReducerGpu> reducer = test_reducer();
 	std::string error;
-	const std::unique_ptr<IcpReducerGpu> reducer = IcpReducerGpu::create(device, &error);
-	REQUIRE_MESSAGE(reducer, error);
 	const PinholeIntrinsics camera = pinhole_intrinsics(half_camera());
 	const IcpOptions options;
 	for (const bool with_colour : { false, true }) {
@@ -205,6 +208,7 @@ TEST_CASE("GPU engine: the live engine on the Vulkan backend tracks as the CPU's
 	CAPTURE(compute);
 	CHECK(compute.rfind("Vulkan: ", 0) == 0);
 	CHECK(compute.find("on the CPU") == std::string::npos);
+	CHECK(gpu_engine.stats().compute_on_device);
 	CHECK(gpu_engine.slam_model()->tracks_on_gpu());
 	CHECK(gpu_engine.stats().good == cpu_engine.stats().good);
 	const double apart_m = translation_difference_m(cpu_engine.slam_model()->pose(), gpu_engine.slam_model()->pose());

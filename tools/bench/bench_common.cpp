@@ -197,10 +197,6 @@ std::string backend_summary(ComputeBackend p_asked, bool p_on_device) {
 	return p_on_device ? "backend=vulkan" : p_asked == ComputeBackend::Cpu ? "backend=cpu" : "backend=cpu_fallback";
 }
 
-std::string backend_summary(ComputeBackend p_asked, const std::string &p_compute_note) {
-	return backend_summary(p_asked, p_compute_note.rfind("Vulkan", 0) == 0 && p_compute_note.find("on the CPU") == std::string::npos);
-}
-
 void print_memory(const TsdfStats &p_stats) {
 	const TsdfStats &s = p_stats;
 	std::printf("memory (TSDF at the end):\n");

@@ -136,9 +136,6 @@ std::string accuracy_summary(const Accuracy &p_accuracy);
 // The summary's backend key: "backend=cpu" or "backend=vulkan" where the kernels ran, or
 // "backend=cpu_fallback" when p_asked was not the CPU and they ran there (the header says why).
 std::string backend_summary(ComputeBackend p_asked, bool p_on_device);
-// The same from the engine's note (LiveRoomStats::compute): on the device when it names Vulkan
-// and nothing was put back on the CPU.
-std::string backend_summary(ComputeBackend p_asked, const std::string &p_compute_note);
 void print_memory(const TsdfStats &p_stats);
 void print_slam_rows(const SlamFigures &p_figures, const char *p_mesh_name);
 void print_slam_target(const SlamFigures &p_figures, int p_width, int p_height);

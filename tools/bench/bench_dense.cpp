@@ -57,10 +57,7 @@ std::string set_backend(ComputeBackend p_backend, DenseSlam *r_slam) {
 	std::string reason;
 	const std::shared_ptr<ComputeDevice> device = shared_compute_device(p_backend, &reason);
 	const std::string error = r_slam->set_compute(device);
-	if (device && error.empty()) {
-		return "Vulkan: " + device->name();
-	}
-	return p_backend == ComputeBackend::Cpu ? std::string("CPU") : std::string("CPU (") + compute_backend_name(p_backend) + ": " + (device ? error : reason) + ")";
+	return compute_backend_note(p_backend, error.empty() ? device.get() : nullptr, device ? error : reason);
 }
 
 // The RGB-D frames from p_first on through SLAM; the frames processed (r_failed: unreadable).

@@ -242,7 +242,7 @@ void print_summary(const LiveRoomStats &p_stats, ComputeBackend p_backend, const
 			(unsigned long long)stats.rgbd_pushed, (unsigned long long)stats.fisheye_pushed, (unsigned long long)stats.rgbd_processed,
 			(unsigned long long)stats.fisheye_integrated, (unsigned long long)stats.probe_renders, figure(!p_loop.map.total.empty(), p_loop.map.total.median()).c_str(),
 			p_loop.copy_ms.median(), p_loop.copy_ms.percentile(0.95), p_real_time_factor, accuracy_summary(p_accuracy).c_str(),
-			backend_summary(p_backend, stats.compute).c_str(),
+			backend_summary(p_backend, stats.compute_on_device).c_str(),
 			(unsigned long long)stats.good, (unsigned long long)stats.poor, (unsigned long long)stats.lost);
 }
 

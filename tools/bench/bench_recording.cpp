@@ -332,7 +332,7 @@ int print_speed(const StepRun &p_run, const FullFrame &p_full, const Accuracy &p
 				"frame_ms_p50=%.2f frame_ms_mean=%.2f %s %s %s good=%d poor=%d lost=%d\n",
 			p_run.rgbd_done, p_run.fisheye_integrated, figures.track.median(), figures.integrate.median(), figures.process.median(),
 			p_run.map.total.median(), p_full.median, p_full.mean, speed_summary(speed, ratios).c_str(), accuracy_summary(p_accuracy).c_str(),
-			backend_summary(p_run.setup.config.compute_backend, p_run.engine.stats().compute).c_str(),
+			backend_summary(p_run.setup.config.compute_backend, p_run.engine.stats().compute_on_device).c_str(),
 			figures.good, figures.poor, figures.lost);
 	return 0;
 }

@@ -147,9 +147,8 @@ std::string LiveRoom::build_room_locked() {
 	settings.compute = shared_compute_device(cfg.compute_backend, &reason);
 	{
 		const std::lock_guard<std::mutex> lock(stats_mutex);
-		compute_note = settings.compute ? "Vulkan: " + settings.compute->name()
-										 : cfg.compute_backend == ComputeBackend::Cpu ? std::string("CPU")
-																					  : std::string("CPU (") + compute_backend_name(cfg.compute_backend) + ": " + reason + ")";
+		compute_note = compute_backend_note(cfg.compute_backend, settings.compute.get(), reason);
+		compute_on_device = settings.compute != nullptr;
 	}
 	renderer = std::make_unique<ProbeRenderer>(room_mesh(), settings);
 	room_builds++;

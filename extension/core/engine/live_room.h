@@ -179,6 +179,7 @@ struct LiveRoomStats {
 	// Where the GPU-capable kernels run: "CPU", "Vulkan: <device>", or "CPU (<backend>: <why not>)";
 	// "; tracking on the CPU (<why>)" is added when tracking's kernel failed while the others did not.
 	std::string compute = "CPU";
+	bool compute_on_device = false; // every kernel with a GPU twin runs on the device (compute says where not)
 };
 
 class LiveRoom {
@@ -390,6 +391,7 @@ private:
 	// Counters and latencies.
 	mutable std::mutex stats_mutex;
 	std::string compute_note = "CPU"; // stats().compute
+	bool compute_on_device = false; // stats().compute_on_device, before tracking's share
 	LiveRoomStats counters;
 	std::vector<double> rgbd_latencies_ms, fisheye_latencies_ms;
 	std::vector<std::pair<uint64_t, double>> rgbd_arrivals, fisheye_arrivals; // recent (sequence, push time)

@@ -166,7 +166,8 @@ std::shared_ptr<const ProbeMap> LiveRoom::render_one(int p_probe, const glm::dve
 		if (renderer->gpu_failures() > 0) {
 			const std::string problem = renderer->gpu_problem();
 			const std::lock_guard<std::mutex> lock(stats_mutex);
-			compute_note = std::string("CPU (") + compute_backend_name(cfg.compute_backend) + ": " + problem + ")";
+			compute_note = compute_backend_note(cfg.compute_backend, nullptr, problem);
+			compute_on_device = false;
 		}
 		{
 			const std::lock_guard<std::mutex> lock(probe_mutex);
@@ -355,6 +356,7 @@ LiveRoomStats LiveRoom::stats() const {
 		const std::lock_guard<std::mutex> lock(stats_mutex);
 		s = counters;
 		s.compute = compute_note;
+		s.compute_on_device = compute_on_device;
 		s.rgbd_latency = summarise_latency(rgbd_latencies_ms);
 		s.fisheye_latency = summarise_latency(fisheye_latencies_ms);
 	}
@@ -363,8 +365,9 @@ LiveRoomStats LiveRoom::stats() const {
 	s.fisheye_dropped = frames->fisheye.dropped_count();
 	if (slam) {
 		const std::string tracking_problem = slam->compute_problem();
-		if (!tracking_problem.empty() && s.compute.rfind("Vulkan", 0) == 0) {
+		if (!tracking_problem.empty() && s.compute_on_device) {
 			s.compute += "; tracking on the CPU (" + tracking_problem + ")";
+			s.compute_on_device = false;
 		}
 		s.dense_frames = slam->frame_count();
 		s.dense_fused = slam->integrated_count();

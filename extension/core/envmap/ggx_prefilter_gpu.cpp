@@ -93,8 +93,7 @@ std::vector<Cubemap> GgxFilterGpu::apply(const Cubemap &p_source, std::string *r
 		GpuDispatch dispatch;
 		dispatch.kernel = kernel.get();
 		dispatch.buffers = { pyramid.get(), level.first.get(), level.texel.get(), level.weight.get(), level.result.get() };
-		dispatch.push.resize(sizeof(uint32_t));
-		std::memcpy(dispatch.push.data(), &level.texels, sizeof(uint32_t));
+		dispatch.set_push(level.texels);
 		dispatch.groups_x = (level.texels + GROUP_SIZE - 1) / GROUP_SIZE;
 		dispatches.push_back(std::move(dispatch));
 	}

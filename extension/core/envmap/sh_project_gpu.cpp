@@ -55,8 +55,7 @@ bool ShProjectorGpu::project(const Cubemap &p_cubemap, ShCoefficients *r_sh, std
 	dispatch.kernel = kernel.get();
 	dispatch.buffers = { faces.get(), weights.get(), rows.get() };
 	const uint32_t face_size = uint32_t(size);
-	dispatch.push.resize(sizeof(uint32_t));
-	std::memcpy(dispatch.push.data(), &face_size, sizeof(uint32_t));
+	dispatch.set_push(face_size);
 	dispatch.groups_x = (6 * face_size + GROUP_SIZE - 1) / GROUP_SIZE;
 	*r_error = compute->run({ dispatch });
 	if (!r_error->empty()) {

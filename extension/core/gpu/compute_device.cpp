@@ -53,6 +53,13 @@ const char *compute_backend_name(ComputeBackend p_backend) {
 	return "?";
 }
 
+std::string compute_backend_note(ComputeBackend p_asked, const ComputeDevice *p_device, const std::string &p_why_not) {
+	if (p_device != nullptr) {
+		return "Vulkan: " + p_device->name();
+	}
+	return p_asked == ComputeBackend::Cpu ? std::string("CPU") : std::string("CPU (") + compute_backend_name(p_asked) + ": " + p_why_not + ")";
+}
+
 GpuBuffer::~GpuBuffer() {
 	const vk::Api &api = device->api();
 	if (device->is_lost()) {

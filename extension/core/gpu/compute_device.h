@@ -14,9 +14,11 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace roomprobe {
@@ -29,11 +31,15 @@ enum class ComputeBackend {
 
 const char *compute_backend_name(ComputeBackend p_backend);
 
+class ComputeDevice;
+
+// Where the kernels run, as the engine's stats().compute and the benchmark say it: "Vulkan:
+// <device>" on p_device, else "CPU" when p_asked is the CPU, else "CPU (<backend>: <p_why_not>)".
+std::string compute_backend_note(ComputeBackend p_asked, const ComputeDevice *p_device, const std::string &p_why_not);
+
 struct ComputeDeviceOptions {
 	bool allow_cpu_device = true; // false: refuse a CPU device (lavapipe), as Auto does
 };
-
-class ComputeDevice;
 
 // A storage buffer, mapped for the host.
 class GpuBuffer {
@@ -82,6 +88,14 @@ struct GpuDispatch {
 	std::vector<const GpuBuffer *> buffers;
 	std::vector<uint8_t> push;
 	uint32_t groups_x = 1, groups_y = 1, groups_z = 1;
+
+	// The push constants: p_values byte for byte (a value or a struct laid out as the kernel's).
+	template <typename T>
+	void set_push(const T &p_values) {
+		static_assert(std::is_trivially_copyable_v<T>);
+		push.resize(sizeof(T));
+		std::memcpy(push.data(), &p_values, sizeof(T));
+	}
 };
 
 class ComputeDevice {

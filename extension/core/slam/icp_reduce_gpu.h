@@ -7,8 +7,10 @@
 //
 // Tolerance against the CPU: each row's float sums are added in a tree rather than pixel by pixel,
 // and a driver may fuse multiply-adds, so a row's sums differ by float rounding (about 1e-6 of
-// their size); the solved pose then differs by far less than ICP's convergence threshold
-// (IcpOptions::min_update_m), which is what the tests allow.
+// their size). A solve moves by far less than ICP's stopping step (IcpOptions::min_update_m),
+// except where rounding picks another model pixel for a frame pixel on a pixel boundary; the
+// runs then stop within a step of the same minimum each, which is what the tests allow
+// (tests/core/test_gpu_tracking.cpp).
 
 #include "depth_pyramid.h"
 #include "icp_kernels.h"
@@ -34,8 +36,8 @@ public:
 	// Null, with r_error, when the kernel cannot be made on p_device.
 	static std::unique_ptr<IcpReducerGpu> create(std::shared_ptr<ComputeDevice> p_device, std::string *r_error);
 
-	// One tracking call at a time goes through the buffers: hold this lock from set_frame to the
-	// last reduce.
+	// One tracking call at a time goes through the buffers: hold this lock from build_frame (or
+	// set_frame) to the last reduce.
 	std::mutex &mutex() const { return busy; }
 	// The frame's first p_levels levels; level 0 only every p_finest_stride-th pixel of every
 	// p_finest_stride-th row, as the CPU pairs it.
@@ -55,7 +57,6 @@ public:
 	// the next call.
 	bool reduce(int p_level, const IcpKernelParams &p_params, const float **r_rows, int *r_row_count, std::string *r_error);
 
-	const ComputeDevice &device() const { return *compute; }
 	// After a failed dispatch the reducer is not used again (its device may be lost): why.
 	void set_failed(const std::string &p_reason);
 	bool has_failed() const { return failed.load(); }

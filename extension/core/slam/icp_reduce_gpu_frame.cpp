@@ -22,8 +22,7 @@ GpuDispatch dispatch_of(const GpuKernel *p_kernel, std::vector<const GpuBuffer *
 	GpuDispatch dispatch;
 	dispatch.kernel = p_kernel;
 	dispatch.buffers = std::move(p_buffers);
-	dispatch.push.resize(sizeof(Push));
-	std::memcpy(dispatch.push.data(), &p_push, sizeof(Push));
+	dispatch.set_push(p_push);
 	dispatch.groups_x = (p_width + GROUP_SIDE - 1) / GROUP_SIDE;
 	dispatch.groups_y = (p_height + GROUP_SIDE - 1) / GROUP_SIDE;
 	return dispatch;

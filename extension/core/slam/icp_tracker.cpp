@@ -186,21 +186,20 @@ NormalSystem accumulate(const FramePyramid &p_frame, int p_level, int p_stride, 
 }
 
 // The normal equations from the device's row sums (IcpReducerGpu::ROW_FLOATS each), added in
-// double in row order as accumulate adds its rows.
+// double in row order as accumulate adds its rows: a row's first 30 floats are a RowSums, in its
+// order (icp_reduce.comp's Rows), then the inlier count.
+static_assert(IcpReducerGpu::ROW_FLOATS > 30);
 NormalSystem system_from_rows(const float *p_rows, int p_row_count) {
 	NormalSystem system;
 	for (int r = 0; r < p_row_count; r++) {
 		const float *row = p_rows + size_t(r) * IcpReducerGpu::ROW_FLOATS;
-		int k = 0;
-		for (int a = 0; a < 6; ++a) {
-			for (int b = a; b < 6; ++b) {
-				system.h[a][b] += double(row[k++]);
-			}
-			system.g[a] += double(row[21 + a]);
-		}
-		system.geometry_trace_rotation += double(row[27]);
-		system.geometry_trace_translation += double(row[28]);
-		system.sum_squared += double(row[29]);
+		RowSums sums;
+		std::copy(row, row + 21, sums.h);
+		std::copy(row + 21, row + 27, sums.g);
+		sums.trace_rotation = row[27];
+		sums.trace_translation = row[28];
+		sums.sum_squared = row[29];
+		sums.flush(&system);
 		system.inliers += int(row[30]);
 	}
 	return system;

@@ -232,11 +232,10 @@ PackedStringArray RigCapture::get_warnings() const {
 		}
 	}
 	if (compute_backend != COMPUTE_BACKEND_CPU && engine->is_configured()) {
-		const std::string compute = engine->stats().compute;
-		if (compute.rfind("CPU", 0) == 0) {
-			warnings.push_back(String(("compute_backend: the kernels run on the CPU: " + compute).c_str()));
-		} else if (compute.find("on the CPU") != std::string::npos) {
-			warnings.push_back(String(("compute_backend: some kernels went back to the CPU: " + compute).c_str()));
+		const LiveRoomStats stats = engine->stats();
+		if (!stats.compute_on_device) {
+			const char *what = stats.compute.rfind("CPU", 0) == 0 ? "the kernels run on the CPU: " : "some kernels went back to the CPU: ";
+			warnings.push_back(String(("compute_backend: " + std::string(what) + stats.compute).c_str()));
 		}
 	}
 	if (live_open && playing) {
