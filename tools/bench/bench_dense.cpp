@@ -52,7 +52,7 @@ void print_dense_header(const DenseSource &p_source, const DenseSlamOptions &p_s
 	print_threads();
 }
 
-// Puts r_slam's tracking on p_backend's device: where it runs, as the engine's note says it.
+// Puts r_slam's tracking and integration on p_backend's device: where it runs, as the engine's note says it.
 std::string set_backend(ComputeBackend p_backend, DenseSlam *r_slam) {
 	std::string reason;
 	const std::shared_ptr<ComputeDevice> device = shared_compute_device(p_backend, &reason);
@@ -168,9 +168,9 @@ int bench_dense(const Arguments &p_args, const DenseSource &p_source) {
 	trajectory_file.close(p_args.save_trajectory);
 	const std::string problem = slam.compute_problem();
 	if (!problem.empty() && p_args.backend != ComputeBackend::Cpu) {
-		std::printf("  backend: tracking went back to the CPU: %s\n", problem.c_str());
+		std::printf("  backend: %s\n", problem.c_str());
 	}
-	print_dense_summary(p_source, figures, accuracy, done, backend_summary(p_args.backend, slam.tracks_on_gpu()));
+	print_dense_summary(p_source, figures, accuracy, done, backend_summary(p_args.backend, slam.tracks_on_gpu() && slam.integrates_on_gpu()));
 	return 0;
 }
 

@@ -364,9 +364,9 @@ LiveRoomStats LiveRoom::stats() const {
 	s.rgbd_dropped = frames->rgbd.dropped_count();
 	s.fisheye_dropped = frames->fisheye.dropped_count();
 	if (slam) {
-		const std::string tracking_problem = slam->compute_problem();
-		if (!tracking_problem.empty() && s.compute_on_device) {
-			s.compute += "; tracking on the CPU (" + tracking_problem + ")";
+		const std::string slam_problem = slam->compute_problem();
+		if (!slam_problem.empty() && s.compute_on_device) {
+			s.compute += "; " + slam_problem;
 			s.compute_on_device = false;
 		}
 		s.dense_frames = slam->frame_count();

@@ -238,8 +238,14 @@ ComputeDevice::~ComputeDevice() {
 	}
 }
 
-int ComputeDevice::memory_type(uint32_t p_bits) const {
+int ComputeDevice::memory_type(uint32_t p_bits, bool p_cached) const {
 	const VkMemoryPropertyFlags wanted = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+	for (uint32_t i = 0; p_cached && i < memory.memoryTypeCount; i++) {
+		const VkMemoryPropertyFlags cached = wanted | VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+		if ((p_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & cached) == cached) {
+			return int(i);
+		}
+	}
 	for (uint32_t i = 0; i < memory.memoryTypeCount; i++) {
 		if ((p_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & wanted) == wanted) {
 			return int(i);
@@ -248,7 +254,7 @@ int ComputeDevice::memory_type(uint32_t p_bits) const {
 	return -1;
 }
 
-std::unique_ptr<GpuBuffer> ComputeDevice::make_buffer(size_t p_bytes, std::string *r_error) const {
+std::unique_ptr<GpuBuffer> ComputeDevice::make_buffer(size_t p_bytes, std::string *r_error, bool p_host_reads) const {
 	std::unique_ptr<GpuBuffer> out(new GpuBuffer());
 	out->device = this;
 	out->bytes = p_bytes;
@@ -263,7 +269,7 @@ std::unique_ptr<GpuBuffer> ComputeDevice::make_buffer(size_t p_bytes, std::strin
 	}
 	VkMemoryRequirements needs;
 	vk_api.GetBufferMemoryRequirements(device, out->buffer, &needs);
-	const int type = memory_type(needs.memoryTypeBits);
+	const int type = memory_type(needs.memoryTypeBits, p_host_reads);
 	if (type < 0) {
 		*r_error = "the Vulkan device has no host-visible, coherent memory for a storage buffer";
 		return nullptr;
@@ -285,6 +291,15 @@ std::unique_ptr<GpuBuffer> ComputeDevice::make_buffer(size_t p_bytes, std::strin
 		return nullptr;
 	}
 	return out;
+}
+
+bool ComputeDevice::ensure_buffer(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error, size_t p_slack_bytes) const {
+	if (*r_buffer && (*r_buffer)->size_bytes() >= p_bytes) {
+		return true;
+	}
+	r_buffer->reset(); // before the new one: the old one's memory may be needed
+	*r_buffer = make_buffer(p_bytes + p_slack_bytes, r_error);
+	return bool(*r_buffer);
 }
 
 std::unique_ptr<GpuKernel> ComputeDevice::make_kernel(const uint32_t *p_spirv, size_t p_words, int p_buffers, uint32_t p_push_bytes, std::string *r_error) const {
@@ -371,7 +386,8 @@ std::string ComputeDevice::run(const std::vector<GpuDispatch> &p_dispatches) con
 		std::vector<VkDescriptorBufferInfo> infos(dispatch.buffers.size());
 		std::vector<VkWriteDescriptorSet> writes(dispatch.buffers.size());
 		for (size_t b = 0; b < dispatch.buffers.size(); b++) {
-			infos[b] = { dispatch.buffers[b]->buffer, 0, VK_WHOLE_SIZE };
+			const GpuWindow window = b < dispatch.windows.size() ? dispatch.windows[b] : GpuWindow();
+			infos[b] = { dispatch.buffers[b]->buffer, window.offset, window.bytes > 0 ? window.bytes : VK_WHOLE_SIZE };
 			writes[b] = { VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, nullptr, set, uint32_t(b), 0, 1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, nullptr, &infos[b], nullptr };
 		}
 		vk_api.UpdateDescriptorSets(device, uint32_t(writes.size()), writes.data(), 0, nullptr);

@@ -81,11 +81,19 @@ private:
 	uint32_t push_bytes = 0;
 };
 
+// The part of a buffer a dispatch binds: a buffer may be larger than one binding may reach
+// (maxStorageBufferRange; lavapipe's is 128 MiB). offset: a multiple of the device's
+// minStorageBufferOffsetAlignment; bytes 0: to the end.
+struct GpuWindow {
+	size_t offset = 0, bytes = 0;
+};
+
 // One dispatch of a batch: the kernel, its buffers in binding order, its push constants and the
 // workgroup counts.
 struct GpuDispatch {
 	const GpuKernel *kernel = nullptr;
 	std::vector<const GpuBuffer *> buffers;
+	std::vector<GpuWindow> windows; // per buffer, or empty: every buffer whole
 	std::vector<uint8_t> push;
 	uint32_t groups_x = 1, groups_y = 1, groups_z = 1;
 
@@ -111,7 +119,13 @@ public:
 	const std::string &name() const { return device_name; } // "llvmpipe (LLVM 19.1.7, 256 bits)", ...
 	bool is_cpu() const { return cpu; }
 
-	std::unique_ptr<GpuBuffer> make_buffer(size_t p_bytes, std::string *r_error) const;
+	// p_host_reads: the host reads the buffer as much as the device does (a model both work on):
+	// host-cached memory where the device has it, since uncached (write-combined) memory, a
+	// discrete GPU's usual host-visible kind, makes every CPU read a bus transaction.
+	std::unique_ptr<GpuBuffer> make_buffer(size_t p_bytes, std::string *r_error, bool p_host_reads = false) const;
+	// *r_buffer made anew, p_bytes + p_slack_bytes large, unless it already holds p_bytes (a
+	// stage's buffers grow with its inputs and are kept between calls). False with r_error.
+	bool ensure_buffer(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error, size_t p_slack_bytes = 0) const;
 	std::unique_ptr<GpuKernel> make_kernel(const uint32_t *p_spirv, size_t p_words, int p_buffers, uint32_t p_push_bytes, std::string *r_error) const;
 	// Runs the dispatches in order (each sees the writes of those before it) and waits for them.
 	// "" or what failed.
@@ -138,7 +152,7 @@ private:
 	std::vector<Candidate> rank_devices(const std::vector<VkPhysicalDevice> &p_devices, const ComputeDeviceOptions &p_options) const;
 	std::string open_device(const Candidate &p_candidate); // "" or why it cannot be used
 	void close_device(); // what open_device made, so that the next candidate can be tried
-	int memory_type(uint32_t p_bits) const; // host-visible and coherent; -1: none
+	int memory_type(uint32_t p_bits, bool p_cached = false) const; // host-visible and coherent (cached first when asked); -1: none
 
 	vk::Api vk_api;
 	VkInstance instance = VK_NULL_HANDLE;

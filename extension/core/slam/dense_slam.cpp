@@ -93,17 +93,32 @@ std::string DenseSlam::set_compute(std::shared_ptr<ComputeDevice> p_device) {
 	compute_error.clear();
 	if (!p_device) {
 		tracker.set_gpu(nullptr);
+		tsdf.set_compute(nullptr);
 		return "";
 	}
 	std::string error;
-	std::shared_ptr<IcpReducerGpu> reducer = IcpReducerGpu::create(std::move(p_device), &error);
+	std::shared_ptr<IcpReducerGpu> reducer = IcpReducerGpu::create(p_device, &error);
 	tracker.set_gpu(reducer);
-	compute_error = reducer ? "" : "ICP on the GPU: " + error;
+	compute_error = reducer ? "" : "tracking on the CPU (ICP on the GPU: " + error + ")";
+	const std::string integration = tsdf.set_compute(std::move(p_device));
+	if (!integration.empty()) {
+		compute_error += std::string(compute_error.empty() ? "" : "; ") + "integration on the CPU (" + integration + ")";
+	}
 	return compute_error;
 }
 
 std::string DenseSlam::compute_problem() const {
-	return compute_error.empty() ? tracker.compute_problem() : compute_error;
+	if (!compute_error.empty()) {
+		return compute_error;
+	}
+	std::string out;
+	if (!tracker.compute_problem().empty()) {
+		out = "tracking on the CPU (" + tracker.compute_problem() + ")";
+	}
+	if (!tsdf.compute_problem().empty()) {
+		out += std::string(out.empty() ? "" : "; ") + "integration on the CPU (" + tsdf.compute_problem() + ")";
+	}
+	return out;
 }
 
 std::string DenseSlam::configure(const PinholeParams &p_camera, const Pose &p_initial_world_from_camera) {

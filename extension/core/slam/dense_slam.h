@@ -112,13 +112,15 @@ public:
 	// of the first frame, and empties the model. The error (empty on success) names the problem.
 	std::string configure(const PinholeParams &p_camera, const Pose &p_initial_world_from_camera);
 	bool is_configured() const { return configured; }
-	// Where tracking's pyramid and normal equations are made (issue #40): on p_device
-	// (icp_reduce_gpu.h), or on the CPU when it is null. "" or why the device cannot (tracking
-	// then stays on the CPU).
+	// Where tracking's pyramid and normal equations are made and where voxels are fused (issue
+	// #40): on p_device (icp_reduce_gpu.h, tsdf_integrate_gpu.h), or on the CPU when it is null.
+	// "" or what stays on the CPU and why ("tracking on the CPU (...)", "integration on the CPU (...)").
 	std::string set_compute(std::shared_ptr<ComputeDevice> p_device);
-	// Whether tracking runs on a device now, and, when set_compute's device refused the kernel or
-	// a dispatch failed and put tracking back on the CPU, why ("" otherwise).
+	// Whether tracking and integration run on a device now, and, when set_compute's device
+	// refused a kernel or a dispatch failed and put a stage back on the CPU, which and why, in
+	// set_compute's words ("" otherwise).
 	bool tracks_on_gpu() const { return tracker.uses_gpu(); }
+	bool integrates_on_gpu() const { return tsdf.integrates_on_gpu(); }
 	std::string compute_problem() const;
 
 	// The four verbs, on undistorted images (p_depth_m CV_32FC1 z metres, NaN or 0 = none;

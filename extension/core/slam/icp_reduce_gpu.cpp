@@ -70,12 +70,7 @@ std::string IcpReducerGpu::failure() const {
 }
 
 bool IcpReducerGpu::ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error) const {
-	if (*r_buffer && (*r_buffer)->size_bytes() >= p_bytes) {
-		return true;
-	}
-	r_buffer->reset();
-	*r_buffer = compute->make_buffer(p_bytes, r_error);
-	return bool(*r_buffer);
+	return compute->ensure_buffer(r_buffer, p_bytes, r_error);
 }
 
 size_t IcpReducerGpu::plan_levels(const PinholeIntrinsics &p_camera, int p_levels, int p_finest_stride) {

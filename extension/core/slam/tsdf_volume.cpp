@@ -4,6 +4,7 @@
 #include "tsdf_volume.h"
 
 #include "tsdf_capacity.h"
+#include "tsdf_integrate_gpu.h"
 #include "tsdf_volume_internal.h"
 
 #include <algorithm>
@@ -57,6 +58,49 @@ TsdfVolume::TsdfVolume(const TsdfOptions &p_options) :
 				m_options.max_blocks, double(tsdf_capacity_bytes(m_options.max_blocks)) / double(uint64_t(1) << 30));
 		throw std::runtime_error(text);
 	}
+}
+
+TsdfVolume::~TsdfVolume() = default;
+TsdfVolume::TsdfVolume(TsdfVolume &&) noexcept = default;
+TsdfVolume &TsdfVolume::operator=(TsdfVolume &&) noexcept = default;
+
+// ---- where the pool lives ----
+
+TsdfVoxel *TsdfVolume::pool() {
+	return m_gpu ? m_gpu->pool() : m_voxels.data();
+}
+
+const TsdfVoxel *TsdfVolume::pool() const {
+	return m_gpu ? m_gpu->pool() : m_voxels.data();
+}
+
+std::string TsdfVolume::set_compute(std::shared_ptr<ComputeDevice> p_device, size_t p_window_blocks) {
+	m_gpu_problem.clear();
+	if (!p_device) {
+		leave_device();
+		return "";
+	}
+	std::string error;
+	std::unique_ptr<TsdfIntegratorGpu> gpu = TsdfIntegratorGpu::create(std::move(p_device), size_t(m_options.max_blocks), &error, p_window_blocks);
+	if (!gpu) {
+		m_gpu_problem = "integration on the GPU: " + error;
+		return m_gpu_problem;
+	}
+	const size_t used = m_slot_block.size() * TSDF_BLOCK_VOXELS;
+	std::copy_n(pool(), used, gpu->pool());
+	m_gpu = std::move(gpu);
+	m_voxels = std::vector<TsdfVoxel>();
+	return "";
+}
+
+void TsdfVolume::leave_device() {
+	if (!m_gpu) {
+		return;
+	}
+	const size_t used = m_slot_block.size() * TSDF_BLOCK_VOXELS;
+	m_voxels.reserve(size_t(m_options.max_blocks) * TSDF_BLOCK_VOXELS); // as the constructor: the pool never moves
+	m_voxels.assign(m_gpu->pool(), m_gpu->pool() + used);
+	m_gpu.reset();
 }
 
 // ---- hash table ----
@@ -120,14 +164,18 @@ int32_t TsdfVolume::allocate_slot(const glm::ivec3 &p_block) {
 	if (!m_free_slots.empty()) {
 		slot = m_free_slots.back();
 		m_free_slots.pop_back();
-		std::fill_n(m_voxels.begin() + ptrdiff_t(slot) * TSDF_BLOCK_VOXELS, TSDF_BLOCK_VOXELS, TsdfVoxel());
+		std::fill_n(pool() + ptrdiff_t(slot) * TSDF_BLOCK_VOXELS, TSDF_BLOCK_VOXELS, TsdfVoxel());
 	} else {
 		slot = int32_t(m_slot_block.size());
 		m_slot_block.push_back(p_block);
 		m_slot_used.push_back(0);
 		m_slot_frame.push_back(0);
 		m_slot_saturated.push_back(0);
-		m_voxels.resize(m_voxels.size() + TSDF_BLOCK_VOXELS);
+		if (m_gpu) {
+			std::fill_n(pool() + ptrdiff_t(slot) * TSDF_BLOCK_VOXELS, TSDF_BLOCK_VOXELS, TsdfVoxel());
+		} else {
+			m_voxels.resize(m_voxels.size() + TSDF_BLOCK_VOXELS);
+		}
 	}
 	m_slot_block[size_t(slot)] = p_block;
 	m_slot_used[size_t(slot)] = 1;
@@ -184,7 +232,7 @@ TsdfView TsdfVolume::view() const {
 	TsdfView view;
 	view.entries = m_hash.data();
 	view.mask = m_hash_mask;
-	view.voxels = m_voxels.data();
+	view.voxels = pool();
 	view.voxel_size = m_options.voxel_size_m;
 	view.truncation = m_options.truncation_m;
 	return view;
@@ -192,7 +240,7 @@ TsdfView TsdfVolume::view() const {
 
 const TsdfVoxel *TsdfVolume::find_block(const glm::ivec3 &p_block) const {
 	const int32_t slot = tsdf_find_slot(view(), p_block);
-	return slot >= 0 ? &m_voxels[size_t(slot) * TSDF_BLOCK_VOXELS] : nullptr;
+	return slot >= 0 ? pool() + size_t(slot) * TSDF_BLOCK_VOXELS : nullptr;
 }
 
 namespace {
@@ -253,7 +301,8 @@ TsdfStats TsdfVolume::stats() const {
 	const size_t block_bytes = sizeof(TsdfVoxel) * TSDF_BLOCK_VOXELS + sizeof(glm::ivec3) + 2 * sizeof(uint32_t);
 	const size_t hash_bytes = m_hash.size() * sizeof(TsdfHashEntry);
 	stats.bytes_used = size_t(m_allocated) * block_bytes + hash_bytes;
-	stats.bytes_reserved = m_slot_block.size() * block_bytes + hash_bytes;
+	// The device's pool is held whole (tsdf_integrate_gpu.h).
+	stats.bytes_reserved = (m_gpu ? m_gpu->pool_blocks() : m_slot_block.size()) * block_bytes + hash_bytes;
 	stats.evicted_blocks_total = m_evicted_total;
 	stats.dropped_blocks_total = m_dropped_total;
 	stats.bounds_min = m_bounds_min;

@@ -14,9 +14,14 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <string>
 #include <vector>
 
 namespace roomprobe {
+
+class ComputeDevice;
+class TsdfIntegratorGpu;
 
 struct TsdfOptions {
 	float voxel_size_m = 0.01f; // edge of one voxel, metres
@@ -92,6 +97,20 @@ struct RaycastStats {
 class TsdfVolume {
 public:
 	explicit TsdfVolume(const TsdfOptions &p_options = TsdfOptions());
+	~TsdfVolume();
+	TsdfVolume(TsdfVolume &&) noexcept;
+	TsdfVolume &operator=(TsdfVolume &&) noexcept;
+
+	// Where integrate() updates voxels (issue #40): on p_device, with the voxel pool moved into
+	// memory the device shares with the host (tsdf_integrate_gpu.h: the whole max_blocks pool is
+	// held from now on), or on the CPU when it is null (the pool moves back). The model is kept
+	// either way. "" or why the device cannot (integration then stays on the CPU).
+	// p_window_blocks: TsdfIntegratorGpu::create's (0: the device's reach; tests ask for fewer).
+	std::string set_compute(std::shared_ptr<ComputeDevice> p_device, size_t p_window_blocks = 0);
+	// Whether integration runs on a device now, and, when set_compute's device refused or a
+	// dispatch failed and put integration back on the CPU, why ("" otherwise).
+	bool integrates_on_gpu() const { return bool(m_gpu); }
+	const std::string &compute_problem() const { return m_gpu_problem; }
 
 	// Fuses one frame. p_depth_m: CV_32FC1, z in metres, NaN or 0 = no reading; p_rgb: CV_8UC3,
 	// R, G, B, same size; p_camera: the (undistorted) camera of both; p_world_from_camera: its pose.
@@ -148,6 +167,15 @@ private:
 	int32_t allocate_slot(const glm::ivec3 &p_block);
 	void free_slot(int32_t p_slot);
 	void update_bounds();
+	TsdfVoxel *pool();
+	const TsdfVoxel *pool() const;
+	void leave_device(); // the pool back in host memory
+	// Step 4 of integrate(): every voxel of the blocks in view (p_depth: clean), on the device
+	// when there is one, else on the CPU.
+	void update_in_view(const cv::Mat &p_depth, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, IntegrationStats *r_stats);
+	// Its update on the device: false (after leave_device, with the reason kept) when it failed.
+	bool update_on_device(const TsdfFrameView &p_frame, const glm::vec3 &p_step_x, const glm::vec3 &p_step_y, const glm::vec3 &p_step_z,
+			const std::vector<int32_t> &p_visible, const std::vector<glm::vec3> &p_origins, std::vector<uint8_t> *r_updated, std::vector<uint8_t> *r_changed);
 	cv::Mat depth_ranges(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_near_m, float p_far_m) const;
 	void raycast_ranged(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_min_depth_m, float p_max_depth_m, const cv::Mat *p_search_m,
 			bool p_normals, ModelMaps *r_maps, RaycastStats *r_stats) const;
@@ -162,7 +190,9 @@ private:
 	uint32_t m_hash_mask = 0;
 	int m_hash_used = 0;
 
-	std::vector<TsdfVoxel> m_voxels; // pool: slot s at [s * 512, s * 512 + 512)
+	std::vector<TsdfVoxel> m_voxels; // pool: slot s at [s * 512, s * 512 + 512); empty while m_gpu holds it
+	std::unique_ptr<TsdfIntegratorGpu> m_gpu; // set_compute's device, with the pool
+	std::string m_gpu_problem;
 	std::vector<glm::ivec3> m_slot_block; // the block held by each slot
 	std::vector<uint8_t> m_slot_used;
 	std::vector<uint32_t> m_slot_frame; // the frame that last saw each slot (in view)

@@ -4,6 +4,7 @@
 #include "tsdf_volume.h"
 
 #include "depth_pyramid.h"
+#include "tsdf_integrate_gpu.h"
 #include "tsdf_integrate_simd.h"
 
 #include <parallel/parallel_for.h>
@@ -393,50 +394,104 @@ IntegrationStats TsdfVolume::integrate(const cv::Mat &p_depth_m, const cv::Mat &
 	m_dropped_total += stats.dropped_blocks;
 
 	// 4. Update every voxel of the blocks in view.
+	update_in_view(depth, p_rgb, p_camera, p_world_from_camera, &stats);
+	update_bounds();
+	return stats;
+}
+
+void TsdfVolume::update_in_view(const cv::Mat &p_depth, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera,
+		IntegrationStats *r_stats) {
 	std::vector<int32_t> visible;
 	for (size_t s = 0; s < m_slot_block.size(); s++) {
 		if (m_slot_used[s] && m_slot_frame[s] == m_frame) {
 			visible.push_back(int32_t(s));
 		}
 	}
-	stats.visible_blocks = int(visible.size());
+	r_stats->visible_blocks = int(visible.size());
 	cv::Mat slope;
-	const TsdfFrameView frame = integration_frame(depth, p_rgb, p_camera, p_world_from_camera, m_options, &slope);
+	const TsdfFrameView frame = integration_frame(p_depth, p_rgb, p_camera, p_world_from_camera, m_options, &slope);
 	const float vs = m_options.voxel_size_m;
 	const glm::vec3 step_x = frame.camera_from_world_rotation[0] * vs; // glm: [i] is column i
 	const glm::vec3 step_y = frame.camera_from_world_rotation[1] * vs;
 	const glm::vec3 step_z = frame.camera_from_world_rotation[2] * vs;
-	// Blocks none of whose voxels could change are culled from the bounds of the readings under
-	// them: most blocks in view lie wholly behind the nearer surfaces or in saturated free space.
-	const DepthTiles tiles = depth_tiles(depth, m_options.min_depth_m, m_options.max_depth_m);
+	const DepthTiles tiles = depth_tiles(p_depth, m_options.min_depth_m, m_options.max_depth_m);
 	const uint16_t full_weight = uint16_t(m_options.max_weight * TSDF_WEIGHT_UNIT);
 	// Eight voxels of a row at a time where the CPU has AVX2 (the same voxels come out).
 	const bool simd = m_options.simd && tsdf_simd_available();
 	std::vector<uint8_t> changed(visible.size(), 0), updated(visible.size(), 0);
-	parallel_for(cv::Range(0, int(visible.size())), [&](const cv::Range &p_range) {
-		for (int i = p_range.start; i < p_range.end; i++) {
-			const int32_t slot = visible[size_t(i)];
-			const glm::ivec3 base = m_slot_block[size_t(slot)] * TSDF_BLOCK_SIDE;
-			// The voxels in the camera's frame, stepped by the rotated grid axes (a voxel's point
-			// is its block's origin plus x, y, z steps: adds instead of a matrix product each).
-			const glm::vec3 origin = frame.camera_from_world_rotation * (glm::vec3(base) * vs) + frame.camera_from_world_translation;
-			if (m_options.skip_unchanged && !block_may_change(frame, tiles, origin, step_x, step_y, step_z, m_slot_saturated[size_t(slot)] != 0)) {
-				continue;
+	// The voxels in the camera's frame, stepped by the rotated grid axes (a voxel's point is its
+	// block's origin plus x, y, z steps: adds instead of a matrix product each).
+	auto block_origin = [&](int32_t p_slot) {
+		const glm::ivec3 base = m_slot_block[size_t(p_slot)] * TSDF_BLOCK_SIDE;
+		return frame.camera_from_world_rotation * (glm::vec3(base) * vs) + frame.camera_from_world_translation;
+	};
+	auto may_change = [&](int32_t p_slot, const glm::vec3 &p_origin) {
+		return !m_options.skip_unchanged || block_may_change(frame, tiles, p_origin, step_x, step_y, step_z, m_slot_saturated[size_t(p_slot)] != 0);
+	};
+	bool on_device = false;
+	if (m_gpu) {
+		std::vector<glm::vec3> origins(visible.size());
+		parallel_for(cv::Range(0, int(visible.size())), [&](const cv::Range &p_range) {
+			for (int i = p_range.start; i < p_range.end; i++) {
+				origins[size_t(i)] = block_origin(visible[size_t(i)]);
+				updated[size_t(i)] = may_change(visible[size_t(i)], origins[size_t(i)]) ? 1 : 0;
 			}
-			updated[size_t(i)] = 1;
-			bool saturated = true;
-			changed[size_t(i)] = update_block_voxels(frame, origin, step_x, step_y, step_z, simd, full_weight, &m_voxels[size_t(slot) * TSDF_BLOCK_VOXELS], &saturated);
-			m_slot_saturated[size_t(slot)] = saturated;
-		}
-	});
+		});
+		on_device = update_on_device(frame, step_x, step_y, step_z, visible, origins, &updated, &changed);
+	}
+	if (!on_device) {
+		parallel_for(cv::Range(0, int(visible.size())), [&](const cv::Range &p_range) {
+			for (int i = p_range.start; i < p_range.end; i++) {
+				const int32_t slot = visible[size_t(i)];
+				const glm::vec3 origin = block_origin(slot);
+				// Blocks none of whose voxels could change are culled from the bounds of the
+				// readings under them: most blocks in view lie wholly behind the nearer surfaces
+				// or in saturated free space.
+				if (!may_change(slot, origin)) {
+					updated[size_t(i)] = 0;
+					continue;
+				}
+				updated[size_t(i)] = 1;
+				bool saturated = true;
+				changed[size_t(i)] = update_block_voxels(frame, origin, step_x, step_y, step_z, simd, full_weight, &m_voxels[size_t(slot) * TSDF_BLOCK_VOXELS], &saturated);
+				m_slot_saturated[size_t(slot)] = saturated;
+			}
+		});
+	}
 	for (size_t i = 0; i < visible.size(); i++) {
-		stats.updated_blocks += updated[i];
+		r_stats->updated_blocks += updated[i];
 		if (changed[i]) {
 			m_dirty.push_back(m_slot_block[size_t(visible[i])]);
 		}
 	}
-	update_bounds();
-	return stats;
+}
+
+bool TsdfVolume::update_on_device(const TsdfFrameView &p_frame, const glm::vec3 &p_step_x, const glm::vec3 &p_step_y, const glm::vec3 &p_step_z,
+		const std::vector<int32_t> &p_visible, const std::vector<glm::vec3> &p_origins, std::vector<uint8_t> *r_updated, std::vector<uint8_t> *r_changed) {
+	std::vector<TsdfGpuBlock> list;
+	std::vector<size_t> listed; // the index in p_visible of each entry
+	for (size_t i = 0; i < p_visible.size(); i++) {
+		if ((*r_updated)[i]) {
+			const glm::vec3 &o = p_origins[i];
+			list.push_back({ uint32_t(p_visible[i]), o.x, o.y, o.z });
+			listed.push_back(i);
+		}
+	}
+	std::vector<uint32_t> flags;
+	std::string error;
+	if (!m_gpu->integrate(p_frame, p_step_x, p_step_y, p_step_z, list, &flags, &error)) {
+		// The CPU takes over from this frame on. A batch that failed after it started may have
+		// fused part of the frame into the pool; the CPU fuses all of it again (a frame's weight
+		// twice in those voxels, once).
+		m_gpu_problem = "integration on the GPU failed: " + error;
+		leave_device();
+		return false;
+	}
+	for (size_t k = 0; k < listed.size(); k++) {
+		(*r_changed)[listed[k]] = (flags[k] & TsdfIntegratorGpu::CHANGED) ? 1 : 0;
+		m_slot_saturated[size_t(p_visible[listed[k]])] = (flags[k] & TsdfIntegratorGpu::SATURATED) ? 1 : 0;
+	}
+	return true;
 }
 
 void TsdfVolume::update_bounds() {
