@@ -10,6 +10,7 @@
 // 1e-5, and at most 1 voxel in 1000 with another weight, colour or a larger tsdf difference.
 
 #include "gpu_test_device.h"
+#include "gpu_test_fusion.h"
 #include "slam/tsdf_volume.h"
 #include "synth_test_frames.h"
 
@@ -22,10 +23,9 @@
 
 using namespace roomprobe;
 using namespace synth_frames;
+using gpu_test_fusion::fuse;
 
 namespace {
-
-constexpr double FRAME_S = 1.0 / 30.0;
 
 struct VoxelDifference {
 	size_t observed = 0; // voxels with a weight in either volume
@@ -71,17 +71,6 @@ void check_close(const VoxelDifference &p_difference, bool p_cpu_device) {
 	CHECK(p_difference.tsdf <= 1e-5f);
 }
 
-// Frame i of the living room, as dense SLAM would fuse it (true poses).
-void fuse(TsdfVolume *r_volume, int p_frame, IntegrationStats *r_stats = nullptr) {
-	const double t = 0.5 + p_frame * 4.0 * FRAME_S; // every fourth frame: more of the room per frame
-	const Pose pose = living_room().trajectory.world_from_rgb(t);
-	const Frame shot = render_living_room(pose, t, true, uint64_t(p_frame) + 21);
-	const IntegrationStats stats = r_volume->integrate(shot.depth_m, shot.rgb, pinhole_intrinsics(half_camera()), pose);
-	if (r_stats != nullptr) {
-		*r_stats = stats;
-	}
-}
-
 } // namespace
 
 TEST_CASE("GPU TSDF: integration on a Vulkan device gives the CPU's voxels, block lists and changed blocks") {
@@ -91,9 +80,7 @@ TEST_CASE("GPU TSDF: integration on a Vulkan device gives the CPU's voxels, bloc
 	REQUIRE(gpu.integrates_on_gpu());
 	for (int i = 0; i < 12; i++) {
 		CAPTURE(i);
-		IntegrationStats a, b;
-		fuse(&cpu, i, &a);
-		fuse(&gpu, i, &b);
+		const IntegrationStats a = fuse(&cpu, i), b = fuse(&gpu, i);
 		CHECK(b.valid_pixels == a.valid_pixels);
 		CHECK(b.visible_blocks == a.visible_blocks);
 		CHECK(b.updated_blocks == a.updated_blocks);
@@ -135,12 +122,18 @@ TEST_CASE("GPU TSDF: a pool larger than one binding reaches is fused a window at
 	// so that this room's few thousand blocks span many.
 	const std::shared_ptr<ComputeDevice> device = gpu_test_device();
 	TsdfVolume cpu, windowed;
-	REQUIRE(windowed.set_compute(device, 300) == "");
+	// The raycast binds at most four windows: it stays on the CPU and says so, naming what to lower.
+	const std::string problem = windowed.set_compute(device, 300);
+	CAPTURE(problem);
+	REQUIRE(windowed.integrates_on_gpu());
+	CHECK(!windowed.raycasts_on_gpu());
+	CHECK(problem.rfind("raycasts on the CPU (the raycast on the GPU: the voxel pool spans ", 0) == 0);
+	CHECK(problem.find("lower max_blocks") != std::string::npos);
 	for (int i = 0; i < 6; i++) {
 		fuse(&cpu, i);
 		fuse(&windowed, i);
 	}
 	REQUIRE(cpu.stats().allocated_blocks > 3 * 300);
-	CHECK(windowed.compute_problem() == "");
+	CHECK(windowed.compute_problem() == problem);
 	check_close(compare_volumes(cpu, windowed), device->is_cpu());
 }

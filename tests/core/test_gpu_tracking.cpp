@@ -151,7 +151,7 @@ TEST_CASE("GPU ICP: the frame's pyramid made on the device is the CPU's to float
 	}
 }
 
-TEST_CASE("GPU ICP: dense SLAM with tracking and integration on the device follows the CPU's trajectory, ATE within 0.5 mm of it") {
+TEST_CASE("GPU ICP: dense SLAM with tracking, integration and raycasts on the device follows the CPU's trajectory, ATE within 0.5 mm of it") {
 	DenseSlam cpu, gpu;
 	const Pose start = living_room().trajectory.world_from_rgb(0.0);
 	REQUIRE(cpu.configure(half_camera(), start) == "");
@@ -159,6 +159,7 @@ TEST_CASE("GPU ICP: dense SLAM with tracking and integration on the device follo
 	REQUIRE(gpu.set_compute(gpu_test_device()) == "");
 	CHECK(gpu.tracks_on_gpu());
 	CHECK(gpu.integrates_on_gpu());
+	CHECK(gpu.volume().raycasts_on_gpu());
 	double cpu_sum_sq = 0.0, gpu_sum_sq = 0.0, largest_apart_m = 0.0;
 	const int frames = 20;
 	for (int i = 0; i < frames; i++) {
@@ -212,6 +213,7 @@ TEST_CASE("GPU engine: the live engine on the Vulkan backend tracks as the CPU's
 	CHECK(gpu_engine.stats().compute_on_device);
 	CHECK(gpu_engine.slam_model()->tracks_on_gpu());
 	CHECK(gpu_engine.slam_model()->integrates_on_gpu());
+	CHECK(gpu_engine.slam_model()->volume().raycasts_on_gpu());
 	CHECK(gpu_engine.stats().good == cpu_engine.stats().good);
 	const double apart_m = translation_difference_m(cpu_engine.slam_model()->pose(), gpu_engine.slam_model()->pose());
 	const CubemapMetrics metrics = compare_cubemaps(maps[1]->cubemap, maps[0]->cubemap);

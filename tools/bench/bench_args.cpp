@@ -253,7 +253,7 @@ void print_usage(std::FILE *p_out) {
 			"  --frames N            stop after N RGB-D frames, 1 to 10000000 (default: all)\n"
 			"  --threads N           worker threads for OpenCV and TBB, 1 to 1024 (default: the libraries')\n"
 			"  --probe-size N        the probe's cubemap face size (default: slam %d, live %d)\n"
-			"  --backend B           where the kernels with a GPU twin (tracking, integration, GGX, SH) run: cpu\n"
+			"  --backend B           where the kernels with a GPU twin (tracking, fusion, raycasts, GGX, SH) run: cpu\n"
 			"                        (default), vulkan, auto; the summary's backend key says where they ran\n"
 			"  --speed X             live: playback speed, 0.01 to 1000 (default 1: real time)\n"
 			"  --intrinsics FX,FY,CX,CY  the RGB-D camera's pinhole intrinsics, pixels, no distortion, instead of the source's\n"

@@ -118,7 +118,7 @@ struct LiveRoomConfig {
 	// process), box-filtered meanwhile. True: wait for it instead (the benchmark, the evaluation).
 	bool wait_for_ggx_filter = false;
 	// Where the kernels that have a GPU twin run (issue #40; so far the GGX prefilter, SH,
-	// tracking's depth pyramid and normal equations, and the TSDF's voxel updates):
+	// tracking's depth pyramid and normal equations, the TSDF's voxel updates and its raycasts):
 	// Cpu; Vulkan (any Vulkan device, Mesa's lavapipe included); Auto (Vulkan where a device that
 	// is not a CPU exists). No device: the CPU, and stats().compute says why.
 	ComputeBackend compute_backend = ComputeBackend::Cpu;
@@ -177,8 +177,8 @@ struct LiveRoomStats {
 	size_t relocalisation_attempts = 0, relocalisations = 0; // lost frames searched, and found again
 	TsdfStats tsdf;
 	// Where the GPU-capable kernels run: "CPU", "Vulkan: <device>", or "CPU (<backend>: <why not>)";
-	// "; tracking on the CPU (<why>)" or "; integration on the CPU (<why>)" is added when dense
-	// SLAM's kernels failed while the others did not.
+	// "; tracking on the CPU (<why>)", "; integration on the CPU (<why>)" or "; raycasts on the
+	// CPU (<why>)" is added when dense SLAM's kernels failed while the others did not.
 	std::string compute = "CPU";
 	bool compute_on_device = false; // every kernel with a GPU twin runs on the device (compute says where not)
 };

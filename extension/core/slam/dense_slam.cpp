@@ -100,9 +100,9 @@ std::string DenseSlam::set_compute(std::shared_ptr<ComputeDevice> p_device) {
 	std::shared_ptr<IcpReducerGpu> reducer = IcpReducerGpu::create(p_device, &error);
 	tracker.set_gpu(reducer);
 	compute_error = reducer ? "" : "tracking on the CPU (ICP on the GPU: " + error + ")";
-	const std::string integration = tsdf.set_compute(std::move(p_device));
-	if (!integration.empty()) {
-		compute_error += std::string(compute_error.empty() ? "" : "; ") + "integration on the CPU (" + integration + ")";
+	const std::string volume = tsdf.set_compute(std::move(p_device));
+	if (!volume.empty()) {
+		compute_error += std::string(compute_error.empty() ? "" : "; ") + volume;
 	}
 	return compute_error;
 }
@@ -115,8 +115,9 @@ std::string DenseSlam::compute_problem() const {
 	if (!tracker.compute_problem().empty()) {
 		out = "tracking on the CPU (" + tracker.compute_problem() + ")";
 	}
-	if (!tsdf.compute_problem().empty()) {
-		out += std::string(out.empty() ? "" : "; ") + "integration on the CPU (" + tsdf.compute_problem() + ")";
+	const std::string volume = tsdf.compute_problem();
+	if (!volume.empty()) {
+		out += std::string(out.empty() ? "" : "; ") + volume;
 	}
 	return out;
 }

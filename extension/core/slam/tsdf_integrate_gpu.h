@@ -55,6 +55,9 @@ public:
 			const std::vector<TsdfGpuBlock> &p_blocks, std::vector<uint32_t> *r_flags, std::string *r_error);
 
 	const ComputeDevice &device() const { return *compute; }
+	// The pool as the kernels bind it: one buffer, window_blocks() blocks per binding.
+	const GpuBuffer &pool_buffer() const { return *voxels; }
+	size_t blocks_per_window() const { return window_blocks; }
 
 private:
 	TsdfIntegratorGpu() = default;

@@ -5,6 +5,7 @@
 
 #include "tsdf_capacity.h"
 #include "tsdf_integrate_gpu.h"
+#include "tsdf_raycast_gpu.h"
 #include "tsdf_volume_internal.h"
 
 #include <algorithm>
@@ -76,6 +77,7 @@ const TsdfVoxel *TsdfVolume::pool() const {
 
 std::string TsdfVolume::set_compute(std::shared_ptr<ComputeDevice> p_device, size_t p_window_blocks) {
 	m_gpu_problem.clear();
+	m_raycast_problem.clear();
 	if (!p_device) {
 		leave_device();
 		return "";
@@ -84,23 +86,45 @@ std::string TsdfVolume::set_compute(std::shared_ptr<ComputeDevice> p_device, siz
 	std::unique_ptr<TsdfIntegratorGpu> gpu = TsdfIntegratorGpu::create(std::move(p_device), size_t(m_options.max_blocks), &error, p_window_blocks);
 	if (!gpu) {
 		m_gpu_problem = "integration on the GPU: " + error;
-		return m_gpu_problem;
+		return compute_problem();
 	}
 	const size_t used = m_slot_block.size() * TSDF_BLOCK_VOXELS;
 	std::copy_n(pool(), used, gpu->pool());
+	m_gpu_raycaster.reset();
 	m_gpu = std::move(gpu);
 	m_voxels = std::vector<TsdfVoxel>();
-	return "";
+	m_gpu_raycaster = TsdfRaycasterGpu::create(*m_gpu, &error);
+	if (!m_gpu_raycaster) {
+		m_raycast_problem = "the raycast on the GPU: " + error;
+	}
+	return compute_problem();
 }
 
 void TsdfVolume::leave_device() {
 	if (!m_gpu) {
 		return;
 	}
+	m_gpu_raycaster.reset();
 	const size_t used = m_slot_block.size() * TSDF_BLOCK_VOXELS;
 	m_voxels.reserve(size_t(m_options.max_blocks) * TSDF_BLOCK_VOXELS); // as the constructor: the pool never moves
 	m_voxels.assign(m_gpu->pool(), m_gpu->pool() + used);
 	m_gpu.reset();
+}
+
+bool TsdfVolume::raycasts_on_gpu() const {
+	return m_gpu_raycaster && !m_gpu_raycaster->has_failed();
+}
+
+std::string TsdfVolume::compute_problem() const {
+	std::string out = m_gpu_problem.empty() ? "" : "integration on the CPU (" + m_gpu_problem + ")";
+	std::string raycast = m_raycast_problem;
+	if (raycast.empty() && m_gpu_raycaster && m_gpu_raycaster->has_failed()) {
+		raycast = "the raycast on the GPU failed: " + m_gpu_raycaster->failure();
+	}
+	if (!raycast.empty()) {
+		out += std::string(out.empty() ? "" : "; ") + "raycasts on the CPU (" + raycast + ")";
+	}
+	return out;
 }
 
 // ---- hash table ----
@@ -284,6 +308,7 @@ void TsdfVolume::reset() {
 	}
 	std::fill(m_hash.begin(), m_hash.end(), TsdfHashEntry());
 	m_hash_used = 0;
+	m_hash_version++;
 	m_voxels.clear();
 	m_slot_block.clear();
 	m_slot_used.clear();

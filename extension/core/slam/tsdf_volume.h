@@ -22,6 +22,7 @@ namespace roomprobe {
 
 class ComputeDevice;
 class TsdfIntegratorGpu;
+class TsdfRaycasterGpu;
 
 struct TsdfOptions {
 	float voxel_size_m = 0.01f; // edge of one voxel, metres
@@ -101,16 +102,19 @@ public:
 	TsdfVolume(TsdfVolume &&) noexcept;
 	TsdfVolume &operator=(TsdfVolume &&) noexcept;
 
-	// Where integrate() updates voxels (issue #40): on p_device, with the voxel pool moved into
-	// memory the device shares with the host (tsdf_integrate_gpu.h: the whole max_blocks pool is
-	// held from now on), or on the CPU when it is null (the pool moves back). The model is kept
-	// either way. "" or why the device cannot (integration then stays on the CPU).
+	// Where integrate() updates voxels and raycast() marches (issue #40): on p_device, with the
+	// voxel pool moved into memory the device shares with the host (tsdf_integrate_gpu.h: the
+	// whole max_blocks pool is held from now on; tsdf_raycast_gpu.h), or on the CPU when it is
+	// null (the pool moves back). The model is kept either way. "" or compute_problem()'s words
+	// for what the device cannot do (that then stays on the CPU).
 	// p_window_blocks: TsdfIntegratorGpu::create's (0: the device's reach; tests ask for fewer).
 	std::string set_compute(std::shared_ptr<ComputeDevice> p_device, size_t p_window_blocks = 0);
-	// Whether integration runs on a device now, and, when set_compute's device refused or a
-	// dispatch failed and put integration back on the CPU, why ("" otherwise).
+	// Whether integration and raycasts run on a device now, and, when set_compute's device refused
+	// or a dispatch failed and put either back on the CPU, which and why: "integration on the CPU
+	// (why)", "raycasts on the CPU (why)", joined by "; " ("" otherwise).
 	bool integrates_on_gpu() const { return bool(m_gpu); }
-	const std::string &compute_problem() const { return m_gpu_problem; }
+	bool raycasts_on_gpu() const;
+	std::string compute_problem() const;
 
 	// Fuses one frame. p_depth_m: CV_32FC1, z in metres, NaN or 0 = no reading; p_rgb: CV_8UC3,
 	// R, G, B, same size; p_camera: the (undistorted) camera of both; p_world_from_camera: its pose.
@@ -192,7 +196,9 @@ private:
 
 	std::vector<TsdfVoxel> m_voxels; // pool: slot s at [s * 512, s * 512 + 512); empty while m_gpu holds it
 	std::unique_ptr<TsdfIntegratorGpu> m_gpu; // set_compute's device, with the pool
-	std::string m_gpu_problem;
+	std::unique_ptr<TsdfRaycasterGpu> m_gpu_raycaster; // on m_gpu's pool (reset before it)
+	std::string m_gpu_problem, m_raycast_problem; // set_compute's, or integration's failure
+	uint64_t m_hash_version = 0; // changes with the hash table (the device's copy follows it)
 	std::vector<glm::ivec3> m_slot_block; // the block held by each slot
 	std::vector<uint8_t> m_slot_used;
 	std::vector<uint32_t> m_slot_frame; // the frame that last saw each slot (in view)

@@ -395,6 +395,7 @@ IntegrationStats TsdfVolume::integrate(const cv::Mat &p_depth_m, const cv::Mat &
 
 	// 4. Update every voxel of the blocks in view.
 	update_in_view(depth, p_rgb, p_camera, p_world_from_camera, &stats);
+	m_hash_version++; // blocks were allocated, evicted or reserved and dropped
 	update_bounds();
 	return stats;
 }
@@ -484,6 +485,7 @@ bool TsdfVolume::update_on_device(const TsdfFrameView &p_frame, const glm::vec3 
 		// fused part of the frame into the pool; the CPU fuses all of it again (a frame's weight
 		// twice in those voxels, once).
 		m_gpu_problem = "integration on the GPU failed: " + error;
+		m_raycast_problem = "the pool left the device with integration";
 		leave_device();
 		return false;
 	}

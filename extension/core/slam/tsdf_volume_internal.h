@@ -1,6 +1,6 @@
 #pragma once
 // What the parts of TsdfVolume share (tsdf_volume.cpp, tsdf_volume_integrate.cpp,
-// tsdf_volume_raycast.cpp): small helpers on poses and blocks. Not for use elsewhere.
+// tsdf_volume_raycast.cpp, tsdf_raycast_gpu.cpp): small helpers on poses and blocks. Not for use elsewhere.
 
 #include "slam/slam_types.h"
 #include "slam/tsdf_kernels.h"

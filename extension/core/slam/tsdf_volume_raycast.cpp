@@ -3,6 +3,7 @@
 // model. Split from tsdf_volume.cpp to keep each file short.
 #include "tsdf_volume.h"
 
+#include "tsdf_raycast_gpu.h"
 #include "tsdf_volume_internal.h"
 
 #include <parallel/parallel_for.h>
@@ -154,6 +155,28 @@ void TsdfVolume::raycast_ranged(const PinholeIntrinsics &p_camera, const Pose &p
 		}
 		return;
 	}
+	const cv::Mat ranges = depth_ranges(p_camera, p_world_from_camera, p_min_depth_m, p_max_depth_m);
+	if (m_gpu_raycaster) {
+		TsdfRaycastInput input;
+		input.camera = p_camera;
+		input.world_from_camera = p_world_from_camera;
+		input.min_depth_m = p_min_depth_m;
+		input.max_depth_m = p_max_depth_m;
+		input.bounds_min = m_bounds_min;
+		input.bounds_max = m_bounds_max;
+		input.normals = p_normals;
+		input.ranges = &ranges;
+		input.search_m = p_search_m;
+		input.hash = m_hash.data();
+		input.hash_mask = m_hash_mask;
+		input.hash_version = m_hash_version;
+		input.voxel_size_m = m_options.voxel_size_m;
+		input.truncation_m = m_options.truncation_m;
+		if (m_gpu_raycaster->raycast(input, r_maps, r_stats)) {
+			return;
+		}
+		// Failed (compute_problem() says why from now on): the CPU casts this one and the rest.
+	}
 	const TsdfView view = this->view();
 	TsdfRayParams ray;
 	ray.origin = glm::vec3(p_world_from_camera.translation);
@@ -163,7 +186,6 @@ void TsdfVolume::raycast_ranged(const PinholeIntrinsics &p_camera, const Pose &p
 	ray.bounds_min = m_bounds_min;
 	ray.bounds_max = m_bounds_max;
 	ray.normals = p_normals;
-	const cv::Mat ranges = depth_ranges(p_camera, p_world_from_camera, p_min_depth_m, p_max_depth_m);
 	std::vector<long long> steps(size_t(p_camera.height), 0);
 	std::vector<int> hits(size_t(p_camera.height), 0);
 	parallel_for(cv::Range(0, p_camera.height), [&](const cv::Range &p_range) {
