@@ -18,6 +18,9 @@ extends Node3D
 ##   --true-poses      the recording's ground-truth poses instead of SLAM (evaluation mode)
 ##   --auto-room       no floorplan from the recording: CoarseRoomModel finds the room from the
 ##                     sweep (Automatic), and the room found is written to --out as room.yaml
+##   --backend NAME    where the kernels with a GPU twin run: cpu (default), vulkan or auto
+##                     (RigCapture.compute_backend); the summary line ends in backend=NAME and
+##                     compute_fallback=yes when any went back to the CPU (RigCapture's warning)
 ##   --scene NAME      one of the paper's figures instead of the three objects
 ##                     (demo_scenes/figures/figure_scenes.gd: mirror_teapot, water_bottle,
 ##                     prt_mannequin, metal_teapots, chrome_sphere)
@@ -41,6 +44,8 @@ var _objects_ms: Array[float] = []  # the saved probe's maps: drawing the other 
 var _figure := ""  # the paper's figure shown (--scene), or "" for the three objects
 var _frames := 0
 var _auto_room := false
+var _backend := "cpu"
+const BACKENDS := ["cpu", "vulkan", "auto"]  # RigCapture.ComputeBackendMode's order
 
 
 func _ready() -> void:
@@ -57,6 +62,12 @@ func _ready() -> void:
 			_true_poses = true
 		elif args[i] == "--auto-room":
 			_auto_room = true
+		elif args[i] == "--backend" and i + 1 < args.size():
+			_backend = args[i + 1]
+			if not BACKENDS.has(_backend):
+				printerr("demo: --backend %s: one of %s" % [_backend, ", ".join(BACKENDS)])
+				get_tree().quit(2)
+				return
 		elif args[i] == "--scene" and i + 1 < args.size() and args[i + 1] != "main":
 			var figure := FigureScenes.build(self, args[i + 1])
 			if figure.is_empty():
@@ -77,6 +88,7 @@ func _ready() -> void:
 		get_tree().quit(2)
 		return
 	_rig.recording_path = recording
+	_rig.compute_backend = BACKENDS.find(_backend)
 	if not _rig.open():
 		printerr("demo: %s" % _rig.get_last_error())
 		get_tree().quit(1)
@@ -208,6 +220,11 @@ func _print_summary() -> void:
 		sorted.sort()
 		return sorted[clampi(ceili(fraction * sorted.size()) - 1, 0, sorted.size() - 1)] if not sorted.is_empty() else 0.0
 	var slam: Dictionary = _slam.get_stats()
-	print("demo: summary frames=%d main_thread_ms_p50=%.3f main_thread_ms_p95=%.3f main_thread_ms_max=%.3f latency_ms_p50=%.1f latency_ms_p95=%.1f dropped_rgbd=%d dropped_capture=%d objects_ms_p50=%.2f" % [
+	var fallback := false
+	for warning in _rig.get_warnings():
+		if warning.begins_with("compute_backend"):
+			fallback = true
+			print("demo: %s" % warning)
+	print("demo: summary frames=%d main_thread_ms_p50=%.3f main_thread_ms_p95=%.3f main_thread_ms_max=%.3f latency_ms_p50=%.1f latency_ms_p95=%.1f dropped_rgbd=%d dropped_capture=%d objects_ms_p50=%.2f backend=%s compute_fallback=%s" % [
 		_main_ms.size(), rank.call(_main_ms, 0.5), rank.call(_main_ms, 0.95), rank.call(_main_ms, 1.0), slam.get("latency_ms_p50", 0.0), slam.get("latency_ms_p95", 0.0),
-		slam.get("dropped_frames", 0), _rig.get_dropped_frame_count(), rank.call(_objects_ms, 0.5)])
+		slam.get("dropped_frames", 0), _rig.get_dropped_frame_count(), rank.call(_objects_ms, 0.5), _backend, "yes" if fallback else "no"])

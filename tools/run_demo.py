@@ -61,6 +61,8 @@ def main():
     ap.add_argument("--scene", default="main", choices=["main"] + FIGURES,
                     help="main (the three objects) or one of the paper's figures")
     ap.add_argument("--auto-room", action="store_true", help="find the room from a 10-s sweep instead of the recording's room.yaml")
+    ap.add_argument("--backend", default="cpu", choices=["cpu", "vulkan", "auto"],
+                    help="where the kernels with a GPU twin run (RigCapture.compute_backend; vulkan runs on lavapipe here)")
     opts = ap.parse_args()
     os.makedirs(OUT, exist_ok=True)
     global SCENE_OUT, FRAMES, RECORDING, SECONDS
@@ -85,7 +87,7 @@ def main():
     if not synthesise():
         return 1
     import_project()
-    if not play(opts.window, opts.once, opts.scene, opts.auto_room):
+    if not play(opts.window, opts.once, opts.scene, opts.auto_room, opts.backend):
         return 1
     room = os.path.join(SCENE_OUT, "room.yaml") if opts.auto_room else None
     if opts.auto_room and not os.path.exists(room):
@@ -149,7 +151,7 @@ def import_project():
         print(f"ok ({rp.fmt_duration(r.seconds)})")
 
 
-def play(window, once=False, scene="main", auto_room=False):
+def play(window, once=False, scene="main", auto_room=False, backend="cpu"):
     cmd = rp.godot_base_args(rendering=True) + ["--resolution", SIZE]
     if not window:
         shutil.rmtree(FRAMES, ignore_errors=True)
@@ -157,6 +159,7 @@ def play(window, once=False, scene="main", auto_room=False):
         cmd = rp.xvfb_prefix() + cmd + ["--write-movie", os.path.join(FRAMES, "frame.png"), "--fixed-fps", str(FPS)]
     cmd += [SCENE, "--", "--recording", RECORDING, "--out", SCENE_OUT, "--scene", scene] + ([] if window and not once else ["--quit-at-end"])
     cmd += ["--auto-room"] if auto_room else []
+    cmd += ["--backend", backend]
     rp.header(f"play ({'window' if window else 'Movie Maker under Xvfb'}): {shlex.join(cmd)}")
     log = os.path.join(SCENE_OUT, "demo.log")
     noise = rp.NoiseFilter()

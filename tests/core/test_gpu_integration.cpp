@@ -96,6 +96,25 @@ TEST_CASE("GPU TSDF: integration on a Vulkan device gives the CPU's voxels, bloc
 	CHECK(gpu.stats().bytes_reserved >= size_t(gpu.options().max_blocks) * TSDF_BLOCK_VOXELS * sizeof(TsdfVoxel));
 }
 
+TEST_CASE("GPU TSDF: the slope factors made on the device follow slope_smoothing_px, none included") {
+	// The device smooths the depth (depth_smooth.comp) and takes the tangent planes on it
+	// (tsdf_slope.comp); radius 0 takes them on the clean depth itself.
+	const std::shared_ptr<ComputeDevice> device = gpu_test_device();
+	for (const int radius : { 0, 2 }) {
+		CAPTURE(radius);
+		TsdfOptions options;
+		options.slope_smoothing_px = radius;
+		TsdfVolume cpu(options), gpu(options);
+		REQUIRE(gpu.set_compute(device) == "");
+		for (int i = 0; i < 4; i++) {
+			fuse(&cpu, i);
+			fuse(&gpu, i);
+		}
+		CHECK(gpu.integrates_on_gpu());
+		check_close(compare_volumes(cpu, gpu), device->is_cpu());
+	}
+}
+
 TEST_CASE("GPU TSDF: the model moves to the device and back with set_compute, and fusing goes on where it left off") {
 	// A volume fused on the CPU, then on the device, then on the CPU again, against one fused on the
 	// CPU throughout: the same voxels (to the device's rounding), so nothing is lost or doubled in

@@ -27,7 +27,7 @@ func test_a_scene_with_no_script_shows_a_reflecting_sphere_over_the_camera_image
 	await _play_and_check(scene, "no_code_scene.png")
 
 
-## Issue #40: the same scene with the maps' GGX prefilter on Vulkan compute (lavapipe here), in
+## Issue #40: the same scene with dense SLAM and the maps' filtering on Vulkan compute (lavapipe here), in
 ## the same process as Godot's own Vulkan renderer: it renders as on the CPU, and RigCapture has
 ## no warning that the kernels fell back to the CPU.
 func test_the_scene_with_the_vulkan_compute_backend_renders_without_falling_back() -> void:
@@ -41,7 +41,7 @@ func test_the_scene_with_the_vulkan_compute_backend_renders_without_falling_back
 	rig.compute_backend = 1  # COMPUTE_BACKEND_VULKAN
 	await _play_and_check(scene, "no_code_scene_vulkan.png")
 	for warning in rig.get_warnings():
-		assert_false(warning.contains("compute_backend"), "tracking, SH and the GGX prefilter stayed on the Vulkan device: %s" % warning)
+		assert_false(warning.contains("compute_backend"), "tracking, fusion, raycasts, SH and the GGX prefilter stayed on the Vulkan device: %s" % warning)
 
 
 ## Issue #37: README's quick start, followed literally, gave a grey screen. The scene built here

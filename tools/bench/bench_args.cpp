@@ -119,14 +119,7 @@ int run_option(cli::Arguments &p_cursor, const std::string &p_arg, Arguments *r_
 	if (p_arg == "--backend") {
 		std::string name;
 		p_cursor.value(&name);
-		const ComputeBackend backends[3] = { ComputeBackend::Cpu, ComputeBackend::Vulkan, ComputeBackend::Auto };
-		for (const ComputeBackend backend : backends) {
-			if (name == compute_backend_name(backend)) {
-				r_args->backend = backend;
-				return TAKEN;
-			}
-		}
-		return usage("--backend needs cpu, vulkan or auto");
+		return compute_backend_from_name(name, &r_args->backend) ? TAKEN : usage("--backend needs cpu, vulkan or auto");
 	}
 	if (p_arg == "--speed" && r_args->mode == "live") {
 		const std::string error = "--speed needs a playback speed in " + cli::range_text(SPEED_MIN, SPEED_MAX);

@@ -5,10 +5,13 @@
 //
 // roomprobe_eval --recording DIR [--out DIR [--force]] [--cubemap-size N] [--per-frame] [--texel-size M]
 //                [--max-cubemaps K] [--no-dense] [--quiet] [--budget] [--rgb-texture]
-//                [--dense-range M]
+//                [--dense-range M] [--backend cpu|vulkan|auto]
+// roomprobe_eval --compare A.exr B.exr   (two cubemaps: B against A, e.g. one backend's map against the other's)
 // Maps already in --out are kept, the evaluation refused, unless --force (as every tool's outputs).
 
+#include <envmap/export.h>
 #include <eval/evaluate.h>
+#include <eval/metrics.h>
 
 #include "../common/cli.h"
 
@@ -39,6 +42,26 @@ std::string out_problem(const std::string &p_out, bool p_force) {
 	return roomprobe::cli::output_folder_problem("--out", p_out, roomprobe::evaluation_output_files().front());
 }
 
+// --compare: B against A, as the evaluation scores a map against the truth.
+int compare(const std::string &p_a, const std::string &p_b) {
+	roomprobe::Cubemap a, b;
+	for (const auto &[path, cubemap] : { std::pair<const std::string &, roomprobe::Cubemap *>{ p_a, &a }, { p_b, &b } }) {
+		const std::string error = roomprobe::read_cubemap_exr(path, cubemap);
+		if (!error.empty()) {
+			std::fprintf(stderr, "roomprobe_eval: --compare: %s\n", error.c_str());
+			return 1;
+		}
+	}
+	const roomprobe::CubemapMetrics m = roomprobe::compare_cubemaps(b, a);
+	if (!m.ok) {
+		std::fprintf(stderr, "roomprobe_eval: --compare: %s and %s are not cubemaps of the same size\n", p_a.c_str(), p_b.c_str());
+		return 1;
+	}
+	std::printf("compare: %s against %s: psnr_db=%.2f psnr_linear_db=%.2f ssim=%.4f irradiance_error=%.5f\n", p_b.c_str(), p_a.c_str(), m.psnr_db,
+			m.psnr_linear_db, m.ssim, m.irradiance_error);
+	return 0;
+}
+
 int run(int argc, char **argv) {
 	roomprobe::EvaluationOptions options;
 	bool per_frame = false, quiet = false, budget = false, force = false;
@@ -46,9 +69,12 @@ int run(int argc, char **argv) {
 		std::fprintf(stderr,
 				"%s%susage: roomprobe_eval --recording DIR [--out DIR [--force]] [--cubemap-size N] [--per-frame]\n"
 				"                      [--texel-size M] [--max-cubemaps K] [--no-dense] [--quiet] [--budget]\n"
-				"                      [--rgb-texture] [--dense-range M] [--room FILE]\n"
+				"                      [--rgb-texture] [--dense-range M] [--room FILE] [--backend cpu|vulkan|auto]\n"
+				"       roomprobe_eval --compare A.exr B.exr\n"
 				"  --out DIR: the last frame's maps of every variant, and the truth's, as NAME.exr and NAME.png;\n"
 				"    maps already there are kept and nothing is evaluated, unless --force replaces them\n"
+				"  --backend B: where the kernels with a GPU twin run (RigCapture.compute_backend; default cpu)\n"
+				"  --compare A.exr B.exr: B's PSNR against A (tone-mapped and linear), two maps --out wrote\n"
 				"  --budget: the error budget, the live system with one stage at a time replaced by its oracle\n"
 				"  --dense-range M: fuse depth and draw the dense model up to M metres (default 4)\n"
 				"  --room FILE: the coarse model uses this room.yaml (one found by ./roomprobe room) instead of the\n"
@@ -97,6 +123,17 @@ int run(int argc, char **argv) {
 			force = true;
 		} else if (arg == "--rgb-texture") {
 			options.rgb_texture = true;
+		} else if (arg == "--backend") {
+			std::string name;
+			if (!cursor.value(&name) || !roomprobe::compute_backend_from_name(name, &options.compute_backend)) {
+				return usage("--backend needs cpu, vulkan or auto");
+			}
+		} else if (arg == "--compare") {
+			std::string a, b;
+			if (!cursor.value(&a) || !cursor.value(&b)) {
+				return usage("--compare needs two cubemap EXR files");
+			}
+			return compare(a, b);
 		} else if (arg == "--budget") {
 			budget = true;
 		} else if (arg == "--no-dense") {

@@ -212,6 +212,7 @@ bool RecordingEvaluation::build_base_config() {
 	base.coarse_poses = PoseSource::GroundTruth;
 	base.dense_poses = PoseSource::GroundTruth;
 	base.dense = false;
+	base.compute_backend = options.compute_backend;
 	base.coarse.texel_size_m = options.texel_size_m;
 	base.coarse.inpaint = true;
 	base.coarse.inpaint_async = false; // the completed texture belongs to the latest frame
@@ -376,6 +377,7 @@ bool RecordingEvaluation::finish() {
 	result.metrics_ms = comparisons > 0 ? metrics_total_ms / double(comparisons) : 0.0;
 	if (options.dense) {
 		slam_figures.finish(&result.slam);
+		result.compute = engine_tracked.stats().compute;
 	}
 	return true;
 }

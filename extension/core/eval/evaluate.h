@@ -33,6 +33,7 @@
 #include "mirror_error.h"
 
 #include <envmap/cubemap.h>
+#include <gpu/compute_device.h>
 #include <pipeline/coarse_pipeline.h>
 
 #include <functional>
@@ -61,6 +62,9 @@ struct EvaluationOptions {
 	// the two rooms' initial_rgb_pose (both are the first RGB-D frame's camera), so the maps are
 	// scored at the same probes against the same truth.
 	std::string room_file;
+	// Where the live variants' kernels with a GPU twin run (LiveRoomConfig::compute_backend);
+	// EvaluationResult::compute says where they ran.
+	ComputeBackend compute_backend = ComputeBackend::Cpu;
 	std::function<void(const std::string &)> progress; // optional
 };
 
@@ -180,6 +184,7 @@ struct EvaluationResult {
 	double start_s = 0.0; // the recording's first frame (RGB-D clock): the sweep's moments count from it
 	bool linearised = false;
 	size_t fisheye_frames_used = 0;
+	std::string compute; // where +dense (SLAM)'s kernels ran (LiveRoomStats::compute), with the dense variants
 	size_t cubemaps = 0;
 	int cubemap_size = 0;
 	// Per-frame averages, ms: the no-lighting pipeline (b/c), the additive (d) and gain (e) ones.

@@ -177,6 +177,7 @@ std::string format_evaluation(const EvaluationResult &p_result, bool p_per_frame
 		std::snprintf(line, sizeof(line), "SLAM ms per RGB-D frame: tracking %.2f, integration %.2f, raycast %.2f; dense cubemap pass %.2f ms\n", slam.track_ms,
 				slam.integrate_ms, slam.raycast_ms, slam.dense_render_ms);
 		out << line;
+		out << "backend (+dense (SLAM)): " << p_result.compute << "\n";
 	}
 	return out.str();
 }

@@ -53,6 +53,16 @@ const char *compute_backend_name(ComputeBackend p_backend) {
 	return "?";
 }
 
+bool compute_backend_from_name(const std::string &p_name, ComputeBackend *r_backend) {
+	for (const ComputeBackend backend : { ComputeBackend::Cpu, ComputeBackend::Vulkan, ComputeBackend::Auto }) {
+		if (p_name == compute_backend_name(backend)) {
+			*r_backend = backend;
+			return true;
+		}
+	}
+	return false;
+}
+
 std::string compute_backend_note(ComputeBackend p_asked, const ComputeDevice *p_device, const std::string &p_why_not) {
 	if (p_device != nullptr) {
 		return "Vulkan: " + p_device->name();

@@ -29,7 +29,9 @@ enum class ComputeBackend {
 	Auto, // Vulkan where a device that is not a CPU exists, else the CPU kernels
 };
 
-const char *compute_backend_name(ComputeBackend p_backend);
+const char *compute_backend_name(ComputeBackend p_backend); // "cpu", "vulkan", "auto"
+// The backend a command line or file names (compute_backend_name's words); false for any other.
+bool compute_backend_from_name(const std::string &p_name, ComputeBackend *r_backend);
 
 class ComputeDevice;
 

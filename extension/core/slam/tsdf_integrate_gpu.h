@@ -4,7 +4,9 @@
 // device updates are the ones the CPU's raycasts, copies and meshing read, with no copy either
 // way. TsdfVolume keeps choosing what to update on the CPU (the blocks along the readings' bands
 // allocated in its hash, the blocks in view, the culling) and hands the list here; the device
-// runs tsdf_update_voxel_at on every voxel of it (tsdf_integrate.comp, one workgroup a block).
+// makes the slope factors (depth_smooth.comp, then tsdf_slope.comp: tsdf_depth_slope) and runs
+// tsdf_update_voxel_at on every voxel of it (tsdf_integrate.comp, one workgroup a block), in
+// one batch.
 //
 // Tolerance against the CPU: the same operations in the same order, with multiply-adds kept
 // apart (`precise`), so a device whose division is correctly rounded (lavapipe's is) gives the
@@ -47,11 +49,12 @@ public:
 	TsdfVoxel *pool() const { return static_cast<TsdfVoxel *>(voxels->data()); }
 	size_t pool_blocks() const { return capacity_blocks; }
 
-	// One frame into p_blocks (p_frame as the CPU's update reads it; the grid's axes in the
-	// camera's frame as p_step_*): r_flags gets CHANGED and SATURATED per block (one dispatch per
-	// window of the pool the blocks lie in, all in one batch). False with
+	// One frame into p_blocks (p_frame as the CPU's update reads it, less its slope factors,
+	// which are made here on the depth smoothed over p_slope_smoothing_px (TsdfOptions'); the
+	// grid's axes in the camera's frame as p_step_*): r_flags gets CHANGED and SATURATED per block
+	// (one dispatch per window of the pool the blocks lie in, all in one batch). False with
 	// r_error when a buffer or the dispatch failed; the pool may then hold part of the frame.
-	bool integrate(const TsdfFrameView &p_frame, const glm::vec3 &p_step_x, const glm::vec3 &p_step_y, const glm::vec3 &p_step_z,
+	bool integrate(const TsdfFrameView &p_frame, int p_slope_smoothing_px, const glm::vec3 &p_step_x, const glm::vec3 &p_step_y, const glm::vec3 &p_step_z,
 			const std::vector<TsdfGpuBlock> &p_blocks, std::vector<uint32_t> *r_flags, std::string *r_error);
 
 	const ComputeDevice &device() const { return *compute; }
@@ -62,11 +65,14 @@ public:
 private:
 	TsdfIntegratorGpu() = default;
 	bool ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error) const;
-	void upload_frame(const TsdfFrameView &p_frame, size_t p_slope_offset, size_t p_rgb_offset);
+	void upload_frame(const TsdfFrameView &p_frame, size_t p_rgb_offset);
+	// The batch's first dispatches: the smoothing (when p_radius > 0) and the slope factors.
+	void add_slope_dispatches(const TsdfFrameView &p_frame, int p_radius, size_t p_slope_offset, std::vector<GpuDispatch> *r_batch);
 
 	std::shared_ptr<ComputeDevice> compute; // outlives the buffers below
-	std::unique_ptr<GpuKernel> kernel;
-	std::unique_ptr<GpuBuffer> voxels, blocks, frame, flags;
+	std::unique_ptr<GpuKernel> kernel, smooth_kernel, slope_kernel;
+	std::unique_ptr<GpuBuffer> voxels, blocks, frame, flags, weights;
+	int weights_radius = -1;
 	size_t capacity_blocks = 0;
 	size_t window_blocks = 0;
 };

@@ -190,9 +190,9 @@ bool block_may_change(const TsdfFrameView &p_frame, const DepthTiles &p_tiles, c
 }
 
 // The frame as the voxel updates read it (tsdf_kernels.h): its pose, its clean depth p_depth,
-// its colour and the options. r_slope receives the slope factors it points to: keep it with it.
+// its colour and the options; the slope factors are set by add_slope_factors.
 TsdfFrameView integration_frame(const cv::Mat &p_depth, const cv::Mat &p_rgb, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera,
-		const TsdfOptions &p_options, cv::Mat *r_slope) {
+		const TsdfOptions &p_options) {
 	const Pose camera_from_world = inverse(p_world_from_camera);
 	TsdfFrameView frame;
 	frame.camera = p_camera;
@@ -209,10 +209,18 @@ TsdfFrameView integration_frame(const cv::Mat &p_depth, const cv::Mat &p_rgb, co
 	frame.behind_limit_m = tsdf_behind_limit(p_options.truncation_m, p_options.min_slope);
 	frame.max_weight = uint16_t(p_options.max_weight);
 	frame.max_color_weight = uint16_t(std::clamp(p_options.max_color_weight, 1, 65535));
-	// Slope factors of the frame's pixels (tsdf_depth_slope); a depth jump of half the band
-	// between neighbours is an edge. Taken on the depth smoothed as ICP smooths it: a sensor's
-	// noise (centimetres at 3 m) over one-pixel differences (6 mm there) would tilt the tangent
-	// planes at random and reject most far readings as grazing.
+	frame.min_slope = p_options.min_slope;
+	frame.early_exits = p_options.skip_unchanged;
+	return frame;
+}
+
+// The slope factors of the frame's pixels (tsdf_depth_slope) into r_slope, which r_frame then
+// points to: keep it with it. A depth jump of half the band between neighbours is an edge. Taken
+// on the depth smoothed as ICP smooths it: a sensor's noise (centimetres at 3 m) over one-pixel
+// differences (6 mm there) would tilt the tangent planes at random and reject most far readings
+// as grazing. (The device makes its own: TsdfIntegratorGpu.)
+void add_slope_factors(const cv::Mat &p_depth, const TsdfOptions &p_options, TsdfFrameView *r_frame, cv::Mat *r_slope) {
+	const PinholeIntrinsics &camera = r_frame->camera;
 	const cv::Mat smoothed = p_options.slope_smoothing_px > 0 ? smooth_depth(p_depth, p_options.slope_smoothing_px, p_options.truncation_m) : p_depth;
 	cv::Mat &slope = *r_slope;
 	slope.create(p_depth.size(), CV_32FC1);
@@ -222,15 +230,12 @@ TsdfFrameView integration_frame(const cv::Mat &p_depth, const cv::Mat &p_rgb, co
 		for (int v = p_range.start; v < p_range.end; v++) {
 			float *row = slope.ptr<float>(v);
 			for (int u = 0; u < p_depth.cols; u++) {
-				row[u] = tsdf_depth_slope(smoothed_data, smoothed_stride, p_camera, u, v, 0.5f * p_options.truncation_m);
+				row[u] = tsdf_depth_slope(smoothed_data, smoothed_stride, camera, u, v, 0.5f * p_options.truncation_m);
 			}
 		}
 	});
-	frame.slope = slope.ptr<float>(0);
-	frame.slope_stride = slope.step1();
-	frame.min_slope = p_options.min_slope;
-	frame.early_exits = p_options.skip_unchanged;
-	return frame;
+	r_frame->slope = slope.ptr<float>(0);
+	r_frame->slope_stride = slope.step1();
 }
 
 // Updates the voxels of one block, p_voxel its first, row by row from p_origin (its voxel
@@ -410,7 +415,7 @@ void TsdfVolume::update_in_view(const cv::Mat &p_depth, const cv::Mat &p_rgb, co
 	}
 	r_stats->visible_blocks = int(visible.size());
 	cv::Mat slope;
-	const TsdfFrameView frame = integration_frame(p_depth, p_rgb, p_camera, p_world_from_camera, m_options, &slope);
+	TsdfFrameView frame = integration_frame(p_depth, p_rgb, p_camera, p_world_from_camera, m_options);
 	const float vs = m_options.voxel_size_m;
 	const glm::vec3 step_x = frame.camera_from_world_rotation[0] * vs; // glm: [i] is column i
 	const glm::vec3 step_y = frame.camera_from_world_rotation[1] * vs;
@@ -441,6 +446,7 @@ void TsdfVolume::update_in_view(const cv::Mat &p_depth, const cv::Mat &p_rgb, co
 		on_device = update_on_device(frame, step_x, step_y, step_z, visible, origins, &updated, &changed);
 	}
 	if (!on_device) {
+		add_slope_factors(p_depth, m_options, &frame, &slope);
 		parallel_for(cv::Range(0, int(visible.size())), [&](const cv::Range &p_range) {
 			for (int i = p_range.start; i < p_range.end; i++) {
 				const int32_t slot = visible[size_t(i)];
@@ -480,7 +486,7 @@ bool TsdfVolume::update_on_device(const TsdfFrameView &p_frame, const glm::vec3 
 	}
 	std::vector<uint32_t> flags;
 	std::string error;
-	if (!m_gpu->integrate(p_frame, p_step_x, p_step_y, p_step_z, list, &flags, &error)) {
+	if (!m_gpu->integrate(p_frame, m_options.slope_smoothing_px, p_step_x, p_step_y, p_step_z, list, &flags, &error)) {
 		// The CPU takes over from this frame on. A batch that failed after it started may have
 		// fused part of the frame into the pool; the CPU fuses all of it again (a frame's weight
 		// twice in those voxels, once).
