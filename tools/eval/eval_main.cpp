@@ -62,6 +62,43 @@ int compare(const std::string &p_a, const std::string &p_b) {
 	return 0;
 }
 
+// After the arguments: the checks of --out, then the evaluation or the budget, printed.
+template <typename Usage>
+int evaluate(roomprobe::EvaluationOptions options, const Usage &usage, bool budget, bool per_frame, bool quiet, bool force) {
+	std::error_code ec;
+	if (!options.out.empty() && std::filesystem::exists(options.out, ec) && !std::filesystem::is_directory(options.out, ec)) {
+		return usage(("--out " + options.out + " is a file, not a folder: the cubemaps are written into a folder").c_str());
+	}
+	const std::string kept = options.out.empty() || budget ? "" : out_problem(options.out, force); // --budget writes no maps
+	if (!kept.empty()) {
+		return usage(kept.c_str());
+	}
+	if (!quiet) {
+		options.progress = [](const std::string &p_line) { std::cerr << p_line << "\n"; };
+	}
+	if (budget) {
+		const roomprobe::BudgetResult table = roomprobe::error_budget(options);
+		if (!table.ok) {
+			std::fprintf(stderr, "roomprobe_eval: %s\n", table.error.c_str());
+			return 1;
+		}
+		std::cout << roomprobe::format_budget(table);
+		return 0;
+	}
+	const roomprobe::EvaluationResult result = roomprobe::evaluate_recording(options);
+	if (!result.ok) {
+		std::fprintf(stderr, "roomprobe_eval: %s\n", result.error.c_str());
+		return 1;
+	}
+	std::cout << roomprobe::format_evaluation(result, per_frame);
+	if (!result.out_error.empty()) { // the scores stand; the maps asked for are not all there
+		std::fprintf(stderr, "roomprobe_eval: --out %s: %s\n", options.out.c_str(), result.out_error.c_str());
+		return 1;
+	}
+	return 0;
+}
+
+
 int run(int argc, char **argv) {
 	roomprobe::EvaluationOptions options;
 	bool per_frame = false, quiet = false, budget = false, force = false;
@@ -152,37 +189,7 @@ int run(int argc, char **argv) {
 	if (options.recording.empty()) {
 		return usage("--recording is required");
 	}
-	std::error_code ec;
-	if (!options.out.empty() && std::filesystem::exists(options.out, ec) && !std::filesystem::is_directory(options.out, ec)) {
-		return usage(("--out " + options.out + " is a file, not a folder: the cubemaps are written into a folder").c_str());
-	}
-	const std::string kept = options.out.empty() || budget ? "" : out_problem(options.out, force); // --budget writes no maps
-	if (!kept.empty()) {
-		return usage(kept.c_str());
-	}
-	if (!quiet) {
-		options.progress = [](const std::string &p_line) { std::cerr << p_line << "\n"; };
-	}
-	if (budget) {
-		const roomprobe::BudgetResult table = roomprobe::error_budget(options);
-		if (!table.ok) {
-			std::fprintf(stderr, "roomprobe_eval: %s\n", table.error.c_str());
-			return 1;
-		}
-		std::cout << roomprobe::format_budget(table);
-		return 0;
-	}
-	const roomprobe::EvaluationResult result = roomprobe::evaluate_recording(options);
-	if (!result.ok) {
-		std::fprintf(stderr, "roomprobe_eval: %s\n", result.error.c_str());
-		return 1;
-	}
-	std::cout << roomprobe::format_evaluation(result, per_frame);
-	if (!result.out_error.empty()) { // the scores stand; the maps asked for are not all there
-		std::fprintf(stderr, "roomprobe_eval: --out %s: %s\n", options.out.c_str(), result.out_error.c_str());
-		return 1;
-	}
-	return 0;
+	return evaluate(options, usage, budget, per_frame, quiet, force);
 }
 
 } // namespace

@@ -175,6 +175,7 @@ struct LiveRoomStats {
 	LatencySummary rgbd_latency, fisheye_latency;
 	size_t dense_frames = 0, dense_fused = 0;
 	size_t relocalisation_attempts = 0, relocalisations = 0; // lost frames searched, and found again
+	size_t keyframes = 0, keyframe_relocalisations = 0; // dense SLAM's keyframes, and the relocalisations that came from one
 	TsdfStats tsdf;
 	// Where the GPU-capable kernels run: "CPU", "Vulkan: <device>", or "CPU (<backend>: <why not>)";
 	// "; tracking on the CPU (<why>)", "; integration on the CPU (<why>)" or "; raycasts on the

@@ -373,6 +373,8 @@ LiveRoomStats LiveRoom::stats() const {
 		s.dense_fused = slam->integrated_count();
 		s.relocalisation_attempts = slam->relocalisation_attempts();
 		s.relocalisations = slam->relocalisation_count();
+		s.keyframes = slam->keyframe_count();
+		s.keyframe_relocalisations = slam->keyframe_relocalisation_count();
 	}
 	return s;
 }

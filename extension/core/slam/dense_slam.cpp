@@ -74,20 +74,24 @@ Pose motion_over(const Pose &p_delta, double p_dt_s, double p_last_dt_s) {
 } // namespace
 
 std::string DenseSlam::faster_than_a_hand(const TrackingResult &p_tracking, double p_time_s) const {
+	return faster_than_a_hand(p_tracking, p_time_s, last_pose, last_time_s);
+}
+
+std::string DenseSlam::faster_than_a_hand(const TrackingResult &p_tracking, double p_time_s, const Pose &p_from, double p_from_time_s) const {
 	if (p_tracking.state == TrackingState::Lost || integrated_frames == 0 || !(opts.max_speed_m_s > 0.0)) {
 		return "";
 	}
-	const double dt_s = std::clamp(p_time_s - last_time_s, 0.0, 1.0);
-	const double moved_m = translation_difference_m(p_tracking.world_from_camera, last_pose);
+	const double dt_s = std::clamp(p_time_s - p_from_time_s, 0.0, 1.0);
+	const double moved_m = translation_difference_m(p_tracking.world_from_camera, p_from);
 	if (!(moved_m > opts.max_speed_m_s * dt_s + 0.02)) {
 		return "";
 	}
-	return "the pose moved " + std::to_string(moved_m) + " m in " + std::to_string(dt_s) + " s since the last tracked frame, faster than " +
+	return "the pose moved " + std::to_string(moved_m) + " m in " + std::to_string(dt_s) + " s since the last tracked pose, faster than " +
 			std::to_string(opts.max_speed_m_s) + " m/s: a slide along surfaces that do not fix the pose, not the rig";
 }
 
 DenseSlam::DenseSlam(const DenseSlamOptions &p_options) :
-		opts(p_options), tracker(p_options.icp), tsdf(p_options.tsdf) {}
+		opts(p_options), tracker(p_options.icp), tsdf(p_options.tsdf), keyframes(p_options.keyframes) {}
 
 std::string DenseSlam::set_compute(std::shared_ptr<ComputeDevice> p_device) {
 	compute_error.clear();
@@ -142,6 +146,10 @@ std::string DenseSlam::configure(const PinholeParams &p_camera, const Pose &p_in
 	}
 	tsdf.reset();
 	tsdf.take_dirty_blocks(); // a fresh model: nothing of the old one is re-meshed
+	keyframes.clear();
+	candidate = KeyframeCandidate();
+	keyframe_total = 0;
+	keyframe_relocalised = 0;
 	reference = ModelMaps();
 	last_pose = p_initial_world_from_camera;
 	has_previous = false;
@@ -266,6 +274,11 @@ TrackingResult DenseSlam::track_with(const IcpTracker &p_tracker, const cv::Mat 
 		lost.world_from_camera = p_initial_world_from_camera;
 		return lost;
 	}
+	return track_against(p_tracker, reference, p_depth_m, p_rgb, p_initial_world_from_camera);
+}
+
+TrackingResult DenseSlam::track_against(const IcpTracker &p_tracker, const ModelMaps &p_model, const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
+		const Pose &p_initial_world_from_camera) const {
 	cv::Mat depth = p_depth_m, rgb = p_rgb;
 	PinholeIntrinsics camera = intrinsics;
 	for (int level = 0; level < opts.tracking_level; level++) {
@@ -275,7 +288,74 @@ TrackingResult DenseSlam::track_with(const IcpTracker &p_tracker, const cv::Mat 
 		}
 		camera = camera.level(1);
 	}
-	return p_tracker.track(depth, rgb, camera, reference, p_initial_world_from_camera);
+	return p_tracker.track(depth, rgb, camera, p_model, p_initial_world_from_camera);
+}
+
+TrackingResult DenseSlam::relocalise_far(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, double p_time_s) {
+	if (candidate.pending) {
+		// The frame after a keyframe's pose was found: tracked from that pose against the model
+		// seen from it, it must be Good and within a hand's reach of it.
+		candidate.pending = false;
+		TrackingResult next = track_against(tracker, reference_at(candidate.pose), p_depth_m, p_rgb, candidate.pose);
+		if (next.state == TrackingState::Good && faster_than_a_hand(next, p_time_s, candidate.pose, candidate.time_s).empty()) {
+			next.relocalised = true;
+			next.reason = "relocalised at keyframe " + std::to_string(candidate.keyframe);
+			return next;
+		}
+	}
+	int keyframe = -1;
+	TrackingResult found = relocalise_at_keyframes(p_depth_m, p_rgb, &keyframe);
+	if (found.state != TrackingState::Good) {
+		return found;
+	}
+	candidate = { true, found.world_from_camera, p_time_s, keyframe };
+	TrackingResult wait;
+	wait.world_from_camera = last_pose;
+	wait.reason = "relocalisation: found at keyframe " + std::to_string(keyframe) + ", to be confirmed by the next frame";
+	return wait;
+}
+
+ModelMaps DenseSlam::reference_at(const Pose &p_pose) const {
+	ModelMaps maps;
+	tsdf.raycast(intrinsics.level(std::clamp(opts.raycast_level, 0, 4)), p_pose, &maps);
+	return maps;
+}
+
+TrackingResult DenseSlam::relocalise_at_keyframes(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, int *r_keyframe) const {
+	TrackingResult none;
+	none.world_from_camera = last_pose;
+	none.reason = "relocalisation at the keyframes: no keyframe yet";
+	if (keyframes.size() == 0) {
+		return none;
+	}
+	const std::vector<size_t> candidates = keyframes.nearest(keyframes.thumbnail(p_depth_m, p_rgb), size_t(std::max(1, opts.relocalise_keyframes)));
+	if (candidates.empty()) {
+		none.reason = "relocalisation at the keyframes: the frame has too few readings to compare";
+		return none;
+	}
+	// The coarse levels from the keyframe's pose, as the search around the held pose does.
+	IcpOptions coarse = opts.icp;
+	coarse.iterations[0] = 0;
+	coarse.max_jump_m = opts.relocalise_max_m;
+	coarse.max_jump_deg = opts.relocalise_max_deg;
+	IcpTracker search = tracker;
+	search.set_options(coarse);
+	for (const size_t index : candidates) {
+		const Keyframe &keyframe = keyframes.at(index);
+		const TrackingResult near = track_against(search, reference_at(keyframe.world_from_camera), p_depth_m, p_rgb, keyframe.world_from_camera);
+		if (near.state != TrackingState::Good) {
+			continue;
+		}
+		TrackingResult found = track_against(tracker, reference_at(near.world_from_camera), p_depth_m, p_rgb, near.world_from_camera);
+		if (found.state != TrackingState::Good) {
+			continue;
+		}
+		*r_keyframe = keyframe.id;
+		return found;
+	}
+	none.reason = "relocalisation at the keyframes: none of the " + std::to_string(candidates.size()) + " nearest of " + std::to_string(keyframes.size()) +
+			" verified";
+	return none;
 }
 
 IntegrationStats DenseSlam::integrate(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_world_from_camera) {
@@ -339,6 +419,15 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 				relocalised_frames++;
 			} else {
 				out.tracking.reason += "; " + (found_too_fast.empty() ? found.reason : "relocalised, but " + found_too_fast);
+				// Anywhere the keyframes saw: no speed limit, since the camera may have been carried.
+				const TrackingResult far = opts.relocalise_globally ? relocalise_far(depth, rgb, p_frame.timestamp_s) : TrackingResult();
+				if (far.state == TrackingState::Good) {
+					out.tracking = far;
+					relocalised_frames++;
+					keyframe_relocalised++;
+				} else if (opts.relocalise_globally) {
+					out.tracking.reason += "; " + far.reason;
+				}
 			}
 		}
 		if (out.tracking.state == TrackingState::Lost) {
@@ -349,6 +438,7 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 
 	// A Poor pose still moves the camera (the AR view follows it); only Good ones are fused.
 	if (out.tracking.state != TrackingState::Lost) {
+		candidate.pending = false;
 		previous_pose = last_pose;
 		previous_time_s = last_time_s;
 		has_previous = integrated_frames > 0 && !out.tracking.relocalised; // no velocity across a loss
@@ -371,6 +461,9 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 			tsdf.raycast(intrinsics.level(level), last_pose, &reference);
 		}
 		out.timings.raycast_ms = ms_since(start);
+		if (out.tracking.state == TrackingState::Good && keyframes.consider(depth, rgb, last_pose)) {
+			keyframe_total++;
+		}
 	}
 	last_state = out.tracking.state;
 	frames++;

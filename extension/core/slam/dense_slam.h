@@ -13,13 +13,16 @@
 // (integrate_unconstrained); when Lost the last trusted pose is held, nothing is
 // integrated, and each new frame tries to re-track against the model from that pose and, failing
 // that, relocalises: a wider search from starting poses around it (DenseSlamOptions), so that
-// tracking resumes when the camera comes back near where it was lost. A pose the search cannot
-// explain stays Lost.
+// tracking resumes when the camera comes back near where it was lost, then the keyframes
+// (keyframes.h) that look most like the frame, each verified by ICP against the model seen from
+// it, so that a camera carried anywhere the sweep has been is found again (issue #41). A pose
+// the searches cannot explain stays Lost.
 //
 // World frame: the caller's, through the initial pose (a recording's room.yaml initial_rgb_pose
 // puts the dense model in the room's frame, where the coarse model is).
 
 #include "icp_tracker.h"
+#include "keyframes.h"
 #include "marching_cubes.h"
 #include "slam_types.h"
 #include "tsdf_volume.h"
@@ -82,6 +85,17 @@ struct DenseSlamOptions {
 	// relocalise_max_m and relocalise_max_deg of the held pose. About 13 coarse ICP solves per
 	// lost frame (a few tens of ms at 640x480), only while lost.
 	bool relocalise = true;
+	// When that finds nothing, the keyframes (keyframes.h) whose thumbnails are nearest the lost
+	// frame's are tried, relocalise_keyframes of them: each is verified by tracking the frame
+	// against the model raycast from the keyframe's pose (the coarse levels, within
+	// relocalise_max_m and _deg of it), then again at full resolution against the model seen from
+	// the pose found. Only a Good result of both is taken ("relocalised at keyframe K"), wherever
+	// it is: the camera may have been carried anywhere while lost, so max_speed_m_s does not apply
+	// to it. That frame stays Lost; the next, tracked from the pose found, confirms it (Good, and
+	// within max_speed_m_s of it), so a slide along a bare wall would have to repeat itself.
+	bool relocalise_globally = true;
+	int relocalise_keyframes = 3;
+	KeyframeOptions keyframes;
 	double relocalise_step_m = 0.1; // metres
 	double relocalise_step_deg = 10.0; // degrees
 	double relocalise_max_m = 0.35; // metres from the held pose
@@ -150,6 +164,9 @@ public:
 	// Lost frames the relocalisation search ran on, and those it recovered (Good again).
 	size_t relocalisation_attempts() const { return relocalise_attempts; }
 	size_t relocalisation_count() const { return relocalised_frames; }
+	// Keyframes kept so far, and the relocalisations that came from one (a subset of the above).
+	size_t keyframe_count() const { return keyframe_total; }
+	size_t keyframe_relocalisation_count() const { return keyframe_relocalised; }
 	const TsdfVolume &volume() const { return tsdf; }
 	TsdfVolume &volume() { return tsdf; }
 	// For readers on other threads (a probe's dense pass): while held, no frame is being fused, so
@@ -164,10 +181,23 @@ private:
 	TrackingResult track_with(const IcpTracker &p_tracker, const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_initial_world_from_camera) const;
 	// The wider search after a loss, around the held pose (see DenseSlamOptions::relocalise).
 	TrackingResult relocalise(const cv::Mat &p_depth_m, const cv::Mat &p_rgb) const;
+	// The search over the keyframes (DenseSlamOptions::relocalise_globally): Good with the pose
+	// and r_keyframe's id when one verified.
+	TrackingResult relocalise_at_keyframes(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, int *r_keyframe) const;
+	// That search with its confirmation: a pose found is held as the candidate and the frame stays
+	// Lost; the next lost frame, tracked from the candidate, confirms it (Good) or not.
+	TrackingResult relocalise_far(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, double p_time_s);
+	// p_tracker's result for the frame against p_model (at the tracking level, as track_with).
+	TrackingResult track_against(const IcpTracker &p_tracker, const ModelMaps &p_model, const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
+			const Pose &p_initial_world_from_camera) const;
+	// The model seen from p_pose as the reference is (raycast_level, no search intervals).
+	ModelMaps reference_at(const Pose &p_pose) const;
 	// Empty when p_frame fits the camera, else why not.
 	std::string check_frame(const RgbdFrame &p_frame) const;
 	// Empty when p_tracking's pose at p_time_s is within max_speed_m_s of the last tracked one, else why not.
 	std::string faster_than_a_hand(const TrackingResult &p_tracking, double p_time_s) const;
+	// The same from another pose at another time (a relocalisation's candidate).
+	std::string faster_than_a_hand(const TrackingResult &p_tracking, double p_time_s, const Pose &p_from, double p_from_time_s) const;
 
 	DenseSlamOptions opts;
 	bool configured = false;
@@ -178,6 +208,14 @@ private:
 	std::string compute_error; // set_compute's
 	TsdfVolume tsdf;
 	ModelMaps reference; // the model raycast from last_pose
+	KeyframeDatabase keyframes; // trusted frames far apart, for relocalisation from anywhere
+	struct KeyframeCandidate {
+		bool pending = false;
+		Pose pose; // found at a keyframe, for the next frame to confirm
+		double time_s = 0.0;
+		int keyframe = -1;
+	};
+	KeyframeCandidate candidate;
 	Pose last_pose;
 	Pose previous_pose; // the trusted pose before last_pose (constant-velocity prediction)
 	double last_time_s = 0.0, previous_time_s = 0.0; // their frames' timestamps
@@ -188,6 +226,8 @@ private:
 	std::atomic<size_t> integrated_frames = 0;
 	std::atomic<size_t> relocalise_attempts = 0;
 	std::atomic<size_t> relocalised_frames = 0;
+	std::atomic<size_t> keyframe_total = 0;
+	std::atomic<size_t> keyframe_relocalised = 0;
 	mutable std::shared_mutex volume_mutex;
 };
 

@@ -502,6 +502,8 @@ Dictionary DenseSLAM::get_stats() const {
 	d.set("colour_used", last_frame->colour_used);
 	d.set("relocalisation_attempts", int64_t(s.relocalisation_attempts));
 	d.set("relocalisations", int64_t(s.relocalisations));
+	d.set("keyframes", int64_t(s.keyframes));
+	d.set("keyframe_relocalisations", int64_t(s.keyframe_relocalisations));
 	d.set("latency_ms_p50", s.rgbd_latency.p50_ms);
 	d.set("latency_ms_p95", s.rgbd_latency.p95_ms);
 	return d;
