@@ -76,16 +76,16 @@ const TsdfVoxel *TsdfVolume::pool() const {
 }
 
 std::string TsdfVolume::set_compute(std::shared_ptr<ComputeDevice> p_device, size_t p_window_blocks) {
-	m_gpu_problem.clear();
-	m_raycast_problem.clear();
 	if (!p_device) {
 		leave_device();
+		set_status(false, false, "", "");
 		return "";
 	}
 	std::string error;
 	std::unique_ptr<TsdfIntegratorGpu> gpu = TsdfIntegratorGpu::create(std::move(p_device), size_t(m_options.max_blocks), &error, p_window_blocks);
 	if (!gpu) {
-		m_gpu_problem = "integration on the GPU: " + error;
+		leave_device();
+		set_status(false, false, "integration on the GPU: " + error, "");
 		return compute_problem();
 	}
 	const size_t used = m_slot_block.size() * TSDF_BLOCK_VOXELS;
@@ -94,9 +94,7 @@ std::string TsdfVolume::set_compute(std::shared_ptr<ComputeDevice> p_device, siz
 	m_gpu = std::move(gpu);
 	m_voxels = std::vector<TsdfVoxel>();
 	m_gpu_raycaster = TsdfRaycasterGpu::create(*m_gpu, &error);
-	if (!m_gpu_raycaster) {
-		m_raycast_problem = "the raycast on the GPU: " + error;
-	}
+	set_status(true, bool(m_gpu_raycaster), "", m_gpu_raycaster ? "" : "the raycast on the GPU: " + error);
 	return compute_problem();
 }
 
@@ -111,18 +109,30 @@ void TsdfVolume::leave_device() {
 	m_gpu.reset();
 }
 
+void TsdfVolume::set_status(bool p_integrating, bool p_raycasting, const std::string &p_integration_problem, const std::string &p_raycast_problem) const {
+	const std::lock_guard<std::mutex> lock(m_status->mutex);
+	m_status->integrating = p_integrating;
+	m_status->raycasting = p_raycasting;
+	m_status->integration_problem = p_integration_problem;
+	m_status->raycast_problem = p_raycast_problem;
+}
+
+bool TsdfVolume::integrates_on_gpu() const {
+	const std::lock_guard<std::mutex> lock(m_status->mutex);
+	return m_status->integrating;
+}
+
 bool TsdfVolume::raycasts_on_gpu() const {
-	return m_gpu_raycaster && !m_gpu_raycaster->has_failed();
+	const std::lock_guard<std::mutex> lock(m_status->mutex);
+	return m_status->raycasting;
 }
 
 std::string TsdfVolume::compute_problem() const {
-	std::string out = m_gpu_problem.empty() ? "" : "integration on the CPU (" + m_gpu_problem + ")";
-	std::string raycast = m_raycast_problem;
-	if (raycast.empty() && m_gpu_raycaster && m_gpu_raycaster->has_failed()) {
-		raycast = "the raycast on the GPU failed: " + m_gpu_raycaster->failure();
-	}
-	if (!raycast.empty()) {
-		out += std::string(out.empty() ? "" : "; ") + "raycasts on the CPU (" + raycast + ")";
+	const std::lock_guard<std::mutex> lock(m_status->mutex);
+	const ComputeStatus &s = *m_status;
+	std::string out = s.integration_problem.empty() ? "" : "integration on the CPU (" + s.integration_problem + ")";
+	if (!s.raycast_problem.empty()) {
+		out += std::string(out.empty() ? "" : "; ") + "raycasts on the CPU (" + s.raycast_problem + ")";
 	}
 	return out;
 }

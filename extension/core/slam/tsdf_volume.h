@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -112,7 +113,8 @@ public:
 	// Whether integration and raycasts run on a device now, and, when set_compute's device refused
 	// or a dispatch failed and put either back on the CPU, which and why: "integration on the CPU
 	// (why)", "raycasts on the CPU (why)", joined by "; " ("" otherwise).
-	bool integrates_on_gpu() const { return bool(m_gpu); }
+	// Safe from any thread (the engine's stats read them while the SLAM worker fuses).
+	bool integrates_on_gpu() const;
 	bool raycasts_on_gpu() const;
 	std::string compute_problem() const;
 
@@ -197,7 +199,15 @@ private:
 	std::vector<TsdfVoxel> m_voxels; // pool: slot s at [s * 512, s * 512 + 512); empty while m_gpu holds it
 	std::unique_ptr<TsdfIntegratorGpu> m_gpu; // set_compute's device, with the pool
 	std::unique_ptr<TsdfRaycasterGpu> m_gpu_raycaster; // on m_gpu's pool (reset before it)
-	std::string m_gpu_problem, m_raycast_problem; // set_compute's, or integration's failure
+	// Where the kernels run and why not, for readers on other threads; written by set_compute and
+	// by a failed dispatch (integrate() on the fusing thread, a raycast on any reader's).
+	struct ComputeStatus {
+		mutable std::mutex mutex;
+		bool integrating = false, raycasting = false;
+		std::string integration_problem, raycast_problem;
+	};
+	std::unique_ptr<ComputeStatus> m_status = std::make_unique<ComputeStatus>(); // a pointer: the volume stays movable
+	void set_status(bool p_integrating, bool p_raycasting, const std::string &p_integration_problem, const std::string &p_raycast_problem) const;
 	uint64_t m_hash_version = 0; // changes with the hash table (the device's copy follows it)
 	std::vector<glm::ivec3> m_slot_block; // the block held by each slot
 	std::vector<uint8_t> m_slot_used;

@@ -490,8 +490,7 @@ bool TsdfVolume::update_on_device(const TsdfFrameView &p_frame, const glm::vec3 
 		// The CPU takes over from this frame on. A batch that failed after it started may have
 		// fused part of the frame into the pool; the CPU fuses all of it again (a frame's weight
 		// twice in those voxels, once).
-		m_gpu_problem = "integration on the GPU failed: " + error;
-		m_raycast_problem = "the pool left the device with integration";
+		set_status(false, false, "integration on the GPU failed: " + error, "the pool left the device with integration");
 		leave_device();
 		return false;
 	}

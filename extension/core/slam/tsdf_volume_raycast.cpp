@@ -156,7 +156,7 @@ void TsdfVolume::raycast_ranged(const PinholeIntrinsics &p_camera, const Pose &p
 		return;
 	}
 	const cv::Mat ranges = depth_ranges(p_camera, p_world_from_camera, p_min_depth_m, p_max_depth_m);
-	if (m_gpu_raycaster) {
+	if (m_gpu_raycaster && !m_gpu_raycaster->has_failed()) {
 		TsdfRaycastInput input;
 		input.camera = p_camera;
 		input.world_from_camera = p_world_from_camera;
@@ -175,7 +175,10 @@ void TsdfVolume::raycast_ranged(const PinholeIntrinsics &p_camera, const Pose &p
 		if (m_gpu_raycaster->raycast(input, r_maps, r_stats)) {
 			return;
 		}
-		// Failed (compute_problem() says why from now on): the CPU casts this one and the rest.
+		// Failed: the CPU casts this one and the rest, and compute_problem() says why.
+		const std::lock_guard<std::mutex> lock(m_status->mutex);
+		m_status->raycasting = false;
+		m_status->raycast_problem = "the raycast on the GPU failed: " + m_gpu_raycaster->failure();
 	}
 	const TsdfView view = this->view();
 	TsdfRayParams ray;
