@@ -135,6 +135,32 @@ TEST_CASE("GPU TSDF: the model moves to the device and back with set_compute, an
 	check_close(compare_volumes(cpu, moved), device->is_cpu());
 }
 
+TEST_CASE("GPU TSDF: a device lost while fusing puts fusion and raycasts back on the CPU, with the reason, and loses no frame") {
+	// A lost device refuses every later batch before it starts (ComputeDevice::run), as after a
+	// wait that failed: the frame whose batch was refused is fused on the CPU, whole.
+	const std::shared_ptr<ComputeDevice> device = gpu_test_device(); // its own: the loss stays in this test
+	TsdfVolume cpu, gpu;
+	REQUIRE(gpu.set_compute(device) == "");
+	for (int i = 0; i < 6; i++) {
+		if (i == 3) {
+			device->simulate_loss();
+		}
+		fuse(&cpu, i);
+		fuse(&gpu, i);
+	}
+	const std::string problem = gpu.compute_problem();
+	CAPTURE(problem);
+	CHECK(!gpu.integrates_on_gpu());
+	CHECK(!gpu.raycasts_on_gpu());
+	CHECK(problem.rfind("integration on the CPU (integration on the GPU failed: the Vulkan device was lost", 0) == 0);
+	CHECK(problem.find("; raycasts on the CPU (") != std::string::npos);
+	check_close(compare_volumes(cpu, gpu), device->is_cpu());
+	ModelMaps maps;
+	RaycastStats stats;
+	gpu.raycast(pinhole_intrinsics(half_camera()), living_room().trajectory.world_from_rgb(0.6), &maps, &stats);
+	CHECK(stats.hit_pixels > 1000); // on the CPU now
+}
+
 TEST_CASE("GPU TSDF: a pool larger than one binding reaches is fused a window at a time, with the same voxels") {
 	// lavapipe binds at most 128 MiB (maxStorageBufferRange), a third of a pool of 60000 blocks:
 	// the pool is one buffer, bound in windows, one dispatch each. Here windows of 300 blocks,

@@ -138,6 +138,8 @@ public:
 	// A batch whose wait failed (timeout, device lost) may still be running: the device refuses
 	// every later batch, and the stages stay on the CPU.
 	bool is_lost() const { return lost.load(); }
+	// Fault injection (the tests' lost GPU): every later batch is refused as after a real loss.
+	void simulate_loss() const { lost = true; }
 	VkDevice handle() const { return device; }
 
 private:
