@@ -173,6 +173,23 @@ TEST_CASE("synth: the hand-held trajectory orbits the table smoothly, looking at
 	}
 }
 
+TEST_CASE("synth: --loop turns once round the table over the recording and ends where it began") {
+	// scene.orbit_loop_s (synth --loop): loop closure needs a sweep that comes back with truth. The
+	// hand's wobble (radius +-8 cm, angle +-0.08 rad, height +-10 cm) keeps the end within about
+	// 30 cm of the start, seeing the same table from the same side.
+	for (const std::string name : { "two_rooms", "living_room" }) {
+		CAPTURE(name);
+		Scene scene = reference_scene(name);
+		scene.orbit_loop_s = 60.0;
+		const HandheldTrajectory loop = make_handheld_trajectory(scene, 1);
+		const Pose start = loop.world_from_rgb(0.0), end = loop.world_from_rgb(60.0), half = loop.world_from_rgb(30.0);
+		CHECK(glm::length(end.translation - start.translation) < 0.3);
+		CHECK(angle_between(end.rotation, start.rotation) < 15.0 * 3.14159 / 180.0);
+		CHECK(glm::length(half.translation - start.translation) > 2.0 * scene.orbit_radius_m - 0.4); // the far side
+		CHECK(std::abs(loop.angular_speed_rad_s) == doctest::Approx(2.0 * 3.14159265358979 / 60.0));
+	}
+}
+
 TEST_CASE("synth: the room sweep walks its path turning round, and shows every wall, the floor and both rooms") {
 	for (const std::string name : { "two_rooms", "living_room" }) {
 		CAPTURE(name);

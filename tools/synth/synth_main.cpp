@@ -4,7 +4,7 @@
 //                   [--rig calib/synthetic_rig.yaml] [--hdri PATH|none] [--cubemap-size 128]
 //                   [--fisheye-rate 12] [--rgbd-rate 30] [--fisheye-hdr] [--exr-float] [--no-calibration]
 //                   [--threads N] [--exposure fixed|auto|bracket] [--bracket-ev -5,0]
-//                   [--tone-curve srgb|log] [--fisheye-gains R,G,B] [--vignetting 0.5] [--room-sweep]
+//                   [--tone-curve srgb|log] [--fisheye-gains R,G,B] [--vignetting 0.5] [--room-sweep | --loop]
 //                   [--frame-format zstd|png]
 
 #include <io/opencv.h>
@@ -42,6 +42,8 @@ void usage(std::FILE *p_out) {
 			"  --room-sweep        carry the rig through the room (both rooms in two_rooms), turning\n"
 			"                      round, instead of the scene's own path: a sweep that shows\n"
 			"                      every wall and the floor, for ./roomprobe room\n"
+			"  --loop              one whole turn round the table over the recording's length, so that\n"
+			"                      it ends where it began (loop closure with truth; living_room, two_rooms)\n"
 			"  --rig PATH          rig file (default calib/synthetic_rig.yaml)\n"
 			"  --hdri PATH|none    living_room's window view, panorama_room's walls (default %s;\n"
 			"                      none: a procedural sky in living_room's window)\n"
@@ -105,6 +107,7 @@ struct SynthArgs {
 	std::string scene_name, out, rig_path = "calib/synthetic_rig.yaml", hdri;
 	bool hdri_given = false;
 	bool room_sweep = false;
+	bool loop = false;
 	roomprobe::synth::SequenceOptions options;
 	double cubemap_size = 128.0;
 	double threads = 0.0;
@@ -222,7 +225,7 @@ bool fisheye_option(roomprobe::cli::Arguments &p_cursor, const std::string &p_ar
 	return true;
 }
 
-// The switches: --fisheye-hdr, --exr-float, --room-sweep, --no-calibration.
+// The switches: --fisheye-hdr, --exr-float, --room-sweep, --loop, --no-calibration.
 bool flag_option(const std::string &p_arg, SynthArgs *r_args) {
 	if (p_arg == "--fisheye-hdr") {
 		r_args->options.fisheye_hdr = true;
@@ -230,6 +233,8 @@ bool flag_option(const std::string &p_arg, SynthArgs *r_args) {
 		r_args->options.exr_full_float = true;
 	} else if (p_arg == "--room-sweep") {
 		r_args->room_sweep = true;
+	} else if (p_arg == "--loop") {
+		r_args->loop = true;
 	} else if (p_arg == "--no-calibration") {
 		r_args->options.calibration_views = false;
 	} else {
@@ -351,6 +356,13 @@ int render(const SynthArgs &p_args, const roomprobe::Rig &p_rig, const roomprobe
 	}
 	if (p_args.room_sweep) {
 		scene.scene.trajectory = synth::TrajectoryKind::RoomSweep;
+	}
+	if (p_args.loop) {
+		if (scene.scene.trajectory != synth::TrajectoryKind::Orbit) {
+			return fail("--loop turns round the table: " + p_args.scene_name + (p_args.room_sweep ? " with --room-sweep" : "") +
+					" does not orbit one (living_room and two_rooms do)");
+		}
+		scene.scene.orbit_loop_s = options.duration_s;
 	}
 	options.progress = [](const std::string &p_line) {
 		std::printf("  %s\n", p_line.c_str());

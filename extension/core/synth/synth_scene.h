@@ -202,6 +202,10 @@ struct Scene {
 	TrajectoryKind trajectory = TrajectoryKind::Orbit; // how the hand-held camera moves (synth_sequence.h)
 	glm::dvec3 look_target = glm::dvec3(0.0); // Orbit: what the hand-held camera looks at (the table)
 	double orbit_radius_m = 1.5; // Orbit: the hand-held camera's distance from look_target, horizontally
+	// Orbit: > 0: one whole turn round look_target in this many seconds, in the seeded direction
+	// (synth --loop: the recording comes back to where it began, for loop closure with truth);
+	// 0: the seeded speed, 0.3 to 0.45 rad/s.
+	double orbit_loop_s = 0.0;
 	double camera_height_m = 1.45; // its mean height
 	WallSweepParams wall_sweep; // WallSweep: the wall and how far from it
 	RoomSweepParams room_sweep; // RoomSweep (any scene with a room: synth --room-sweep)

@@ -314,6 +314,9 @@ HandheldTrajectory make_handheld_trajectory(const Scene &p_scene, uint64_t p_see
 	trajectory.start_angle_rad = 2.0 * PI * uniform_from(p_seed, 1);
 	const double speed = 0.3 + 0.15 * uniform_from(p_seed, 2);
 	trajectory.angular_speed_rad_s = uniform_from(p_seed, 3) < 0.5 ? speed : -speed;
+	if (p_scene.orbit_loop_s > 0.0) {
+		trajectory.angular_speed_rad_s = std::copysign(2.0 * PI / p_scene.orbit_loop_s, trajectory.angular_speed_rad_s);
+	}
 	for (size_t i = 0; i < trajectory.phases.size(); ++i) {
 		trajectory.phases[i] = 2.0 * PI * uniform_from(p_seed, 10 + i);
 	}
