@@ -179,6 +179,9 @@ public:
 private:
 	void undistort(const RgbdFrame &p_frame, cv::Mat *r_depth, cv::Mat *r_rgb) const;
 	TrackingResult track_with(const IcpTracker &p_tracker, const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_initial_world_from_camera) const;
+	// The tracker both relocalisation searches solve candidates with: the coarse levels only, with
+	// the search's jump limits (relocalise_max_m, _deg).
+	IcpTracker search_tracker() const;
 	// The wider search after a loss, around the held pose (see DenseSlamOptions::relocalise).
 	TrackingResult relocalise(const cv::Mat &p_depth_m, const cv::Mat &p_rgb) const;
 	// The search over the keyframes (DenseSlamOptions::relocalise_globally): Good with the pose

@@ -12,7 +12,7 @@
 
 namespace roomprobe {
 
-TrackingResult DenseSlam::relocalise(const cv::Mat &p_depth_m, const cv::Mat &p_rgb) const {
+IcpTracker DenseSlam::search_tracker() const {
 	// Candidates: coarse levels only (the finest is the refinement's), and a jump limit that lets a
 	// candidate's solve cover the distance between candidates.
 	IcpOptions coarse = opts.icp;
@@ -21,6 +21,11 @@ TrackingResult DenseSlam::relocalise(const cv::Mat &p_depth_m, const cv::Mat &p_
 	coarse.max_jump_deg = opts.relocalise_max_deg;
 	IcpTracker search = tracker; // on the tracker's device, if it has one
 	search.set_options(coarse);
+	return search;
+}
+
+TrackingResult DenseSlam::relocalise(const cv::Mat &p_depth_m, const cv::Mat &p_rgb) const {
+	const IcpTracker search = search_tracker();
 	std::vector<Pose> starts = { last_pose };
 	const double step_rad = opts.relocalise_step_deg * std::numbers::pi / 180.0;
 	for (int axis = 0; axis < 3; axis++) {
@@ -81,13 +86,7 @@ TrackingResult DenseSlam::relocalise_at_keyframes(const cv::Mat &p_depth_m, cons
 		none.reason = "relocalisation at the keyframes: the frame has too few readings to compare";
 		return none;
 	}
-	// The coarse levels from the keyframe's pose, as the search around the held pose does.
-	IcpOptions coarse = opts.icp;
-	coarse.iterations[0] = 0;
-	coarse.max_jump_m = opts.relocalise_max_m;
-	coarse.max_jump_deg = opts.relocalise_max_deg;
-	IcpTracker search = tracker;
-	search.set_options(coarse);
+	const IcpTracker search = search_tracker(); // from the keyframe's pose, as the search around the held pose
 	for (const size_t index : candidates) {
 		const Keyframe &keyframe = keyframes.at(index);
 		const TrackingResult near = track_against(search, reference_at(keyframe.world_from_camera), p_depth_m, p_rgb, keyframe.world_from_camera);

@@ -74,6 +74,12 @@ std::unique_ptr<TsdfIntegratorGpu> TsdfIntegratorGpu::create(std::shared_ptr<Com
 	return out;
 }
 
+GpuWindow TsdfIntegratorGpu::pool_window(size_t p_window) const {
+	constexpr size_t BLOCK_BYTES = TSDF_BLOCK_VOXELS * sizeof(TsdfVoxel);
+	const size_t first = p_window * window_blocks;
+	return GpuWindow{ first * BLOCK_BYTES, std::min(window_blocks, capacity_blocks - first) * BLOCK_BYTES };
+}
+
 bool TsdfIntegratorGpu::ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error) const {
 	return compute->ensure_buffer(r_buffer, p_bytes, r_error, p_bytes / 4 /* the block list changes length every frame */);
 }
@@ -128,7 +134,7 @@ bool TsdfIntegratorGpu::integrate(const TsdfFrameView &p_frame, int p_slope_smoo
 	const size_t slope_offset = 2 * pixels, rgb_offset = 3 * pixels;
 	const size_t frame_words = rgb_offset + (pixels * 3 + 3) / 4;
 	// The list by window of the pool, each block's slot counted from its window's start.
-	const size_t windows = (capacity_blocks + window_blocks - 1) / window_blocks;
+	const size_t windows = pool_windows();
 	std::vector<size_t> first(windows + 1, 0);
 	for (const TsdfGpuBlock &block : p_blocks) {
 		first[block.slot / window_blocks + 1]++;
@@ -162,7 +168,6 @@ bool TsdfIntegratorGpu::integrate(const TsdfFrameView &p_frame, int p_slope_smoo
 		{ p_step_x.x, p_step_x.y, p_step_x.z, p_step_y.x, p_step_y.y, p_step_y.z, p_step_z.x, p_step_z.y, p_step_z.z }, p_frame.min_slope,
 		p_frame.truncation_m, p_frame.color_band_m, p_frame.behind_limit_m, uint32_t(p_frame.max_weight) * TSDF_WEIGHT_UNIT, p_frame.max_color_weight,
 		p_frame.early_exits ? 1u : 0u, uint32_t(slope_offset), uint32_t(rgb_offset), 0u };
-	const size_t block_bytes = TSDF_BLOCK_VOXELS * sizeof(TsdfVoxel);
 	std::vector<GpuDispatch> batch;
 	add_slope_dispatches(p_frame, radius, slope_offset, &batch);
 	for (size_t w = 0; w < windows; w++) {
@@ -177,8 +182,7 @@ bool TsdfIntegratorGpu::integrate(const TsdfFrameView &p_frame, int p_slope_smoo
 		GpuDispatch dispatch;
 		dispatch.kernel = kernel.get();
 		dispatch.buffers = { voxels.get(), blocks.get(), frame.get(), flags.get() };
-		const size_t window_start = w * window_blocks;
-		dispatch.windows = { GpuWindow{ window_start * block_bytes, std::min(window_blocks, capacity_blocks - window_start) * block_bytes } };
+		dispatch.windows = { pool_window(w) };
 		push.first_block = uint32_t(first[w]);
 		dispatch.set_push(push);
 		dispatch.groups_x = uint32_t(count);

@@ -58,9 +58,12 @@ public:
 			const std::vector<TsdfGpuBlock> &p_blocks, std::vector<uint32_t> *r_flags, std::string *r_error);
 
 	const ComputeDevice &device() const { return *compute; }
-	// The pool as the kernels bind it: one buffer, window_blocks() blocks per binding.
+	// The pool as the kernels bind it: one buffer, blocks_per_window() blocks per binding, the
+	// last window shorter; pool_window(w) is window w's part of the buffer.
 	const GpuBuffer &pool_buffer() const { return *voxels; }
 	size_t blocks_per_window() const { return window_blocks; }
+	size_t pool_windows() const { return (capacity_blocks + window_blocks - 1) / window_blocks; }
+	GpuWindow pool_window(size_t p_window) const;
 
 private:
 	TsdfIntegratorGpu() = default;

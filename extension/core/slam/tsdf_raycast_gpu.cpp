@@ -16,7 +16,6 @@ namespace roomprobe {
 namespace {
 
 constexpr int HIT_FLOATS = 12; // tsdf_raycast.comp's
-constexpr int RANGE_CELL = 8;
 
 // tsdf_raycast.comp's Params, std430.
 struct Params {
@@ -39,7 +38,7 @@ cv::Vec2f device_interval(const cv::Vec2f &p_interval) {
 } // namespace
 
 std::unique_ptr<TsdfRaycasterGpu> TsdfRaycasterGpu::create(const TsdfIntegratorGpu &p_pool, std::string *r_error) {
-	const size_t windows = (p_pool.pool_blocks() + p_pool.blocks_per_window() - 1) / p_pool.blocks_per_window();
+	const size_t windows = p_pool.pool_windows();
 	if (windows > size_t(MAX_WINDOWS)) {
 		*r_error = "the voxel pool spans " + std::to_string(windows) + " bindings of the device's largest storage buffer; the raycast binds at most " +
 				std::to_string(MAX_WINDOWS) + ": lower max_blocks";
@@ -128,11 +127,8 @@ bool TsdfRaycasterGpu::run(const TsdfRaycastInput &p_input, ModelMaps *r_maps, R
 	dispatch.kernel = kernel.get();
 	const GpuBuffer *voxels = &pool.pool_buffer();
 	dispatch.buffers = { voxels, voxels, voxels, voxels, hash.get(), ranges.get(), hits.get(), params.get() };
-	const size_t window_bytes = pool.blocks_per_window() * TSDF_BLOCK_VOXELS * sizeof(TsdfVoxel);
-	const size_t pool_bytes = pool.pool_blocks() * TSDF_BLOCK_VOXELS * sizeof(TsdfVoxel);
-	for (int w = 0; w < MAX_WINDOWS; w++) {
-		const size_t offset = size_t(w) * window_bytes < pool_bytes ? size_t(w) * window_bytes : 0; // windows past the pool: the first again, unread
-		dispatch.windows.push_back(GpuWindow{ offset, std::min(window_bytes, pool_bytes - offset) });
+	for (size_t w = 0; w < size_t(MAX_WINDOWS); w++) {
+		dispatch.windows.push_back(pool.pool_window(w < pool.pool_windows() ? w : 0)); // windows past the pool: the first again, unread
 	}
 	dispatch.groups_x = uint32_t((camera.width + 7) / 8);
 	dispatch.groups_y = uint32_t((camera.height + 7) / 8);

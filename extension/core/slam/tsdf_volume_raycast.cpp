@@ -144,12 +144,16 @@ void TsdfVolume::raycast_ranged(const PinholeIntrinsics &p_camera, const Pose &p
 	r_maps->normals.create(p_camera.height, p_camera.width, CV_32FC3);
 	r_maps->colors.create(p_camera.height, p_camera.width, CV_8UC3);
 	r_maps->depth.create(p_camera.height, p_camera.width, CV_32FC1);
-	r_maps->points.setTo(cv::Scalar::all(nan));
-	r_maps->normals.setTo(cv::Scalar::all(nan));
-	r_maps->colors.setTo(cv::Scalar::all(0));
-	r_maps->depth.setTo(cv::Scalar::all(nan));
+	// No surface anywhere until a ray finds one (the device writes every pixel itself).
+	auto blank = [&]() {
+		r_maps->points.setTo(cv::Scalar::all(nan));
+		r_maps->normals.setTo(cv::Scalar::all(nan));
+		r_maps->colors.setTo(cv::Scalar::all(0));
+		r_maps->depth.setTo(cv::Scalar::all(nan));
+	};
 	RaycastStats stats;
 	if (m_allocated == 0) {
+		blank();
 		if (r_stats != nullptr) {
 			*r_stats = stats;
 		}
@@ -180,6 +184,7 @@ void TsdfVolume::raycast_ranged(const PinholeIntrinsics &p_camera, const Pose &p
 		m_status->raycasting = false;
 		m_status->raycast_problem = "the raycast on the GPU failed: " + m_gpu_raycaster->failure();
 	}
+	blank();
 	const TsdfView view = this->view();
 	TsdfRayParams ray;
 	ray.origin = glm::vec3(p_world_from_camera.translation);
