@@ -8,7 +8,7 @@ Suites, in order (see tests/README.md):
   core       every build/tests/*_tests (doctest) program
   fuzz       every libFuzzer target of tests/fuzz/ for a few seconds on its corpus (tools/fuzz/fuzz.py;
              clang builds the core again into build/fuzz/)
-  soak       roomprobe_bench soak: the fixture back and forth through the engine for 3000 frames;
+  soak       roomprobe_bench soak: the fixture back and forth through the engine for 2000 frames;
              resident memory flat after the warm-up
   room       roomprobe_room on a 10-s living-room sweep against its true room (corners, ceiling, up,
              registration), roomprobe_eval's maps with the room found against the true room, and

@@ -38,10 +38,11 @@ says() { grep -qF -- "$1" <<<"$out"; }
 # A non-empty BLOCKED fails every test with that reason instead of running it. Status: 0 when
 # none failed.
 run_host_tests() {
-	local suite=$1 blocked=$2 t name line passed=0 failed=0 start seconds
+	local suite=$1 blocked=$2 t name line passed=0 failed=0 start seconds t_start
 	shift 2
 	start=$(date +%s.%N)
 	for t in "$@"; do
+		t_start=$(date +%s.%N)
 		name=$suite::$t
 		[[ $name == *"$filter"* ]] || continue
 		printf '\n### %s\n' "$name" >>"$log"
@@ -61,7 +62,10 @@ run_host_tests() {
 			failed=$((failed + 1))
 		fi
 		echo "$line" >>"$results"
-		echo "    $line"
+		# The screen and the log say how long each took, to find what makes a suite slow.
+		seconds=$(awk -v a="$t_start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
+		echo "    $line ($seconds s)"
+		printf '### %s: %s s\n' "$name" "$seconds" >>"$log"
 	done
 	seconds=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
 	echo "${suite^^}_TESTS $passed passed, $failed failed in $seconds s" >>"$results"
