@@ -46,7 +46,10 @@ double variance(const std::vector<uint8_t> &p_pixels) {
 } // namespace
 
 TEST_CASE("aravis driver: the Fake camera is listed only when asked for") {
-	const std::vector<DeviceInfo> with_fake = list_aravis_devices(true);
+	REQUIRE_MESSAGE(aravis_plugin_problem().empty(), aravis_plugin_problem());
+	const DriverResult<std::vector<DeviceInfo>> listed_fake = list_aravis_devices(true);
+	REQUIRE_MESSAGE(listed_fake.ok(), listed_fake.error);
+	const std::vector<DeviceInfo> &with_fake = listed_fake.value;
 	REQUIRE(listed(with_fake, "Fake_1"));
 	for (const DeviceInfo &info : with_fake) {
 		CHECK(info.backend == "aravis");
@@ -56,7 +59,9 @@ TEST_CASE("aravis driver: the Fake camera is listed only when asked for") {
 	CHECK(fake->vendor == "Aravis");
 	CHECK(fake->model == "Fake");
 
-	CHECK_FALSE(listed(list_aravis_devices(false), "Fake_1"));
+	const DriverResult<std::vector<DeviceInfo>> without_fake = list_aravis_devices(false);
+	REQUIRE(without_fake.ok());
+	CHECK_FALSE(listed(without_fake.value, "Fake_1"));
 }
 
 TEST_CASE("aravis driver: Fake_1 opens and grabs frames of the reported size with increasing timestamps") {

@@ -26,6 +26,7 @@ summary_value() { sed -n "s/.*summary:.* $1=\([^ ]*\).*/\1/p" <<<"$out" | tail -
 version_at_most() { [[ $(printf '%s\n%s\n' "$1" "$2" | sort -V | head -n1) == "$1" ]]; }
 
 zip=
+plugin_zip=
 addon=$work/unzipped/addons/roomprobe
 bare12=
 player=
@@ -33,7 +34,8 @@ player=
 test_zip() {
 	logged ./roomprobe package
 	check "./roomprobe package failed (exit $rc)" test "$rc" -eq 0
-	zip=$(sed -n 's/^package: \(.*\.zip\)$/\1/p' <<<"$out" | tail -n1)
+	zip=$(sed -n 's/^package: \(.*roomprobe-addon-.*\.zip\)$/\1/p' <<<"$out" | tail -n1)
+	plugin_zip=$(sed -n 's/^package: \(.*roomprobe-aravis-.*\.zip\)$/\1/p' <<<"$out" | tail -n1)
 	check "no zip named in the output" test -n "$zip" -a -f "$zip"
 	[[ -f $zip ]] || return
 	local needed
@@ -56,7 +58,11 @@ test_zip() {
 	check "the zip bundles an OpenCV module, which the library should have compiled in" bash -c "! grep -q 'bin/libopencv_' <<<\"\$0\"" "$out"
 	check "the zip carries RoomProbe's LICENSE" says "addons/roomprobe/LICENSE"
 	check "the zip carries the licence of CGAL, compiled in" says "licenses/libcgal-dev.txt"
-	check "the zip carries the licence of liblzma, bundled" says "licenses/liblzma5.txt"
+	# Every bundled library's Debian package has its licence in the zip (BUNDLED.txt: path, package).
+	local listing=$out package
+	while IFS=$'\t' read -r _ package; do
+		grep -qF "addons/roomprobe/licenses/$package.txt" <<<"$listing" || failures+=("the zip lacks the licence of $package, bundled")
+	done < <(python3 -c 'import sys, zipfile; print(zipfile.ZipFile(sys.argv[1]).read("addons/roomprobe/bin/BUNDLED.txt").decode())' "$zip" | grep -P '^\S+\t\S+$')
 	check "the zip carries test files" bash -c "! grep -qE 'tests/|binding_test|\.debug\.' <<<\"\$0\"" "$out"
 	check "the zip has files outside addons/roomprobe/" bash -c "! awk 'NR > 1 && \$1 !~ /^addons\/roomprobe\// {bad = 1} END {exit !bad}' <<<\"\$0\"" "$out"
 	rm -rf "$work/unzipped"
@@ -104,6 +110,35 @@ test_loads_on_bare_debian_12() {
 	# The control: the toolchain's own build (sid, unbundled) must not load there, or the root is not bare.
 	logged rp_run_in_root "$bare12" "$work/check_load" godot_project/addons/roomprobe/bin/libroomprobe.linux.debug.x86_64.so
 	check "the toolchain's own library loaded on bare Debian 12: the check proves nothing" test "$rc" -ne 0
+}
+
+# The optional zip of the Aravis plugin (GigE Vision and USB3 Vision fisheyes), unzipped over the
+# addon: the plugin loads on a bare Debian 12 with what it brings, which is all in [dependencies];
+# the addon alone carries none of Aravis, GLib, libxml2 or ICU.
+test_aravis_plugin_zip() {
+	[[ -d $addon ]] || { failures+=("no unpacked addon (package::zip failed)"); return; }
+	check "the addon bundles Aravis, GLib, libxml2 or ICU, which belong in the plugin's zip" \
+		bash -c '! find "$0/bin" \( -name "libaravis*" -o -name "libicu*" -o -name "libxml2*" -o -name "libglib*" \) | grep -q .' "$addon"
+	[[ -n $plugin_zip && -f $plugin_zip ]] || { failures+=("./roomprobe package named no Aravis plugin zip"); return; }
+	local over=$work/with-aravis
+	rm -rf "$over" && mkdir -p "$over"
+	python3 -m zipfile -e "$zip" "$over" && python3 -m zipfile -e "$plugin_zip" "$over"
+	local a=$over/addons/roomprobe so rel
+	check "the plugin's zip lacks bin/libroomprobe_aravis.so" test -f "$a/bin/libroomprobe_aravis.so"
+	check "the plugin's zip lacks Aravis' licence" bash -c 'ls "$0"/licenses/libaravis* >/dev/null 2>&1' "$a"
+	check "the plugin's zip lacks ICU's licence" bash -c 'ls "$0"/licenses/libicu* >/dev/null 2>&1' "$a"
+	while IFS=$'\t' read -r _ package; do
+		[[ -f $a/licenses/$package.txt ]] || failures+=("the plugin's zip lacks the licence of $package, bundled")
+	done < <(grep -P '^\S+\t\S+$' "$a/bin/BUNDLED-aravis.txt")
+	while IFS= read -r so; do
+		rel=${so#"$a"/}
+		[[ $rel == bin/libroomprobe.linux.release.x86_64.so ]] && continue
+		grep -qF "\"res://addons/roomprobe/$rel\"" "$a/roomprobe.gdextension" || failures+=("$rel is not in the plugin zip's [dependencies]")
+	done < <(find "$a/bin" -name '*.so*' -type f | sort)
+	[[ -x $work/check_load && -n $bare12 ]] || { failures+=("no check_load or bare Debian 12 (package::loads_on_bare_debian_12 failed)"); return; }
+	logged rp_run_in_root "$bare12" "$work/check_load" --entry roomprobe_aravis_plugin "$a/bin/libroomprobe_aravis.so"
+	check "the Aravis plugin did not load on bare Debian 12 (exit $rc): $(tail -n1 <<<"$out")" test "$rc" -eq 0
+	check "the plugin's entry symbol was not found" says "found roomprobe_aravis_plugin"
 }
 
 # The demo exported with Debian's templates, played headless on a sid root with only the template.
@@ -175,5 +210,5 @@ test_export_own_project() {
 	rm -rf "$user"
 }
 
-run_host_tests package "" zip gdextension_lists_dependencies loads_on_bare_debian_12 fresh_project_imports_the_addon exported_app_runs_without_dependencies \
+run_host_tests package "" zip gdextension_lists_dependencies loads_on_bare_debian_12 aravis_plugin_zip fresh_project_imports_the_addon exported_app_runs_without_dependencies \
 	export_own_project

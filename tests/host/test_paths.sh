@@ -407,6 +407,22 @@ test_input_devices_named() {
 	check "roomprobe_bench --tum --open3d-results: not said to go with --recording" says "it goes with --recording"
 }
 
+# The Aravis plugin (libroomprobe_aravis.so) missing, or a file of that name that is not it: a
+# program that lists Aravis cameras says so, naming the file and the folder, and goes on.
+test_aravis_plugin_missing_named() {
+	local dir=build/test-data/faults/no-plugin
+	cd "$repo" || return
+	rm -rf "$dir" && mkdir -p "$dir" && cp build/bin/roomprobe_devices "$dir/"
+	rp shell timeout 60 "$dir/roomprobe_devices" --fake
+	check "roomprobe_devices without the plugin exited with status $rc" test "$rc" -eq 0
+	check "the missing plugin was not named with its folder" says "the Aravis plugin (libroomprobe_aravis.so) is not installed in $repo/$dir"
+	cp "$dir/roomprobe_devices" "$dir/libroomprobe_aravis.so"
+	rp shell timeout 60 "$dir/roomprobe_devices" --fake
+	check "a plugin that is not one was not refused" says "the Aravis plugin $repo/$dir/libroomprobe_aravis.so does not load"
+	rp shell timeout 60 build/bin/roomprobe_devices --fake
+	check "with the plugin beside it, Aravis' Fake camera was not listed" says "Fake_1"
+}
+
 # --hdri where it does not apply (two_rooms shows no panorama: it was ignored, and 10 s were made
 # without a word), or naming no file: refused before anything is made.
 test_synth_hdri_refused() {
@@ -636,14 +652,14 @@ test_no_gpl_cgal_headers() {
 tests=(synth_out_outside_clone eval_outside_clone bench_tum_outside_clone relative_paths_from_another_folder missing_parent_refused unusable_paths_refused
 	calibrate_refuses_and_never_overwrites synth_photometric_options_refused eval_refuses_bad_input numbers_out_of_range_refused
 	record_relative_out_run_directly bake_prt_bakes_and_caches unknown_verb_is_named editor_sees_the_callers_files docs_name_existing_paths core_includes_run_downward
-	input_devices_named synth_hdri_refused read_only_output_refused dev_full_outputs_refused full_disk_outputs synth_killed_midway record_killed_midway two_writers_one_output
+	input_devices_named aravis_plugin_missing_named synth_hdri_refused read_only_output_refused dev_full_outputs_refused full_disk_outputs synth_killed_midway record_killed_midway two_writers_one_output
 	outputs_inside_inputs_refused
 	no_gpl_cgal_headers)
 # The verbs build what they run anyway; building it first says so, and fails once when it does not build.
 echo "    building roomprobe_synth, roomprobe_eval, roomprobe_bench, roomprobe_calibrate, roomprobe_record, roomprobe_oni and roomprobe_room"
 cd "$repo" || exit 1
 rp build -Q build/bin/roomprobe_synth build/bin/roomprobe_eval build/bin/roomprobe_bench build/bin/roomprobe_calibrate build/bin/roomprobe_record \
-	build/bin/roomprobe_oni build/bin/roomprobe_room
+	build/bin/roomprobe_oni build/bin/roomprobe_room build/bin/roomprobe_devices build/bin/libroomprobe_aravis.so
 blocked=
 ((rc == 0)) || blocked="the tools did not build (see $log)"
 run_host_tests host "$blocked" "${tests[@]}"

@@ -54,7 +54,11 @@ int run(int p_argc, char **p_argv) {
 	}
 
 	std::printf("Machine-vision cameras (Aravis: GigE Vision, USB3 Vision):\n");
-	std::vector<DeviceInfo> cameras = list_aravis_devices(fake);
+	const DriverResult<std::vector<DeviceInfo>> listed_cameras = list_aravis_devices(fake);
+	if (!listed_cameras.ok()) {
+		std::printf("  (none can be listed: %s)\n", listed_cameras.error.c_str());
+	}
+	std::vector<DeviceInfo> cameras = listed_cameras.value;
 	for (DeviceInfo &info : cameras) {
 		DriverResult<std::unique_ptr<AravisCamera>> opened = AravisCamera::open(info.id);
 		if (!opened.ok()) {
@@ -69,7 +73,7 @@ int run(int p_argc, char **p_argv) {
 		}
 		print_device(info);
 	}
-	if (cameras.empty()) {
+	if (cameras.empty() && listed_cameras.ok()) {
 		std::printf("  none%s\n", fake ? "" : " (--fake lists Aravis' test camera)");
 	}
 

@@ -13,6 +13,9 @@ target=release` built the library there. It stages addons/roomprobe/ with:
     one is an error);
 then checks that nothing shipped needs a glibc newer than the baseline, prints the unpacked size with
 the largest files (a warning above TARGET_MB, a failure above BUDGET_MB), and zips it.
+Then the optional zip of the Aravis plugin (libroomprobe_aravis.so: GigE Vision and USB3 Vision
+fisheyes), unzipped over the addon: the plugin, the libraries it needs beyond the addon's, their
+licences, and a roomprobe.gdextension that lists them too (package_plugin).
 The last line is one key=value summary.
 """
 
@@ -42,8 +45,9 @@ GLIBC_BASELINE = (2, 36)
 # The unpacked addon's size (issue #37, item 4). TARGET_MB is the issue's target: above it the package
 # warns, with the largest files. BUDGET_MB is the hard limit: above it the package fails, so that a new
 # dependency (OpenCV's videoio alone brings FFmpeg and GStreamer) cannot slip in unseen. The target
-# is out of reach while Embree 3 (43.8 MB, five ISA variants) and ICU (33.6 MB, through Aravis'
-# libxml2) are bundled as Debian 12 builds them: docs/addon.md (Size) says why and what would reach it.
+# is out of reach while Embree 3 (43.8 MB, five ISA variants) is bundled as Debian 12 builds it:
+# docs/addon.md (Size) says why and what would reach it. Aravis, with GLib, libxml2 and ICU, ships in
+# a zip of its own (package_plugin).
 TARGET_MB = 60
 BUDGET_MB = 120
 LIBRARY_NAME = "libroomprobe.linux.release.x86_64.so"
@@ -134,9 +138,12 @@ def copy_tree_files(src, dst, keep):
                 shutil.copyfile(os.path.join(root, name), os.path.join(dst, rel))
 
 
-def write_gdextension(src, dst, bundled):
-    """The addon's .gdextension: the release library for every build, and its dependencies."""
+def write_gdextension(src, dst, bundled, source_has_libraries=False):
+    """The addon's .gdextension: the release library for every build, and its dependencies (src
+    may be one written here already: its [dependencies] are replaced)."""
     text = open(src).read()
+    if source_has_libraries:
+        text = re.sub(r"\n*\[dependencies\].*\Z", "", text, flags=re.S)
     text = re.sub(r"\[libraries\].*?(?=\n\[|\Z)", "[libraries]\n"
                   f'linux.debug.x86_64 = "{RES}/bin/{LIBRARY_NAME}"\n'
                   f'linux.release.x86_64 = "{RES}/bin/{LIBRARY_NAME}"\n', text, flags=re.S)
@@ -146,13 +153,110 @@ def write_gdextension(src, dst, bundled):
     open(dst, "w").write(text)
 
 
+def bundle(bin_dir, roots, skip=()):
+    """Copies into bin_dir every shared library that the files in roots load (beside the base system
+    and the sonames in skip), each with RUNPATH $ORIGIN and stripped. Returns ({path under bin/:
+    source}, {path under bin/: Debian package})."""
+    bundled = {soname: path for soname, path in needed_closure(roots).items() if soname not in skip}
+    package_of = {}
+    for rel, path in bundled.items():
+        dst = os.path.join(bin_dir, rel)
+        os.makedirs(os.path.dirname(dst), exist_ok=True)
+        shutil.copyfile(os.path.realpath(path), dst)
+        package_of[rel] = debian_package(path)
+    return bundled, package_of
+
+
+def finish_binaries(bin_dir, rels):
+    """Executable, stripped, RUNPATH $ORIGIN (OpenNI2's drivers: the bin/ two folders up); then the
+    glibc baseline, checked on every file shipped. Returns the newest glibc version needed."""
+    for rel in rels:
+        dst = os.path.join(bin_dir, rel)
+        os.chmod(dst, 0o755)
+        strip_if_unstripped(dst)
+        origin = "$ORIGIN" if "/" not in rel else "$ORIGIN/../.."
+        run("patchelf", "--set-rpath", origin, dst)
+    newest = max((glibc_needs(os.path.join(bin_dir, rel)), rel) for rel in rels)
+    if newest[0] > GLIBC_BASELINE:
+        sys.exit(f"package: bin/{newest[1]} needs GLIBC_{'.'.join(map(str, newest[0]))}, newer than the baseline "
+                 f"{'.'.join(map(str, GLIBC_BASELINE))}: build it in the Debian 12 root")
+    return newest[0]
+
+
+def write_bundled_list(path, title, bundled, package_of, newest, static=True):
+    with open(path, "w") as f:
+        f.write(f"{title}: libraries bundled from Debian 12 (bookworm), each with RUNPATH $ORIGIN.\n"
+                f"glibc baseline: {'.'.join(map(str, GLIBC_BASELINE))} (newest needed: GLIBC_{'.'.join(map(str, newest))}).\n\n")
+        for rel in sorted(bundled):
+            f.write(f"{rel}\t{package_of[rel] or '?'}\n")
+        if static:
+            f.write("\nCompiled into the library (static, from Debian 12): " + ", ".join(STATIC_PACKAGES) + ".\n")
+
+
+def write_zip(stage, addon, zip_path):
+    """A deterministic zip of addon (names relative to stage): sorted names, one timestamp,
+    executable bits kept. Returns the unpacked bytes."""
+    os.makedirs(os.path.dirname(os.path.abspath(zip_path)), exist_ok=True)
+    size = 0
+    with zipfile.ZipFile(zip_path + ".partial", "w", zipfile.ZIP_DEFLATED, compresslevel=9) as z:
+        for root, _, files in sorted(os.walk(addon)):
+            for name in sorted(files):
+                path = os.path.join(root, name)
+                info = zipfile.ZipInfo(os.path.relpath(path, stage), date_time=(2026, 1, 1, 0, 0, 0))
+                info.external_attr = (stat.S_IFREG | (0o755 if os.access(path, os.X_OK) else 0o644)) << 16
+                info.compress_type = zipfile.ZIP_DEFLATED
+                with open(path, "rb") as src:
+                    data = src.read()
+                size += len(data)
+                z.writestr(info, data)
+    os.replace(zip_path + ".partial", zip_path)
+    return size
+
+
+def package_plugin(args, main_bundled, main_gdextension):
+    """The optional zip of the Aravis plugin (GigE Vision and USB3 Vision fisheyes), unzipped over
+    the addon: the plugin, what it needs beyond the addon's own libraries, their licences, and a
+    roomprobe.gdextension that lists the plugin's files too, so that an export copies them."""
+    stage = args.stage + "-aravis"
+    addon = os.path.join(stage, "addons", "roomprobe")
+    shutil.rmtree(addon, ignore_errors=True)
+    bin_dir = os.path.join(addon, "bin")
+    os.makedirs(bin_dir)
+    plugin_name = os.path.basename(args.plugin)
+    shutil.copyfile(args.plugin, os.path.join(bin_dir, plugin_name))
+    bundled, package_of = bundle(bin_dir, [args.plugin], skip=set(main_bundled))
+    newest = finish_binaries(bin_dir, list(bundled) + [plugin_name])
+    licenses = os.path.join(addon, "licenses")
+    os.makedirs(licenses)
+    missing = [f"bin/{rel} (no Debian package owns it)" for rel, package in sorted(package_of.items()) if not package]
+    for package in sorted(set(p for p in package_of.values() if p)):
+        copyright_file = f"/usr/share/doc/{package}/copyright"
+        if os.path.exists(copyright_file):
+            shutil.copyfile(copyright_file, os.path.join(licenses, f"{package}.txt"))
+        else:
+            missing.append(f"{package} (no {copyright_file})")
+    if missing:
+        sys.exit("package: no licence found for " + "; ".join(missing))
+    write_gdextension(main_gdextension, os.path.join(addon, "roomprobe.gdextension"), list(main_bundled) + list(bundled) + [plugin_name],
+                      source_has_libraries=True)
+    write_bundled_list(os.path.join(bin_dir, "BUNDLED-aravis.txt"), f"The Aravis plugin of RoomProbe {args.version}", bundled, package_of,
+                       newest, static=False)
+    unpacked_mb, sizes = size_report(addon)
+    size = write_zip(stage, addon, args.plugin_zip)
+    print(f"package: the Aravis plugin: unpacked {unpacked_mb:.1f} MB; largest: " + ", ".join(f"{rel} {mb:.1f}" for mb, rel in sizes[:6]))
+    print(f"package: {args.plugin_zip}")
+    return size, len(bundled)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--library", required=True, help="the library built with ship=yes target=release")
+    parser.add_argument("--plugin", required=True, help="the Aravis plugin built beside it (libroomprobe_aravis.so)")
     parser.add_argument("--addon", required=True, help="the source addon folder (godot_project/addons/roomprobe)")
     parser.add_argument("--readme", required=True, help="the addon's README (docs/addon.md)")
     parser.add_argument("--stage", required=True, help="folder to stage into (its addons/roomprobe is replaced)")
     parser.add_argument("--zip", required=True, help="the zip to write")
+    parser.add_argument("--plugin-zip", required=True, help="the Aravis plugin's zip to write")
     parser.add_argument("--version", required=True)
     args = parser.parse_args()
 
@@ -165,29 +269,14 @@ def main():
     shutil.copyfile(args.library, os.path.join(bin_dir, LIBRARY_NAME))
     drivers_src = "/usr/lib/x86_64-linux-gnu/OpenNI2/Drivers"
     drivers = sorted(f for f in os.listdir(drivers_src) if f.endswith(".so") and f != "libDummyDevice.so")
-    bundled = {}  # path relative to bin/ -> source path
-    for soname, path in needed_closure([args.library] + [os.path.join(drivers_src, d) for d in drivers]).items():
-        bundled[soname] = path
+    bundled, package_of = bundle(bin_dir, [args.library] + [os.path.join(drivers_src, d) for d in drivers])
     for d in drivers:
-        bundled[f"OpenNI2/Drivers/{d}"] = os.path.join(drivers_src, d)
-    package_of = {}  # path relative to bin/ -> its Debian package (dpkg -S, once each)
-    for rel, path in bundled.items():
-        dst = os.path.join(bin_dir, rel)
-        os.makedirs(os.path.dirname(dst), exist_ok=True)
-        shutil.copyfile(os.path.realpath(path), dst)
-        package_of[rel] = debian_package(path)
-    for rel in list(bundled) + [LIBRARY_NAME]:
-        dst = os.path.join(bin_dir, rel)
-        os.chmod(dst, 0o755)
-        strip_if_unstripped(dst)
-        origin = "$ORIGIN" if "/" not in rel else "$ORIGIN/../.."
-        run("patchelf", "--set-rpath", origin, dst)
-
-    # The glibc baseline, checked on every file shipped.
-    newest = max(((glibc_needs(os.path.join(bin_dir, rel)), rel) for rel in list(bundled) + [LIBRARY_NAME]))
-    if newest[0] > GLIBC_BASELINE:
-        sys.exit(f"package: bin/{newest[1]} needs GLIBC_{'.'.join(map(str, newest[0]))}, newer than the baseline "
-                 f"{'.'.join(map(str, GLIBC_BASELINE))}: build it in the Debian 12 root")
+        rel = f"OpenNI2/Drivers/{d}"
+        bundled[rel] = os.path.join(drivers_src, d)
+        os.makedirs(os.path.dirname(os.path.join(bin_dir, rel)), exist_ok=True)
+        shutil.copyfile(bundled[rel], os.path.join(bin_dir, rel))
+        package_of[rel] = debian_package(bundled[rel])
+    newest = finish_binaries(bin_dir, list(bundled) + [LIBRARY_NAME])
 
     # Scripts, icons, shaders, the README and the licences.
     copy_tree_files(args.addon, addon, lambda n: n.endswith((".gd", ".gd.uid", ".cfg", ".svg", ".gdshader",
@@ -195,12 +284,7 @@ def main():
     shutil.copyfile(args.readme, os.path.join(addon, "README.md"))
     write_gdextension(os.path.join(args.addon, "roomprobe.gdextension"), os.path.join(addon, "roomprobe.gdextension"), bundled)
     copy_licences(addon, package_of)
-    with open(os.path.join(addon, "bin", "BUNDLED.txt"), "w") as f:
-        f.write(f"RoomProbe {args.version}: libraries bundled from Debian 12 (bookworm), each with RUNPATH $ORIGIN.\n"
-                f"glibc baseline: {'.'.join(map(str, GLIBC_BASELINE))} (newest needed: GLIBC_{'.'.join(map(str, newest[0]))}).\n\n")
-        for rel in sorted(bundled):
-            f.write(f"{rel}\t{package_of[rel] or '?'}\n")
-        f.write("\nCompiled into the library (static, from Debian 12): " + ", ".join(STATIC_PACKAGES) + ".\n")
+    write_bundled_list(os.path.join(addon, "bin", "BUNDLED.txt"), f"RoomProbe {args.version}", bundled, package_of, newest)
 
     # The size: the largest files always, a warning above the target, a failure above the budget.
     unpacked_mb, sizes = size_report(addon)
@@ -210,27 +294,14 @@ def main():
                  f"(tools/package/package.py, BUDGET_MB): a new dependency? bin/BUNDLED.txt lists them")
     if unpacked_mb > TARGET_MB:
         print(f"package: warning: the unpacked addon is {unpacked_mb:.1f} MB, above issue #37's target of {TARGET_MB} MB "
-              f"(within the budget of {BUDGET_MB} MB); Embree 3 and ICU are why: docs/addon.md, Size")
+              f"(within the budget of {BUDGET_MB} MB); Embree 3 and LAPACK are why: docs/addon.md, Size")
 
-    # A deterministic zip: sorted names, one timestamp, executable bits kept.
-    os.makedirs(os.path.dirname(os.path.abspath(args.zip)), exist_ok=True)
-    size = 0
-    with zipfile.ZipFile(args.zip + ".partial", "w", zipfile.ZIP_DEFLATED, compresslevel=9) as z:
-        for root, _, files in sorted(os.walk(addon)):
-            for name in sorted(files):
-                path = os.path.join(root, name)
-                rel = os.path.relpath(path, args.stage)
-                info = zipfile.ZipInfo(rel, date_time=(2026, 1, 1, 0, 0, 0))
-                info.external_attr = (stat.S_IFREG | (0o755 if os.access(path, os.X_OK) else 0o644)) << 16
-                info.compress_type = zipfile.ZIP_DEFLATED
-                with open(path, "rb") as src:
-                    data = src.read()
-                size += len(data)
-                z.writestr(info, data)
-    os.replace(args.zip + ".partial", args.zip)
+    size = write_zip(args.stage, addon, args.zip)
     print(f"package: {args.zip}")
+    plugin_size, plugin_libraries = package_plugin(args, bundled, os.path.join(addon, "roomprobe.gdextension"))
     print(f"summary: zip_mb={os.path.getsize(args.zip) / 1e6:.1f} unpacked_mb={size / 1e6:.1f} bundled_libraries={len(bundled)} "
-          f"glibc_needed={'.'.join(map(str, newest[0]))} glibc_baseline={'.'.join(map(str, GLIBC_BASELINE))} "
+          f"aravis_zip_mb={os.path.getsize(args.plugin_zip) / 1e6:.1f} aravis_unpacked_mb={plugin_size / 1e6:.1f} "
+          f"aravis_libraries={plugin_libraries} glibc_needed={'.'.join(map(str, newest))} glibc_baseline={'.'.join(map(str, GLIBC_BASELINE))} "
           f"target_mb={TARGET_MB} budget_mb={BUDGET_MB}")
 
 

@@ -141,11 +141,14 @@ public:
 		close();
 		std::string id = settings.device;
 		if (id.empty()) {
-			const std::vector<DeviceInfo> listed = list_aravis_devices(settings.include_fake);
-			if (listed.empty()) {
+			const DriverResult<std::vector<DeviceInfo>> listed = list_aravis_devices(settings.include_fake);
+			if (!listed.ok()) {
+				return { name() + ": " + listed.error };
+			}
+			if (listed.value.empty()) {
 				return { name() + ": no GigE Vision or USB3 Vision camera found" };
 			}
-			id = listed.front().id;
+			id = listed.value.front().id;
 		}
 		DriverResult<std::unique_ptr<AravisCamera>> opened = AravisCamera::open(id);
 		if (!opened.ok()) {

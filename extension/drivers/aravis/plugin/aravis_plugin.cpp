@@ -1,4 +1,7 @@
-#include "aravis/aravis_camera.h"
+// The Aravis plugin (libroomprobe_aravis.so): GenICam cameras through Aravis 0.8, built as a
+// library of its own so that Aravis, GLib, libxml2 and ICU load only when an Aravis camera is
+// listed or opened (aravis/aravis_loader.cpp), and ship apart from the addon (docs/addon.md).
+#include "aravis/aravis_plugin_api.h"
 
 #include "capture/capture_clock.h"
 
@@ -113,7 +116,7 @@ void release_control_lost_flag(gpointer p_flag, GClosure *) {
 
 } // namespace
 
-struct AravisCamera::State {
+struct State {
 	std::string name; // "Aravis device 'id'", the prefix of every message.
 	DeviceInfo info;
 	int sensor_width = 0;
@@ -182,17 +185,42 @@ public:
 	ArvBuffer *const buffer;
 };
 
-std::vector<DeviceInfo> list_aravis_devices(bool p_include_fake) {
+// AravisCamera on Aravis' objects: the one implementation, made only by open_camera().
+class AravisPluginCamera final : public AravisCamera {
+public:
+	explicit AravisPluginCamera(std::unique_ptr<State> p_state) :
+			state(std::move(p_state)) {}
+
+	DriverResult<CameraFrame> grab(int p_timeout_ms) override;
+	const std::string &get_device_id() const override;
+	DeviceInfo get_info() const override;
+	int get_sensor_width() const override;
+	int get_sensor_height() const override;
+	int get_width() const override;
+	int get_height() const override;
+	std::string get_pixel_format() const override;
+	bool is_streaming() const override;
+	bool is_connection_lost() const override;
+	std::vector<std::string> get_available_pixel_formats() const override;
+	DriverStatus set_pixel_format(const std::string &p_format) override;
+	DriverStatus set_auto_exposure(bool p_on) override;
+	bool has_exposure_time() const override;
+	DriverResult<double> get_exposure_time_us() const override;
+	DriverStatus set_exposure_time_us(double p_exposure_us) override;
+	bool has_gain() const override;
+	DriverResult<double> get_gain() const override;
+	DriverStatus set_gain(double p_gain) override;
+
+private:
+	std::unique_ptr<State> state;
+};
+
+std::vector<DeviceInfo> list_cameras(bool p_include_fake) {
 	std::lock_guard lock(device_list_mutex);
 	return list_devices_locked(p_include_fake);
 }
 
-AravisCamera::AravisCamera(std::unique_ptr<State> p_state) :
-		state(std::move(p_state)) {}
-
-AravisCamera::~AravisCamera() = default;
-
-DriverResult<std::unique_ptr<AravisCamera>> AravisCamera::open(const std::string &p_device_id) {
+DriverResult<std::unique_ptr<AravisCamera>> open_camera(const std::string &p_device_id) {
 	using Result = DriverResult<std::unique_ptr<AravisCamera>>;
 	const std::string name = device_name(p_device_id);
 	if (p_device_id.empty()) {
@@ -228,10 +256,10 @@ DriverResult<std::unique_ptr<AravisCamera>> AravisCamera::open(const std::string
 	g_signal_connect_data(arv_camera_get_device(cam), "control-lost", G_CALLBACK(on_control_lost),
 			new std::shared_ptr<std::atomic<bool>>(state->control_lost), release_control_lost_flag, GConnectFlags(0));
 	state->camera = std::move(camera);
-	return Result::success(std::unique_ptr<AravisCamera>(new AravisCamera(std::move(state))));
+	return Result::success(std::unique_ptr<AravisCamera>(new AravisPluginCamera(std::move(state))));
 }
 
-DriverResult<CameraFrame> AravisCamera::grab(int p_timeout_ms) {
+DriverResult<CameraFrame> AravisPluginCamera::grab(int p_timeout_ms) {
 	using Result = DriverResult<CameraFrame>;
 	State &s = *state;
 	if (s.control_lost->load()) {
@@ -328,50 +356,50 @@ DriverResult<CameraFrame> AravisCamera::grab(int p_timeout_ms) {
 			(last_problem.empty() ? std::string() : " (last one: " + last_problem + ")"));
 }
 
-const std::string &AravisCamera::get_device_id() const {
+const std::string &AravisPluginCamera::get_device_id() const {
 	return state->info.id;
 }
 
-DeviceInfo AravisCamera::get_info() const {
+DeviceInfo AravisPluginCamera::get_info() const {
 	return state->info;
 }
 
-int AravisCamera::get_sensor_width() const {
+int AravisPluginCamera::get_sensor_width() const {
 	return state->sensor_width;
 }
 
-int AravisCamera::get_sensor_height() const {
+int AravisPluginCamera::get_sensor_height() const {
 	return state->sensor_height;
 }
 
-int AravisCamera::get_width() const {
+int AravisPluginCamera::get_width() const {
 	ErrorSlot error;
 	int x = 0, y = 0, width = 0, height = 0;
 	arv_camera_get_region(state->camera.get(), &x, &y, &width, &height, error.out());
 	return width;
 }
 
-int AravisCamera::get_height() const {
+int AravisPluginCamera::get_height() const {
 	ErrorSlot error;
 	int x = 0, y = 0, width = 0, height = 0;
 	arv_camera_get_region(state->camera.get(), &x, &y, &width, &height, error.out());
 	return height;
 }
 
-std::string AravisCamera::get_pixel_format() const {
+std::string AravisPluginCamera::get_pixel_format() const {
 	ErrorSlot error;
 	return text(arv_camera_get_pixel_format_as_string(state->camera.get(), error.out()));
 }
 
-bool AravisCamera::is_streaming() const {
+bool AravisPluginCamera::is_streaming() const {
 	return state->stream != nullptr;
 }
 
-bool AravisCamera::is_connection_lost() const {
+bool AravisPluginCamera::is_connection_lost() const {
 	return state->control_lost->load();
 }
 
-std::vector<std::string> AravisCamera::get_available_pixel_formats() const {
+std::vector<std::string> AravisPluginCamera::get_available_pixel_formats() const {
 	ErrorSlot error;
 	guint count = 0;
 	const char **names = arv_camera_dup_available_pixel_formats_as_strings(state->camera.get(), &count, error.out());
@@ -383,7 +411,7 @@ std::vector<std::string> AravisCamera::get_available_pixel_formats() const {
 	return formats;
 }
 
-DriverStatus AravisCamera::set_pixel_format(const std::string &p_format) {
+DriverStatus AravisPluginCamera::set_pixel_format(const std::string &p_format) {
 	const std::string what = state->name + ": cannot set the pixel format " + p_format + ": ";
 	if (state->stream) {
 		return { what + "the camera is streaming (set it before the first grab)" };
@@ -400,7 +428,7 @@ DriverStatus AravisCamera::set_pixel_format(const std::string &p_format) {
 	return {};
 }
 
-DriverStatus AravisCamera::set_auto_exposure(bool p_on) {
+DriverStatus AravisPluginCamera::set_auto_exposure(bool p_on) {
 	ErrorSlot error;
 	ArvCamera *cam = state->camera.get();
 	const bool exposure = arv_camera_is_exposure_auto_available(cam, error.out()) && !error.failed();
@@ -423,12 +451,12 @@ DriverStatus AravisCamera::set_auto_exposure(bool p_on) {
 	return {};
 }
 
-bool AravisCamera::has_exposure_time() const {
+bool AravisPluginCamera::has_exposure_time() const {
 	ErrorSlot error;
 	return arv_camera_is_exposure_time_available(state->camera.get(), error.out()) && !error.failed();
 }
 
-DriverResult<double> AravisCamera::get_exposure_time_us() const {
+DriverResult<double> AravisPluginCamera::get_exposure_time_us() const {
 	ErrorSlot error;
 	const double exposure = arv_camera_get_exposure_time(state->camera.get(), error.out());
 	if (error.failed()) {
@@ -437,7 +465,7 @@ DriverResult<double> AravisCamera::get_exposure_time_us() const {
 	return DriverResult<double>::success(exposure);
 }
 
-DriverStatus AravisCamera::set_exposure_time_us(double p_exposure_us) {
+DriverStatus AravisPluginCamera::set_exposure_time_us(double p_exposure_us) {
 	ArvCamera *cam = state->camera.get();
 	const std::string what = state->name + ": cannot set the exposure time to " + std::to_string(p_exposure_us) + " us: ";
 	if (!has_exposure_time()) {
@@ -460,12 +488,12 @@ DriverStatus AravisCamera::set_exposure_time_us(double p_exposure_us) {
 	return {};
 }
 
-bool AravisCamera::has_gain() const {
+bool AravisPluginCamera::has_gain() const {
 	ErrorSlot error;
 	return arv_camera_is_gain_available(state->camera.get(), error.out()) && !error.failed();
 }
 
-DriverResult<double> AravisCamera::get_gain() const {
+DriverResult<double> AravisPluginCamera::get_gain() const {
 	ErrorSlot error;
 	const double gain = arv_camera_get_gain(state->camera.get(), error.out());
 	if (error.failed()) {
@@ -474,7 +502,7 @@ DriverResult<double> AravisCamera::get_gain() const {
 	return DriverResult<double>::success(gain);
 }
 
-DriverStatus AravisCamera::set_gain(double p_gain) {
+DriverStatus AravisPluginCamera::set_gain(double p_gain) {
 	ArvCamera *cam = state->camera.get();
 	const std::string what = state->name + ": cannot set the gain to " + std::to_string(p_gain) + ": ";
 	if (!has_gain()) {
@@ -496,4 +524,10 @@ DriverStatus AravisCamera::set_gain(double p_gain) {
 	return {};
 }
 
+const AravisPluginApi PLUGIN_API = { ARAVIS_PLUGIN_VERSION, __VERSION__, list_cameras, open_camera };
+
 } // namespace roomprobe::drivers
+
+extern "C" __attribute__((visibility("default"))) const roomprobe::drivers::AravisPluginApi *roomprobe_aravis_plugin() {
+	return &roomprobe::drivers::PLUGIN_API;
+}
