@@ -110,15 +110,13 @@ def debian_package(path):
     return None
 
 
-def copy_licences(addon, package_of):
-    """RoomProbe's LICENSE, and licenses/PACKAGE.txt (Debian's copyright file) for every package a
-    bundled library comes from and every header-only library compiled in; a file without one
-    stops the package."""
-    shutil.copyfile(LICENSE, os.path.join(addon, "LICENSE"))
+def copy_licences(addon, package_of, extra_packages=()):
+    """licenses/PACKAGE.txt (Debian's copyright file) for every package a bundled library comes from
+    and every one in extra_packages; a file without one stops the package."""
     licenses = os.path.join(addon, "licenses")
     os.makedirs(licenses)
     missing = [f"bin/{rel} (no Debian package owns it)" for rel, package in sorted(package_of.items()) if not package]
-    for package in sorted(set(p for p in package_of.values() if p) | set(HEADER_ONLY_PACKAGES) | set(STATIC_PACKAGES)):
+    for package in sorted(set(p for p in package_of.values() if p) | set(extra_packages)):
         copyright_file = f"/usr/share/doc/{package}/copyright"
         if os.path.exists(copyright_file):
             shutil.copyfile(copyright_file, os.path.join(licenses, f"{package}.txt"))
@@ -226,17 +224,7 @@ def package_plugin(args, main_bundled, main_gdextension):
     shutil.copyfile(args.plugin, os.path.join(bin_dir, plugin_name))
     bundled, package_of = bundle(bin_dir, [args.plugin], skip=set(main_bundled))
     newest = finish_binaries(bin_dir, list(bundled) + [plugin_name])
-    licenses = os.path.join(addon, "licenses")
-    os.makedirs(licenses)
-    missing = [f"bin/{rel} (no Debian package owns it)" for rel, package in sorted(package_of.items()) if not package]
-    for package in sorted(set(p for p in package_of.values() if p)):
-        copyright_file = f"/usr/share/doc/{package}/copyright"
-        if os.path.exists(copyright_file):
-            shutil.copyfile(copyright_file, os.path.join(licenses, f"{package}.txt"))
-        else:
-            missing.append(f"{package} (no {copyright_file})")
-    if missing:
-        sys.exit("package: no licence found for " + "; ".join(missing))
+    copy_licences(addon, package_of)
     write_gdextension(main_gdextension, os.path.join(addon, "roomprobe.gdextension"), list(main_bundled) + list(bundled) + [plugin_name],
                       source_has_libraries=True)
     write_bundled_list(os.path.join(bin_dir, "BUNDLED-aravis.txt"), f"The Aravis plugin of RoomProbe {args.version}", bundled, package_of,
@@ -283,7 +271,9 @@ def main():
                                                               ".gdshaderinc", ".uid")) and not n.endswith(".gdextension.uid"))
     shutil.copyfile(args.readme, os.path.join(addon, "README.md"))
     write_gdextension(os.path.join(args.addon, "roomprobe.gdextension"), os.path.join(addon, "roomprobe.gdextension"), bundled)
-    copy_licences(addon, package_of)
+    # RoomProbe's own licence, and those of the code compiled into the library.
+    shutil.copyfile(LICENSE, os.path.join(addon, "LICENSE"))
+    copy_licences(addon, package_of, HEADER_ONLY_PACKAGES + STATIC_PACKAGES)
     write_bundled_list(os.path.join(addon, "bin", "BUNDLED.txt"), f"RoomProbe {args.version}", bundled, package_of, newest)
 
     # The size: the largest files always, a warning above the target, a failure above the budget.
