@@ -46,7 +46,7 @@ NOT_REPOSITORY_PATHS = {
     "rgb/", "depth/", "fisheye/", "groundtruth/", "calibration/", "pairs/", "frames/",
     "rgb/000000.png", "rgb/000000.zst", "depth/000000.png", "fisheye/000000.png",
     "groundtruth/rgb_trajectory.txt", "groundtruth/fisheye_trajectory.txt", "groundtruth/cubemaps.txt",
-    "groundtruth/cubemaps/", "frames/frame*.png", "bin/BUNDLED.txt", "rgb/*.png", "depth/*.png",
+    "groundtruth/cubemaps/", "frames/frame*.png", "bin/BUNDLED.txt", "bin/BUNDLED-aravis.txt", "rgb/*.png", "depth/*.png",
     # TUM RGB-D's own files
     "associate.py", "rgbd_dataset_freiburg1_xyz/",
     # dumped by Godot into build/api/ while SConstruct is read

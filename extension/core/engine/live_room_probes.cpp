@@ -114,6 +114,7 @@ CoarseMapInput LiveRoom::coarse_input(const CoarseSnapshot &p_snapshot) {
 	input.atlas = p_snapshot.atlas;
 	input.observed = p_snapshot.observed;
 	input.cumulative = p_snapshot.cumulative;
+	input.published = true; // a snapshot's Mats are never written after publishing
 	return input;
 }
 
@@ -222,6 +223,7 @@ Cubemap LiveRoom::render_at(const glm::dvec3 &p_position, int p_size, bool p_com
 		source.atlas = coarse->texture().color;
 		source.observed = cfg.coarse_shell_first ? observed_mask(coarse->texture()) : cv::Mat();
 		source.cumulative = coarse->cumulative_lighting();
+		source.published = false; // the pipeline's own, which it writes again
 	}
 	DenseRenderStats dense;
 	double coarse_ms = 0.0, dense_ms = 0.0;

@@ -257,7 +257,48 @@ std::shared_ptr<const CoarseCubemapRenderer::Lookup> CoarseCubemapRenderer::look
 	return built;
 }
 
-Cubemap CoarseCubemapRenderer::render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size, const glm::dquat &p_room_from_world) const {
+void CoarseCubemapRenderer::set_compute(std::shared_ptr<ComputeDevice> p_device) {
+	static_assert(sizeof(Taps) == 32 && std::is_trivially_copyable_v<Taps>, "coarse_gather.comp's Taps");
+	const std::lock_guard<std::mutex> lock(gpu_mutex);
+	gpu.reset();
+	gpu_problem.clear();
+	if (p_device) {
+		std::string error;
+		gpu = CoarseGatherGpu::create(std::move(p_device), &error);
+		if (!gpu) {
+			gpu_problem = "the coarse render on the CPU (the device's kernel: " + error + ")";
+		}
+	}
+}
+
+bool CoarseCubemapRenderer::gathers_on_gpu() const {
+	const std::lock_guard<std::mutex> lock(gpu_mutex);
+	return gpu != nullptr;
+}
+
+std::string CoarseCubemapRenderer::compute_problem() const {
+	const std::lock_guard<std::mutex> lock(gpu_mutex);
+	return gpu_problem;
+}
+
+bool CoarseCubemapRenderer::gather_on_gpu(const std::shared_ptr<const Lookup> &p_lookup, const cv::Mat &p_atlas, bool p_published,
+		std::array<cv::Mat, 6> *r_faces) const {
+	const std::lock_guard<std::mutex> lock(gpu_mutex);
+	if (!gpu) {
+		return false;
+	}
+	std::string error;
+	const cv::Mat whole = continuous(p_atlas); // a copy is never the published buffer
+	if (gpu->gather(p_lookup, p_lookup->taps.data(), p_lookup->size, whole, p_published && whole.data == p_atlas.data, r_faces, &error)) {
+		gpu_problem.clear();
+		return true;
+	}
+	gpu_problem = "the coarse render on the CPU for the last map (on the device: " + error + ")";
+	return false;
+}
+
+Cubemap CoarseCubemapRenderer::render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size, const glm::dquat &p_room_from_world,
+		bool p_atlas_published) const {
 	if (p_size <= 0 || p_atlas_color.type() != CV_32FC3 || p_atlas_color.cols != mesh.atlas_width || p_atlas_color.rows != mesh.atlas_height) {
 		return Cubemap();
 	}
@@ -270,12 +311,14 @@ Cubemap CoarseCubemapRenderer::render(const cv::Mat &p_atlas_color, const glm::d
 		cubemap.distance_m[size_t(f)] =
 				cv::Mat(p_size, p_size, CV_32FC1, const_cast<float *>(taps->distance_m.data()) + size_t(f) * size_t(p_size) * size_t(p_size)).clone();
 	}
-	gather_faces<3>(*taps, p_atlas_color, &cubemap.faces);
+	if (!gather_on_gpu(taps, p_atlas_color, p_atlas_published, &cubemap.faces)) {
+		gather_faces<3>(*taps, p_atlas_color, &cubemap.faces);
+	}
 	return cubemap;
 }
 
 std::array<cv::Mat, 6> CoarseCubemapRenderer::render_channel(const cv::Mat &p_atlas, const glm::dvec3 &p_position, int p_size,
-		const glm::dquat &p_room_from_world) const {
+		const glm::dquat &p_room_from_world, bool p_atlas_published) const {
 	std::array<cv::Mat, 6> faces;
 	if (p_size <= 0 || p_atlas.type() != CV_32FC1 || p_atlas.cols != mesh.atlas_width || p_atlas.rows != mesh.atlas_height) {
 		return faces;
@@ -283,7 +326,10 @@ std::array<cv::Mat, 6> CoarseCubemapRenderer::render_channel(const cv::Mat &p_at
 	for (cv::Mat &face : faces) {
 		face.create(p_size, p_size, CV_32FC1);
 	}
-	gather_faces<1>(*lookup(p_position, p_size, p_room_from_world), p_atlas, &faces);
+	const std::shared_ptr<const Lookup> taps = lookup(p_position, p_size, p_room_from_world);
+	if (!gather_on_gpu(taps, p_atlas, p_atlas_published, &faces)) {
+		gather_faces<1>(*taps, p_atlas, &faces);
+	}
 	return faces;
 }
 

@@ -10,6 +10,7 @@
 // (texel_to_world succeeds), so nothing bleeds in from padding, the rounding margin or, on the
 // floor and ceiling, from outside the polygon.
 
+#include "coarse_render_gpu.h"
 #include "cubemap.h"
 
 #include <coarse/coarse_texture.h>
@@ -41,7 +42,7 @@ bool intersect_room(const RoomMesh &p_mesh, const glm::dvec3 &p_origin, const gl
 
 // Renders a coarse model into cubemaps. Build once per room mesh (it caches which atlas texels
 // lie on the surface, p_mesh's atlas size in bytes), then render any number of probes. The
-// mesh must outlive the renderer.
+// mesh must outlive the renderer. A compute device, when set, gathers the faces (set_compute).
 class CoarseCubemapRenderer {
 public:
 	explicit CoarseCubemapRenderer(const RoomMesh &p_mesh);
@@ -57,8 +58,10 @@ public:
 	// The rays and taps depend only on the position and size, not on the atlas: they are kept for
 	// the last MAX_CACHED_LOOKUPS (position, size) pairs (36 bytes a texel with the distance: 14 MiB at 256^2), so a
 	// probe that does not move costs a gather of four taps a texel. Safe to call from any thread.
+	// p_atlas_published: the atlas is never written again (the engine's coarse snapshots), so a
+	// compute device keeps it between maps instead of uploading it for each (set_compute).
 	Cubemap render(const cv::Mat &p_atlas_color, const glm::dvec3 &p_position, int p_size = 256,
-			const glm::dquat &p_room_from_world = glm::dquat(1.0, 0.0, 0.0, 0.0)) const;
+			const glm::dquat &p_room_from_world = glm::dquat(1.0, 0.0, 0.0, 0.0), bool p_atlas_published = false) const;
 	Cubemap render(const CoarseTexture &p_texture, const glm::dvec3 &p_position, int p_size = 256) const {
 		return render(p_texture.color, p_position, p_size);
 	}
@@ -67,7 +70,14 @@ public:
 	// one CV_32FC1 image per face, 0 where a ray hits nothing. Empty images when the atlas does
 	// not fit.
 	std::array<cv::Mat, 6> render_channel(const cv::Mat &p_atlas, const glm::dvec3 &p_position, int p_size,
-			const glm::dquat &p_room_from_world = glm::dquat(1.0, 0.0, 0.0, 0.0)) const;
+			const glm::dquat &p_room_from_world = glm::dquat(1.0, 0.0, 0.0, 0.0), bool p_atlas_published = false) const;
+
+	// The gather on a Vulkan compute device (issue #40; coarse_render_gpu.h): the same faces, bit for
+	// bit. Null: the CPU. A gather the device fails is done on the CPU, and compute_problem() says
+	// why (empty while the device works).
+	void set_compute(std::shared_ptr<ComputeDevice> p_device);
+	bool gathers_on_gpu() const;
+	std::string compute_problem() const;
 
 	// Whether atlas texel (x, y) lies on the room surface (texel_to_world succeeds).
 	bool texel_on_surface(int p_x, int p_y) const;
@@ -98,11 +108,16 @@ private:
 	template <int N>
 	static void gather_faces(const Lookup &p_lookup, const cv::Mat &p_atlas, std::array<cv::Mat, 6> *r_faces);
 	std::shared_ptr<const Lookup> lookup(const glm::dvec3 &p_position, int p_size, const glm::dquat &p_room_from_world) const;
+	// The faces gathered on the compute device; false: none, or it failed (then on the CPU).
+	bool gather_on_gpu(const std::shared_ptr<const Lookup> &p_lookup, const cv::Mat &p_atlas, bool p_published, std::array<cv::Mat, 6> *r_faces) const;
 
 	const RoomMesh &mesh;
 	std::vector<uint8_t> on_surface; // atlas_width * atlas_height, row-major
 	mutable std::mutex lookup_mutex;
 	mutable std::list<std::shared_ptr<const Lookup>> lookups; // most recently used first
+	mutable std::mutex gpu_mutex; // the device's buffers: one gather at a time
+	std::unique_ptr<CoarseGatherGpu> gpu;
+	mutable std::string gpu_problem;
 };
 
 } // namespace roomprobe

@@ -68,6 +68,7 @@ ProbeRenderer::ProbeRenderer(const RoomMesh *p_room, const ProbeRenderSettings &
 		settings_(p_settings) {
 	if (p_room != nullptr) {
 		coarse_ = std::make_unique<CoarseCubemapRenderer>(*p_room);
+		coarse_->set_compute(settings_.compute);
 	}
 }
 
@@ -81,9 +82,16 @@ Cubemap ProbeRenderer::render_faces(const glm::dvec3 &p_position, int p_size, co
 	if (coarse_ && p_coarse != nullptr && !p_coarse->atlas.empty()) {
 		const Pose room_from_world = inverse(settings_.world_from_room);
 		const glm::dvec3 in_room = transform_point(room_from_world, p_position);
-		map = coarse_->render(p_coarse->atlas, in_room, p_size, room_from_world.rotation);
+		map = coarse_->render(p_coarse->atlas, in_room, p_size, room_from_world.rotation, p_coarse->published);
 		if (p_dense.slam != nullptr && settings_.coarse_shell_first && !p_coarse->observed.empty()) {
-			observed = coarse_->render_channel(p_coarse->observed, in_room, p_size, room_from_world.rotation);
+			observed = coarse_->render_channel(p_coarse->observed, in_room, p_size, room_from_world.rotation, p_coarse->published);
+		}
+		if (settings_.compute) {
+			const std::string problem = coarse_->compute_problem();
+			if (!problem.empty()) {
+				const std::lock_guard<std::mutex> lock(gpu_mutex);
+				note_gpu_failure(problem);
+			}
 		}
 		cumulative = p_coarse->cumulative;
 	} else {

@@ -67,8 +67,8 @@ struct ProbeRenderSettings {
 	// Until the GGX filter for a size is built (shared_ggx_filter), mips are box-filtered; true:
 	// wait for it instead (the benchmark, the evaluation).
 	bool wait_for_ggx_filter = false;
-	// The device the GGX chain is filtered on (null: the CPU); a failed dispatch falls back to the
-	// CPU for that map and counts in gpu_failures().
+	// The device the coarse render's gather, SH and the GGX chain run on (null: the CPU); a failed
+	// dispatch falls back to the CPU for that map and counts in gpu_failures().
 	std::shared_ptr<ComputeDevice> compute;
 };
 
@@ -78,6 +78,9 @@ struct CoarseMapInput {
 	cv::Mat atlas;
 	cv::Mat observed;
 	LightingChange cumulative;
+	// Neither Mat is ever written again (a published CoarseSnapshot's): a compute device keeps
+	// them between maps (CoarseCubemapRenderer::render).
+	bool published = false;
 };
 
 // The dense model's part: the model and the lighting state of its colours (null slam: none).
