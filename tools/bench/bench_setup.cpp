@@ -157,7 +157,7 @@ void print_recording_header(const char *p_mode, const Arguments &p_args, const R
 	}
 	std::printf("  engine: LiveRoom, tracked poses for both models, re-mesh every %d fused frames, dense pass at 1/%d, %d render thread(s)\n",
 			p_setup.config.mesh_interval_frames, p_setup.config.dense_render_scale, p_setup.config.render_threads);
-	std::printf("  backend (tracking, integration, raycasts, the GGX prefilter, SH): %s\n", p_engine.stats().compute.c_str());
+	std::printf("  backend (tracking, integration, raycasts, the coarse render's gather, the GGX prefilter, SH): %s\n", p_engine.stats().compute.c_str());
 	print_threads();
 }
 

@@ -117,8 +117,9 @@ struct LiveRoomConfig {
 	// built: at once up to 64^2 faces, otherwise in the background (about 3 s at 256^2, once per
 	// process), box-filtered meanwhile. True: wait for it instead (the benchmark, the evaluation).
 	bool wait_for_ggx_filter = false;
-	// Where the kernels that have a GPU twin run (issue #40; so far the GGX prefilter, SH,
-	// tracking's depth pyramid and normal equations, the TSDF's voxel updates and its raycasts):
+	// Where the kernels that have a GPU twin run (issue #40; so far the coarse render's gather, the
+	// GGX prefilter, SH, tracking's depth pyramid and normal equations, the TSDF's voxel updates
+	// and its raycasts):
 	// Cpu; Vulkan (any Vulkan device, Mesa's lavapipe included); Auto (Vulkan where a device that
 	// is not a CPU exists). No device: the CPU, and stats().compute says why.
 	ComputeBackend compute_backend = ComputeBackend::Cpu;
