@@ -151,11 +151,12 @@ def write_gdextension(src, dst, bundled, source_has_libraries=False):
     open(dst, "w").write(text)
 
 
-def bundle(bin_dir, roots, skip=()):
+def bundle(bin_dir, roots, skip=(), extra=None):
     """Copies into bin_dir every shared library that the files in roots load (beside the base system
-    and the sonames in skip), each with RUNPATH $ORIGIN and stripped. Returns ({path under bin/:
-    source}, {path under bin/: Debian package})."""
+    and the sonames in skip), and the files of extra ({path under bin/: source}). Returns ({path
+    under bin/: source}, {path under bin/: Debian package}); finish_binaries makes them shippable."""
     bundled = {soname: path for soname, path in needed_closure(roots).items() if soname not in skip}
+    bundled.update(extra or {})
     package_of = {}
     for rel, path in bundled.items():
         dst = os.path.join(bin_dir, rel)
@@ -257,13 +258,8 @@ def main():
     shutil.copyfile(args.library, os.path.join(bin_dir, LIBRARY_NAME))
     drivers_src = "/usr/lib/x86_64-linux-gnu/OpenNI2/Drivers"
     drivers = sorted(f for f in os.listdir(drivers_src) if f.endswith(".so") and f != "libDummyDevice.so")
-    bundled, package_of = bundle(bin_dir, [args.library] + [os.path.join(drivers_src, d) for d in drivers])
-    for d in drivers:
-        rel = f"OpenNI2/Drivers/{d}"
-        bundled[rel] = os.path.join(drivers_src, d)
-        os.makedirs(os.path.dirname(os.path.join(bin_dir, rel)), exist_ok=True)
-        shutil.copyfile(bundled[rel], os.path.join(bin_dir, rel))
-        package_of[rel] = debian_package(bundled[rel])
+    driver_files = {f"OpenNI2/Drivers/{d}": os.path.join(drivers_src, d) for d in drivers}
+    bundled, package_of = bundle(bin_dir, [args.library] + list(driver_files.values()), extra=driver_files)
     newest = finish_binaries(bin_dir, list(bundled) + [LIBRARY_NAME])
 
     # Scripts, icons, shaders, the README and the licences.
