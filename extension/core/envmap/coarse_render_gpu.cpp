@@ -46,8 +46,7 @@ bool CoarseGatherGpu::upload(Slot *io_slot, const std::shared_ptr<const void> &p
 	}
 	if (!device.ensure_buffer(&io_slot->taps, taps_bytes, r_error) || !device.ensure_buffer(&io_slot->atlas_buffer, atlas_bytes, r_error) ||
 			!device.ensure_buffer(&io_slot->faces, faces_bytes, r_error)) {
-		io_slot->taps_owner.reset();
-		io_slot->atlas.release();
+		io_slot->forget();
 		return false;
 	}
 	if (io_slot->taps_owner != p_taps_owner) {
@@ -90,8 +89,7 @@ bool CoarseGatherGpu::gather(const std::shared_ptr<const void> &p_taps_owner, co
 	dispatch.groups_x = uint32_t(groups);
 	*r_error = compute->run({ dispatch });
 	if (!r_error->empty()) {
-		slot.taps_owner.reset(); // after a failure, nothing on the device is trusted
-		slot.atlas.release();
+		slot.forget();
 		return false;
 	}
 	const float *faces = static_cast<const float *>(slot.faces->data());

@@ -35,6 +35,12 @@ private:
 		std::shared_ptr<const void> taps_owner; // held: no other lookup can take its address
 		cv::Mat atlas; // held, likewise; empty: none uploaded, or not published
 		std::unique_ptr<GpuBuffer> taps, atlas_buffer, faces;
+
+		// After a failure nothing on the device is trusted: both are uploaded again.
+		void forget() {
+			taps_owner.reset();
+			atlas.release();
+		}
 	};
 	bool upload(Slot *io_slot, const std::shared_ptr<const void> &p_taps_owner, const void *p_taps, size_t p_texels, const cv::Mat &p_atlas,
 			bool p_atlas_published, std::string *r_error);
