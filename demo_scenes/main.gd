@@ -38,8 +38,11 @@ var _out_dir := ""
 var _quit_at_end := false
 var _true_poses := false
 var _objects: Array[MeshInstance3D] = []  # each under a SurfaceAnchor, which puts it on the table
-var _main_usec_last := -1
+var _main_last := {}  # RigCapture.get_main_thread_times() at the last frame
 var _main_ms: Array[float] = []  # RoomProbe's main-thread time per rendered frame
+var _main_cpu_ms: Array[float] = []  # its CPU time
+var _node_ms := {}  # node class -> Array of its main-thread time per rendered frame
+const NODE_CLASSES := ["RigCapture", "DenseSLAM", "CoarseRoomModel", "RoomProbe", "SurfaceAnchor"]
 var _objects_ms: Array[float] = []  # the saved probe's maps: drawing the other virtual objects
 var _figure := ""  # the paper's figure shown (--scene), or "" for the three objects
 var _frames := 0
@@ -130,10 +133,14 @@ func _process(_delta: float) -> void:
 	if _true_poses and _rig.has_ground_truth():
 		_camera.global_transform = _rig.get_ground_truth_camera_transform()
 	# RoomProbe's nodes' main-thread time since the last frame (their _process and signals).
-	var usec: int = RigCapture.get_main_thread_usec()
-	if _main_usec_last >= 0:
-		_main_ms.append((usec - _main_usec_last) / 1000.0)
-	_main_usec_last = usec
+	var times: Dictionary = RigCapture.get_main_thread_times()
+	if not _main_last.is_empty():
+		_main_ms.append((times.wall_usec - _main_last.wall_usec) / 1000.0)
+		_main_cpu_ms.append((times.cpu_usec - _main_last.cpu_usec) / 1000.0)
+		for node in NODE_CLASSES:
+			var series: Array = _node_ms.get_or_add(node, [])
+			series.append((times[node] - _main_last[node]) / 1000.0)
+	_main_last = times
 	_frames += 1
 	# Figure 7 (middle) shows the mannequin before the light is switched on, half-way through.
 	if _figure == "prt_mannequin" and _frames == FigureScenes.BEFORE_SWITCH_FRAME:
@@ -225,6 +232,16 @@ func _print_summary() -> void:
 		if warning.begins_with("compute_backend"):
 			fallback = true
 			print("demo: %s" % warning)
-	print("demo: summary frames=%d main_thread_ms_p50=%.3f main_thread_ms_p95=%.3f main_thread_ms_max=%.3f latency_ms_p50=%.1f latency_ms_p95=%.1f dropped_rgbd=%d dropped_capture=%d objects_ms_p50=%.2f backend=%s compute_fallback=%s" % [
-		_main_ms.size(), rank.call(_main_ms, 0.5), rank.call(_main_ms, 0.95), rank.call(_main_ms, 1.0), slam.get("latency_ms_p50", 0.0), slam.get("latency_ms_p95", 0.0),
-		slam.get("dropped_frames", 0), _rig.get_dropped_frame_count(), rank.call(_objects_ms, 0.5), _backend, "yes" if fallback else "no"])
+	# Where the main-thread time goes: each node class's median and mean per rendered frame.
+	var by_node := []
+	for node in NODE_CLASSES:
+		var series: Array[float] = []
+		series.assign(_node_ms.get(node, []))
+		var total := 0.0
+		for value in series:
+			total += value
+		by_node.append("%s %.2f/%.2f" % [node, rank.call(series, 0.5), total / maxi(series.size(), 1)])
+	print("demo: main thread per frame by node, median/mean ms: %s" % ", ".join(by_node))
+	print("demo: summary frames=%d main_thread_ms_p50=%.3f main_thread_ms_p95=%.3f main_thread_ms_max=%.3f main_thread_cpu_ms_p50=%.3f latency_ms_p50=%.1f latency_ms_p95=%.1f dropped_rgbd=%d dropped_capture=%d objects_ms_p50=%.2f backend=%s compute_fallback=%s" % [
+		_main_ms.size(), rank.call(_main_ms, 0.5), rank.call(_main_ms, 0.95), rank.call(_main_ms, 1.0), rank.call(_main_cpu_ms, 0.5), slam.get("latency_ms_p50", 0.0),
+		slam.get("latency_ms_p95", 0.0), slam.get("dropped_frames", 0), _rig.get_dropped_frame_count(), rank.call(_objects_ms, 0.5), _backend, "yes" if fallback else "no"])

@@ -28,6 +28,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstring>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -129,6 +130,36 @@ double max_atlas_diff(const cv::Mat &p_a, const cv::Mat &p_b) {
 	double m = 0.0;
 	cv::minMaxLoc(diff.reshape(1), nullptr, &m);
 	return m;
+}
+
+// The forms made for display on the workers: the pushed RGB image with alpha 255, exactly; the
+// atlas as half floats with alpha 1, within a half's rounding (2^-11 relative, 2^-24 absolute
+// for the subnormals).
+void check_display_forms(const TrackedFrame &p_tracked, const cv::Mat &p_pushed_rgb, const CoarseSnapshot &p_snapshot) {
+	REQUIRE(p_tracked.rgba.type() == CV_8UC4);
+	REQUIRE(p_tracked.rgba.size() == p_pushed_rgb.size());
+	cv::Mat channels[4];
+	cv::split(p_tracked.rgba, channels);
+	cv::Mat rgb;
+	cv::merge(channels, 3, rgb);
+	CHECK(cv::norm(rgb, p_pushed_rgb, cv::NORM_INF) == 0.0);
+	CHECK(cv::countNonZero(channels[3] != 255) == 0);
+	REQUIRE(p_snapshot.display.type() == CV_16FC4);
+	REQUIRE(p_snapshot.display.size() == p_snapshot.atlas.size());
+	cv::Mat shown;
+	p_snapshot.display.convertTo(shown, CV_32F);
+	int outside = 0;
+	for (int y = 0; y < shown.rows; y++) {
+		for (int x = 0; x < shown.cols; x++) {
+			const cv::Vec4f d = shown.at<cv::Vec4f>(y, x);
+			const cv::Vec3f a = p_snapshot.atlas.at<cv::Vec3f>(y, x);
+			for (int c = 0; c < 3; c++) {
+				outside += std::abs(d[c] - a[c]) > std::abs(a[c]) * 0x1p-11f + 0x1p-24f;
+			}
+			outside += d[3] != 1.0f;
+		}
+	}
+	CHECK(outside == 0);
 }
 
 void check_same_trajectory(const Trajectory &p_a, const Trajectory &p_b, double p_tol_m, double p_quat_tol) {
@@ -409,6 +440,7 @@ TEST_CASE("engine: threaded mode, paced so that no frame is dropped, ends with s
 	REQUIRE(snapshot != nullptr);
 	CHECK(snapshot->frames == step.stats.fisheye_integrated);
 	CHECK(max_atlas_diff(snapshot->atlas, step.atlas) <= TEXEL_TOL);
+	check_display_forms(*tracked, rec.rgbd.back().rgb, *snapshot);
 
 	const double texel_diff = max_abs_diff(map->cubemap, step.map->cubemap);
 	MESSAGE("threaded vs step probe map: max texel diff ", texel_diff, ", mean ", mean_abs_diff(map->cubemap, step.map->cubemap), " (version ",
@@ -578,6 +610,7 @@ TEST_CASE("engine: probes are added, moved and removed; maps carry versions and 
 	const glm::dvec3 centre(2.5, 1.2, 2.0);
 	CHECK(mip_chain_uint16(32) == size_t(1024 + 256 + 64 + 16 + 4 + 1) * 4);
 	CHECK(mip_chain_uint16(24) == size_t(576 + 144 + 36 + 9 + 1) * 4);
+	CHECK(gpu_face_bytes(24) == mip_chain_uint16(24) * sizeof(uint16_t));
 
 	LiveRoom engine;
 	CHECK(engine.set_atlas(cv::Mat(4, 4, CV_32FC3)) == false); // no room yet
@@ -635,10 +668,11 @@ TEST_CASE("engine: probes are added, moved and removed; maps carry versions and 
 	// distance to the surface (envmap/parallax.h), area-averaged down the chain.
 	for (const auto &map : { map_a, map_b }) {
 		for (int f = 0; f < 6; f++) {
-			CHECK(map->gpu_faces[size_t(f)]->size() == mip_chain_uint16(map->cubemap.size));
+			CHECK(map->gpu_faces[size_t(f)]->size() == mip_chain_uint16(map->cubemap.size) * sizeof(uint16_t));
 		}
 	}
-	const std::vector<uint16_t> &face = *map_a->gpu_faces[0];
+	std::vector<uint16_t> face(map_a->gpu_faces[0]->size() / sizeof(uint16_t));
+	std::memcpy(face.data(), map_a->gpu_faces[0]->data(), map_a->gpu_faces[0]->size());
 	// Half floats have an 11-bit significand: relative error <= 2^-11 = 4.9e-4 on rounding.
 	for (int c = 0; c < 3; c++) {
 		CHECK(half_to_float(face[size_t(c)]) == doctest::Approx(colour[c]).epsilon(1e-3));
@@ -657,12 +691,12 @@ TEST_CASE("engine: probes are added, moved and removed; maps carry versions and 
 	CHECK(engine.probe_map(a)->version == 3);
 	CHECK(engine.probe_map(a)->cubemap.size == 16);
 	CHECK(engine.probe_map(a)->position.y == doctest::Approx(1.7));
-	CHECK(engine.probe_map(a)->gpu_faces[5]->size() == mip_chain_uint16(16));
+	CHECK(engine.probe_map(a)->gpu_faces[5]->size() == mip_chain_uint16(16) * sizeof(uint16_t));
 	CHECK(engine.probe_map(b)->version == 2); // render_probe renders one
 	engine.set_probe(a, centre, 0); // sizes are clamped to 1..4096
 	engine.render_probe(a);
 	CHECK(engine.probe_map(a)->cubemap.size == 1);
-	CHECK(engine.probe_map(a)->gpu_faces[0]->size() == 4u);
+	CHECK(engine.probe_map(a)->gpu_faces[0]->size() == 8u);
 	engine.set_probe(12345, centre, 8); // unknown: ignored
 	CHECK_FALSE(engine.render_probe(12345));
 	// probe_is_current (the editor renders only then): a rendered probe is, until it moves.
@@ -711,6 +745,53 @@ TEST_CASE("engine: probes are added, moved and removed; maps carry versions and 
 }
 
 // ---------------------------------------------------------------- 5. configuration errors
+
+// A host's buffers for the faces (Godot's PackedByteArray in the extension): the faces are
+// filled into them, with the same bytes as the default vectors; a factory that gives none, or
+// one of the wrong size, leaves the face in a vector.
+namespace {
+struct HostBuffer final : PixelBuffer {
+	explicit HostBuffer(size_t p_bytes) :
+			bytes(p_bytes, 0xAB) {}
+	uint8_t *data() override { return bytes.data(); }
+	const uint8_t *data() const override { return bytes.data(); }
+	size_t size() const override { return bytes.size(); }
+	std::vector<uint8_t> bytes;
+};
+} // namespace
+
+TEST_CASE("engine: the faces for upload are filled into the host's buffers when it gives them") {
+	const glm::dvec3 centre(2.5, 1.2, 2.0);
+	std::atomic<int> made{ 0 };
+	LiveRoomConfig with_host = room_only_config();
+	with_host.face_buffers = [&](size_t p_bytes) -> std::shared_ptr<PixelBuffer> {
+		made++;
+		return std::make_shared<HostBuffer>(p_bytes);
+	};
+	LiveRoomConfig refusing = room_only_config();
+	refusing.face_buffers = [](size_t p_bytes) -> std::shared_ptr<PixelBuffer> { return std::make_shared<HostBuffer>(p_bytes + 1); };
+	std::vector<std::shared_ptr<const ProbeMap>> maps;
+	for (const LiveRoomConfig &cfg : { room_only_config(), with_host, refusing }) {
+		LiveRoom engine;
+		REQUIRE(engine.configure(cfg) == "");
+		const RoomMesh *mesh = engine.room_mesh();
+		REQUIRE(mesh != nullptr);
+		REQUIRE(engine.set_atlas(cv::Mat(mesh->atlas_height, mesh->atlas_width, CV_32FC3, cv::Scalar(0.25, 0.5, 0.75))));
+		const int probe = engine.add_probe(centre, 16);
+		REQUIRE(engine.render_probe(probe));
+		maps.push_back(engine.probe_map(probe));
+		REQUIRE(maps.back() != nullptr);
+	}
+	CHECK(made == 6);
+	for (size_t f = 0; f < 6; f++) {
+		CHECK(dynamic_cast<const HostBuffer *>(maps[1]->gpu_faces[f].get()) != nullptr);
+		CHECK(dynamic_cast<const VectorPixelBuffer *>(maps[2]->gpu_faces[f].get()) != nullptr);
+		for (size_t m = 1; m < 3; m++) {
+			REQUIRE(maps[m]->gpu_faces[f]->size() == maps[0]->gpu_faces[f]->size());
+			CHECK(std::memcmp(maps[m]->gpu_faces[f]->data(), maps[0]->gpu_faces[f]->data(), maps[0]->gpu_faces[f]->size()) == 0);
+		}
+	}
+}
 
 TEST_CASE("engine: configuration errors name the problem") {
 	LiveRoomConfig rig_and_room;

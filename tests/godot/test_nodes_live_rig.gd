@@ -80,6 +80,7 @@ func test_live_devices_reach_the_probe_off_the_main_thread() -> void:
 	var maps := [0]
 	s.probe.environment_map_updated.connect(func(): maps[0] += 1)
 	var usec_before: int = ClassDB.class_call_static("RigCapture", "get_main_thread_usec")
+	var times_before: Dictionary = ClassDB.class_call_static("RigCapture", "get_main_thread_times")
 	var frames_before := Engine.get_process_frames()
 	s.rig.play()
 	assert_true(s.rig.is_playing(), s.rig.get_last_error())
@@ -103,6 +104,19 @@ func test_live_devices_reach_the_probe_off_the_main_thread() -> void:
 	assert_eq(s.rig.get_fisheye_image().get_width(), 512)
 	var frames := Engine.get_process_frames() - frames_before
 	var usec: int = ClassDB.class_call_static("RigCapture", "get_main_thread_usec") - usec_before
+	# The split adds up: the classes' shares are the whole, each node class that ran has a share,
+	# and the CPU time is at most the wall-clock time (each timer rounds both down to a microsecond).
+	var times: Dictionary = ClassDB.class_call_static("RigCapture", "get_main_thread_times")
+	var wall: int = times.wall_usec - times_before.wall_usec
+	var cpu: int = times.cpu_usec - times_before.cpu_usec
+	var shares := 0
+	for node in ["RigCapture", "DenseSLAM", "CoarseRoomModel", "RoomProbe", "SurfaceAnchor"]:
+		shares += times[node] - times_before[node]
+	assert_eq(shares, wall, str(times))
+	assert_true(wall >= usec, "wall %d, get_main_thread_usec %d" % [wall, usec])
+	for node in ["RigCapture", "DenseSLAM", "CoarseRoomModel", "RoomProbe"]:
+		assert_true(times[node] > times_before[node], "%s has no main-thread time: %s" % [node, str(times)])
+	assert_true(cpu > 0 and cpu <= wall + frames * 20, "cpu %d us, wall %d us over %d frames" % [cpu, wall, frames])
 	# Reported, not asserted: speed is the benchmark's (roomprobe_bench live), not a timed test's.
 	print("live rig: %d game frames, RoomProbe's nodes %.2f ms a frame on the main thread" % [frames, usec / 1000.0 / max(frames, 1)])
 	s.rig.stop()

@@ -88,9 +88,9 @@ std::shared_ptr<const ProbeMap> poll_map(const LiveRoom &p_engine, int p_probe_i
 		if (r_loop->map_taken && r_loop->map_taken->gpu_faces[f] == map->gpu_faces[f]) {
 			continue; // as RoomProbe: an unchanged face is not uploaded
 		}
-		const std::vector<uint16_t> &src = *map->gpu_faces[f];
-		r_loop->face_bytes[f].resize(src.size() * sizeof(uint16_t));
-		std::memcpy(r_loop->face_bytes[f].data(), src.data(), r_loop->face_bytes[f].size());
+		const PixelBuffer &src = *map->gpu_faces[f];
+		r_loop->face_bytes[f].resize(src.size());
+		std::memcpy(r_loop->face_bytes[f].data(), src.data(), src.size());
 	}
 	r_loop->copy_ms.add(ms_since(poll_start));
 	r_loop->map_version_seen = map->version;

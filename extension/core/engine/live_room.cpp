@@ -93,7 +93,7 @@ bool LiveRoom::set_atlas(const cv::Mat &p_atlas) {
 		return false;
 	}
 	auto snapshot = std::make_shared<CoarseSnapshot>();
-	snapshot->atlas = p_atlas.clone();
+	snapshot->set_atlas(p_atlas.clone());
 	snapshot->cumulative.valid = true;
 	{
 		const std::lock_guard<std::mutex> lock(publish_mutex);
@@ -143,6 +143,7 @@ std::string LiveRoom::build_room_locked() {
 	settings.rgb_lut = rgb_lut;
 	settings.rgb_lut_active = rgb_lut_active;
 	settings.wait_for_ggx_filter = cfg.wait_for_ggx_filter;
+	settings.face_buffers = cfg.face_buffers;
 	std::string reason;
 	settings.compute = shared_compute_device(cfg.compute_backend, &reason);
 	{

@@ -123,6 +123,9 @@ struct LiveRoomConfig {
 	// Cpu; Vulkan (any Vulkan device, Mesa's lavapipe included); Auto (Vulkan where a device that
 	// is not a CPU exists). No device: the CPU, and stats().compute says why.
 	ComputeBackend compute_backend = ComputeBackend::Cpu;
+	// Where the maps' faces for upload (ProbeMap::gpu_faces) are filled, on the probe workers: a
+	// host engine's own buffers, which it then takes without a copy. Empty: plain vectors.
+	PixelBufferFactory face_buffers;
 };
 
 // One RGB-D frame as the engine saw it: the image the AR view shows behind the virtual objects
@@ -130,7 +133,9 @@ struct LiveRoomConfig {
 struct TrackedFrame {
 	uint64_t sequence = 0; // 1, 2, ... in push order
 	double timestamp_s = 0.0; // RGB-D clock
-	cv::Mat rgb; // CV_8UC3 R, G, B, as pushed (not undistorted)
+	// CV_8UC4 R, G, B, 255 of the pushed image (not undistorted), for showing: made here on the
+	// worker in the layout GPUs sample as it is, so a display uploads it without converting.
+	cv::Mat rgba;
 	Pose world_from_camera; // the RGB camera's pose (held while Lost)
 	bool has_pose = false; // false: no pose yet (not configured, or ground truth missing there)
 	TrackingState state = TrackingState::Lost;
@@ -146,6 +151,9 @@ struct CoarseSnapshot {
 	uint64_t frames = 0; // fisheye frames integrated
 	uint64_t fisheye_sequence = 0; // the last one
 	cv::Mat atlas; // completed colour (CV_32FC3), never written after publishing
+	// The atlas as RGBA half floats (CV_16FC4), for showing the room: made on the worker that
+	// publishes, in the layout GPUs sample as it is (set_atlas).
+	cv::Mat display;
 	// CV_32FC1, the atlas's size: 1 where the fisheye observed the texel (quality > 0), else 0; the
 	// dense pass leaves those texels of the room's shell to the coarse model (dense_render.h).
 	// Empty: none (set_atlas).
@@ -153,6 +161,9 @@ struct CoarseSnapshot {
 	LightingChange cumulative; // the coarse model's lighting changes so far (§4.6)
 	CoarseFrameStats last; // of the last frame
 	CoarsePipelineTimings timings; // of the last frame
+
+	// atlas = p_atlas (shared, not copied), and its display form.
+	void set_atlas(const cv::Mat &p_atlas);
 };
 
 // Nearest-rank percentiles of a latency series, milliseconds.

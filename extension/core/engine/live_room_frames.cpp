@@ -2,6 +2,8 @@
 
 #include <rig/fisheye_pose.h>
 
+#include <opencv2/imgproc.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -59,7 +61,9 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence) {
 		auto out = std::make_shared<TrackedFrame>();
 		out->sequence = p_sequence;
 		out->timestamp_s = p_frame.timestamp_s;
-		out->rgb = p_frame.rgb;
+		if (p_frame.rgb.type() == CV_8UC3) {
+			cv::cvtColor(p_frame.rgb, out->rgba, cv::COLOR_RGB2RGBA);
+		}
 		bool fused = false;
 		Pose truth;
 		std::string truth_error;
@@ -222,9 +226,19 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 // The coarse pipeline's state as a snapshot holds it: the frame count, the completed atlas (a
 // copy the pipeline will never write: probes read it while the next frame goes in), the observed
 // mask the dense pass needs, and the lighting changes so far.
+void CoarseSnapshot::set_atlas(const cv::Mat &p_atlas) {
+	atlas = p_atlas;
+	display.release();
+	if (p_atlas.type() == CV_32FC3) {
+		cv::Mat rgba;
+		cv::cvtColor(p_atlas, rgba, cv::COLOR_RGB2RGBA);
+		rgba.convertTo(display, CV_16F);
+	}
+}
+
 void LiveRoom::take_coarse_state(CoarseSnapshot *r_snapshot) const {
 	r_snapshot->frames = coarse->frame_count();
-	r_snapshot->atlas = coarse->completed_color().clone();
+	r_snapshot->set_atlas(coarse->completed_color().clone());
 	if (cfg.coarse_shell_first) {
 		r_snapshot->observed = observed_mask(coarse->texture());
 	}

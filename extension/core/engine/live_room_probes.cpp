@@ -324,7 +324,7 @@ void LiveRoom::finish() {
 		const std::lock_guard<std::mutex> lock(publish_mutex);
 		if (last_coarse) {
 			auto snapshot = std::make_shared<CoarseSnapshot>(*last_coarse);
-			snapshot->atlas = coarse->completed_color().clone();
+			snapshot->set_atlas(coarse->completed_color().clone());
 			last_coarse = snapshot;
 		}
 	}

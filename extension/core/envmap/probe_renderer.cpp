@@ -22,8 +22,10 @@ double ms_since(Clock::time_point p_start) {
 // One face as Godot's RGBAH image with mipmaps wants it: level 0, then each half-size level down
 // to 1x1, RGBA half floats. The levels are the GGX chain's (ggx_prefilter.h), then box halvings
 // of its last level, which no shader reads for roughness.
-std::vector<uint16_t> gpu_face(const std::vector<Cubemap> &p_chain, const cv::Mat &p_distance_m, int p_face) {
-	std::vector<uint16_t> out;
+std::shared_ptr<const PixelBuffer> gpu_face(const std::vector<Cubemap> &p_chain, const cv::Mat &p_distance_m, int p_face,
+		const PixelBufferFactory &p_buffers) {
+	const std::shared_ptr<PixelBuffer> buffer = make_pixel_buffer(p_buffers, gpu_face_bytes(p_chain.front().size));
+	uint8_t *out = buffer->data();
 	cv::Mat level, distance = p_distance_m;
 	for (size_t m = 0;; m++) {
 		if (m < p_chain.size()) {
@@ -43,23 +45,22 @@ std::vector<uint16_t> gpu_face(const std::vector<Cubemap> &p_chain, const cv::Ma
 			cv::resize(distance, next, size, 0.0, 0.0, cv::INTER_AREA);
 			distance = next;
 		}
-		cv::Mat rgba, half;
+		cv::Mat rgba;
 		const cv::Mat channels[2] = { level, distance };
 		rgba.create(level.size(), CV_32FC4);
 		const int pairs[8] = { 0, 0, 1, 1, 2, 2, 3, 3 };
 		cv::mixChannels(channels, 2, &rgba, 1, pairs, 4);
+		// Straight into the buffer: a continuous CV_16FC4 header over its bytes.
+		cv::Mat half(level.size(), CV_16FC4, out);
 		rgba.convertTo(half, CV_16F);
-		const size_t n = size_t(half.total()) * 4;
-		const size_t at = out.size();
-		out.resize(at + n);
-		for (int y = 0; y < half.rows; y++) {
-			std::memcpy(out.data() + at + size_t(y) * size_t(half.cols) * 4, half.ptr(y), size_t(half.cols) * 4 * sizeof(uint16_t));
-		}
+		CV_Assert(half.data == out); // converted in place, not reallocated
+		out += half.total() * half.elemSize();
 		if (level.cols == 1 && level.rows == 1) {
 			break;
 		}
 	}
-	return out;
+	CV_Assert(out == buffer->data() + buffer->size());
+	return buffer;
 }
 
 } // namespace
@@ -143,6 +144,17 @@ void ProbeRenderer::render_map(int p_size, const CoarseMapInput *p_coarse, const
 // previous one is done again: the chain's texels that read a changed face, and the faces whose
 // chain or distances changed (dense faces take turns, and the coarse model changes with fisheye
 // frames only, so most maps change one or two faces).
+size_t gpu_face_bytes(int p_size) {
+	size_t texels = 0;
+	for (int s = std::max(p_size, 1);; s = std::max(1, s / 2)) {
+		texels += size_t(s) * size_t(s);
+		if (s == 1) {
+			break;
+		}
+	}
+	return texels * 4 * sizeof(uint16_t);
+}
+
 void ProbeRenderer::build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map) const {
 	const int size = io_map->cubemap.size;
 	const std::shared_ptr<const GgxFilter> filter = shared_ggx_filter(size, settings_.wait_for_ggx_filter);
@@ -163,7 +175,7 @@ void ProbeRenderer::build_gpu_faces(const ProbeMap *p_previous, ProbeMap *io_map
 		const size_t f = size_t(p_face);
 		const cv::Mat &distance = io_map->cubemap.distance_m[f];
 		const bool same = same_kind && !(chain_changed & (1u << p_face)) && p_previous->gpu_faces[f] && same_pixels(distance, p_previous->cubemap.distance_m[f]);
-		io_map->gpu_faces[f] = same ? p_previous->gpu_faces[f] : std::make_shared<const std::vector<uint16_t>>(gpu_face(chain, distance, p_face));
+		io_map->gpu_faces[f] = same ? p_previous->gpu_faces[f] : gpu_face(chain, distance, p_face, settings_.face_buffers);
 	});
 	if (filter) {
 		io_map->ggx_chain = std::move(chain);

@@ -16,6 +16,7 @@
 
 #include <gpu/compute_device.h>
 #include <slam/dense_slam.h>
+#include <types/pixel_buffer.h>
 
 #include <array>
 #include <atomic>
@@ -41,9 +42,9 @@ struct ProbeMap {
 	glm::dvec3 position = glm::dvec3(0.0);
 	Cubemap cubemap;
 	ShCoefficients sh{};
-	// Per face; a face the map did not change is the previous map's own (the same pointer), so a
-	// node uploads only the faces that changed.
-	std::array<std::shared_ptr<const std::vector<uint16_t>>, 6> gpu_faces;
+	// Per face, RGBA halves, level 0 first (gpu_face_bytes); a face the map did not change is the
+	// previous map's own (the same pointer), so a node uploads only the faces that changed.
+	std::array<std::shared_ptr<const PixelBuffer>, 6> gpu_faces;
 	bool ggx_mips = false; // false: box-filtered while the GGX filter is built (ProbeRenderSettings)
 	// The GGX chain as floats (level 0: the cubemap's faces): the next map of the probe filters
 	// again only the texels that read a changed face (GgxFilter::apply). Empty without ggx_mips.
@@ -70,7 +71,12 @@ struct ProbeRenderSettings {
 	// The device the coarse render's gather, SH and the GGX chain run on (null: the CPU); a failed
 	// dispatch falls back to the CPU for that map and counts in gpu_failures().
 	std::shared_ptr<ComputeDevice> compute;
+	// Where ProbeMap::gpu_faces are filled (empty: plain vectors).
+	PixelBufferFactory face_buffers;
 };
+
+// The bytes of one face of ProbeMap::gpu_faces at p_size^2: the whole mip chain of RGBA halves.
+size_t gpu_face_bytes(int p_size);
 
 // The coarse model's part of a map: its atlas (completed or raw, CV_32FC3; empty: none yet), where
 // the fisheye observed it (CV_32FC1; empty: nowhere known) and its lighting change so far (§4.6).

@@ -21,6 +21,12 @@ Ref<Image> image_from_mat(const cv::Mat &p_mat) {
 		case CV_32FC3:
 			format = Image::FORMAT_RGBF;
 			break;
+		case CV_8UC4:
+			format = Image::FORMAT_RGBA8;
+			break;
+		case CV_16FC4:
+			format = Image::FORMAT_RGBAH;
+			break;
 		default:
 			return Ref<Image>();
 	}
@@ -45,6 +51,31 @@ void show_in_texture(const Ref<Image> &p_image, Ref<ImageTexture> &r_texture) {
 		return;
 	}
 	r_texture = ImageTexture::create_from_image(p_image);
+}
+
+PackedBytesBuffer::PackedBytesBuffer(size_t p_bytes) {
+	packed.resize(int64_t(p_bytes));
+	write = packed.ptrw();
+}
+
+uint8_t *PackedBytesBuffer::data() { return write; }
+
+const uint8_t *PackedBytesBuffer::data() const { return write; }
+
+size_t PackedBytesBuffer::size() const { return size_t(packed.size()); }
+
+PixelBufferFactory packed_bytes_buffers() {
+	return [](size_t p_bytes) -> std::shared_ptr<PixelBuffer> { return std::make_shared<PackedBytesBuffer>(p_bytes); };
+}
+
+PackedByteArray packed_bytes(const PixelBuffer &p_buffer) {
+	if (const auto *packed = dynamic_cast<const PackedBytesBuffer *>(&p_buffer)) {
+		return packed->bytes();
+	}
+	PackedByteArray copy;
+	copy.resize(int64_t(p_buffer.size()));
+	std::memcpy(copy.ptrw(), p_buffer.data(), p_buffer.size());
+	return copy;
 }
 
 } // namespace roomprobe

@@ -84,7 +84,7 @@ void CoarseRoomModel::_notification(int p_what) {
 
 void CoarseRoomModel::_process(double p_delta) {
 	(void)p_delta;
-	MainThreadTimer timer;
+	MainThreadTimer timer(MainThreadTimer::COARSE_ROOM_MODEL);
 	take_room_search();
 	if (!Engine::get_singleton()->is_editor_hint()) {
 		integrate_rig_frame();
@@ -406,7 +406,7 @@ void CoarseRoomModel::apply_material() {
 		mesh_instance->set_material_override(Ref<Material>());
 		return;
 	}
-	show_in_texture(image_from_mat(shown->atlas), atlas_texture);
+	show_in_texture(image_from_mat(shown->display), atlas_texture);
 	if (material.is_null()) {
 		material.instantiate();
 		material->set_shading_mode(BaseMaterial3D::SHADING_MODE_UNSHADED);

@@ -108,7 +108,7 @@ void DenseSLAM::_notification(int p_what) {
 
 void DenseSLAM::_process(double p_delta) {
 	(void)p_delta;
-	MainThreadTimer timer;
+	MainThreadTimer timer(MainThreadTimer::DENSE_SLAM);
 	process_rig_frame();
 }
 
@@ -310,8 +310,8 @@ bool DenseSLAM::process_rig_frame() {
 			masked_camera_mask = ar_camera->get_cull_mask();
 		}
 	}
-	if (camera_image_wanted && !frame->rgb.empty()) {
-		show_in_texture(image_from_mat(frame->rgb), camera_image);
+	if (camera_image_wanted && !frame->rgba.empty()) {
+		show_in_texture(image_from_mat(frame->rgba), camera_image);
 		const Ref<ShaderMaterial> shown = background != nullptr ? Ref<ShaderMaterial>(background->get_material_override()) : Ref<ShaderMaterial>();
 		if (shown.is_valid() && shown->get_shader_parameter("image") != Variant(camera_image)) {
 			shown->set_shader_parameter("image", camera_image); // the texture is made with the first image
@@ -378,8 +378,8 @@ void DenseSLAM::update_background() {
 Ref<ImageTexture> DenseSLAM::get_camera_image_texture() const {
 	if (!camera_image_wanted) {
 		camera_image_wanted = true;
-		if (last_frame && !last_frame->rgb.empty()) {
-			show_in_texture(image_from_mat(last_frame->rgb), camera_image);
+		if (last_frame && !last_frame->rgba.empty()) {
+			show_in_texture(image_from_mat(last_frame->rgba), camera_image);
 		}
 	}
 	return camera_image;

@@ -33,19 +33,28 @@ godot::Node *find_collaborator(const godot::Node &p_from, const godot::NodePath 
 std::shared_ptr<LiveRoom> live_room_of(godot::Node *p_node);
 
 // Main-thread time of RoomProbe's nodes: each _process, update and signal emission is timed
-// with one of these, and the total is what the demo reports per rendered frame.
+// with one of these, and the total is what the demo reports per rendered frame. A timer inside
+// another (update_now() from _process) adds nothing: the outer one holds its time.
 class MainThreadTimer {
 public:
-	MainThreadTimer() :
-			start(std::chrono::steady_clock::now()) {}
+	enum Node { RIG_CAPTURE, DENSE_SLAM, COARSE_ROOM_MODEL, ROOM_PROBE, SURFACE_ANCHOR, NODE_COUNT };
+	explicit MainThreadTimer(Node p_node);
 	~MainThreadTimer();
 	MainThreadTimer(const MainThreadTimer &) = delete;
 	MainThreadTimer &operator=(const MainThreadTimer &) = delete;
-	// Microseconds spent in all timers since the library was loaded.
+	// Microseconds spent in all timers since the library was loaded: wall-clock time, and the
+	// thread's CPU time (less than wall-clock time when the system ran other threads meanwhile).
 	static uint64_t total_usec();
+	static uint64_t total_cpu_usec();
+	// Wall-clock microseconds of one class's nodes; its class name.
+	static uint64_t node_usec(Node p_node);
+	static const char *node_class(Node p_node);
 
 private:
+	Node node;
+	bool outermost;
 	std::chrono::steady_clock::time_point start;
+	uint64_t cpu_start_usec = 0;
 };
 
 } // namespace roomprobe

@@ -2,6 +2,7 @@
 // frames handed from the capture threads to the main thread.
 #include "rig_capture.h"
 
+#include "../convert/image_convert.h"
 #include "../convert/project_paths.h"
 
 #include <engine/engine_config.h>
@@ -18,6 +19,7 @@ RigCapture::RigCapture() :
 		p_config.has_rig = false;
 		p_config.dense = false;
 		p_config.has_room = false;
+		p_config.face_buffers = packed_bytes_buffers();
 	});
 }
 
@@ -31,6 +33,17 @@ RigCapture::~RigCapture() {
 
 int64_t RigCapture::get_main_thread_usec() {
 	return int64_t(MainThreadTimer::total_usec());
+}
+
+Dictionary RigCapture::get_main_thread_times() {
+	Dictionary times;
+	times["wall_usec"] = int64_t(MainThreadTimer::total_usec());
+	times["cpu_usec"] = int64_t(MainThreadTimer::total_cpu_usec());
+	for (int n = 0; n < MainThreadTimer::NODE_COUNT; n++) {
+		const auto node = MainThreadTimer::Node(n);
+		times[MainThreadTimer::node_class(node)] = int64_t(MainThreadTimer::node_usec(node));
+	}
+	return times;
 }
 
 void RigCapture::fail(const std::string &p_message) {
@@ -232,7 +245,7 @@ void RigCapture::show_frames(bool p_signal) {
 }
 
 bool RigCapture::step() {
-	MainThreadTimer timer;
+	MainThreadTimer timer(MainThreadTimer::RIG_CAPTURE);
 	if (source == SOURCE_LIVE) {
 		fail("step() plays recordings one frame at a time; with source Live the devices stream (play())");
 		return false;
@@ -267,7 +280,7 @@ void RigCapture::_ready() {
 }
 
 void RigCapture::_process(double p_delta) {
-	MainThreadTimer timer;
+	MainThreadTimer timer(MainThreadTimer::RIG_CAPTURE);
 	if (engine->config_pending()) {
 		// A node changed its part: the engine restarts with it (workers too, if they ran).
 		engine->apply_config();

@@ -146,6 +146,8 @@ public:
 	std::shared_ptr<LiveRoom> get_live_room() const override { return engine; }
 	// Microseconds RoomProbe's nodes have spent on the main thread (MainThreadTimer), for the demo.
 	static int64_t get_main_thread_usec();
+	// The same split: wall_usec, cpu_usec, and each node class's wall-clock microseconds.
+	static godot::Dictionary get_main_thread_times();
 
 	godot::PackedStringArray get_warnings() const;
 	godot::PackedStringArray _get_configuration_warnings() const { return get_warnings(); }

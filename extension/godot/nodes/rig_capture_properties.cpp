@@ -175,6 +175,7 @@ void RigCapture::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_ground_truth_camera_transform"), &RigCapture::get_ground_truth_camera_transform);
 	ClassDB::bind_method(D_METHOD("get_rgb_camera_fov"), &RigCapture::get_rgb_camera_fov);
 	ClassDB::bind_static_method("RigCapture", D_METHOD("get_main_thread_usec"), &RigCapture::get_main_thread_usec);
+	ClassDB::bind_static_method("RigCapture", D_METHOD("get_main_thread_times"), &RigCapture::get_main_thread_times);
 	bind_properties();
 }
 

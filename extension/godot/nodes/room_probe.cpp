@@ -207,7 +207,7 @@ void RoomProbe::drive_outputs() {
 
 void RoomProbe::_process(double p_delta) {
 	(void)p_delta;
-	MainThreadTimer timer;
+	MainThreadTimer timer(MainThreadTimer::ROOM_PROBE);
 	if (!engine) {
 		connect_engine();
 		if (!engine) {
@@ -304,7 +304,7 @@ void RoomProbe::process_once() {
 }
 
 bool RoomProbe::update_now() {
-	MainThreadTimer timer;
+	MainThreadTimer timer(MainThreadTimer::ROOM_PROBE);
 	if (!engine) {
 		connect_engine();
 	}
@@ -334,12 +334,8 @@ bool RoomProbe::take_map() {
 		if (same_size && map && map->gpu_faces[size_t(i)] == newest->gpu_faces[size_t(i)]) {
 			continue; // the engine kept the previous map's face: nothing to upload
 		}
-		// The worker built the half floats and their mips: only bytes are copied here.
-		const std::vector<uint16_t> &half = *newest->gpu_faces[size_t(i)];
-		PackedByteArray bytes;
-		bytes.resize(int64_t(half.size() * sizeof(uint16_t)));
-		std::memcpy(bytes.ptrw(), half.data(), half.size() * sizeof(uint16_t));
-		Ref<Image> gpu = Image::create_from_data(size, size, true, Image::FORMAT_RGBAH, bytes);
+		// The worker built the half floats and their mips in Godot's own array: nothing is copied here.
+		Ref<Image> gpu = Image::create_from_data(size, size, true, Image::FORMAT_RGBAH, packed_bytes(*newest->gpu_faces[size_t(i)]));
 		ERR_FAIL_COND_V(gpu.is_null(), false);
 		if (same_size) {
 			cubemap->update_layer(gpu, i);

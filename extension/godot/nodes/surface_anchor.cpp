@@ -35,7 +35,7 @@ void SurfaceAnchor::_notification(int p_what) {
 
 void SurfaceAnchor::_process(double p_delta) {
 	(void)p_delta;
-	MainThreadTimer timer;
+	MainThreadTimer timer(MainThreadTimer::SURFACE_ANCHOR);
 	std::string unused; // get_warnings() reports it
 	const std::shared_ptr<LiveRoom> engine = live_room_of(find_collaborator(*this, dense_slam_path, "DenseSLAM", "dense_slam", &unused));
 	if (!engine) {
