@@ -136,18 +136,20 @@ double max_atlas_diff(const cv::Mat &p_a, const cv::Mat &p_b) {
 // atlas as half floats with alpha 1, within a half's rounding (2^-11 relative, 2^-24 absolute
 // for the subnormals).
 void check_display_forms(const TrackedFrame &p_tracked, const cv::Mat &p_pushed_rgb, const CoarseSnapshot &p_snapshot) {
-	REQUIRE(p_tracked.rgba.type() == CV_8UC4);
-	REQUIRE(p_tracked.rgba.size() == p_pushed_rgb.size());
+	REQUIRE(p_tracked.rgba.mat.type() == CV_8UC4);
+	REQUIRE(p_tracked.rgba.mat.size() == p_pushed_rgb.size());
+	REQUIRE(p_tracked.rgba.bytes->data() == p_tracked.rgba.mat.data);
 	cv::Mat channels[4];
-	cv::split(p_tracked.rgba, channels);
+	cv::split(p_tracked.rgba.mat, channels);
 	cv::Mat rgb;
 	cv::merge(channels, 3, rgb);
 	CHECK(cv::norm(rgb, p_pushed_rgb, cv::NORM_INF) == 0.0);
 	CHECK(cv::countNonZero(channels[3] != 255) == 0);
-	REQUIRE(p_snapshot.display.type() == CV_16FC4);
-	REQUIRE(p_snapshot.display.size() == p_snapshot.atlas.size());
+	REQUIRE(p_snapshot.display.mat.type() == CV_16FC4);
+	REQUIRE(p_snapshot.display.mat.size() == p_snapshot.atlas.size());
+	REQUIRE(p_snapshot.display.bytes->data() == p_snapshot.display.mat.data);
 	cv::Mat shown;
-	p_snapshot.display.convertTo(shown, CV_32F);
+	p_snapshot.display.mat.convertTo(shown, CV_32F);
 	int outside = 0;
 	for (int y = 0; y < shown.rows; y++) {
 		for (int x = 0; x < shown.cols; x++) {
@@ -760,17 +762,18 @@ struct HostBuffer final : PixelBuffer {
 };
 } // namespace
 
-TEST_CASE("engine: the faces for upload are filled into the host's buffers when it gives them") {
+TEST_CASE("engine: the images for display are filled into the host's buffers when it gives them") {
 	const glm::dvec3 centre(2.5, 1.2, 2.0);
 	std::atomic<int> made{ 0 };
 	LiveRoomConfig with_host = room_only_config();
-	with_host.face_buffers = [&](size_t p_bytes) -> std::shared_ptr<PixelBuffer> {
+	with_host.display_buffers = [&](size_t p_bytes) -> std::shared_ptr<PixelBuffer> {
 		made++;
 		return std::make_shared<HostBuffer>(p_bytes);
 	};
 	LiveRoomConfig refusing = room_only_config();
-	refusing.face_buffers = [](size_t p_bytes) -> std::shared_ptr<PixelBuffer> { return std::make_shared<HostBuffer>(p_bytes + 1); };
+	refusing.display_buffers = [](size_t p_bytes) -> std::shared_ptr<PixelBuffer> { return std::make_shared<HostBuffer>(p_bytes + 1); };
 	std::vector<std::shared_ptr<const ProbeMap>> maps;
+	std::vector<std::shared_ptr<const CoarseSnapshot>> atlases;
 	for (const LiveRoomConfig &cfg : { room_only_config(), with_host, refusing }) {
 		LiveRoom engine;
 		REQUIRE(engine.configure(cfg) == "");
@@ -780,9 +783,17 @@ TEST_CASE("engine: the faces for upload are filled into the host's buffers when 
 		const int probe = engine.add_probe(centre, 16);
 		REQUIRE(engine.render_probe(probe));
 		maps.push_back(engine.probe_map(probe));
+		atlases.push_back(engine.coarse_snapshot());
 		REQUIRE(maps.back() != nullptr);
+		REQUIRE(atlases.back() != nullptr);
 	}
-	CHECK(made == 6);
+	CHECK(made == 7); // the atlas shown, and the six faces
+	CHECK(dynamic_cast<const HostBuffer *>(atlases[1]->display.bytes.get()) != nullptr);
+	CHECK(dynamic_cast<const VectorPixelBuffer *>(atlases[2]->display.bytes.get()) != nullptr);
+	for (size_t m = 1; m < 3; m++) {
+		REQUIRE(atlases[m]->display.bytes->size() == atlases[0]->display.bytes->size());
+		CHECK(std::memcmp(atlases[m]->display.bytes->data(), atlases[0]->display.bytes->data(), atlases[0]->display.bytes->size()) == 0);
+	}
 	for (size_t f = 0; f < 6; f++) {
 		CHECK(dynamic_cast<const HostBuffer *>(maps[1]->gpu_faces[f].get()) != nullptr);
 		CHECK(dynamic_cast<const VectorPixelBuffer *>(maps[2]->gpu_faces[f].get()) != nullptr);

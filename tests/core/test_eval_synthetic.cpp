@@ -37,8 +37,8 @@ Rig half_fisheye_rig() {
 	return rig;
 }
 
-// A short synthetic living-room recording with 32-px ground-truth cubemaps, in p_folder.
-synth::SequenceResult write_living_room(const EvalTempFolder &p_folder, double p_seconds) {
+// A short synthetic living-room recording with 32-px ground-truth cubemaps, in p_folder, by p_rig.
+synth::SequenceResult write_living_room(const EvalTempFolder &p_folder, double p_seconds, const Rig &p_rig = half_fisheye_rig()) {
 	synth::SceneOptions scene_options;
 	scene_options.duration_s = p_seconds;
 	const synth::SceneResult scene = synth::make_scene("living_room", scene_options);
@@ -48,7 +48,7 @@ synth::SequenceResult write_living_room(const EvalTempFolder &p_folder, double p
 	sequence.seed = 3;
 	sequence.cubemap_face_size = 32;
 	sequence.calibration_views = false;
-	const synth::SequenceResult written = synth::write_sequence(p_folder.path.string(), half_fisheye_rig(), scene.scene, sequence);
+	const synth::SequenceResult written = synth::write_sequence(p_folder.path.string(), p_rig, scene.scene, sequence);
 	REQUIRE_MESSAGE(written.ok, written.error);
 	return written;
 }
@@ -113,6 +113,41 @@ TEST_CASE("eval: a recording with no fisheye or no RGB-D frames is refused, not 
 		CHECK_FALSE(result.ok);
 		CHECK(result.error.find(std::string(index) == "fisheye.txt" ? "no fisheye frames" : "no RGB-D frames") != std::string::npos);
 		fs::copy_file(kept, path, fs::copy_options::overwrite_existing);
+	}
+}
+
+// Issue #43: a recording of the RGB-D camera alone is scored from its RGB views; the same sweep
+// with the fisheye, scored with no_fisheye, is the same evaluation: the same RGB-D frames, and the
+// truth at the same times (the fisheye's clock offset is 0 here: without a fisheye the truth keeps
+// the fisheye clock's times, which a clock offset would shift).
+TEST_CASE("eval: a recording of an RGB-D camera alone is scored from its RGB views, as --no-fisheye scores one with a fisheye") {
+	EvalTempFolder alone, with_fisheye;
+	with_fisheye.path += "_fisheye";
+	fs::remove_all(with_fisheye.path);
+	Rig one_clock = half_fisheye_rig();
+	one_clock.fisheye_time_offset_s = 0.0;
+	const synth::SequenceResult written = write_living_room(alone, 0.5, rgbd_camera_alone(one_clock));
+	CHECK(written.timings.fisheye_frames == 0);
+	CHECK(written.timings.cubemaps > 0);
+	write_living_room(with_fisheye, 0.5, one_clock);
+	EvaluationOptions options = options_for(alone, 0.08);
+	options.dense = false;
+	const EvaluationResult scored = evaluate_recording(options);
+	REQUIRE_MESSAGE(scored.ok, scored.error);
+	MESSAGE(format_evaluation(scored, false));
+	CHECK(scored.cubemaps == written.timings.cubemaps);
+	CHECK(scored.fisheye_frames_used == 0);
+	// The baseline (5.3) has no frame: a black map. The RGB views' map holds the room's light.
+	CHECK(scored.variants[VARIANT_INPAINT].mean_psnr_db > scored.variants[VARIANT_BASELINE].mean_psnr_db + 3.0);
+	options = options_for(with_fisheye, 0.08);
+	options.dense = false;
+	options.no_fisheye = true;
+	const EvaluationResult stripped = evaluate_recording(options);
+	REQUIRE_MESSAGE(stripped.ok, stripped.error);
+	REQUIRE(stripped.cubemaps == scored.cubemaps);
+	for (int v : { VARIANT_COARSE, VARIANT_INPAINT, VARIANT_LIGHT_GAIN }) {
+		CAPTURE(v);
+		CHECK(stripped.variants[size_t(v)].mean_psnr_db == doctest::Approx(scored.variants[size_t(v)].mean_psnr_db).epsilon(1e-9));
 	}
 }
 

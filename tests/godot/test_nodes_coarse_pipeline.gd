@@ -42,35 +42,6 @@ func _make_scene() -> Array:
 	return [rig, room, probe]
 
 
-## The ground-truth cubemap (an N x 6N EXR strip) of the recording's last line, as six RGBF faces.
-func _ground_truth_faces() -> Array[Image]:
-	var lines := FileAccess.get_file_as_string(_dir.path_join("groundtruth/cubemaps.txt")).strip_edges().split("\n")
-	var last := lines[lines.size() - 1].split(" ")
-	var strip := Image.load_from_file(_dir.path_join(last[2]))
-	strip.convert(Image.FORMAT_RGBF)
-	var n := strip.get_width()
-	var faces: Array[Image] = []
-	for f in 6:
-		faces.append(strip.get_region(Rect2i(0, f * n, n, n)))
-	return faces
-
-
-## PSNR in dB of p_faces against p_truth (linear values clamped to [0, 1], peak 1).
-static func _psnr(p_faces: Array, p_truth: Array[Image]) -> float:
-	var se := 0.0
-	var count := 0
-	for f in 6:
-		var a: Image = p_faces[f]
-		var b: Image = p_truth[f]
-		for y in b.get_height():
-			for x in b.get_width():
-				var ca := a.get_pixel(x, y)
-				var cb := b.get_pixel(x, y)
-				se += pow(clampf(ca.r, 0, 1) - clampf(cb.r, 0, 1), 2) + pow(clampf(ca.g, 0, 1) - clampf(cb.g, 0, 1), 2) + pow(clampf(ca.b, 0, 1) - clampf(cb.b, 0, 1), 2)
-				count += 3
-	return 10.0 * log(1.0 / maxf(se / count, 1e-12)) / log(10.0)
-
-
 ## Normalised cross-correlation of the luminance (clamped to [0, 1]) of p_faces and p_truth over
 ## the texels of the faces in p_face_list: 1 for a map with the truth's structure at any gain and offset, 0 for a map without
 ## any (a constant map, or noise).
@@ -127,13 +98,13 @@ func test_fisheye_frames_texture_the_room_and_the_ceiling_matches_the_truth() ->
 	assert_eq(updated.size(), integrated, "texture_updated once a frame")
 	assert_true(room.has_texture_data())
 	room.finish_inpainting()
-	var truth := _ground_truth_faces()
+	var truth := ground_truth_faces(_dir)
 	probe.resolution = truth[0].get_width()
 	assert_true(probe.update_now())
 	var faces := []
 	for f in 6:
 		faces.append(probe.get_face_image(f))
-	var psnr := _psnr(faces, truth)
+	var psnr := cubemap_psnr(faces, truth)
 	var correlation := _correlation(faces, truth, [2])
 	print("    coarse map at the probe vs ground truth: PSNR %.2f dB, luminance correlation %.3f (+Y face), %.3f (all)" % [psnr, correlation, _correlation(faces, truth, range(6))])
 	# Looking up from the probe the truth is the coarse model's alone (ceiling tiles, the panel
@@ -166,7 +137,7 @@ func _ceiling_faces(p_recording: String) -> Array:
 	while rig.step():
 		room.integrate_rig_frame()
 	room.finish_inpainting()
-	var truth := _ground_truth_faces()
+	var truth := ground_truth_faces(_dir)
 	probe.resolution = truth[0].get_width()
 	assert_true(probe.update_now())
 	var map: Image = probe.get_face_image(2)

@@ -27,6 +27,19 @@ func test_a_scene_with_no_script_shows_a_reflecting_sphere_over_the_camera_image
 	await _play_and_check(scene, "no_code_scene.png")
 
 
+## Issue #43: the same scene on a recording of an RGB-D camera alone (no fisheye stream): the coarse
+## model is textured from the RGB camera, and the sphere reflects the room all the same.
+func test_the_scene_plays_a_recording_of_an_rgbd_camera_alone() -> void:
+	if not rendering:
+		return skip("needs a renderer (rendering suite: --rendering under a display)")
+	if not need_fixture_recording(fixture_rgbd_only_recording()):
+		return
+	var scene: Node3D = load("res://demo_scenes/no_code.tscn").instantiate()
+	scene.get_node("Rig").recording_path = fixture_rgbd_only_recording()
+	await _play_and_check(scene, "no_code_scene_rgbd_only.png")
+	assert_true(scene.get_node("Room").has_texture_data(), "the room is textured from the RGB camera")
+
+
 ## Issue #40: the same scene with dense SLAM and the maps' filtering on Vulkan compute (lavapipe here), in
 ## the same process as Godot's own Vulkan renderer: it renders as on the CPU, and RigCapture has
 ## no warning that the kernels fell back to the CPU.

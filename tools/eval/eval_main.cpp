@@ -4,7 +4,7 @@
 // (eval/evaluate.h).
 //
 // roomprobe_eval --recording DIR [--out DIR [--force]] [--cubemap-size N] [--per-frame] [--texel-size M]
-//                [--max-cubemaps K] [--no-dense] [--quiet] [--budget] [--rgb-texture]
+//                [--max-cubemaps K] [--no-dense] [--quiet] [--budget] [--rgb-texture] [--no-fisheye]
 //                [--dense-range M] [--backend cpu|vulkan|auto]
 // roomprobe_eval --compare A.exr B.exr   (two cubemaps: B against A, e.g. one backend's map against the other's)
 // Maps already in --out are kept, the evaluation refused, unless --force (as every tool's outputs).
@@ -106,7 +106,7 @@ int run(int argc, char **argv) {
 		std::fprintf(stderr,
 				"%s%susage: roomprobe_eval --recording DIR [--out DIR [--force]] [--cubemap-size N] [--per-frame]\n"
 				"                      [--texel-size M] [--max-cubemaps K] [--no-dense] [--quiet] [--budget]\n"
-				"                      [--rgb-texture] [--dense-range M] [--room FILE] [--backend cpu|vulkan|auto]\n"
+				"                      [--rgb-texture] [--no-fisheye] [--dense-range M] [--room FILE] [--backend cpu|vulkan|auto]\n"
 				"       roomprobe_eval --compare A.exr B.exr\n"
 				"  --out DIR: the last frame's maps of every variant, and the truth's, as NAME.exr and NAME.png;\n"
 				"    maps already there are kept and nothing is evaluated, unless --force replaces them\n"
@@ -114,6 +114,8 @@ int run(int argc, char **argv) {
 				"  --compare A.exr B.exr: B's PSNR against A (tone-mapped and linear), two maps --out wrote\n"
 				"  --budget: the error budget, the live system with one stage at a time replaced by its oracle\n"
 				"  --dense-range M: fuse depth and draw the dense model up to M metres (default 4)\n"
+				"  --no-fisheye: the rig as its RGB-D camera alone: the coarse model textured from the RGB camera\n"
+				"    (the baseline keeps the fisheye; the same truth, so the runs compare with and without it)\n"
 				"  --room FILE: the coarse model uses this room.yaml (one found by ./roomprobe room) instead of the\n"
 				"    recording's, placed by the two files' initial_rgb_pose; scored against the same truth\n",
 				p_error ? "roomprobe_eval: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
@@ -160,6 +162,8 @@ int run(int argc, char **argv) {
 			force = true;
 		} else if (arg == "--rgb-texture") {
 			options.rgb_texture = true;
+		} else if (arg == "--no-fisheye") {
+			options.no_fisheye = true;
 		} else if (arg == "--backend") {
 			std::string name;
 			if (!cursor.value(&name) || !roomprobe::compute_backend_from_name(name, &options.compute_backend)) {

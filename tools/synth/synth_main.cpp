@@ -45,6 +45,10 @@ void usage(std::FILE *p_out) {
 			"  --loop              one whole turn round the table over the recording's length, so that\n"
 			"                      it ends where it began (loop closure with truth; living_room, two_rooms)\n"
 			"  --rig PATH          rig file (default calib/synthetic_rig.yaml)\n"
+			"  --look-up           with --room-sweep: the camera also tilts up to the ceiling every 5 s\n"
+			"                      (a 1.6-s look, up to 55 degrees up), as when scanning with one camera\n"
+			"  --no-fisheye        the rig's RGB-D camera alone: no fisheye stream, no calibration views;\n"
+			"                      the ground-truth cubemaps at the same times as with the fisheye\n"
 			"  --hdri PATH|none    living_room's window view, panorama_room's walls (default %s;\n"
 			"                      none: a procedural sky in living_room's window)\n"
 			"  --cubemap-size N    ground-truth cubemap face size in pixels (default 128)\n"
@@ -108,6 +112,8 @@ struct SynthArgs {
 	bool hdri_given = false;
 	bool room_sweep = false;
 	bool loop = false;
+	bool no_fisheye = false;
+	bool look_up = false;
 	roomprobe::synth::SequenceOptions options;
 	double cubemap_size = 128.0;
 	double threads = 0.0;
@@ -235,6 +241,10 @@ bool flag_option(const std::string &p_arg, SynthArgs *r_args) {
 		r_args->room_sweep = true;
 	} else if (p_arg == "--loop") {
 		r_args->loop = true;
+	} else if (p_arg == "--no-fisheye") {
+		r_args->no_fisheye = true;
+	} else if (p_arg == "--look-up") {
+		r_args->look_up = true;
 	} else if (p_arg == "--no-calibration") {
 		r_args->options.calibration_views = false;
 	} else {
@@ -357,6 +367,12 @@ int render(const SynthArgs &p_args, const roomprobe::Rig &p_rig, const roomprobe
 	if (p_args.room_sweep) {
 		scene.scene.trajectory = synth::TrajectoryKind::RoomSweep;
 	}
+	if (p_args.look_up) {
+		if (!p_args.room_sweep) {
+			return fail("--look-up tilts the room sweep's camera to the ceiling now and then: it needs --room-sweep");
+		}
+		scene.scene.room_sweep.look_up_every_s = 5.0;
+	}
 	if (p_args.loop) {
 		if (scene.scene.trajectory != synth::TrajectoryKind::Orbit) {
 			return fail("--loop turns round the table: " + p_args.scene_name + (p_args.room_sweep ? " with --room-sweep" : "") +
@@ -404,7 +420,7 @@ int run(int argc, char **argv) {
 	if (args.threads > 0.0) {
 		thread_limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(args.threads));
 	}
-	return render(args, rig.rig, scene_options);
+	return render(args, args.no_fisheye ? rgbd_camera_alone(rig.rig) : rig.rig, scene_options);
 }
 
 } // namespace

@@ -12,6 +12,9 @@ FIXTURE_RECORDING = os.path.join(rp.BUILD, "test-data", "living_room_1s")
 # The same second with the fisheye bracketed (every other frame 5 stops shorter), for the HDR test
 # (tests/godot/test_nodes_coarse_pipeline.gd).
 FIXTURE_BRACKETED = os.path.join(rp.BUILD, "test-data", "living_room_1s_bracketed")
+# The same second from the RGB-D camera alone (roomprobe_synth --no-fisheye), for
+# tests/godot/test_nodes_rgbd_only.gd (issue #43).
+FIXTURE_RGBD_ONLY = FIXTURE_RECORDING + "_rgbd_only"
 # The room suite's 10-s living-room sweep, which tests/godot/test_nodes_auto_room.gd plays too.
 ROOM_SWEEP = os.path.join(rp.BUILD, "test-data", "living_room_10s")
 

@@ -8,7 +8,7 @@ import rp_godot as rp
 
 from . import common
 from .common import GODOT_TIMEOUT, RENDERING_TIMEOUT, RESULT, Suite, show_with_context
-from .fixtures import FIXTURE_BRACKETED, ROOM_SWEEP, make_fixture_oni, make_fixture_recording
+from .fixtures import FIXTURE_BRACKETED, FIXTURE_RGBD_ONLY, ROOM_SWEEP, make_fixture_oni, make_fixture_recording
 from .sanitize import godot_env_shown, sanitized_project, sanitizer_env_text, sanitizer_report, sanitizer_summary
 
 # Lines that fail the godot and rendering suites, wherever they appear.
@@ -29,6 +29,7 @@ def suite_godot(opts, rendering, allow_empty):
     if not rendering:
         make_fixture_recording()
         make_fixture_recording(FIXTURE_BRACKETED, ("--exposure", "bracket", "--no-calibration"))
+        make_fixture_recording(FIXTURE_RGBD_ONLY, ("--no-fisheye",))
         make_fixture_recording(ROOM_SWEEP, ("--no-calibration",), seconds=10, seed=1)  # test_nodes_auto_room.gd
         make_fixture_oni()
     project, env = rp.PROJECT, None

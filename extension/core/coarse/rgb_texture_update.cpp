@@ -54,7 +54,7 @@ bool sample_rgb(const cv::Mat &p_rgb, const glm::dvec2 &p_pixel, const ResponseC
 
 RgbTextureStats update_coarse_texture_from_rgb(const TexelGeometry &p_geometry, const PinholeParams &p_camera, const Pose &p_world_from_rgb,
 		const cv::Mat &p_rgb, const cv::Mat &p_depth_m, const ResponseCurve *p_lut, CoarseTexture *io_texture, const RgbTextureOptions &p_options,
-		cv::Mat *r_updated) {
+		cv::Mat *r_updated, LightingPairs *r_pairs) {
 	RgbTextureStats stats;
 	CoarseTexture &tex = *io_texture;
 	const int w = p_geometry.width, h = p_geometry.height;
@@ -72,6 +72,13 @@ RgbTextureStats update_coarse_texture_from_rgb(const TexelGeometry &p_geometry, 
 	for (size_t t = 0; t < tile_visible.size(); t++) {
 		tile_visible[t] = tile_in_view(transform_point(camera_from_world, p_geometry.tile_centres[t]), p_geometry.tile_radii[t], p_camera) ? 1 : 0;
 	}
+	const int pair_step = r_pairs ? std::max(1, r_pairs->step) : 1;
+	if (r_pairs) {
+		r_pairs->rows.resize(size_t((h + pair_step - 1) / pair_step));
+		for (std::vector<LightingSample> &row : r_pairs->rows) {
+			row.clear();
+		}
+	}
 	std::atomic<size_t> visible{ 0 }, updated{ 0 };
 	const double max_x = p_camera.width - 1.0 - p_options.border_px, max_y = p_camera.height - 1.0 - p_options.border_px;
 	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {
@@ -82,6 +89,7 @@ RgbTextureStats update_coarse_texture_from_rgb(const TexelGeometry &p_geometry, 
 			float *rgb_quality = tex.rgb_quality.ptr<float>(y);
 			uint8_t *observed = tex.observed.ptr<uint8_t>(y);
 			uint8_t *fresh = r_updated ? r_updated->ptr<uint8_t>(y) : nullptr;
+			std::vector<LightingSample> *pairs_row = r_pairs && y % pair_step == 0 ? &r_pairs->rows[size_t(y / pair_step)] : nullptr;
 			for (int x = 0; x < w; ++x) {
 				const size_t i = size_t(y) * w + x;
 				if (!tile_visible[size_t(y / TexelGeometry::tile_size) * p_geometry.tiles_x + x / TexelGeometry::tile_size]) {
@@ -110,11 +118,16 @@ RgbTextureStats update_coarse_texture_from_rgb(const TexelGeometry &p_geometry, 
 				++row_visible;
 				const double d = std::max(distance, p_options.min_distance_m);
 				const float quality = float(cos_view / (d * d));
-				if (quality < rgb_quality[x] * float(1.0 - p_options.replace_epsilon)) {
+				const bool replace = quality >= rgb_quality[x] * float(1.0 - p_options.replace_epsilon);
+				const bool pair = pairs_row != nullptr && x % pair_step == 0 && rgb_quality[x] > 0.0f;
+				cv::Vec3f value;
+				if (!(replace || pair) || !sample_rgb(p_rgb, pixel, p_lut, &value)) {
 					continue;
 				}
-				cv::Vec3f value;
-				if (!sample_rgb(p_rgb, pixel, p_lut, &value)) {
+				if (pair) {
+					pairs_row->push_back(LightingSample{ color[x], value });
+				}
+				if (!replace) {
 					continue;
 				}
 				color[x] = value;

@@ -53,9 +53,12 @@ struct RgbTextureStats {
 // p_world_from_rgb (room frame). p_lut: the RGB camera's value -> radiance (null: value / 255).
 // r_updated (optional, CV_8UC1 atlas-sized, not cleared): 255 on each texel that took the view, so
 // that the next lighting change (§4.6) is not applied again to a value of the present lighting.
+// r_pairs (optional): the lighting estimate's pairs (§4.6; its step is read, its rows filled) of
+// the texels this view sees that already hold an RGB value: (held, this view's), before the
+// update writes; clipped samples left out. Without a fisheye these are the only pairs (issue #43).
 // Parallel over atlas rows. Zero stats when the inputs do not fit together.
 RgbTextureStats update_coarse_texture_from_rgb(const TexelGeometry &p_geometry, const PinholeParams &p_camera, const Pose &p_world_from_rgb,
 		const cv::Mat &p_rgb, const cv::Mat &p_depth_m, const ResponseCurve *p_lut, CoarseTexture *io_texture,
-		const RgbTextureOptions &p_options = RgbTextureOptions(), cv::Mat *r_updated = nullptr);
+		const RgbTextureOptions &p_options = RgbTextureOptions(), cv::Mat *r_updated = nullptr, LightingPairs *r_pairs = nullptr);
 
 } // namespace roomprobe

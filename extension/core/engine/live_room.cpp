@@ -93,7 +93,7 @@ bool LiveRoom::set_atlas(const cv::Mat &p_atlas) {
 		return false;
 	}
 	auto snapshot = std::make_shared<CoarseSnapshot>();
-	snapshot->set_atlas(p_atlas.clone());
+	snapshot->set_atlas(p_atlas.clone(), cfg.display_buffers);
 	snapshot->cumulative.valid = true;
 	{
 		const std::lock_guard<std::mutex> lock(publish_mutex);
@@ -143,7 +143,7 @@ std::string LiveRoom::build_room_locked() {
 	settings.rgb_lut = rgb_lut;
 	settings.rgb_lut_active = rgb_lut_active;
 	settings.wait_for_ggx_filter = cfg.wait_for_ggx_filter;
-	settings.face_buffers = cfg.face_buffers;
+	settings.face_buffers = cfg.display_buffers;
 	std::string reason;
 	settings.compute = shared_compute_device(cfg.compute_backend, &reason);
 	{
@@ -203,6 +203,7 @@ std::string LiveRoom::configure_locked(const LiveRoomConfig &p_config) {
 		{
 			const std::lock_guard<std::mutex> lock(pending_rgb_mutex);
 			pending_rgb.reset(); // a frame of the old configuration
+			next_rgb_view_s = -std::numeric_limits<double>::infinity();
 		}
 		rgb_lut_active = cfg.photometry.known;
 		rgb_lut = rgb_radiance_lut(cfg.photometry);
@@ -326,6 +327,10 @@ void LiveRoom::stop_locked() {
 		probes_dirty.notify_all();
 	}
 	{
+		const std::lock_guard<std::mutex> lock(pending_rgb_mutex);
+		pending_rgb_ready.notify_all();
+	}
+	{
 		tracked.wake_all();
 	}
 	room_finder.wake();
@@ -354,7 +359,14 @@ void LiveRoom::slam_worker() {
 }
 
 void LiveRoom::coarse_worker() {
+	const bool rgb_only = coarse && coarse->rgb_only();
 	while (!stopping) {
+		if (rgb_only) {
+			if (std::optional<PendingRgb> view = take_rgb_view(WORKER_POLL)) {
+				process_rgb_view(*view);
+			}
+			continue;
+		}
 		std::optional<Frames::Fisheye> item = frames->fisheye.take(WORKER_POLL);
 		if (!item) {
 			continue;

@@ -45,10 +45,12 @@
 #include <slam/dense_slam.h>
 
 #include <array>
+#include <chrono>
 #include <condition_variable>
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -92,6 +94,10 @@ struct LiveRoomConfig {
 	Trajectory ground_truth; // RGB-D clock; needed by either GroundTruth
 	DenseSlamOptions slam;
 	CoarsePipelineOptions coarse; // inpaint_async: the nodes turn it on (live), the evaluation off (deterministic)
+	// A rig without a fisheye (an RGB-D camera alone, issue #43): the coarse model takes an RGB-D
+	// frame with a pose as its view at most this often, seconds of the RGB-D clock (the synthetic
+	// recordings' fisheye rate). Its views then cost the coarse worker what fisheye frames would.
+	double rgb_view_interval_s = 1.0 / 12.0;
 	// Re-mesh the dense model every this many fused frames (threaded: or later, when the mesh
 	// worker is still busy with the last ones).
 	int mesh_interval_frames = 15;
@@ -123,9 +129,10 @@ struct LiveRoomConfig {
 	// Cpu; Vulkan (any Vulkan device, Mesa's lavapipe included); Auto (Vulkan where a device that
 	// is not a CPU exists). No device: the CPU, and stats().compute says why.
 	ComputeBackend compute_backend = ComputeBackend::Cpu;
-	// Where the maps' faces for upload (ProbeMap::gpu_faces) are filled, on the probe workers: a
-	// host engine's own buffers, which it then takes without a copy. Empty: plain vectors.
-	PixelBufferFactory face_buffers;
+	// Where the images for display are filled on the workers (ProbeMap::gpu_faces,
+	// TrackedFrame::rgba, CoarseSnapshot::display): a host engine's own buffers, which it then
+	// takes without a copy. Empty: plain vectors.
+	PixelBufferFactory display_buffers;
 };
 
 // One RGB-D frame as the engine saw it: the image the AR view shows behind the virtual objects
@@ -133,9 +140,9 @@ struct LiveRoomConfig {
 struct TrackedFrame {
 	uint64_t sequence = 0; // 1, 2, ... in push order
 	double timestamp_s = 0.0; // RGB-D clock
-	// CV_8UC4 R, G, B, 255 of the pushed image (not undistorted), for showing: made here on the
-	// worker in the layout GPUs sample as it is, so a display uploads it without converting.
-	cv::Mat rgba;
+	// CV_8UC4 R, G, B, 255 of the pushed image (not undistorted), for showing: made on the worker
+	// in the layout GPUs sample as it is, so a display uploads it without converting.
+	BufferImage rgba;
 	Pose world_from_camera; // the RGB camera's pose (held while Lost)
 	bool has_pose = false; // false: no pose yet (not configured, or ground truth missing there)
 	TrackingState state = TrackingState::Lost;
@@ -153,7 +160,7 @@ struct CoarseSnapshot {
 	cv::Mat atlas; // completed colour (CV_32FC3), never written after publishing
 	// The atlas as RGBA half floats (CV_16FC4), for showing the room: made on the worker that
 	// publishes, in the layout GPUs sample as it is (set_atlas).
-	cv::Mat display;
+	BufferImage display;
 	// CV_32FC1, the atlas's size: 1 where the fisheye observed the texel (quality > 0), else 0; the
 	// dense pass leaves those texels of the room's shell to the coarse model (dense_render.h).
 	// Empty: none (set_atlas).
@@ -162,8 +169,8 @@ struct CoarseSnapshot {
 	CoarseFrameStats last; // of the last frame
 	CoarsePipelineTimings timings; // of the last frame
 
-	// atlas = p_atlas (shared, not copied), and its display form.
-	void set_atlas(const cv::Mat &p_atlas);
+	// atlas = p_atlas (shared, not copied), and its display form in p_buffers' buffer.
+	void set_atlas(const cv::Mat &p_atlas, const PixelBufferFactory &p_buffers);
 };
 
 // Nearest-rank percentiles of a latency series, milliseconds.
@@ -177,6 +184,7 @@ struct LiveRoomStats {
 	bool running = false;
 	uint64_t rgbd_pushed = 0, rgbd_processed = 0, rgbd_dropped = 0;
 	uint64_t fisheye_pushed = 0, fisheye_integrated = 0, fisheye_dropped = 0;
+	uint64_t rgb_views_integrated = 0; // without a fisheye: RGB-D frames the coarse model took as views
 	uint64_t fisheye_without_pose = 0; // skipped: no pose at their timestamp (never integrated at a guess)
 	uint64_t probe_renders = 0;
 	uint64_t good = 0, poor = 0, lost = 0;
@@ -358,13 +366,22 @@ private:
 	std::array<float, 256> rgb_lut{};
 	bool rgb_lut_active = false;
 	// The newest RGB-D frame with its pose (room frame), for the coarse model's RGB texturing:
-	// written by the SLAM side, taken by the coarse side at its next fisheye frame.
+	// written by the SLAM side, taken by the coarse side at its next fisheye frame, or, without a
+	// fisheye, as its next view (woken by pending_rgb_ready; offered every rgb_view_interval_s).
 	struct PendingRgb {
 		RgbdFrame frame;
 		Pose world_from_rgb;
 	};
 	std::mutex pending_rgb_mutex;
 	std::optional<PendingRgb> pending_rgb;
+	std::condition_variable pending_rgb_ready;
+	double next_rgb_view_s = -std::numeric_limits<double>::infinity(); // the SLAM side's
+	// Without a fisheye: p_view into the coarse model as its view (CoarsePipeline::add_rgb_view).
+	void process_rgb_view(const PendingRgb &p_view);
+	// The SLAM side's posed frame for the coarse model: kept for its next fisheye frame, or
+	// without a fisheye offered as a view (threaded: to the coarse worker; step mode: here).
+	void offer_rgb(const RgbdFrame &p_frame, const Pose &p_world_from_rgb);
+	std::optional<PendingRgb> take_rgb_view(std::chrono::milliseconds p_wait);
 
 	PoseHistory tracked; // the SLAM thread appends, the coarse thread reads (its own lock)
 	DenseLighting dense_lighting; // thread-safe itself

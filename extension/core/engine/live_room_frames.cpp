@@ -31,6 +31,10 @@ void LiveRoom::push_fisheye(FisheyeFrame p_frame) {
 	const double arrival = now_s();
 	note_arrival(sequence, arrival, &counters.fisheye_pushed, &fisheye_arrivals);
 	const std::shared_lock<std::shared_mutex> shared(lifecycle);
+	if (configured && cfg.has_rig && !cfg.rig.has_fisheye()) {
+		record_error("fisheye frame", "the rig has no fisheye (an RGB-D camera alone): frame skipped");
+		return;
+	}
 	if (configured && cfg.has_rig && cfg.find_room) {
 		room_finder.keep_view(p_frame, cfg.find_room_views);
 	}
@@ -62,7 +66,9 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence) {
 		out->sequence = p_sequence;
 		out->timestamp_s = p_frame.timestamp_s;
 		if (p_frame.rgb.type() == CV_8UC3) {
-			cv::cvtColor(p_frame.rgb, out->rgba, cv::COLOR_RGB2RGBA);
+			make_buffer_image(cfg.display_buffers, p_frame.rgb.rows, p_frame.rgb.cols, CV_8UC4, &out->rgba);
+			cv::cvtColor(p_frame.rgb, out->rgba.mat, cv::COLOR_RGB2RGBA);
+			CV_Assert(out->rgba.mat.data == out->rgba.bytes->data()); // written in place
 		}
 		bool fused = false;
 		Pose truth;
@@ -101,8 +107,9 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence) {
 			out->state = TrackingState::Good;
 		}
 		// The coarse model takes the texels its fisheye never saw from this frame, on its own
-		// thread at its next fisheye frame (the newest RGB-D frame with a pose waits there).
-		if (coarse && cfg.coarse.rgb_texture) {
+		// thread at its next fisheye frame (the newest RGB-D frame with a pose waits there);
+		// without a fisheye the frame is its view.
+		if (coarse && (cfg.coarse.rgb_texture || coarse->rgb_only())) {
 			Pose world_from_rgb;
 			bool posed = false;
 			if (cfg.coarse_poses == PoseSource::GroundTruth) {
@@ -113,9 +120,7 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence) {
 				world_from_rgb = out->world_from_camera;
 			}
 			if (posed) {
-				world_from_rgb = compose(inverse(cfg.world_from_room), world_from_rgb); // into the room's frame
-				const std::lock_guard<std::mutex> lock(pending_rgb_mutex);
-				pending_rgb = PendingRgb{ p_frame, world_from_rgb };
+				offer_rgb(p_frame, compose(inverse(cfg.world_from_room), world_from_rgb)); // into the room's frame
 			}
 		}
 		// Read here, on the only thread that writes the volume: stats() never waits for a fusing.
@@ -150,6 +155,58 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence) {
 		}
 	} catch (const std::exception &e) {
 		record_error("SLAM", e.what());
+	}
+}
+
+void LiveRoom::offer_rgb(const RgbdFrame &p_frame, const Pose &p_world_from_rgb) {
+	if (!coarse->rgb_only()) {
+		const std::lock_guard<std::mutex> lock(pending_rgb_mutex);
+		pending_rgb = PendingRgb{ p_frame, p_world_from_rgb };
+		return;
+	}
+	if (p_frame.timestamp_s < next_rgb_view_s) {
+		return;
+	}
+	next_rgb_view_s = p_frame.timestamp_s + cfg.rgb_view_interval_s;
+	if (!running) {
+		process_rgb_view(PendingRgb{ p_frame, p_world_from_rgb }); // step mode: now, in order
+		return;
+	}
+	{
+		const std::lock_guard<std::mutex> lock(pending_rgb_mutex);
+		pending_rgb = PendingRgb{ p_frame, p_world_from_rgb };
+	}
+	pending_rgb_ready.notify_one();
+}
+
+std::optional<LiveRoom::PendingRgb> LiveRoom::take_rgb_view(std::chrono::milliseconds p_wait) {
+	std::unique_lock<std::mutex> lock(pending_rgb_mutex);
+	pending_rgb_ready.wait_for(lock, p_wait, [this] { return stopping || pending_rgb.has_value(); });
+	std::optional<PendingRgb> view;
+	view.swap(pending_rgb);
+	return view;
+}
+
+void LiveRoom::process_rgb_view(const PendingRgb &p_view) {
+	try {
+		auto snapshot = std::make_shared<CoarseSnapshot>();
+		{
+			const std::lock_guard<std::mutex> coarse_lock(coarse_mutex);
+			snapshot->last = coarse->add_rgb_view(p_view.frame, cfg.rig.rgb, p_view.world_from_rgb, rgb_lut_active ? &rgb_lut : nullptr);
+			take_coarse_state(snapshot.get());
+			snapshot->timings = coarse->last_timings();
+		}
+		{
+			const std::lock_guard<std::mutex> lock(publish_mutex);
+			last_coarse = snapshot;
+		}
+		{
+			const std::lock_guard<std::mutex> lock(stats_mutex);
+			counters.rgb_views_integrated++;
+		}
+		wake_probes();
+	} catch (const std::exception &e) {
+		record_error("coarse (RGB view)", e.what());
 	}
 }
 
@@ -226,21 +283,23 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 // The coarse pipeline's state as a snapshot holds it: the frame count, the completed atlas (a
 // copy the pipeline will never write: probes read it while the next frame goes in), the observed
 // mask the dense pass needs, and the lighting changes so far.
-void CoarseSnapshot::set_atlas(const cv::Mat &p_atlas) {
+void CoarseSnapshot::set_atlas(const cv::Mat &p_atlas, const PixelBufferFactory &p_buffers) {
 	atlas = p_atlas;
-	display.release();
+	display = BufferImage();
 	if (p_atlas.type() == CV_32FC3) {
 		cv::Mat rgba;
 		cv::cvtColor(p_atlas, rgba, cv::COLOR_RGB2RGBA);
-		rgba.convertTo(display, CV_16F);
+		make_buffer_image(p_buffers, p_atlas.rows, p_atlas.cols, CV_16FC4, &display);
+		rgba.convertTo(display.mat, CV_16F);
+		CV_Assert(display.mat.data == display.bytes->data()); // written in place
 	}
 }
 
 void LiveRoom::take_coarse_state(CoarseSnapshot *r_snapshot) const {
 	r_snapshot->frames = coarse->frame_count();
-	r_snapshot->set_atlas(coarse->completed_color().clone());
+	r_snapshot->set_atlas(coarse->completed_color().clone(), cfg.display_buffers);
 	if (cfg.coarse_shell_first) {
-		r_snapshot->observed = observed_mask(coarse->texture());
+		r_snapshot->observed = observed_mask(coarse->texture(), coarse->rgb_only());
 	}
 	r_snapshot->cumulative = coarse->cumulative_lighting();
 }

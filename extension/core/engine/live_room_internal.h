@@ -25,13 +25,15 @@ constexpr std::chrono::milliseconds WORKER_POLL(50);
 // Arrival times kept for the latency figures (frames older than this many are forgotten).
 constexpr size_t ARRIVALS_KEPT = 256;
 
-// CoarseSnapshot::observed of a texture: where the fisheye observed each texel.
-inline cv::Mat observed_mask(const CoarseTexture &p_texture) {
+// CoarseSnapshot::observed of a texture: where the fisheye observed each texel, or, without a
+// fisheye (p_rgb_only), where the RGB camera did: the texels the coarse model saw itself.
+inline cv::Mat observed_mask(const CoarseTexture &p_texture, bool p_rgb_only) {
 	cv::Mat observed;
-	if (p_texture.quality.empty()) {
+	const cv::Mat seen = p_rgb_only ? p_texture.observed : cv::Mat(p_texture.quality > 0.0f);
+	if (seen.empty()) {
 		return observed;
 	}
-	cv::Mat(p_texture.quality > 0.0f).convertTo(observed, CV_32F, 1.0 / 255.0); // 255 or 0 -> 1 or 0
+	seen.convertTo(observed, CV_32F, 1.0 / 255.0); // 255 or 0 -> 1 or 0
 	return observed;
 }
 

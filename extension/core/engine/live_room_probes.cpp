@@ -221,7 +221,7 @@ Cubemap LiveRoom::render_at(const glm::dvec3 &p_position, int p_size, bool p_com
 	if (!p_completed && coarse && !running) {
 		// The observations alone (no inpainting), straight from the pipeline: nothing writes it now.
 		source.atlas = coarse->texture().color;
-		source.observed = cfg.coarse_shell_first ? observed_mask(coarse->texture()) : cv::Mat();
+		source.observed = cfg.coarse_shell_first ? observed_mask(coarse->texture(), coarse->rgb_only()) : cv::Mat();
 		source.cumulative = coarse->cumulative_lighting();
 		source.published = false; // the pipeline's own, which it writes again
 	}
@@ -318,13 +318,19 @@ void LiveRoom::finish() {
 	if (!coarse) {
 		return;
 	}
+	if (running && coarse->rgb_only()) {
+		// The last view offered, which the coarse worker may not have taken yet.
+		if (std::optional<PendingRgb> view = take_rgb_view(std::chrono::milliseconds(0))) {
+			process_rgb_view(*view);
+		}
+	}
 	{
 		const std::lock_guard<std::mutex> coarse_lock(coarse_mutex);
 		coarse->finish_inpainting();
 		const std::lock_guard<std::mutex> lock(publish_mutex);
 		if (last_coarse) {
 			auto snapshot = std::make_shared<CoarseSnapshot>(*last_coarse);
-			snapshot->set_atlas(coarse->completed_color().clone());
+			snapshot->set_atlas(coarse->completed_color().clone(), cfg.display_buffers);
 			last_coarse = snapshot;
 		}
 	}

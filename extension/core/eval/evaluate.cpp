@@ -133,8 +133,12 @@ void RecordingEvaluation::say(const std::string &p_line) const {
 // Opens the recording and checks it holds what every variant needs.
 bool RecordingEvaluation::open_recording() {
 	PlayerOptions play;
-	play.rgbd = options.dense; // the coarse variants alone read no RGB-D frame
-	const std::string opened = open_player(options.recording, play, &player);
+	play.rgbd = options.dense || options.no_fisheye; // the coarse variants read RGB-D frames only without a fisheye
+	std::string opened = open_player(options.recording, play, &player);
+	if (opened.empty() && !play.rgbd && !player.reader().get_rig().has_fisheye()) {
+		play.rgbd = true; // a recording of an RGB-D camera alone: its frames are the coarse model's views
+		opened = open_player(options.recording, play, &player);
+	}
 	if (!opened.empty()) {
 		result.error = opened;
 		return false;
@@ -156,7 +160,8 @@ bool RecordingEvaluation::open_recording() {
 		return false;
 	}
 	// Nothing to score from nothing: every variant but the dense ones needs fisheye frames.
-	if (reader().fisheye_count() == 0) {
+	no_fisheye = options.no_fisheye || !reader().get_rig().has_fisheye();
+	if (reader().fisheye_count() == 0 && !no_fisheye) {
 		result.error = options.recording + ": no fisheye frames (fisheye.txt lists none)";
 		return false;
 	}
@@ -217,6 +222,9 @@ bool RecordingEvaluation::build_base_config() {
 	base.coarse.inpaint = true;
 	base.coarse.inpaint_async = false; // the completed texture belongs to the latest frame
 	base.coarse.rgb_texture = options.rgb_texture;
+	if (no_fisheye) {
+		base.rig = rgbd_camera_alone(base.rig); // the RGB camera's response stays known (base.photometry)
+	}
 	if (options.dense_range_m > 0.0) {
 		base.slam.tsdf.max_depth_m = float(options.dense_range_m);
 		base.dense_render_far_m = float(options.dense_range_m);
@@ -302,9 +310,15 @@ void RecordingEvaluation::feed_until(double p_time_s) {
 		SourceFrame rgbd = player.read(e);
 		if (rgbd.ok) {
 			rgbd_frames_used++;
+			if (no_fisheye) { // the coarse-only engines' views
+				engine_plain.push_rgbd(rgbd.rgbd);
+				engine_additive.push_rgbd(rgbd.rgbd);
+			}
 			engine_gain.push_rgbd(rgbd.rgbd);
-			engine_tracked.push_rgbd(std::move(rgbd.rgbd));
-			slam_figures.add(*engine_tracked.tracked_frame(), reader().ground_truth_trajectory(RecordingStream::Rgbd), &result.slam);
+			if (options.dense) { // the SLAM engine is configured only then
+				engine_tracked.push_rgbd(std::move(rgbd.rgbd));
+				slam_figures.add(*engine_tracked.tracked_frame(), reader().ground_truth_trajectory(RecordingStream::Rgbd), &result.slam);
+			}
 		} else {
 			say("skipping RGB-D frame: " + rgbd.error);
 			rgbd_skipped.add(rgbd.error);
@@ -336,8 +350,10 @@ void RecordingEvaluation::feed_fisheye(size_t p_event) {
 			linearizer.linearise(frame.fisheye.image, exposure_ratio(photometry.fisheye, frame.fisheye.capture.exposure_us, frame.fisheye.capture.gain)).radiance,
 			rig.fisheye, pose);
 	baseline_total_ms += ms_since(start);
-	for (const auto &[engine, config] : engines) {
-		engine->push_fisheye(frame.fisheye);
+	if (!no_fisheye) {
+		for (const auto &[engine, config] : engines) {
+			engine->push_fisheye(frame.fisheye);
+		}
 	}
 	result.fisheye_frames_used++;
 }
@@ -352,7 +368,7 @@ bool RecordingEvaluation::finish() {
 	// The reason is in the message itself: "see the messages above" pointed at progress lines that
 	// --quiet and the nodes never show (issue #38).
 	const double last_cubemap_s = reader().get_ground_truth_cubemap_ref(count - 1).timestamp_s;
-	if (result.fisheye_frames_used == 0) {
+	if (result.fisheye_frames_used == 0 && reader().fisheye_count() > 0) {
 		result.error = options.recording + ": none of its " + std::to_string(reader().fisheye_count()) + " fisheye frames could be used: " +
 				fisheye_skipped.describe(last_cubemap_s);
 		return false;

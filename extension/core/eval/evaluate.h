@@ -52,6 +52,11 @@ struct EvaluationOptions {
 	bool dense = true; // the two dense variants (they run SLAM on every RGB-D frame: slower)
 	int render_scale = 1; // maps rendered at render_scale x cubemap_size, area-averaged down to be scored
 	bool rgb_texture = false; // the coarse model also textured from the RGB camera (coarse/rgb_texture_update.h)
+	// The rig as an RGB-D camera alone (issue #43): the engines' rig has no fisheye, they get no
+	// fisheye frames but every RGB-D frame, and the coarse model is textured from the RGB camera
+	// (CoarsePipeline::add_rgb_view). The baseline (5.3) keeps the fisheye; the ground truth is
+	// the same, so the two runs compare the same sweep with and without the fisheye.
+	bool no_fisheye = false;
 	// > 0: the dense model's reach, metres: depth readings fused up to this far (TsdfOptions'
 	// max_depth_m) and the dense pass drawn this far from the probe (LiveRoomConfig's
 	// dense_render_far_m); 0: their defaults (4 m).

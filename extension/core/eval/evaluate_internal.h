@@ -165,6 +165,8 @@ private:
 	bool finish();
 
 	const EvaluationOptions &options;
+	// options.no_fisheye, or the recording's rig has none (open_recording).
+	bool no_fisheye = false;
 	EvaluationResult result;
 	RecordingPlayer player;
 	// The variants, each one LiveRoom in step mode, as the nodes and the benchmark run it: (b, c)

@@ -36,7 +36,8 @@ std::string CoarsePipeline::configure(const OmniParams &p_fisheye, const Floorpl
 	if (!built.ok) {
 		return "coarse pipeline: room mesh: " + built.error;
 	}
-	if (p_fisheye.width <= 0 || p_fisheye.height <= 0) {
+	has_fisheye = p_fisheye.width != 0 || p_fisheye.height != 0;
+	if (has_fisheye && (p_fisheye.width <= 0 || p_fisheye.height <= 0)) {
 		return "coarse pipeline: fisheye has no size";
 	}
 	fisheye = p_fisheye;
@@ -59,14 +60,20 @@ std::string CoarsePipeline::configure(const OmniParams &p_fisheye, const Floorpl
 }
 
 RgbTextureStats CoarsePipeline::add_rgb_frame(const RgbdFrame &p_frame, const PinholeParams &p_camera, const Pose &p_world_from_rgb, const ResponseCurve *p_lut) {
-	if (!configured || !opts.rgb_texture) {
+	if (!configured || !(opts.rgb_texture || !has_fisheye)) {
 		return RgbTextureStats();
 	}
+	return rgb_update(p_frame, p_camera, p_world_from_rgb, p_lut, nullptr);
+}
+
+RgbTextureStats CoarsePipeline::rgb_update(const RgbdFrame &p_frame, const PinholeParams &p_camera, const Pose &p_world_from_rgb, const ResponseCurve *p_lut,
+		LightingPairs *r_pairs) {
 	const Clock::time_point start = Clock::now();
 	if (rgb_fresh.size() != coarse.color.size()) {
 		rgb_fresh = cv::Mat(coarse.color.size(), CV_8UC1, cv::Scalar(0));
 	}
-	const RgbTextureStats stats = update_coarse_texture_from_rgb(geometry, p_camera, p_world_from_rgb, p_frame.rgb, p_frame.depth_m, p_lut, &coarse, opts.rgb, &rgb_fresh);
+	const RgbTextureStats stats =
+			update_coarse_texture_from_rgb(geometry, p_camera, p_world_from_rgb, p_frame.rgb, p_frame.depth_m, p_lut, &coarse, opts.rgb, &rgb_fresh, r_pairs);
 	last.rgb_ms = ms_since(start);
 	total.rgb_ms += last.rgb_ms;
 	return stats;
@@ -74,7 +81,7 @@ RgbTextureStats CoarsePipeline::add_rgb_frame(const RgbdFrame &p_frame, const Pi
 
 CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, const Pose &p_world_from_fisheye) {
 	CoarseFrameStats stats;
-	if (!configured) {
+	if (!configured || !has_fisheye) {
 		return stats;
 	}
 	const Clock::time_point frame_start = Clock::now();
@@ -111,29 +118,61 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 
 	// 3. Lighting change (§4.6) from those pairs, applied to the observed texels this frame did not
 	// update (the update's order does not matter: the pairs hold the values from before it).
-	start = Clock::now();
-	if (estimate_lighting) {
-		stats.lighting = estimate_lighting_change(lighting_pairs.gather(), opts.lighting_options);
-	}
-	if (stats.lighting.valid) {
-		apply_lighting_change(&coarse, stats.lighting);
-		cumulative = compose_lighting(stats.lighting, cumulative);
-	}
-	t.lighting_ms = ms_since(start);
+	change_lighting(estimate_lighting, &stats, &t);
 
+	finish_frame(&t, &stats, ms_since(frame_start));
+	return stats;
+}
+
+CoarseFrameStats CoarsePipeline::add_rgb_view(const RgbdFrame &p_frame, const PinholeParams &p_camera, const Pose &p_world_from_rgb, const ResponseCurve *p_lut) {
+	CoarseFrameStats stats;
+	if (!configured || has_fisheye) {
+		return stats;
+	}
+	const Clock::time_point frame_start = Clock::now();
+	const bool estimate_lighting = opts.lighting && frames > 0;
+	lighting_pairs.step = opts.lighting_options.sample_step;
+	const RgbTextureStats rgb = rgb_update(p_frame, p_camera, p_world_from_rgb, p_lut, estimate_lighting ? &lighting_pairs : nullptr);
+	stats.update.texels_visible = rgb.texels_visible;
+	stats.update.texels_updated = rgb.texels_updated;
+	// The update's mask of this view's texels, as the fisheye's update leaves it.
+	rgb_fresh.copyTo(coarse.updated);
+	rgb_fresh.setTo(cv::Scalar(0));
+	CoarsePipelineTimings t;
+	t.update_ms = last.rgb_ms;
+	// The lighting change (§4.6) from the pairs of texels seen again, as with the fisheye.
+	change_lighting(estimate_lighting, &stats, &t);
+	finish_frame(&t, &stats, ms_since(frame_start));
+	return stats;
+}
+
+void CoarsePipeline::change_lighting(bool p_estimate, CoarseFrameStats *io_stats, CoarsePipelineTimings *io_timings) {
+	const Clock::time_point start = Clock::now();
+	if (p_estimate) {
+		io_stats->lighting = estimate_lighting_change(lighting_pairs.gather(), opts.lighting_options);
+	}
+	if (io_stats->lighting.valid) {
+		apply_lighting_change(&coarse, io_stats->lighting);
+		cumulative = compose_lighting(io_stats->lighting, cumulative);
+	}
+	io_timings->lighting_ms = ms_since(start);
+}
+
+void CoarsePipeline::finish_frame(CoarsePipelineTimings *io_timings, CoarseFrameStats *io_stats, double p_frame_start_ms_ago) {
+	CoarsePipelineTimings &t = *io_timings;
 	// 4. Inpainting (§4.5), here or on the worker.
-	start = Clock::now();
+	const Clock::time_point start = Clock::now();
 	if (opts.inpaint && opts.inpaint_async) {
 		inpainter->request(coarse);
-		inpainter->try_take_result(&inpainted, nullptr, &stats.inpaint);
+		inpainter->try_take_result(&inpainted, nullptr, &io_stats->inpaint);
 		compose_completed();
 	} else if (opts.inpaint) {
-		completed = inpainter->inpaint(coarse, &stats.inpaint);
+		completed = inpainter->inpaint(coarse, &io_stats->inpaint);
 	}
 	t.inpaint_ms = ms_since(start);
 
 	frames++;
-	t.frame_ms = ms_since(frame_start);
+	t.frame_ms = p_frame_start_ms_ago + t.inpaint_ms;
 	t.render_ms = last.render_ms;
 	t.sh_ms = last.sh_ms;
 	t.rgb_ms = last.rgb_ms; // add_rgb_frame's, kept
@@ -143,7 +182,6 @@ CoarseFrameStats CoarsePipeline::add_fisheye_frame(const FisheyeFrame &p_frame, 
 	total.update_ms += t.update_ms;
 	total.inpaint_ms += t.inpaint_ms;
 	total.frame_ms += t.frame_ms;
-	return stats;
 }
 
 void CoarsePipeline::compose_completed() {

@@ -92,10 +92,13 @@ public:
 	CoarsePipeline &operator=(const CoarsePipeline &) = delete;
 
 	// Builds the room mesh, texel geometry, renderer and inpainter; clears the texture. The error
-	// (empty on success) names the problem (invalid floorplan, atlas too large, bad fisheye).
+	// (empty on success) names the problem (invalid floorplan, atlas too large, bad fisheye). A
+	// fisheye of size 0 x 0 is none (an RGB-D camera alone, issue #43): the RGB camera is then the
+	// model's only eye (add_rgb_view), whatever rgb_texture says.
 	std::string configure(const OmniParams &p_fisheye, const Floorplan &p_floorplan);
 	std::string configure(const Rig &p_rig, const Floorplan &p_floorplan) { return configure(p_rig.fisheye, p_floorplan); }
 	bool is_configured() const { return configured; }
+	bool rgb_only() const { return configured && !has_fisheye; }
 
 	// Integrates one fisheye frame (image types as update_coarse_texture accepts) taken at
 	// p_world_from_fisheye; a linearised frame's saturation mask (FisheyeFrame::saturated) makes
@@ -107,6 +110,11 @@ public:
 	// camera's value -> radiance (null: value / 255). No effect with rgb_texture off. The completed
 	// texture follows at the next fisheye frame.
 	RgbTextureStats add_rgb_frame(const RgbdFrame &p_frame, const PinholeParams &p_camera, const Pose &p_world_from_rgb, const ResponseCurve *p_lut);
+	// Without a fisheye (rgb_only()): one RGB-D frame as the model's view, as add_fisheye_frame
+	// is with one: the texture update from the RGB camera, the lighting change (§4.6) from the
+	// texels it sees again (their held value against this view's), applied to those it did not
+	// update, then the inpainting. Zero stats with a fisheye.
+	CoarseFrameStats add_rgb_view(const RgbdFrame &p_frame, const PinholeParams &p_camera, const Pose &p_world_from_rgb, const ResponseCurve *p_lut);
 
 	// The environment map at p_position (world metres) of the completed texture (the raw one
 	// when inpainting is off or p_completed is false). Size 0: options.cubemap_size.
@@ -141,9 +149,17 @@ public:
 
 private:
 	void compose_completed();
+	RgbTextureStats rgb_update(const RgbdFrame &p_frame, const PinholeParams &p_camera, const Pose &p_world_from_rgb, const ResponseCurve *p_lut,
+			LightingPairs *r_pairs);
+	// The lighting change from lighting_pairs (when p_estimate), applied to the texels the view did
+	// not update and composed into cumulative.
+	void change_lighting(bool p_estimate, CoarseFrameStats *io_stats, CoarsePipelineTimings *io_timings);
+	// The frame's last stage for both kinds of view: the inpainting (§4.5), the counts and timings.
+	void finish_frame(CoarsePipelineTimings *io_timings, CoarseFrameStats *io_stats, double p_frame_start_ms_ago);
 
 	CoarsePipelineOptions opts;
 	bool configured = false;
+	bool has_fisheye = true;
 	bool convex = false;
 	OmniParams fisheye;
 	Floorplan floorplan;

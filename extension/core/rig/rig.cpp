@@ -346,6 +346,16 @@ bool read_rig(YamlFieldReader &p_reader, const cv::FileNode &p_root, Rig *r_rig)
 
 } // namespace
 
+Rig rgbd_camera_alone(const Rig &p_rig) {
+	Rig alone = p_rig;
+	alone.fisheye = OmniParams();
+	alone.rgb_from_fisheye = Pose();
+	alone.fisheye_time_offset_s = 0.0;
+	alone.fisheye_latency_s = 0.0;
+	alone.photometry = RigPhotometry();
+	return alone;
+}
+
 RigLoadResult load_rig(const std::string &p_path) {
 	RigLoadResult result;
 	// Read here, parsed from memory: the errors are ours to word, and OpenCV logs nothing.

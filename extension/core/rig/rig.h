@@ -67,6 +67,9 @@ struct RigLoadResult {
 // A file without the fisheye, rgb_from_fisheye and fisheye_time_offset_s fields (all three left
 // out together) gives a rig without a fisheye.
 RigLoadResult load_rig(const std::string &p_path);
+// p_rig's RGB-D camera alone (issue #43): no fisheye, extrinsic, clock offset, latency or
+// photometry (the file's photometry describes both cameras, check_rig); the RGB camera as it was.
+Rig rgbd_camera_alone(const Rig &p_rig);
 // Writes the rig file (without the fisheye's three fields when the rig has no fisheye); returns an empty string, or the error naming the file.
 // With p_report, the calibration's report is written after the rig (calibration_report). Replaces
 // p_path whole or leaves it as it was (io/replace_file.h).

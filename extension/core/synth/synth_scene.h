@@ -180,6 +180,10 @@ struct RoomSweepParams {
 	std::vector<glm::dvec2> path_xz;
 	double walk_s = 10.0; // from the first point to the last, at rest at both ends; then back
 	double turn_rad_s = 0.8; // the camera's yaw rate (about 1.3 turns in 10 s); its sign from the seed
+	// > 0: every this many seconds the camera also tilts up to the ceiling and back (a 1.6-s
+	// raised cosine, up to about 55 degrees above the horizon), as a user scanning a room with
+	// one camera does (issue #43: synth --room-sweep --look-up). 0: it never looks up.
+	double look_up_every_s = 0.0;
 };
 
 struct Scene {

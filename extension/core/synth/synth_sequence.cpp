@@ -193,6 +193,9 @@ struct EventRenderer {
 	}
 
 	bool fisheye(const Event &p_event, const Pose &p_world_from_rgb) {
+		if (!rig.has_fisheye()) {
+			return truth_only(p_event);
+		}
 		const double t_fisheye = fisheye_times[p_event.index];
 		const Pose world_from_fisheye = compose(p_world_from_rgb, rig.rgb_from_fisheye);
 		auto t0 = std::chrono::steady_clock::now();
@@ -216,10 +219,7 @@ struct EventRenderer {
 			}
 		}
 		timings.fisheye_s += seconds_since(t0);
-		t0 = std::chrono::steady_clock::now();
-		auto faces = std::make_shared<CubemapFaces>(render_cubemap(renderer, scene.probe_position, p_event.time_s, sequence.cubemap_face_size));
-		auto ldr = std::make_shared<CubemapFaces>(to_srgb8_faces(*faces, sequence.cubemap_ldr_exposure));
-		timings.cubemap_s += seconds_since(t0);
+		const auto [faces, ldr] = truth_faces(p_event.time_s);
 		auto frame = std::make_shared<FisheyeFrame>();
 		frame->timestamp_s = t_fisheye;
 		frame->hdr = sequence.fisheye_hdr;
@@ -240,6 +240,24 @@ struct EventRenderer {
 		++timings.fisheye_frames;
 		++timings.cubemaps;
 		return pushed;
+	}
+
+	// The true cubemap at the probe at p_time_s (RGB-D clock): linear, and as 8-bit sRGB.
+	std::pair<std::shared_ptr<CubemapFaces>, std::shared_ptr<CubemapFaces>> truth_faces(double p_time_s) {
+		const auto t0 = std::chrono::steady_clock::now();
+		auto faces = std::make_shared<CubemapFaces>(render_cubemap(renderer, scene.probe_position, p_time_s, sequence.cubemap_face_size));
+		auto ldr = std::make_shared<CubemapFaces>(to_srgb8_faces(*faces, sequence.cubemap_ldr_exposure));
+		timings.cubemap_s += seconds_since(t0);
+		return { faces, ldr };
+	}
+
+	// A rig without a fisheye (an RGB-D camera alone): the ground truth at the fisheye clock's
+	// times all the same, so that a recording with and one without the fisheye are scored alike.
+	bool truth_only(const Event &p_event) {
+		const auto [faces, ldr] = truth_faces(p_event.time_s);
+		const double t_rgbd = p_event.time_s;
+		++timings.cubemaps;
+		return thread.push([&writer = writer, faces, ldr, t_rgbd]() { return writer.add_ground_truth_cubemap(t_rgbd, 0, *faces, *ldr); }, &timings.write_wait_s);
 	}
 };
 
@@ -388,7 +406,14 @@ Pose HandheldTrajectory::room_sweep_pose(double p_t_s) const {
 	// Turning round all the time; the camera dips to the floor and rises to the walls every 3.4 s
 	// (16 degrees down at t = 0: a hand-held start is roughly level).
 	const double yaw = start_angle_rad + room.turn_rad_s * t + 0.06 * wave(3.3, 4) + 0.006 * wave(0.37, 8);
-	const double pitch = -0.28 - 0.2 * std::sin(2.0 * PI * t / 3.4) + 0.005 * wave(0.41, 9);
+	double pitch = -0.28 - 0.2 * std::sin(2.0 * PI * t / 3.4) + 0.005 * wave(0.41, 9);
+	if (room.look_up_every_s > 0.0) {
+		// Up to the ceiling at the end of each period: a raised cosine of 1.6 s, 1.25 rad high.
+		const double pulse_s = 1.6, into = std::fmod(t, room.look_up_every_s) - (room.look_up_every_s - pulse_s);
+		if (into > 0.0) {
+			pitch += 1.25 * 0.5 * (1.0 - std::cos(2.0 * PI * into / pulse_s));
+		}
+	}
 	const double roll = 0.05 * wave(2.3, 7) + 0.004 * wave(0.29, 8);
 	const glm::dvec3 up(0.0, 1.0, 0.0);
 	const glm::dvec3 level(std::cos(yaw), 0.0, std::sin(yaw));
@@ -527,7 +552,7 @@ SequenceResult write_sequence(const std::string &p_folder, const Rig &p_rig, con
 		return result;
 	}
 
-	if (p_options.calibration_views) {
+	if (p_options.calibration_views && p_rig.has_fisheye()) { // the views calibrate the rig's two cameras together
 		const auto t0 = std::chrono::steady_clock::now();
 		const CalibrationResult calibration =
 				write_calibration_views(p_folder, p_rig, CheckerboardSpec(), p_options.calibration_samples_per_axis, p_options.fisheye, progress);

@@ -41,7 +41,7 @@ namespace roomprobe::synth {
 // first point to the last in walk_s, at rest at both ends, then back), at about
 // scene.camera_height_m, turning round at turn_rad_s (its sign from the seed) from a yaw drawn
 // from the seed, pitched 5 to 28 degrees down (every 3.4 s: the floor, then the walls), with
-// hand-held wander and tremor.
+// hand-held wander and tremor; with room.look_up_every_s, up to the ceiling now and then.
 struct HandheldTrajectory {
 	TrajectoryKind kind = TrajectoryKind::Orbit;
 	glm::dvec3 target = glm::dvec3(0.0); // Orbit

@@ -1,8 +1,10 @@
 #pragma once
 
-// Bytes that a consumer takes without copying them: a map's faces are filled on the probe worker
-// into a buffer the host engine supplies (Godot: a PackedByteArray, so the main thread only
-// hands it to the texture), or into a plain vector where no host asks.
+// Bytes that a consumer takes without copying them: a map's faces, the camera image and the atlas
+// shown are filled on the workers into a buffer the host engine supplies (Godot: a PackedByteArray,
+// so the main thread only hands it to the texture), or into a plain vector where no host asks.
+
+#include <opencv2/core/mat.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -42,6 +44,23 @@ inline std::shared_ptr<PixelBuffer> make_pixel_buffer(const PixelBufferFactory &
 		return made;
 	}
 	return std::make_shared<VectorPixelBuffer>(p_bytes);
+}
+
+// An image in a PixelBuffer: the bytes, and a continuous cv::Mat header over them (valid while
+// bytes lives; the two travel together).
+struct BufferImage {
+	std::shared_ptr<const PixelBuffer> bytes;
+	cv::Mat mat;
+	bool empty() const { return mat.empty(); }
+};
+
+// A p_rows x p_cols image of p_type in p_factory's buffer (make_pixel_buffer), for the caller to fill
+// through r_image->mat (an OpenCV function given it as its output writes it in place).
+inline void make_buffer_image(const PixelBufferFactory &p_factory, int p_rows, int p_cols, int p_type, BufferImage *r_image) {
+	const size_t bytes = size_t(p_rows) * size_t(p_cols) * CV_ELEM_SIZE(p_type);
+	const std::shared_ptr<PixelBuffer> buffer = make_pixel_buffer(p_factory, bytes);
+	r_image->mat = cv::Mat(p_rows, p_cols, p_type, buffer->data());
+	r_image->bytes = buffer;
 }
 
 } // namespace roomprobe

@@ -21,12 +21,6 @@ Ref<Image> image_from_mat(const cv::Mat &p_mat) {
 		case CV_32FC3:
 			format = Image::FORMAT_RGBF;
 			break;
-		case CV_8UC4:
-			format = Image::FORMAT_RGBA8;
-			break;
-		case CV_16FC4:
-			format = Image::FORMAT_RGBAH;
-			break;
 		default:
 			return Ref<Image>();
 	}
@@ -63,6 +57,14 @@ uint8_t *PackedBytesBuffer::data() { return write; }
 const uint8_t *PackedBytesBuffer::data() const { return write; }
 
 size_t PackedBytesBuffer::size() const { return size_t(packed.size()); }
+
+Ref<Image> image_from_buffer(const BufferImage &p_image) {
+	if (p_image.empty() || !p_image.bytes || (p_image.mat.type() != CV_8UC4 && p_image.mat.type() != CV_16FC4)) {
+		return Ref<Image>();
+	}
+	const Image::Format format = p_image.mat.type() == CV_8UC4 ? Image::FORMAT_RGBA8 : Image::FORMAT_RGBAH;
+	return Image::create_from_data(p_image.mat.cols, p_image.mat.rows, false, format, packed_bytes(*p_image.bytes));
+}
 
 PixelBufferFactory packed_bytes_buffers() {
 	return [](size_t p_bytes) -> std::shared_ptr<PixelBuffer> { return std::make_shared<PackedBytesBuffer>(p_bytes); };

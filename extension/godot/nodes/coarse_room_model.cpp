@@ -406,7 +406,7 @@ void CoarseRoomModel::apply_material() {
 		mesh_instance->set_material_override(Ref<Material>());
 		return;
 	}
-	show_in_texture(image_from_mat(shown->display), atlas_texture);
+	show_in_texture(image_from_buffer(shown->display), atlas_texture);
 	if (material.is_null()) {
 		material.instantiate();
 		material->set_shading_mode(BaseMaterial3D::SHADING_MODE_UNSHADED);

@@ -311,7 +311,7 @@ bool DenseSLAM::process_rig_frame() {
 		}
 	}
 	if (camera_image_wanted && !frame->rgba.empty()) {
-		show_in_texture(image_from_mat(frame->rgba), camera_image);
+		show_in_texture(image_from_buffer(frame->rgba), camera_image);
 		const Ref<ShaderMaterial> shown = background != nullptr ? Ref<ShaderMaterial>(background->get_material_override()) : Ref<ShaderMaterial>();
 		if (shown.is_valid() && shown->get_shader_parameter("image") != Variant(camera_image)) {
 			shown->set_shader_parameter("image", camera_image); // the texture is made with the first image
@@ -379,7 +379,7 @@ Ref<ImageTexture> DenseSLAM::get_camera_image_texture() const {
 	if (!camera_image_wanted) {
 		camera_image_wanted = true;
 		if (last_frame && !last_frame->rgba.empty()) {
-			show_in_texture(image_from_mat(last_frame->rgba), camera_image);
+			show_in_texture(image_from_buffer(last_frame->rgba), camera_image);
 		}
 	}
 	return camera_image;

@@ -19,7 +19,7 @@ RigCapture::RigCapture() :
 		p_config.has_rig = false;
 		p_config.dense = false;
 		p_config.has_room = false;
-		p_config.face_buffers = packed_bytes_buffers();
+		p_config.display_buffers = packed_bytes_buffers();
 	});
 }
 

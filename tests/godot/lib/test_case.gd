@@ -193,6 +193,12 @@ func fixture_bracketed_recording() -> String:
 	return fixture_recording() + "_bracketed"
 
 
+## The same second of the living room from the RGB-D camera alone (roomprobe_synth --no-fisheye:
+## no fisheye stream), as an absolute path.
+func fixture_rgbd_only_recording() -> String:
+	return fixture_recording() + "_rgbd_only"
+
+
 ## False, and the test skipped, when the fixture recording (or p_path) is not there.
 func need_fixture_recording(p_path: String = "") -> bool:
 	var path := fixture_recording() if p_path.is_empty() else p_path
@@ -211,6 +217,35 @@ func fixture_rig() -> Node:
 	rig.autoplay = false
 	rig.recording_path = fixture_recording()
 	return rig
+
+
+## The ground-truth cubemap (an N x 6N EXR strip) of recording p_dir's last line, as six RGBF faces.
+func ground_truth_faces(p_dir: String) -> Array[Image]:
+	var lines := FileAccess.get_file_as_string(p_dir.path_join("groundtruth/cubemaps.txt")).strip_edges().split("\n")
+	var last := lines[lines.size() - 1].split(" ")
+	var strip := Image.load_from_file(p_dir.path_join(last[2]))
+	strip.convert(Image.FORMAT_RGBF)
+	var n := strip.get_width()
+	var faces: Array[Image] = []
+	for f in 6:
+		faces.append(strip.get_region(Rect2i(0, f * n, n, n)))
+	return faces
+
+
+## PSNR in dB of six faces p_faces against p_truth (linear values clamped to [0, 1], peak 1).
+static func cubemap_psnr(p_faces: Array, p_truth: Array[Image]) -> float:
+	var se := 0.0
+	var count := 0
+	for f in 6:
+		var a: Image = p_faces[f]
+		var b: Image = p_truth[f]
+		for y in b.get_height():
+			for x in b.get_width():
+				var ca := a.get_pixel(x, y)
+				var cb := b.get_pixel(x, y)
+				se += pow(clampf(ca.r, 0, 1) - clampf(cb.r, 0, 1), 2) + pow(clampf(ca.g, 0, 1) - clampf(cb.g, 0, 1), 2) + pow(clampf(ca.b, 0, 1) - clampf(cb.b, 0, 1), 2)
+				count += 3
+	return 10.0 * log(1.0 / maxf(se / count, 1e-12)) / log(10.0)
 
 
 ## Adds node under tree.root and returns it. Free it in after_each() (or in the test).
