@@ -124,6 +124,37 @@ func test_live_devices_reach_the_probe_off_the_main_thread() -> void:
 	assert_eq(s.rig.get_warnings().size(), 0, str(s.rig.get_warnings()))
 
 
+## Issue #43: a live rig of an RGB-D camera alone (a rig file without the fisheye, the RGB-D-only
+## fixture's): the .oni streams, no fisheye device is opened, and the coarse model is textured from
+## the RGB camera's views at the poses SLAM tracks.
+func test_a_live_rgbd_camera_alone_textures_the_room() -> void:
+	if not _need_oni():
+		return
+	var alone := fixture_rgbd_only_recording()
+	if not need_fixture_recording(alone):
+		return
+	var rig = ClassDB.instantiate("RigCapture")
+	rig.autoplay = false
+	rig.source = 1  # SOURCE_LIVE
+	rig.rig_file = alone.path_join("rig.yaml")
+	rig.room_file = alone.path_join("room.yaml")
+	rig.rgbd_device = _fixture_oni()
+	var s := live_scene(rig)
+	_scene = s.scene
+	rig.play()
+	assert_true(rig.is_playing(), rig.get_last_error())
+	var textured := await wait_until(func(): return s.room.get_integrated_frame_count() >= 3 and s.probe.get_cubemap() != null, 60.0)
+	assert_true(textured, "RGB views %d, rgbd frames %d, SLAM frames %d, %s" % [s.room.get_integrated_frame_count(), rig.get_frame_count(0),
+			s.slam.get_processed_frame_count(), rig.get_device_state_reason(0)])
+	assert_true(s.room.has_texture_data(), "the room is textured from the RGB camera")
+	assert_eq(rig.get_frame_count(1), 0, "no fisheye frame")
+	assert_eq(rig.get_device_state(1), 0, "no fisheye device opened: %s" % rig.get_device_state_reason(1))
+	for node in [rig, s.room, s.probe, s.slam]:
+		for warning in node.get_warnings():
+			assert_false(warning.to_lower().contains("fisheye"), "%s asks for a fisheye: %s" % [node.name, warning])
+	rig.stop()
+
+
 func test_an_absent_camera_is_one_state_and_a_warning_while_the_other_streams() -> void:
 	if not _need_oni():
 		return
