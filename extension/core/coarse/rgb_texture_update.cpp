@@ -72,13 +72,7 @@ RgbTextureStats update_coarse_texture_from_rgb(const TexelGeometry &p_geometry, 
 	for (size_t t = 0; t < tile_visible.size(); t++) {
 		tile_visible[t] = tile_in_view(transform_point(camera_from_world, p_geometry.tile_centres[t]), p_geometry.tile_radii[t], p_camera) ? 1 : 0;
 	}
-	const int pair_step = r_pairs ? std::max(1, r_pairs->step) : 1;
-	if (r_pairs) {
-		r_pairs->rows.resize(size_t((h + pair_step - 1) / pair_step));
-		for (std::vector<LightingSample> &row : r_pairs->rows) {
-			row.clear();
-		}
-	}
+	const int pair_step = r_pairs ? r_pairs->begin(h) : 1;
 	std::atomic<size_t> visible{ 0 }, updated{ 0 };
 	const double max_x = p_camera.width - 1.0 - p_options.border_px, max_y = p_camera.height - 1.0 - p_options.border_px;
 	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {

@@ -386,13 +386,7 @@ TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p
 	const bool best = p_options.policy == TextureUpdatePolicy::Best;
 	const double keep_fraction = 1.0 - std::clamp(p_options.replace_epsilon, 0.0, 1.0);
 
-	const int pair_step = r_pairs ? std::max(1, r_pairs->step) : 1;
-	if (r_pairs) {
-		r_pairs->rows.resize(size_t((h + pair_step - 1) / pair_step));
-		for (std::vector<LightingSample> &row : r_pairs->rows) {
-			row.clear();
-		}
-	}
+	const int pair_step = r_pairs ? r_pairs->begin(h) : 1;
 	std::atomic<size_t> visible_total { 0 }, updated_total { 0 };
 	tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int> &p_rows) {
 		size_t visible = 0, updated = 0;
@@ -628,6 +622,15 @@ TextureUpdateStats update_coarse_texture(const RoomMesh &p_mesh, const TexelGeom
 		const TextureUpdateOptions &p_options, LightingPairs *r_pairs, const cv::Mat *p_saturated) {
 	return update_texture(p_mesh, p_geometry, &p_projection, p_params, p_world_from_fisheye, p_fisheye_image, p_visibility_mask, io_texture, p_options, r_pairs,
 			p_saturated);
+}
+
+int LightingPairs::begin(int p_height) {
+	const int pair_step = std::max(1, step);
+	rows.resize(size_t((p_height + pair_step - 1) / pair_step));
+	for (std::vector<LightingSample> &row : rows) {
+		row.clear();
+	}
+	return pair_step;
 }
 
 const std::vector<LightingSample> &LightingPairs::gather() {

@@ -145,6 +145,8 @@ struct LightingPairs {
 	std::vector<std::vector<LightingSample>> rows; // per grid row
 	std::vector<LightingSample> all; // gather()'s, in row-major order
 
+	// Empties the rows for an atlas p_height texels high (one row a step); returns the step.
+	int begin(int p_height);
 	// The rows' pairs in row-major order, into all.
 	const std::vector<LightingSample> &gather();
 };

@@ -382,6 +382,8 @@ private:
 	// without a fisheye offered as a view (threaded: to the coarse worker; step mode: here).
 	void offer_rgb(const RgbdFrame &p_frame, const Pose &p_world_from_rgb);
 	std::optional<PendingRgb> take_rgb_view(std::chrono::milliseconds p_wait);
+	// A view's snapshot made the newest, counted in counters.*p_counter, and the probes woken.
+	void publish_coarse(std::shared_ptr<const CoarseSnapshot> p_snapshot, uint64_t LiveRoomStats::*p_counter);
 
 	PoseHistory tracked; // the SLAM thread appends, the coarse thread reads (its own lock)
 	DenseLighting dense_lighting; // thread-safe itself

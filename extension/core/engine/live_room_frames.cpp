@@ -196,18 +196,22 @@ void LiveRoom::process_rgb_view(const PendingRgb &p_view) {
 			take_coarse_state(snapshot.get());
 			snapshot->timings = coarse->last_timings();
 		}
-		{
-			const std::lock_guard<std::mutex> lock(publish_mutex);
-			last_coarse = snapshot;
-		}
-		{
-			const std::lock_guard<std::mutex> lock(stats_mutex);
-			counters.rgb_views_integrated++;
-		}
-		wake_probes();
+		publish_coarse(snapshot, &LiveRoomStats::rgb_views_integrated);
 	} catch (const std::exception &e) {
 		record_error("coarse (RGB view)", e.what());
 	}
+}
+
+void LiveRoom::publish_coarse(std::shared_ptr<const CoarseSnapshot> p_snapshot, uint64_t LiveRoomStats::*p_counter) {
+	{
+		const std::lock_guard<std::mutex> lock(publish_mutex);
+		last_coarse = std::move(p_snapshot);
+	}
+	{
+		const std::lock_guard<std::mutex> lock(stats_mutex);
+		(counters.*p_counter)++;
+	}
+	wake_probes();
 }
 
 bool LiveRoom::fisheye_pose(double p_fisheye_timestamp_s, Pose *r_world_from_fisheye, std::string *r_error) const {
@@ -264,15 +268,7 @@ void LiveRoom::process_fisheye(const FisheyeFrame &p_frame, uint64_t p_sequence,
 		snapshot->fisheye_sequence = p_sequence;
 		take_coarse_state(snapshot.get());
 		snapshot->timings = coarse->last_timings();
-		{
-			const std::lock_guard<std::mutex> lock(publish_mutex);
-			last_coarse = snapshot;
-		}
-		{
-			const std::lock_guard<std::mutex> lock(stats_mutex);
-			counters.fisheye_integrated++;
-		}
-		wake_probes();
+		publish_coarse(snapshot, &LiveRoomStats::fisheye_integrated);
 	} catch (const std::exception &e) {
 		record_error("coarse model", e.what());
 	}

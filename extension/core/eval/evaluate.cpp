@@ -134,10 +134,10 @@ void RecordingEvaluation::say(const std::string &p_line) const {
 bool RecordingEvaluation::open_recording() {
 	PlayerOptions play;
 	play.rgbd = options.dense || options.no_fisheye; // the coarse variants read RGB-D frames only without a fisheye
-	std::string opened = open_player(options.recording, play, &player);
+	const std::string opened = open_player(options.recording, play, &player);
 	if (opened.empty() && !play.rgbd && !player.reader().get_rig().has_fisheye()) {
 		play.rgbd = true; // a recording of an RGB-D camera alone: its frames are the coarse model's views
-		opened = open_player(options.recording, play, &player);
+		player = RecordingPlayer(player.shared_reader(), play); // the same reader, not read again
 	}
 	if (!opened.empty()) {
 		result.error = opened;
