@@ -8,6 +8,8 @@
 #include "capture/pixel_formats.h"
 #include "gv_simulator.h"
 
+#include "test_waiting.h"
+
 #include <doctest/doctest.h>
 
 #include <opencv2/imgcodecs.hpp>
@@ -23,25 +25,10 @@
 #include <vector>
 
 using namespace roomprobe::drivers;
+using roomprobe::test::contains;
+using roomprobe::test::wait_until;
 
 namespace {
-
-bool contains(const std::string &p_text, const std::string &p_part) {
-	return p_text.find(p_part) != std::string::npos;
-}
-
-// Waits up to p_seconds for p_done; true when it held.
-template <class F>
-bool wait_until(double p_seconds, F p_done) {
-	const auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(p_seconds);
-	while (!p_done()) {
-		if (std::chrono::steady_clock::now() > give_up) {
-			return false;
-		}
-		std::this_thread::sleep_for(std::chrono::milliseconds(5));
-	}
-	return true;
-}
 
 // Everything a capture delivered, for the test thread to read.
 struct Collected {

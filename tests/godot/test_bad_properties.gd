@@ -41,7 +41,7 @@ func test_enums_outside_their_list_are_refused() -> void:
 	expect_error("RigCapture.source (0 Recording, 1 Live) must be one of 0..1; got 9")
 	rig.source = 9
 	assert_eq(rig.source, 0)
-	expect_error("RigCapture.fisheye_backend (0 Aravis, 1 UVC) must be one of 0..1; got -1")
+	expect_error("RigCapture.fisheye_backend (0 Aravis, 1 UVC, 2 Camera Feed) must be one of 0..2; got -1")
 	rig.fisheye_backend = -1
 	assert_eq(rig.fisheye_backend, 0)
 

@@ -27,15 +27,6 @@ std::string size_text(int p_width, int p_height) {
 	return std::to_string(p_width) + "x" + std::to_string(p_height);
 }
 
-// Empty when the frame has the rig's size (or the rig takes any), else why not.
-std::string check_size(const std::string &p_name, const char *p_what, int p_width, int p_height, int p_rig_width, int p_rig_height) {
-	if ((p_rig_width <= 0 && p_rig_height <= 0) || (p_width == p_rig_width && p_height == p_rig_height)) {
-		return "";
-	}
-	return p_name + ": " + p_what + " frames are " + size_text(p_width, p_height) + ", the rig file says " +
-			size_text(p_rig_width, p_rig_height) + " (choose that mode, or calibrate the rig for this one)";
-}
-
 // Seconds since p_arrived (when the driver handed the frame over).
 double seconds_since(std::chrono::steady_clock::time_point p_arrived) {
 	return std::chrono::duration<double>(std::chrono::steady_clock::now() - p_arrived).count();
@@ -361,6 +352,14 @@ private:
 #endif
 
 } // namespace
+
+std::string check_size(const std::string &p_name, const char *p_what, int p_width, int p_height, int p_rig_width, int p_rig_height) {
+	if ((p_rig_width <= 0 && p_rig_height <= 0) || (p_width == p_rig_width && p_height == p_rig_height)) {
+		return "";
+	}
+	return p_name + ": " + p_what + " frames are " + size_text(p_width, p_height) + ", the rig file says " +
+			size_text(p_rig_width, p_rig_height) + " (choose that mode, or calibrate the rig for this one)";
+}
 
 std::unique_ptr<CaptureSource> make_openni2_rgbd_source(const RgbdSourceSettings &p_settings) {
 	return std::make_unique<OpenNI2RgbdSource>(p_settings);

@@ -32,6 +32,10 @@ struct FisheyeSourceSettings {
 	bool include_fake = false; // Aravis: the first-found search may pick Aravis' Fake camera (tests)
 };
 
+// Empty when a frame of p_width x p_height has the rig's size (p_rig_*; both 0: any), else why
+// not, naming the device (p_name) and the stream (p_what: "RGB-D", "fisheye").
+std::string check_size(const std::string &p_name, const char *p_what, int p_width, int p_height, int p_rig_width, int p_rig_height);
+
 std::unique_ptr<CaptureSource> make_openni2_rgbd_source(const RgbdSourceSettings &p_settings);
 std::unique_ptr<CaptureSource> make_aravis_fisheye_source(const FisheyeSourceSettings &p_settings);
 std::unique_ptr<CaptureSource> make_uvc_fisheye_source(const FisheyeSourceSettings &p_settings);

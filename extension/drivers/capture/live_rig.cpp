@@ -51,9 +51,23 @@ std::string LiveRig::start(const Rig &p_rig, const LiveRigSettings &p_settings, 
 		settings.height = rig.fisheye.height;
 		DeviceCaptureOptions options = p_settings.capture;
 		options.latency_s = rig.fisheye_latency_s;
-		captures[1] = std::make_unique<DeviceCapture>(
-				p_settings.fisheye_backend == FisheyeBackend::Uvc ? make_uvc_fisheye_source(settings) : make_aravis_fisheye_source(settings), options,
-				frame_sink, state_sink(RecordingStream::Fisheye));
+		std::unique_ptr<CaptureSource> source;
+		switch (p_settings.fisheye_backend) {
+			case FisheyeBackend::Aravis:
+				source = make_aravis_fisheye_source(settings);
+				break;
+			case FisheyeBackend::Uvc:
+				source = make_uvc_fisheye_source(settings);
+				break;
+			case FisheyeBackend::Pushed:
+				if (!p_settings.pushed_fisheye) {
+					stop();
+					return "the fisheye backend takes pushed frames, but nothing pushes them (LiveRigSettings::pushed_fisheye is empty)";
+				}
+				source = make_pushed_fisheye_source(p_settings.pushed_fisheye, settings.width, settings.height);
+				break;
+		}
+		captures[1] = std::make_unique<DeviceCapture>(std::move(source), options, frame_sink, state_sink(RecordingStream::Fisheye));
 	}
 	for (std::unique_ptr<DeviceCapture> &capture : captures) {
 		const std::string error = capture ? capture->start() : std::string();

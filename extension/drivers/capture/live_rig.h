@@ -7,6 +7,7 @@
 
 #include "capture_sources.h"
 #include "device_capture.h"
+#include "pushed_camera.h"
 
 #include <recording/recording_queue.h>
 #include <rig/rig.h>
@@ -21,6 +22,7 @@ namespace roomprobe::drivers {
 enum class FisheyeBackend {
 	Aravis, // GigE Vision, USB3 Vision
 	Uvc, // a V4L2 webcam through OpenCV's VideoCapture
+	Pushed, // frames the host pushes (LiveRigSettings::pushed_fisheye): Godot's camera feeds
 };
 
 struct LiveRigSettings {
@@ -29,6 +31,7 @@ struct LiveRigSettings {
 	RgbdSourceSettings rgbd; // its size comes from the rig
 	FisheyeSourceSettings fisheye; // its size comes from the rig
 	FisheyeBackend fisheye_backend = FisheyeBackend::Aravis;
+	std::shared_ptr<PushedFrames> pushed_fisheye; // FisheyeBackend::Pushed: where the host pushes them
 	DeviceCaptureOptions capture; // latency_s comes from the rig, per device
 };
 

@@ -24,6 +24,7 @@ RigCapture::RigCapture() :
 }
 
 RigCapture::~RigCapture() {
+	release_camera_feed();
 	player.stop();
 	live.reset(); // its sinks reach the engine and this node
 	if (engine) {
@@ -143,6 +144,8 @@ void RigCapture::stop() {
 	if (live) {
 		stop_recording(); // no more frames: the recording is finished
 		live->stop();
+		release_camera_feed();
+		feed_frames.reset();
 		for (drivers::DeviceStatus &status : device_status) {
 			status = drivers::DeviceStatus();
 		}
@@ -288,6 +291,7 @@ void RigCapture::_process(double p_delta) {
 	}
 	report_device_states();
 	if (playing && live_open) {
+		poll_camera_feed();
 		show_frames(true);
 		return;
 	}

@@ -13,6 +13,7 @@
 // device, whose frames go straight into the engine; the node only shows device states (signal,
 // warnings), the newest frames, and starts and stops recordings.
 
+#include "../convert/camera_feed_convert.h"
 #include "live_room_link.h"
 
 #include <capture/live_rig.h>
@@ -23,6 +24,7 @@
 
 #include <math/pose.h>
 
+#include <atomic>
 #include <memory>
 #include <mutex>
 
@@ -47,6 +49,7 @@ public:
 	enum FisheyeBackend {
 		FISHEYE_BACKEND_ARAVIS, // GigE Vision / USB3 Vision
 		FISHEYE_BACKEND_UVC, // a V4L2 webcam (OpenCV's VideoCapture)
+		FISHEYE_BACKEND_CAMERA_FEED, // a Godot CameraServer feed (rig_capture_feed.cpp)
 	};
 	enum ComputeBackendMode { // ComputeBackend (gpu/compute_device.h), in its order
 		COMPUTE_BACKEND_CPU,
@@ -149,6 +152,9 @@ public:
 	// The same split: wall_usec, cpu_usec, and each node class's wall-clock microseconds.
 	static godot::Dictionary get_main_thread_times();
 
+	// fisheye_backend Camera Feed: the feed's frame_changed signal, on whichever thread it comes.
+	void _camera_feed_frame();
+
 	godot::PackedStringArray get_warnings() const;
 	godot::PackedStringArray _get_configuration_warnings() const { return get_warnings(); }
 	void _ready();
@@ -189,6 +195,11 @@ private:
 	const Rig *rig_info() const; // the recording's rig, or rig_file's (live); null when not open
 	const RecordingReader *recording_reader() const; // null when no recording is open
 	void reopen_if_live();
+	// fisheye_backend Camera Feed, main thread (rig_capture_feed.cpp): finds the feed, connects to
+	// it, and pushes its newest frame to the fisheye's capture thread.
+	void poll_camera_feed();
+	bool follow_camera_feed(); // false while the feed is not listed (the reason is pushed as absent)
+	void release_camera_feed();
 
 	godot::String recording_path;
 	Source source = SOURCE_RECORDING;
@@ -239,6 +250,15 @@ private:
 	mutable bool images_stale = true;
 	std::string last_error;
 	drivers::DeviceStatus device_status[2]; // the last state signalled, per stream
+	// fisheye_backend Camera Feed: the feed followed, its reader, and the frames its signal counted.
+	std::shared_ptr<drivers::PushedFrames> feed_frames; // made by start_live, read by the fisheye's capture thread
+	godot::Ref<godot::CameraFeed> feed;
+	bool feed_activated = false; // this node turned the feed on, and turns it off
+	CameraFeedReader feed_reader;
+	std::atomic<uint64_t> feed_signals{ 0 }; // written by the feed's thread
+	std::atomic<uint64_t> feed_arrival_ns{ 0 };
+	uint64_t feed_taken = 0;
+	std::string feed_absent; // the reason last pushed as absent
 };
 
 } // namespace roomprobe

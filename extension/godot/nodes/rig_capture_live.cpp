@@ -72,6 +72,16 @@ void RigCapture::start_live() {
 	settings.fisheye.exposure_us = exposure_us;
 	settings.fisheye.gain = gain;
 	settings.fisheye_backend = fisheye_backend == FISHEYE_BACKEND_UVC ? drivers::FisheyeBackend::Uvc : drivers::FisheyeBackend::Aravis;
+	if (fisheye_backend == FISHEYE_BACKEND_CAMERA_FEED && live_rig.has_fisheye()) {
+		// The main thread pushes the feed's frames (rig_capture_feed.cpp); found before the capture
+		// thread first opens it, so an absent feed is its first reason.
+		settings.fisheye_backend = drivers::FisheyeBackend::Pushed;
+		release_camera_feed();
+		feed_frames = std::make_shared<drivers::PushedFrames>(
+				fisheye_device.is_empty() ? std::string("Godot camera feed (the first listed)") : "Godot camera feed '" + fisheye_device.utf8_string() + "'");
+		settings.pushed_fisheye = feed_frames;
+		poll_camera_feed();
+	}
 	{
 		const std::lock_guard<std::mutex> lock(mutex);
 		live_frames[0] = live_frames[1] = 0;

@@ -71,7 +71,7 @@ void RigCapture::set_fisheye_device(const String &p_id) { fisheye_device = p_id;
 String RigCapture::get_fisheye_device() const { return fisheye_device; }
 
 void RigCapture::set_fisheye_backend(int64_t p_backend) {
-	if (!property_checks::enum_in_range("RigCapture.fisheye_backend (0 Aravis, 1 UVC)", p_backend, 2)) {
+	if (!property_checks::enum_in_range("RigCapture.fisheye_backend (0 Aravis, 1 UVC, 2 Camera Feed)", p_backend, 3)) {
 		return;
 	}
 	fisheye_backend = FisheyeBackend(p_backend);
@@ -130,6 +130,7 @@ void RigCapture::_bind_methods() {
 	ClassDB::bind_method(D_METHOD("get_compute_backend"), &RigCapture::get_compute_backend);
 	ClassDB::bind_method(D_METHOD("set_fisheye_backend", "backend"), &RigCapture::set_fisheye_backend);
 	ClassDB::bind_method(D_METHOD("get_fisheye_backend"), &RigCapture::get_fisheye_backend);
+	ClassDB::bind_method(D_METHOD("_camera_feed_frame"), &RigCapture::_camera_feed_frame);
 	ClassDB::bind_method(D_METHOD("set_fisheye_pixel_format", "format"), &RigCapture::set_fisheye_pixel_format);
 	ClassDB::bind_method(D_METHOD("get_fisheye_pixel_format"), &RigCapture::get_fisheye_pixel_format);
 	ClassDB::bind_method(D_METHOD("set_auto_exposure", "on"), &RigCapture::set_auto_exposure);
@@ -188,7 +189,7 @@ void RigCapture::bind_properties() {
 	ADD_PROPERTY(PropertyInfo(Variant::STRING, "room_file", PROPERTY_HINT_FILE, "*.yaml"), "set_room_file", "get_room_file");
 	ADD_PROPERTY(PropertyInfo(Variant::STRING, "rgbd_device"), "set_rgbd_device", "get_rgbd_device");
 	ADD_PROPERTY(PropertyInfo(Variant::STRING, "fisheye_device"), "set_fisheye_device", "get_fisheye_device");
-	ADD_PROPERTY(PropertyInfo(Variant::INT, "fisheye_backend", PROPERTY_HINT_ENUM, "Aravis,UVC"), "set_fisheye_backend", "get_fisheye_backend");
+	ADD_PROPERTY(PropertyInfo(Variant::INT, "fisheye_backend", PROPERTY_HINT_ENUM, "Aravis,UVC,Camera Feed"), "set_fisheye_backend", "get_fisheye_backend");
 	ADD_PROPERTY(PropertyInfo(Variant::STRING, "fisheye_pixel_format"), "set_fisheye_pixel_format", "get_fisheye_pixel_format");
 	ADD_PROPERTY(PropertyInfo(Variant::BOOL, "auto_exposure"), "set_auto_exposure", "get_auto_exposure");
 	ADD_PROPERTY(PropertyInfo(Variant::FLOAT, "exposure_us", PROPERTY_HINT_RANGE, "1,10000000,1,suffix:us"), "set_exposure_us", "get_exposure_us");
@@ -208,6 +209,7 @@ void RigCapture::bind_properties() {
 	BIND_ENUM_CONSTANT(SOURCE_LIVE);
 	BIND_ENUM_CONSTANT(FISHEYE_BACKEND_ARAVIS);
 	BIND_ENUM_CONSTANT(FISHEYE_BACKEND_UVC);
+	BIND_ENUM_CONSTANT(FISHEYE_BACKEND_CAMERA_FEED);
 	BIND_ENUM_CONSTANT(COMPUTE_BACKEND_CPU);
 	BIND_ENUM_CONSTANT(COMPUTE_BACKEND_VULKAN);
 	BIND_ENUM_CONSTANT(COMPUTE_BACKEND_AUTO);
