@@ -15,6 +15,7 @@ var _scene: Node3D
 ## feed list once a second while the main thread would add and remove feeds (not thread-safe in
 ## Godot 4.6), so the tests do not churn it.
 static var _feed: CameraFeed
+static var _form_feeds := {}  # more feeds, by name, for the YCbCr forms
 var _fisheye: Array[Image] = []  # the fixture's fisheye frames, pushed in turn
 
 
@@ -140,3 +141,50 @@ func test_a_feed_not_listed_or_in_another_size_is_a_state_with_its_reason() -> v
 	assert_true(s.rig.get_device_state_reason(1).contains("fisheye frames are 64x48"), s.rig.get_device_state_reason(1))
 	assert_eq(s.room.get_integrated_frame_count(), 0)
 	s.rig.stop()
+
+
+## A feed's YCbCr frames (YUY2 in one image, or Y and CbCr planes) reach the engine as R, G, B,
+## converted with the BT.709 full-range matrix of Godot's camera background: Y 128, Cb 100,
+## Cr 160 is R 128 + 1.5748 * 32 = 178.4, G 128 + 0.1873 * 28 - 0.4681 * 32 = 118.3,
+## B 128 - 1.8556 * 28 = 76.0. Each form on a feed of its own: Godot 4.6 keeps a feed's first
+## texture format.
+func test_ycbcr_feeds_reach_the_engine_as_rgb() -> void:
+	if not _need_oni():
+		return
+	var size := 1024  # the fixture rig's fisheye
+	var yuy2 := PackedByteArray()
+	yuy2.resize(size * size * 2)
+	for i in size * size:
+		yuy2[2 * i] = 128
+		yuy2[2 * i + 1] = 100 if i % 2 == 0 else 160
+	var packed := Image.create_from_data(size, size, false, Image.FORMAT_RG8, yuy2)
+	var y_plane := Image.create(size, size, false, Image.FORMAT_L8)
+	y_plane.fill(Color8(128, 128, 128))
+	var cbcr := Image.create(size / 2, size / 2, false, Image.FORMAT_RG8)
+	cbcr.fill(Color8(100, 160, 0))
+	for form in ["YUY2", "planes"]:
+		var name: String = FEED_NAME + " " + form
+		if not _form_feeds.has(name):
+			var feed := CameraFeed.new()
+			feed.set_name(name)
+			CameraServer.add_feed(feed)
+			_form_feeds[name] = feed
+		var feed: CameraFeed = _form_feeds[name]
+		var s := _feed_scene(name)
+		s.rig.play()
+		var converted := await wait_until(func():
+			if feed.feed_is_active:
+				if form == "YUY2":
+					feed.set_ycbcr_image(packed)
+				else:
+					feed.set_ycbcr_images(y_plane, cbcr)
+			var image: Image = s.rig.get_fisheye_image()
+			if image == null or image.get_size() != Vector2i(size, size):
+				return false
+			var c := image.get_pixel(size / 2 + 1, size / 3)
+			return absi(c.r8 - 178) <= 1 and absi(c.g8 - 118) <= 1 and absi(c.b8 - 76) <= 1, 30.0)
+		var image: Image = s.rig.get_fisheye_image()
+		assert_true(converted, "%s: the fisheye shown is %s, fisheye state %d: %s" % [form,
+				str(image.get_pixel(size / 2 + 1, size / 3) * 255.0) if image != null else "none", s.rig.get_device_state(1), s.rig.get_device_state_reason(1)])
+		s.rig.stop()
+		_scene.free()

@@ -10,12 +10,15 @@ namespace roomprobe {
 
 namespace {
 
-// An Image as an 8-bit matrix with p_channels channels (converted to L8, RG8 or RGB8 first).
+// An Image as an 8-bit matrix of p_channels channels. One- and two-channel images keep their
+// bytes (a Y plane comes back as R8 or L8, CbCr as RG8); others are converted (to R8, RG8, RGB8).
 cv::Mat mat_of(Ref<Image> p_image, int p_channels) {
-	const Image::Format format = p_channels == 1 ? Image::FORMAT_L8 : p_channels == 2 ? Image::FORMAT_RG8 : Image::FORMAT_RGB8;
-	if (p_image->get_format() != format) {
+	const Image::Format format = p_image->get_format();
+	const bool as_is = (p_channels == 1 && (format == Image::FORMAT_L8 || format == Image::FORMAT_R8)) ||
+			(p_channels == 2 && (format == Image::FORMAT_RG8 || format == Image::FORMAT_LA8)) || (p_channels == 3 && format == Image::FORMAT_RGB8);
+	if (!as_is) {
 		p_image = p_image->duplicate();
-		p_image->convert(format);
+		p_image->convert(p_channels == 1 ? Image::FORMAT_R8 : p_channels == 2 ? Image::FORMAT_RG8 : Image::FORMAT_RGB8);
 	}
 	const PackedByteArray bytes = p_image->get_data();
 	cv::Mat mat(int(p_image->get_height()), int(p_image->get_width()), CV_8UC(p_channels));
@@ -24,6 +27,23 @@ cv::Mat mat_of(Ref<Image> p_image, int p_channels) {
 	}
 	std::memcpy(mat.data, bytes.ptr(), mat.total() * mat.elemSize());
 	return mat;
+}
+
+// YUY2 (4:2:2) as Godot's feeds hand it to set_ycbcr_image: a two-channel image of the frame's
+// size, Y in the first channel, Cb and Cr taking turns in the second (Cb at even columns).
+cv::Mat ycbcr_of_yuy2(const cv::Mat &p_yuy2) {
+	cv::Mat ycbcr(p_yuy2.size(), CV_8UC3);
+	for (int y = 0; y < p_yuy2.rows; y++) {
+		const cv::Vec2b *in = p_yuy2.ptr<cv::Vec2b>(y);
+		cv::Vec3b *out = ycbcr.ptr<cv::Vec3b>(y);
+		for (int x = 0; x < p_yuy2.cols; x++) {
+			const int pair = x & ~1;
+			const uint8_t cb = in[pair][1];
+			const uint8_t cr = pair + 1 < p_yuy2.cols ? in[pair + 1][1] : uint8_t(128);
+			out[x] = cv::Vec3b(in[x][0], cb, cr);
+		}
+	}
+	return ycbcr;
 }
 
 // Full-range Y, Cb, Cr to R, G, B with the BT.709 matrix, as Godot's camera background shader does.
@@ -77,9 +97,13 @@ cv::Mat CameraFeedReader::read(const Ref<CameraFeed> &p_feed, std::string *r_err
 			const Image::Format format = image->get_format();
 			return mat_of(image, format == Image::FORMAT_L8 || format == Image::FORMAT_R8 ? 1 : 3);
 		}
-		case CameraFeed::FEED_YCBCR: { // Y, Cb, Cr in one texture's R, G, B
-			const Ref<Image> image = texture_image(id, CameraServer::FEED_RGBA_IMAGE);
-			return readable(image) ? rgb_of_ycbcr(mat_of(image, 3)) : cv::Mat();
+		case CameraFeed::FEED_YCBCR: { // one texture: YUY2 in two channels, or Y, Cb, Cr in three
+			const Ref<Image> image = texture_image(id, CameraServer::FEED_YCBCR_IMAGE);
+			if (!readable(image)) {
+				return cv::Mat();
+			}
+			const Image::Format format = image->get_format();
+			return format == Image::FORMAT_RG8 || format == Image::FORMAT_LA8 ? rgb_of_ycbcr(ycbcr_of_yuy2(mat_of(image, 2))) : rgb_of_ycbcr(mat_of(image, 3));
 		}
 		case CameraFeed::FEED_YCBCR_SEP: { // Y full size; Cb, Cr subsampled in a second texture
 			const Ref<Image> y_image = texture_image(id, CameraServer::FEED_Y_IMAGE);

@@ -1,7 +1,7 @@
 #pragma once
 // A Godot camera feed's newest frame as an 8-bit image for the engine (issue #43). Godot's feeds
 // (CameraServer: V4L2 webcams on Linux, Android's cameras, a headset's passthrough) hand their
-// frames to the renderer only, as RGB, packed YCbCr or separate Y and CbCr textures; the reader
+// frames to the renderer only, as RGB, YUY2 or separate Y and CbCr textures; the reader
 // reads them back on the main thread and makes R, G, B (or grey) of them, as Godot's own camera
 // background does.
 
