@@ -5,7 +5,7 @@
 //
 // roomprobe_eval --recording DIR [--out DIR [--force]] [--cubemap-size N] [--per-frame] [--texel-size M]
 //                [--max-cubemaps K] [--no-dense] [--quiet] [--budget] [--rgb-texture] [--no-fisheye]
-//                [--dense-range M] [--backend cpu|vulkan|auto]
+//                [--dense-range M] [--backend cpu|vulkan|auto] [--lighting-field PRIOR]
 // roomprobe_eval --compare A.exr B.exr   (two cubemaps: B against A, e.g. one backend's map against the other's)
 // Maps already in --out are kept, the evaluation refused, unless --force (as every tool's outputs).
 
@@ -107,6 +107,7 @@ int run(int argc, char **argv) {
 				"%s%susage: roomprobe_eval --recording DIR [--out DIR [--force]] [--cubemap-size N] [--per-frame]\n"
 				"                      [--texel-size M] [--max-cubemaps K] [--no-dense] [--quiet] [--budget]\n"
 				"                      [--rgb-texture] [--no-fisheye] [--dense-range M] [--room FILE] [--backend cpu|vulkan|auto]\n"
+				"                      [--lighting-field PRIOR]\n"
 				"       roomprobe_eval --compare A.exr B.exr\n"
 				"  --out DIR: the last frame's maps of every variant, and the truth's, as NAME.exr and NAME.png;\n"
 				"    maps already there are kept and nothing is evaluated, unless --force replaces them\n"
@@ -116,6 +117,8 @@ int run(int argc, char **argv) {
 				"  --dense-range M: fuse depth and draw the dense model up to M metres (default 4)\n"
 				"  --no-fisheye: the rig as its RGB-D camera alone: the coarse model textured from the RGB camera\n"
 				"    (the baseline keeps the fisheye; the same truth, so the runs compare with and without it)\n"
+				"  --lighting-field PRIOR: the gain variants' lighting change as a gain field (issue #42), its slope's\n"
+				"    prior in log gain per metre (e.g. 0.3); default 0: one gain\n"
 				"  --room FILE: the coarse model uses this room.yaml (one found by ./roomprobe room) instead of the\n"
 				"    recording's, placed by the two files' initial_rgb_pose; scored against the same truth\n",
 				p_error ? "roomprobe_eval: " : "", p_error ? (std::string(p_error) + "\n").c_str() : "");
@@ -154,6 +157,11 @@ int run(int argc, char **argv) {
 				return usage("--dense-range needs a distance in metres in (0, 20]");
 			}
 			options.dense_range_m = x;
+		} else if (arg == "--lighting-field") {
+			if (!cursor.positive_number(10.0, &x)) {
+				return usage("--lighting-field needs the slope's prior in log gain per metre, in (0, 10]");
+			}
+			options.lighting_field_prior_per_m = x;
 		} else if (arg == "--room") {
 			if (!cursor.value(&options.room_file)) {
 				return usage("--room needs a room.yaml (./roomprobe room writes one)");

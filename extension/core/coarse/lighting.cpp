@@ -1,5 +1,7 @@
 #include "lighting.h"
 
+#include "lighting_field.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -125,6 +127,20 @@ cv::Vec3f LightingChange::apply(const cv::Vec3f &p_old) const {
 	return out;
 }
 
+cv::Vec3f LightingChange::gain_at(const glm::vec3 &p_position) const {
+	const float field = std::exp(log_slope[0] * p_position.x + log_slope[1] * p_position.y + log_slope[2] * p_position.z);
+	return gain * field;
+}
+
+cv::Vec3f LightingChange::apply(const cv::Vec3f &p_old, const glm::vec3 &p_position) const {
+	const cv::Vec3f g = has_field() ? gain_at(p_position) : gain;
+	cv::Vec3f out;
+	for (int c = 0; c < 3; c++) {
+		out[c] = std::max(0.0f, g[c] * p_old[c] + offset[c]);
+	}
+	return out;
+}
+
 bool lighting_value_usable(const cv::Vec3f &p_value, const LightingOptions &p_options) {
 	for (int c = 0; c < 3; c++) {
 		// Written so that NaN is rejected too.
@@ -164,6 +180,12 @@ LightingChange estimate_lighting_change(const std::vector<LightingSample> &p_sam
 		for (int c = 0; c < 3; c++) {
 			change.gain[c] = static_cast<float>(gains[c]);
 		}
+		const bool positioned = std::all_of(valid.begin(), valid.end(), [](const LightingSample &p_sample) {
+			return std::isfinite(p_sample.position[0]) && std::isfinite(p_sample.position[1]) && std::isfinite(p_sample.position[2]);
+		});
+		if (positioned && p_options.field_prior_per_m > 0.0) {
+			fit_lighting_field(valid, gains, p_options, &change);
+		}
 	}
 	change.valid = true;
 	return change;
@@ -196,7 +218,7 @@ LightingChange estimate_lighting_change(const CoarseTexture &p_texture_before, c
 	return estimate_lighting_change(samples, p_options);
 }
 
-void apply_lighting_change(CoarseTexture *r_texture, const LightingChange &p_change) {
+void apply_lighting_change(CoarseTexture *r_texture, const LightingChange &p_change, const std::vector<glm::dvec3> *p_points) {
 	if (!r_texture || !p_change.valid) {
 		return;
 	}
@@ -207,6 +229,9 @@ void apply_lighting_change(CoarseTexture *r_texture, const LightingChange &p_cha
 			updated.size() != color.size()) {
 		return;
 	}
+	// A field needs each texel's point; without them, its gain at the world origin (never wanted:
+	// the pipeline passes the points).
+	const bool field = p_change.has_field() && p_points != nullptr && p_points->size() == color.total();
 	tbb::parallel_for(tbb::blocked_range<int>(0, color.rows), [&](const tbb::blocked_range<int> &p_rows) {
 		for (int y = p_rows.begin(); y < p_rows.end(); y++) {
 			cv::Vec3f *color_row = color.ptr<cv::Vec3f>(y);
@@ -214,7 +239,12 @@ void apply_lighting_change(CoarseTexture *r_texture, const LightingChange &p_cha
 			const uint8_t *updated_row = updated.ptr<uint8_t>(y);
 			for (int x = 0; x < color.cols; x++) {
 				if (observed_row[x] != 0 && updated_row[x] == 0) {
-					color_row[x] = p_change.apply(color_row[x]);
+					if (field) {
+						const glm::dvec3 &p = (*p_points)[size_t(y) * size_t(color.cols) + size_t(x)];
+						color_row[x] = p_change.apply(color_row[x], glm::vec3(p));
+					} else {
+						color_row[x] = p_change.apply(color_row[x]);
+					}
 				}
 			}
 		}
@@ -230,6 +260,7 @@ LightingChange compose_lighting(const LightingChange &p_then, const LightingChan
 		out.gain[c] = p_then.gain[c] * p_first.gain[c];
 		out.offset[c] = p_then.gain[c] * p_first.offset[c] + p_then.offset[c];
 	}
+	out.log_slope = p_then.log_slope + p_first.log_slope;
 	return out;
 }
 
@@ -241,6 +272,7 @@ LightingChange lighting_since(const LightingChange &p_now, const LightingChange 
 		out.gain[c] = g;
 		out.offset[c] = p_now.offset[c] - g * p_reference.offset[c];
 	}
+	out.log_slope = p_now.log_slope - p_reference.log_slope;
 	return out;
 }
 

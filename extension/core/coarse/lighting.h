@@ -34,6 +34,10 @@
 
 #include <io/opencv.h>
 
+#include <glm/vec3.hpp>
+
+#include <cmath>
+
 #include <vector>
 
 namespace roomprobe {
@@ -55,27 +59,45 @@ struct LightingOptions {
 	// needs a selection, the estimate's costliest step; 0: all samples.
 	int scale_samples = 2048;
 	double tukey_c = 4.685; // Tukey biweight cut-off, in robust standard deviations.
+	// GAIN_ROBUST, beyond one gain (issue #42): a gain field, log g(x) = log g + slope . x, fitted
+	// to the pairs' positions where every pair has one. A light switched on brightens the near
+	// side of the room more than the far side; one gain cannot. The slope has a Gaussian prior of
+	// this standard deviation (log gain per metre), so a frame whose pairs span little of the room,
+	// or agree on one gain, keeps about one gain. 0: one gain only.
+	double field_prior_per_m = 0.0;
+	double field_max_per_m = 1.0; // the slope's length is clamped to this (log gain per metre)
 };
 
-// One texel's old texture value T(t) and newly sampled fisheye value F(f(t)), linear RGB.
+// One texel's old texture value T(t) and newly sampled fisheye value F(f(t)), linear RGB, and
+// where the texel is (world metres; NaN: unknown, and no gain field is fitted).
 struct LightingSample {
 	cv::Vec3f old_value;
 	cv::Vec3f new_value;
+	cv::Vec3f position = cv::Vec3f(NAN, NAN, NAN);
 };
 
 struct LightingChange {
 	bool valid = false; // False: too few valid samples; the change is the identity.
 	LightingModel model = LightingModel::GAIN_ROBUST;
 	cv::Vec3f offset = cv::Vec3f(0.0f, 0.0f, 0.0f); // ADDITIVE_PAPER: Δ, per channel.
-	cv::Vec3f gain = cv::Vec3f(1.0f, 1.0f, 1.0f); // GAIN_ROBUST: g, per channel.
+	cv::Vec3f gain = cv::Vec3f(1.0f, 1.0f, 1.0f); // GAIN_ROBUST: g, per channel (at the world origin with a field).
+	// GAIN_ROBUST with a field: d log g / dx, shared by the channels, per metre (0: one gain).
+	cv::Vec3f log_slope = cv::Vec3f(0.0f, 0.0f, 0.0f);
 	int sample_count = 0; // Valid samples used.
 
-	// The changed value: gain · p_old + offset, clamped at 0 (radiance is not negative).
+	// The changed value: gain · p_old + offset, clamped at 0 (radiance is not negative). Without
+	// a position, a field's gain is its value at the world origin: use the overload below.
 	cv::Vec3f apply(const cv::Vec3f &p_old) const;
+	// The same at world point p_position (metres).
+	cv::Vec3f apply(const cv::Vec3f &p_old, const glm::vec3 &p_position) const;
+	bool has_field() const { return log_slope != cv::Vec3f(0.0f, 0.0f, 0.0f); }
+	// The gain at p_position, per channel.
+	cv::Vec3f gain_at(const glm::vec3 &p_position) const;
 };
 
 // The change p_then applied after p_first: gain_then * (gain_first * x + offset_first) + offset_then
-// (without the clamp at 0). Valid when both are.
+// (without the clamp at 0); fields' slopes add. Valid when both are. (A field after an offset
+// would make the offset depend on position; a pipeline uses one model, so that never happens.)
 LightingChange compose_lighting(const LightingChange &p_then, const LightingChange &p_first);
 // The change that takes colours from p_reference to p_now: p_now after the inverse of p_reference.
 LightingChange lighting_since(const LightingChange &p_now, const LightingChange &p_reference);
@@ -98,6 +120,7 @@ LightingChange estimate_lighting_change(const CoarseTexture &p_texture_before, c
 // Applies p_change to every texel of r_texture->color that has been observed and was NOT updated
 // this frame (r_texture->updated == 0). Never-observed texels hold no data (the inpainter fills
 // them from the observed ones) and are left alone. Does nothing for an invalid change.
-void apply_lighting_change(CoarseTexture *r_texture, const LightingChange &p_change);
+// p_points: each texel's world point (TexelGeometry::points), needed for a field.
+void apply_lighting_change(CoarseTexture *r_texture, const LightingChange &p_change, const std::vector<glm::dvec3> *p_points = nullptr);
 
 } // namespace roomprobe

@@ -119,7 +119,8 @@ RgbTextureStats update_coarse_texture_from_rgb(const TexelGeometry &p_geometry, 
 					continue;
 				}
 				if (pair) {
-					pairs_row->push_back(LightingSample{ color[x], value });
+					const glm::dvec3 &at = p_geometry.points[i];
+					pairs_row->push_back(LightingSample{ color[x], value, cv::Vec3f(float(at.x), float(at.y), float(at.z)) });
 				}
 				if (!replace) {
 					continue;

@@ -423,7 +423,8 @@ TextureUpdateStats update_texture(const RoomMesh &p_mesh, const TexelGeometry &p
 					// lighting pair.
 					sample = sample_image(p_fisheye_image, pixel);
 					sampled = true;
-					pairs_row->push_back({ color_row[x], sample });
+					const glm::dvec3 &at = p_geometry.points[i];
+					pairs_row->push_back({ color_row[x], sample, cv::Vec3f(float(at.x), float(at.y), float(at.z)) });
 				}
 				const double edge = edge_factor(r2 / radius2, p_options);
 				double quality = 0.0;

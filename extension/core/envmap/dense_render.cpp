@@ -42,6 +42,7 @@ DenseRenderStats DenseLighting::render_over(const TsdfVolume &p_volume, size_t p
 	const LightingChange change = update(p_fused_frames, p_cumulative);
 	p_options.gain = change.gain;
 	p_options.offset = change.offset;
+	p_options.log_slope = change.log_slope;
 	return render_dense_over(p_volume, p_position, p_options, io_cubemap, io_cache);
 }
 
@@ -65,6 +66,7 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 	}
 	const std::array<float, 256> &lut = p_options.lut != nullptr ? *p_options.lut : identity;
 	const bool has_distances = roomprobe::has_distances(*io_cubemap);
+	const bool field = p_options.log_slope != cv::Vec3f(0.0f, 0.0f, 0.0f);
 	const std::array<cv::Mat, 6> *observed_faces = has_distances && p_options.coarse_observed != nullptr &&
 					(*p_options.coarse_observed)[0].rows == size && (*p_options.coarse_observed)[0].type() == CV_32FC1
 			? p_options.coarse_observed
@@ -134,8 +136,16 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 					}
 					prism = distance;
 				}
+				cv::Vec3f gain = p_options.gain;
+				if (field) {
+					// The surface point: the texel's direction times its distance from the probe.
+					const float dx = (float(u) - 0.5f * float(size - 1)) / (0.5f * float(size));
+					const double distance = double(depth[lu]) * std::sqrt(1.0 + double(dx * dx + dy * dy));
+					const glm::dvec3 point = p_position + cubemap_direction(f, double(u), double(v), size) * distance;
+					gain *= std::exp(p_options.log_slope.dot(cv::Vec3f(float(point.x), float(point.y), float(point.z))));
+				}
 				for (int k = 0; k < 3; k++) {
-					out[u][k] = std::max(0.0f, p_options.gain[k] * lut[c[k]] + p_options.offset[k]);
+					out[u][k] = std::max(0.0f, gain[k] * lut[c[k]] + p_options.offset[k]);
 				}
 				stats.texels_covered++;
 			}

@@ -240,6 +240,7 @@ bool RecordingEvaluation::configure_engines() {
 	additive.coarse.lighting_model = LightingModel::ADDITIVE_PAPER;
 	gain.coarse.lighting = true;
 	gain.coarse.lighting_model = LightingModel::GAIN_ROBUST;
+	gain.coarse.lighting_options.field_prior_per_m = options.lighting_field_prior_per_m;
 	gain.dense = options.dense;
 	tracked = gain;
 	tracked.coarse_poses = PoseSource::Tracked;

@@ -61,6 +61,9 @@ struct EvaluationOptions {
 	// max_depth_m) and the dense pass drawn this far from the probe (LiveRoomConfig's
 	// dense_render_far_m); 0: their defaults (4 m).
 	double dense_range_m = 0.0;
+	// > 0: the gain variants' lighting change is a gain field with this prior on its slope (log
+	// gain per metre; LightingOptions::field_prior_per_m, issue #42); 0: one gain.
+	double lighting_field_prior_per_m = 0.0;
 	bool oracles = true; // the oracle variants, when the recording's true scene can be rebuilt
 	// Non-empty: the coarse model uses this room file (a room found from the sweep by roomprobe_room,
 	// issue #18) instead of the recording's true room. It is placed in the recording's world by

@@ -152,7 +152,7 @@ void CoarsePipeline::change_lighting(bool p_estimate, CoarseFrameStats *io_stats
 		io_stats->lighting = estimate_lighting_change(lighting_pairs.gather(), opts.lighting_options);
 	}
 	if (io_stats->lighting.valid) {
-		apply_lighting_change(&coarse, io_stats->lighting);
+		apply_lighting_change(&coarse, io_stats->lighting, &geometry.points);
 		cumulative = compose_lighting(io_stats->lighting, cumulative);
 	}
 	io_timings->lighting_ms = ms_since(start);
