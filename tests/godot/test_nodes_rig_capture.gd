@@ -140,6 +140,14 @@ func test_unopened_inputs_are_checked_for_the_editor() -> void:
 	assert_true(text.contains("rig_file cannot be read") and text.contains("roomprobe_bad_rig.yaml"), text)
 	_rig.rig_file = _dir.path_join("rig.yaml")
 	assert_false(" ".join(_rig.get_warnings()).contains("cannot be read"), " ".join(_rig.get_warnings()))
+	# A Godot camera feed as the fisheye takes no exposure: asking for one is a warning, not silence.
+	_rig.fisheye_backend = 2  # FISHEYE_BACKEND_CAMERA_FEED
+	assert_false(" ".join(_rig.get_warnings()).contains("Camera Feed"), " ".join(_rig.get_warnings()))
+	_rig.auto_exposure = false
+	text = " ".join(_rig.get_warnings())
+	assert_true(text.contains("Camera Feed") and text.contains("exposure_us"), text)
+	_rig.auto_exposure = true
+	_rig.fisheye_backend = 0
 
 
 # The recording folder zipped with ZIPPacker under one top-level folder, as ./roomprobe export does.

@@ -231,6 +231,11 @@ PackedStringArray RigCapture::get_warnings() const {
 			warnings.push_back(String(("rig_file cannot be read: " + rig_problem).c_str()));
 		}
 	}
+	if (source == SOURCE_LIVE && fisheye_backend == FISHEYE_BACKEND_CAMERA_FEED && (!auto_exposure || !fisheye_pixel_format.is_empty())) {
+		// Godot's feeds take no exposure, gain or pixel format: say so rather than ignore them silently.
+		warnings.push_back("fisheye_backend is Camera Feed: Godot's camera feeds take no exposure, gain or pixel format, so auto_exposure "
+						   "off, exposure_us, gain and fisheye_pixel_format do not apply (the feed's own settings stay).");
+	}
 	if (compute_backend != COMPUTE_BACKEND_CPU && engine->is_configured()) {
 		const LiveRoomStats stats = engine->stats();
 		if (!stats.compute_on_device) {
