@@ -55,7 +55,10 @@ func _fixture_fisheye_frames() -> Array[Image]:
 	return frames
 
 
-func _feed_scene(p_device: String) -> Dictionary:
+## p_rgbd false: the RGB-D camera is a file that is not there, so OpenNI2 opens nothing. Only
+## the first test needs its frames; an .oni opened again in the same process right after one was
+## closed crashed inside OpenNI2 in 1 of 2 to 3 runs here (docs/LIMITS.md).
+func _feed_scene(p_device: String, p_rgbd := true) -> Dictionary:
 	if _feed == null:
 		CameraServer.monitoring_feeds = true  # Godot lists feeds only while monitoring (RigCapture turns it on too)
 		_feed = CameraFeed.new()
@@ -66,7 +69,7 @@ func _feed_scene(p_device: String) -> Dictionary:
 	rig.source = 1  # SOURCE_LIVE
 	rig.rig_file = fixture_recording().path_join("rig.yaml")
 	rig.room_file = fixture_recording().path_join("room.yaml")
-	rig.rgbd_device = fixture_recording() + ".oni"
+	rig.rgbd_device = fixture_recording() + ".oni" if p_rgbd else fixture_recording().path_join("no_rgbd_camera.oni")
 	rig.fisheye_backend = 2  # FISHEYE_BACKEND_CAMERA_FEED
 	rig.fisheye_device = p_device
 	var s := live_scene(rig)
@@ -123,7 +126,7 @@ func test_frames_pushed_into_a_camera_feed_texture_the_room() -> void:
 func test_a_feed_not_listed_or_in_another_size_is_a_state_with_its_reason() -> void:
 	if not _need_oni():
 		return
-	var s := _feed_scene("no such camera")
+	var s := _feed_scene("no such camera", false)
 	s.rig.play()
 	var absent := await wait_until(func(): return s.rig.get_device_state(1) == 4, 30.0)
 	var reason: String = s.rig.get_device_state_reason(1)
@@ -170,7 +173,7 @@ func test_ycbcr_feeds_reach_the_engine_as_rgb() -> void:
 			CameraServer.add_feed(feed)
 			_form_feeds[name] = feed
 		var feed: CameraFeed = _form_feeds[name]
-		var s := _feed_scene(name)
+		var s := _feed_scene(name, false)
 		s.rig.play()
 		var converted := await wait_until(func():
 			if feed.feed_is_active:

@@ -35,9 +35,9 @@ std::string extended_error() {
 	return message.empty() ? "no reason given" : message;
 }
 
-// Keeps OpenNI initialised (after its first success, for the process' life; see
-// acquire_runtime). OpenNI counts its own initialize/shutdown calls; this adds thread
-// safety and a clean retry after a failed start.
+// Keeps OpenNI initialised while any holder lives. OpenNI counts its own
+// initialize/shutdown calls; this adds thread safety and a clean retry after a
+// failed start.
 struct Runtime {
 	Runtime() = default;
 	Runtime(const Runtime &) = delete;
@@ -70,13 +70,17 @@ DriverResult<std::shared_ptr<Runtime>> acquire_runtime() {
 	}
 	auto runtime = std::make_shared<Runtime>();
 	current_runtime = runtime;
-	// Kept for the process' life: OpenNI2 initialised again after a shutdown crashed inside
-	// oniInitialize (reading its configuration) in 1 of 3 to 6 runs of a live scene played after
-	// another, so it is initialised once and its drivers stay loaded. Never freed on purpose:
-	// shutting it down from a static destructor at exit would race its own threads.
-	static auto *kept = new std::shared_ptr<Runtime>(runtime);
-	(void)kept;
 	return Result::success(std::move(runtime));
+}
+
+std::vector<DeviceInfo> enumerate_devices() {
+	openni::Array<openni::DeviceInfo> list;
+	OpenNI::enumerateDevices(&list);
+	std::vector<DeviceInfo> devices;
+	for (int i = 0; i < list.getSize(); i++) {
+		devices.push_back({ "openni2", list[i].getUri(), list[i].getVendor(), list[i].getName(), "", {} });
+	}
+	return devices;
 }
 
 bool ends_with_oni(const std::string &p_path) {
@@ -87,22 +91,6 @@ bool ends_with_oni(const std::string &p_path) {
 	std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return char(std::tolower(c)); });
 	return extension == ".oni";
 }
-
-std::vector<DeviceInfo> enumerate_devices() {
-	openni::Array<openni::DeviceInfo> list;
-	OpenNI::enumerateDevices(&list);
-	std::vector<DeviceInfo> devices;
-	for (int i = 0; i < list.getSize(); i++) {
-		// A recording played before stays in OpenNI's list while it is initialised (for the
-		// process' life): it is not a camera.
-		if (ends_with_oni(list[i].getUri())) {
-			continue;
-		}
-		devices.push_back({ "openni2", list[i].getUri(), list[i].getVendor(), list[i].getName(), "", {} });
-	}
-	return devices;
-}
-
 
 // OpenNI answers every bad file with the same "couldn't open device", so the
 // file is checked here first. Returns an empty string when it looks playable.
