@@ -117,14 +117,19 @@ cv::Vec3d robust_gains(const std::vector<LightingSample> &p_samples, const Light
 	return cv::Vec3d(gain[0], gain[1], gain[2]);
 }
 
+// gain · p_old + offset per channel, clamped at 0 (radiance is not negative).
+cv::Vec3f changed(const cv::Vec3f &p_old, const cv::Vec3f &p_gain, const cv::Vec3f &p_offset) {
+	cv::Vec3f out;
+	for (int c = 0; c < 3; c++) {
+		out[c] = std::max(0.0f, p_gain[c] * p_old[c] + p_offset[c]);
+	}
+	return out;
+}
+
 } // namespace
 
 cv::Vec3f LightingChange::apply(const cv::Vec3f &p_old) const {
-	cv::Vec3f out;
-	for (int c = 0; c < 3; c++) {
-		out[c] = std::max(0.0f, gain[c] * p_old[c] + offset[c]);
-	}
-	return out;
+	return changed(p_old, gain, offset);
 }
 
 cv::Vec3f LightingChange::gain_at(const glm::vec3 &p_position) const {
@@ -133,12 +138,7 @@ cv::Vec3f LightingChange::gain_at(const glm::vec3 &p_position) const {
 }
 
 cv::Vec3f LightingChange::apply(const cv::Vec3f &p_old, const glm::vec3 &p_position) const {
-	const cv::Vec3f g = has_field() ? gain_at(p_position) : gain;
-	cv::Vec3f out;
-	for (int c = 0; c < 3; c++) {
-		out[c] = std::max(0.0f, g[c] * p_old[c] + offset[c]);
-	}
-	return out;
+	return changed(p_old, has_field() ? gain_at(p_position) : gain, offset);
 }
 
 bool lighting_value_usable(const cv::Vec3f &p_value, const LightingOptions &p_options) {

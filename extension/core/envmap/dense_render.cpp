@@ -39,10 +39,7 @@ void DenseLighting::reset() {
 
 DenseRenderStats DenseLighting::render_over(const TsdfVolume &p_volume, size_t p_fused_frames, const LightingChange &p_cumulative,
 		const glm::dvec3 &p_position, DenseRenderOptions p_options, Cubemap *io_cubemap, DenseFaceCache *io_cache) {
-	const LightingChange change = update(p_fused_frames, p_cumulative);
-	p_options.gain = change.gain;
-	p_options.offset = change.offset;
-	p_options.log_slope = change.log_slope;
+	p_options.lighting = update(p_fused_frames, p_cumulative);
 	return render_dense_over(p_volume, p_position, p_options, io_cubemap, io_cache);
 }
 
@@ -66,7 +63,7 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 	}
 	const std::array<float, 256> &lut = p_options.lut != nullptr ? *p_options.lut : identity;
 	const bool has_distances = roomprobe::has_distances(*io_cubemap);
-	const bool field = p_options.log_slope != cv::Vec3f(0.0f, 0.0f, 0.0f);
+	const bool field = p_options.lighting.has_field();
 	const std::array<cv::Mat, 6> *observed_faces = has_distances && p_options.coarse_observed != nullptr &&
 					(*p_options.coarse_observed)[0].rows == size && (*p_options.coarse_observed)[0].type() == CV_32FC1
 			? p_options.coarse_observed
@@ -127,26 +124,20 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 				if (!std::isfinite(depth[lu]) || (c[0] == 0 && c[1] == 0 && c[2] == 0)) {
 					continue;
 				}
+				// The surface's distance from the probe: depth over the cosine to the face's axis.
+				const float dx = (float(u) - 0.5f * float(size - 1)) / (0.5f * float(size)); // mirrored: the sign does not matter
+				const float distance = distances != nullptr || field ? depth[lu] * std::sqrt(1.0f + dx * dx + dy * dy) : 0.0f;
 				if (distances != nullptr) {
-					const float dx = (float(u) - 0.5f * float(size - 1)) / (0.5f * float(size)); // mirrored: the sign does not matter
-					const float distance = depth[lu] * std::sqrt(1.0f + dx * dx + dy * dy);
 					float &prism = distances[size_t(v) * size_t(size) + size_t(u)];
 					if (observed != nullptr && observed[u] >= 0.5f && on_coarse_shell(distance, prism, p_options)) {
 						continue; // the shell the fisheye saw: the coarse model's texel stays
 					}
 					prism = distance;
 				}
-				cv::Vec3f gain = p_options.gain;
-				if (field) {
-					// The surface point: the texel's direction times its distance from the probe.
-					const float dx = (float(u) - 0.5f * float(size - 1)) / (0.5f * float(size));
-					const double distance = double(depth[lu]) * std::sqrt(1.0 + double(dx * dx + dy * dy));
-					const glm::dvec3 point = p_position + cubemap_direction(f, double(u), double(v), size) * distance;
-					gain *= std::exp(p_options.log_slope.dot(cv::Vec3f(float(point.x), float(point.y), float(point.z))));
-				}
-				for (int k = 0; k < 3; k++) {
-					out[u][k] = std::max(0.0f, gain[k] * lut[c[k]] + p_options.offset[k]);
-				}
+				const cv::Vec3f value(lut[c[0]], lut[c[1]], lut[c[2]]);
+				// A field's gain at the surface point: the texel's direction times its distance.
+				out[u] = field ? p_options.lighting.apply(value, glm::vec3(p_position + cubemap_direction(f, double(u), double(v), size) * double(distance)))
+							   : p_options.lighting.apply(value);
 				stats.texels_covered++;
 			}
 		}

@@ -34,11 +34,9 @@ struct DenseRenderOptions {
 	// 3.3 at 4, covering the same 54 % of the texels. 1: full size.
 	int scale = 2;
 	const std::array<float, 256> *lut = nullptr; // 8-bit value -> radiance; null: value / 255
-	cv::Vec3f gain = cv::Vec3f(1.0f, 1.0f, 1.0f); // lighting change applied after the lut
-	cv::Vec3f offset = cv::Vec3f(0.0f, 0.0f, 0.0f);
-	// A gain field (LightingChange::log_slope, issue #42): gain is then its value at the world
-	// origin, and each surface point gets gain · exp(log_slope . point).
-	cv::Vec3f log_slope = cv::Vec3f(0.0f, 0.0f, 0.0f);
+	// The lighting change applied after the lut (a gain field at each surface point, issue #42);
+	// the default is the identity.
+	LightingChange lighting;
 	// The room's shell first (issue #16's error budget): where the coarse render's texel was
 	// observed by the fisheye (these faces >= 0.5, CV_32FC1: CoarseSnapshot::observed rendered
 	// like the atlas, CoarseCubemapRenderer::render_channel) and the dense surface lies on the coarse prism (its distance within

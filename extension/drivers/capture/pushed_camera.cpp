@@ -57,7 +57,6 @@ bool PushedFrames::take(int p_timeout_ms, cv::Mat *r_image, uint64_t *r_arrival_
 	*r_image = std::move(image);
 	*r_arrival_ns = arrival_ns;
 	*r_frame_id = frame_id;
-	image.release();
 	waiting = false;
 	return true;
 }

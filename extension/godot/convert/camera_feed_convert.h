@@ -25,7 +25,9 @@ private:
 	godot::Ref<godot::Image> texture_image(int64_t p_feed_id, godot::CameraServer::FeedImage p_which);
 
 	int64_t feed_id = -1;
-	godot::Ref<godot::CameraTexture> textures[4]; // by CameraServer::FeedImage
+	// By CameraServer::FeedImage: FEED_RGBA_IMAGE, FEED_YCBCR_IMAGE and FEED_Y_IMAGE are all 0
+	// (one texture), FEED_CBCR_IMAGE is 1.
+	godot::Ref<godot::CameraTexture> textures[2];
 };
 
 } // namespace roomprobe

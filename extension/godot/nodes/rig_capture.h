@@ -197,6 +197,7 @@ private:
 	void reopen_if_live();
 	// fisheye_backend Camera Feed, main thread (rig_capture_feed.cpp): finds the feed, connects to
 	// it, and pushes its newest frame to the fisheye's capture thread.
+	std::shared_ptr<drivers::PushedFrames> start_camera_feed(); // start_live: a fresh PushedFrames, the feed looked for
 	void poll_camera_feed();
 	bool follow_camera_feed(); // false while the feed is not listed (the reason is pushed as absent)
 	void release_camera_feed();

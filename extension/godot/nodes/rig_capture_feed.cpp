@@ -54,7 +54,9 @@ bool RigCapture::follow_camera_feed() {
 	if (found.is_valid() && found == feed) {
 		return true;
 	}
-	release_camera_feed();
+	if (feed.is_valid()) {
+		release_camera_feed(); // the feed followed is gone (an unplugged webcam)
+	}
 	if (found.is_null()) {
 		const std::string absent = listed.empty() ? "CameraServer lists no camera feed (none plugged in, or, on Android, no CAMERA permission)"
 												  : "not among CameraServer's feeds: " + drivers::comma_list(listed);
@@ -73,6 +75,14 @@ bool RigCapture::follow_camera_feed() {
 	}
 	feed_taken = feed_signals.load();
 	return true;
+}
+
+std::shared_ptr<drivers::PushedFrames> RigCapture::start_camera_feed() {
+	release_camera_feed();
+	feed_frames = std::make_shared<drivers::PushedFrames>(
+			fisheye_device.is_empty() ? std::string("Godot camera feed (the first listed)") : feed_label(fisheye_device.utf8_string()));
+	poll_camera_feed();
+	return feed_frames;
 }
 
 void RigCapture::poll_camera_feed() {

@@ -76,11 +76,7 @@ void RigCapture::start_live() {
 		// The main thread pushes the feed's frames (rig_capture_feed.cpp); found before the capture
 		// thread first opens it, so an absent feed is its first reason.
 		settings.fisheye_backend = drivers::FisheyeBackend::Pushed;
-		release_camera_feed();
-		feed_frames = std::make_shared<drivers::PushedFrames>(
-				fisheye_device.is_empty() ? std::string("Godot camera feed (the first listed)") : "Godot camera feed '" + fisheye_device.utf8_string() + "'");
-		settings.pushed_fisheye = feed_frames;
-		poll_camera_feed();
+		settings.pushed_fisheye = start_camera_feed();
 	}
 	{
 		const std::lock_guard<std::mutex> lock(mutex);
