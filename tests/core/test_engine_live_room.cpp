@@ -256,10 +256,14 @@ TEST_CASE("engine: step mode is the old sequential path (DenseSlam, fisheye_pose
 	size_t fisheye_used = 0;
 	std::optional<std::pair<RgbdFrame, Pose>> pending_rgb;
 	const ResponseCurve rgb_lut_for_coarse = rgb_radiance_lut(rec.photometry);
+	DenseLighting lighting; // the lighting each fused frame's colours were of
 	for (const Event &event : rec.events) {
 		if (!event.fisheye) {
 			const RgbdFrame &frame = rec.rgbd[event.index];
 			const DenseSlamFrame out = slam.process(frame);
+			if (out.integrated) {
+				lighting.record(slam.volume().frame_count(), coarse.cumulative_lighting());
+			}
 			INFO("RGB-D frame ", event.index, ": ", out.tracking.reason);
 			CHECK(out.tracking.state == TrackingState::Good); // the fixture tracks (test_slam_dense.cpp)
 			if (out.tracking.state != TrackingState::Lost) {
@@ -301,9 +305,8 @@ TEST_CASE("engine: step mode is the old sequential path (DenseSlam, fisheye_pose
 	cv::Mat(coarse.texture().quality > 0.0f).convertTo(observed_atlas, CV_32F, 1.0 / 255.0);
 	const std::array<cv::Mat, 6> observed = renderer.render_channel(observed_atlas, rec.probe, PROBE_SIZE);
 	dense_options.coarse_observed = &observed;
-	DenseLighting lighting;
 	const DenseRenderStats dense_stats =
-			lighting.render_over(slam.volume(), slam.integrated_count(), coarse.cumulative_lighting(), rec.probe, dense_options, &expected);
+			lighting.render_over(slam.volume(), coarse.cumulative_lighting(), rec.probe, dense_options, &expected);
 	CHECK(dense_stats.texels_covered > 0); // the table below the probe is in the dense model
 	const ShCoefficients expected_sh = project_sh(expected);
 
@@ -353,12 +356,10 @@ TEST_CASE("engine: step mode is the old sequential path (DenseSlam, fisheye_pose
 // once finish() has composed the worker's last completion the completed atlas is the synchronous
 // one (test_pipeline_coarse.cpp). The probe map then is step mode's too, to the same tolerance:
 //   - its coarse part is the same atlas rendered at the same point;
-//   - its dense part is the same volume, times DenseLighting's change: the coarse lighting changes
-//     since the first render that saw the final fused-frame count. The probe worker renders between
-//     frames where step mode renders once at the end, so in general (a fisheye frame integrated after
-//     the last fused RGB-D frame) the dense colours could differ by that frame's lighting change;
-//     here the last frame is an RGB-D frame (checked), so every render that sees the final count
-//     also sees the final coarse lighting: the change is lighting_since(final, final) in both.
+//   - its dense part is the same volume, times DenseLighting's changes: the SLAM stage records the
+//     coarse lighting after each fused frame, and the pacing makes that the same coarse state in
+//     both modes (every earlier fisheye frame is in it), so the epochs are the same; the final
+//     render takes them to the final coarse lighting in both.
 // Maps the worker rendered before finish() composed the last completion show the older fill in
 // never-observed texels; finish() waits for a map rendered after it, so the map it leaves must match.
 TEST_CASE("engine: threaded mode, paced so that no frame is dropped, ends with step mode's model") {

@@ -129,7 +129,7 @@ int run_option(cli::Arguments &p_cursor, const std::string &p_arg, Arguments *r_
 }
 
 // DenseSlamOptions: --voxel-size-m, --colour-always, --max-speed, --noise-reference-m,
-// --colour-weight, --icp-depth-range, --tsdf-depth-range, --max-jump.
+// --colour-weight, --icp-depth-range, --tsdf-depth-range, --max-jump, --colour-slide.
 int slam_option(cli::Arguments &p_cursor, const std::string &p_arg, DenseSlamOptions *r_slam) {
 	if (p_arg == "--voxel-size-m") {
 		double v = 0.0;
@@ -173,6 +173,13 @@ int slam_option(cli::Arguments &p_cursor, const std::string &p_arg, DenseSlamOpt
 		}
 		r_slam->icp.max_jump_m = jump[0];
 		r_slam->icp.max_jump_deg = jump[1];
+	} else if (p_arg == "--colour-slide") {
+		double slide[2];
+		if (!p_cursor.number_list(2, slide) || !(slide[0] >= 0.0) || !(slide[1] >= 0.0)) {
+			return usage("--colour-slide needs M,DEG, both >= 0 (metres and degrees; 0,0: no guard)");
+		}
+		r_slam->icp.max_colour_slide_m = slide[0];
+		r_slam->icp.max_colour_slide_deg = slide[1];
 	} else {
 		return NOT_MINE;
 	}
@@ -269,6 +276,9 @@ void print_usage(std::FILE *p_out) {
 			"  --icp-depth-range MIN,MAX   depth readings ICP uses, metres along z (default %.2f,%.2f)\n"
 			"  --tsdf-depth-range MIN,MAX  depth readings fused into the TSDF, metres along z (default %.2f,%.2f)\n"
 			"  --max-jump M,DEG      largest move from the predicted pose believed per frame, metres and degrees (default %.2f,%.0f)\n"
+			"  --colour-slide M,DEG  largest move of the colour term along a direction the geometry leaves free believed per\n"
+			"                        frame, from the predicted pose (beyond: kept at the prediction, Poor); 0,0: no guard\n"
+			"                        (default %.3f,%.1f)\n"
 			"  --max-speed M_S       a pose moved faster than this since the last tracked one (+ 2 cm) is Lost; 0: off\n"
 			"                        (default %.1f m/s)\n"
 			"  --colour-always       the photometric term at every level, not only where the geometry leaves a direction free\n"
@@ -278,7 +288,8 @@ void print_usage(std::FILE *p_out) {
 			"'summary: mode=... key=value ...'.\n",
 			STEP_PROBE_SIZE, LIVE_PROBE_SIZE, double(TsdfOptions().voxel_size_m), DenseSlamOptions().icp.colour_weight, DenseSlamOptions().icp.min_depth_m,
 			DenseSlamOptions().icp.max_depth_m, double(TsdfOptions().min_depth_m), double(TsdfOptions().max_depth_m), DenseSlamOptions().icp.max_jump_m,
-			DenseSlamOptions().icp.max_jump_deg, DenseSlamOptions().max_speed_m_s, DenseSlamOptions().icp.depth_noise.reference_m);
+			DenseSlamOptions().icp.max_jump_deg, DenseSlamOptions().icp.max_colour_slide_m, DenseSlamOptions().icp.max_colour_slide_deg,
+			DenseSlamOptions().max_speed_m_s, DenseSlamOptions().icp.depth_noise.reference_m);
 }
 
 int usage(const char *p_error) {

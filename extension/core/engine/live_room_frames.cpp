@@ -100,6 +100,12 @@ void LiveRoom::process_rgbd(const RgbdFrame &p_frame, uint64_t p_sequence) {
 				tracked.append(p_frame.timestamp_s, slam->pose());
 			}
 			fused = result.integrated;
+			if (fused) {
+				// These colours are of the coarse model's lighting now (§4.6): the probes give each
+				// block the changes since its last fused frame (DenseLighting).
+				const std::shared_ptr<const CoarseSnapshot> lighting = coarse_snapshot();
+				dense_lighting.record(slam->volume().frame_count(), lighting ? lighting->cumulative : LightingChange());
+			}
 		} else if (has_truth) {
 			// No SLAM: the AR view still follows the recording's true poses.
 			out->has_pose = true;

@@ -4,6 +4,7 @@
 
 #include <glm/mat3x3.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -22,24 +23,124 @@ Pose cubemap_face_pose(int p_face, const glm::dvec3 &p_position) {
 	return pose;
 }
 
-LightingChange DenseLighting::update(size_t p_fused_frames, const LightingChange &p_cumulative) {
-	const std::lock_guard<std::mutex> lock(mutex);
-	if (p_fused_frames != fused_seen) {
-		fused_seen = p_fused_frames;
-		at_refresh = p_cumulative;
+DenseLightingEpochs DenseLightingEpochs::uniform(const LightingChange &p_change) {
+	DenseLightingEpochs epochs;
+	epochs.first_frame.push_back(0);
+	epochs.since.push_back(p_change);
+	return epochs;
+}
+
+const LightingChange &DenseLightingEpochs::at_frame(uint32_t p_frame) const {
+	if (p_frame == 0) {
+		return since.back();
 	}
-	return lighting_since(p_cumulative, at_refresh);
+	const auto after = std::upper_bound(first_frame.begin(), first_frame.end(), p_frame);
+	return since[after == first_frame.begin() ? 0 : size_t(after - first_frame.begin()) - 1];
+}
+
+LightingChange DenseLightingEpochs::for_block(const TsdfSurfaceFrames &p_frames, const glm::vec3 &p_point, int p_max_color_weight) const {
+	const int kept = p_frames.kept();
+	const LightingChange &newest = at_frame(kept > 0 ? p_frames.frames[0] : 0);
+	bool one_epoch = true;
+	for (int j = 1; j < kept && one_epoch; j++) {
+		one_epoch = &at_frame(p_frames.frames[j]) == &newest;
+	}
+	LightingChange out = newest;
+	out.log_slope = cv::Vec3f(0.0f, 0.0f, 0.0f);
+	out.gain = newest.gain_at(p_point);
+	if (one_epoch) {
+		return out;
+	}
+	// Each kept frame's share of the running mean, newest first (the TSDF's colour update).
+	const uint32_t cap = uint32_t(std::max(1, p_max_color_weight));
+	double remaining = 1.0;
+	cv::Vec3d a(0.0, 0.0, 0.0), b(0.0, 0.0, 0.0); // the mean = now * a - b, per channel
+	for (int j = 0; j < kept; j++) {
+		const uint32_t observation = p_frames.count - uint32_t(j); // 1-based
+		const double share = j + 1 == kept ? 1.0 : 1.0 / double(std::min(observation - 1, cap) + 1);
+		const double weight = remaining * share;
+		remaining -= weight;
+		const LightingChange &since = at_frame(p_frames.frames[j]);
+		const cv::Vec3f gain = since.gain_at(p_point);
+		for (int c = 0; c < 3; c++) {
+			// A gain of 0 cannot be undone: that frame counts as of the lighting now.
+			const double g = gain[c] > 0.0f ? double(gain[c]) : 1.0;
+			const double o = gain[c] > 0.0f ? double(since.offset[c]) : 0.0;
+			a[c] += weight / g;
+			b[c] += weight * o / g;
+		}
+	}
+	for (int c = 0; c < 3; c++) {
+		out.gain[c] = float(1.0 / a[c]);
+		out.offset[c] = float(b[c] / a[c]);
+	}
+	return out;
+}
+
+bool DenseLightingEpochs::per_point() const {
+	for (const LightingChange &change : since) {
+		if (change.has_field() || change.gain != since[0].gain || change.offset != since[0].offset) {
+			return true;
+		}
+	}
+	return false;
+}
+
+namespace {
+
+// Whether two cumulative changes are the same to within rounding (DenseLighting's thresholds).
+bool same_lighting(const LightingChange &p_a, const LightingChange &p_b) {
+	const LightingChange d = lighting_since(p_a, p_b);
+	for (int c = 0; c < 3; c++) {
+		if (std::abs(d.gain[c] - 1.0f) > 0.005f || std::abs(d.offset[c]) > 0.001f || std::abs(d.log_slope[c]) > 0.005f) {
+			return false;
+		}
+	}
+	return true;
+}
+
+} // namespace
+
+void DenseLighting::record(uint32_t p_volume_frame, const LightingChange &p_cumulative) {
+	const std::lock_guard<std::mutex> lock(mutex);
+	if (!first_frame.empty() && same_lighting(p_cumulative, cumulative.back())) {
+		return;
+	}
+	if (!first_frame.empty() && p_volume_frame <= first_frame.back()) {
+		cumulative.back() = p_cumulative; // the same frames, recorded again
+		return;
+	}
+	first_frame.push_back(p_volume_frame);
+	cumulative.push_back(p_cumulative);
+	if (first_frame.size() > MAX_EPOCHS) {
+		first_frame.erase(first_frame.begin()); // its colours now count as the next epoch's
+		cumulative.erase(cumulative.begin());
+	}
+}
+
+DenseLightingEpochs DenseLighting::epochs(const LightingChange &p_cumulative) const {
+	const std::lock_guard<std::mutex> lock(mutex);
+	if (first_frame.empty()) {
+		return DenseLightingEpochs::uniform(LightingChange());
+	}
+	DenseLightingEpochs out;
+	out.first_frame = first_frame;
+	out.since.reserve(cumulative.size());
+	for (const LightingChange &then : cumulative) {
+		out.since.push_back(lighting_since(p_cumulative, then));
+	}
+	return out;
 }
 
 void DenseLighting::reset() {
 	const std::lock_guard<std::mutex> lock(mutex);
-	fused_seen = 0;
-	at_refresh = LightingChange();
+	first_frame.clear();
+	cumulative.clear();
 }
 
-DenseRenderStats DenseLighting::render_over(const TsdfVolume &p_volume, size_t p_fused_frames, const LightingChange &p_cumulative,
-		const glm::dvec3 &p_position, DenseRenderOptions p_options, Cubemap *io_cubemap, DenseFaceCache *io_cache) {
-	p_options.lighting = update(p_fused_frames, p_cumulative);
+DenseRenderStats DenseLighting::render_over(const TsdfVolume &p_volume, const LightingChange &p_cumulative, const glm::dvec3 &p_position,
+		DenseRenderOptions p_options, Cubemap *io_cubemap, DenseFaceCache *io_cache) const {
+	p_options.lighting = epochs(p_cumulative);
 	return render_dense_over(p_volume, p_position, p_options, io_cubemap, io_cache);
 }
 
@@ -63,7 +164,10 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 	}
 	const std::array<float, 256> &lut = p_options.lut != nullptr ? *p_options.lut : identity;
 	const bool has_distances = roomprobe::has_distances(*io_cubemap);
-	const bool field = p_options.lighting.has_field();
+	// The texel's surface point is needed where the change depends on it (a field, or epochs).
+	const DenseLightingEpochs uniform = p_options.lighting.empty() ? DenseLightingEpochs::uniform(LightingChange()) : DenseLightingEpochs();
+	const DenseLightingEpochs &lighting = p_options.lighting.empty() ? uniform : p_options.lighting;
+	const bool per_point = lighting.per_point();
 	const std::array<cv::Mat, 6> *observed_faces = has_distances && p_options.coarse_observed != nullptr &&
 					(*p_options.coarse_observed)[0].rows == size && (*p_options.coarse_observed)[0].type() == CV_32FC1
 			? p_options.coarse_observed
@@ -126,7 +230,7 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 				}
 				// The surface's distance from the probe: depth over the cosine to the face's axis.
 				const float dx = (float(u) - 0.5f * float(size - 1)) / (0.5f * float(size)); // mirrored: the sign does not matter
-				const float distance = distances != nullptr || field ? depth[lu] * std::sqrt(1.0f + dx * dx + dy * dy) : 0.0f;
+				const float distance = distances != nullptr || per_point ? depth[lu] * std::sqrt(1.0f + dx * dx + dy * dy) : 0.0f;
 				if (distances != nullptr) {
 					float &prism = distances[size_t(v) * size_t(size) + size_t(u)];
 					if (observed != nullptr && observed[u] >= 0.5f && on_coarse_shell(distance, prism, p_options)) {
@@ -135,9 +239,13 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 					prism = distance;
 				}
 				const cv::Vec3f value(lut[c[0]], lut[c[1]], lut[c[2]]);
-				// A field's gain at the surface point: the texel's direction times its distance.
-				out[u] = field ? p_options.lighting.apply(value, glm::vec3(p_position + cubemap_direction(f, double(u), double(v), size) * double(distance)))
-							   : p_options.lighting.apply(value);
+				if (per_point) {
+					// The surface point: the texel's direction times its distance; its block's epoch.
+					const glm::vec3 point(p_position + cubemap_direction(f, double(u), double(v), size) * double(distance));
+					out[u] = lighting.for_block(p_volume.surface_frames(point), point, p_volume.options().max_color_weight).apply(value);
+				} else {
+					out[u] = lighting.since[0].apply(value);
+				}
 				stats.texels_covered++;
 			}
 		}

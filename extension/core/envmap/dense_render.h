@@ -22,8 +22,36 @@
 #include <cmath>
 #include <atomic>
 #include <mutex>
+#include <vector>
 
 namespace roomprobe {
+
+// The lighting change (§4.6) each dense colour has not seen yet. A block's colours are of the
+// lighting of the frames a reading's surface crossed it (TsdfVolume::surface_frames): epoch k
+// holds the colours fused from volume frame first_frame[k] until the next epoch's, and since[k]
+// takes them to the lighting now. A block the camera left before the light switched on keeps
+// its old colours until seen again, and still shows the new light; one seen across the switch
+// holds a mean of both, which for_block undoes.
+struct DenseLightingEpochs {
+	std::vector<uint32_t> first_frame; // ascending; empty: the identity everywhere
+	std::vector<LightingChange> since;
+
+	// One change for every colour (tests; a model with no history).
+	static DenseLightingEpochs uniform(const LightingChange &p_change);
+	// The change for colours fused at volume frame p_frame: the epoch holding it, the first one
+	// before any. 0 (a block not found) takes the newest: the old single-change rule.
+	const LightingChange &at_frame(uint32_t p_frame) const;
+	bool empty() const { return since.empty(); }
+	// The change for the colours of a block whose surface was fused at p_frames
+	// (TsdfVolume::surface_frames), at its point p_point: each frame's colour was of its epoch's
+	// lighting, and the voxel keeps their running mean (equal shares up to p_max_color_weight
+	// observations, then 1 / (p_max_color_weight + 1) for each new one; frames older than those
+	// kept count as the oldest kept), so this takes that mean to the lighting now.
+	LightingChange for_block(const TsdfSurfaceFrames &p_frames, const glm::vec3 &p_point, int p_max_color_weight) const;
+	// Whether any epoch's change varies with position or differs from another's: the texel's
+	// point (and block) is needed then.
+	bool per_point() const;
+};
 
 struct DenseRenderOptions {
 	float near_m = 0.02f; // rays start this far from the probe, metres
@@ -34,9 +62,9 @@ struct DenseRenderOptions {
 	// 3.3 at 4, covering the same 54 % of the texels. 1: full size.
 	int scale = 2;
 	const std::array<float, 256> *lut = nullptr; // 8-bit value -> radiance; null: value / 255
-	// The lighting change applied after the lut (a gain field at each surface point, issue #42);
-	// the default is the identity.
-	LightingChange lighting;
+	// The lighting changes applied after the lut, per block by when its surface colours were
+	// fused (DenseLightingEpochs, issue #42); the default is the identity.
+	DenseLightingEpochs lighting;
 	// The room's shell first (issue #16's error budget): where the coarse render's texel was
 	// observed by the fisheye (these faces >= 0.5, CV_32FC1: CoarseSnapshot::observed rendered
 	// like the atlas, CoarseCubemapRenderer::render_channel) and the dense surface lies on the coarse prism (its distance within
@@ -80,26 +108,31 @@ struct DenseRenderStats {
 // z forward = the face's axis: the face mirrored, see above): world_from_camera.
 Pose cubemap_face_pose(int p_face, const glm::dvec3 &p_position);
 
-// Which part of the coarse model's lighting changes (§4.6) the dense colours have not seen: the
-// colours are as fresh as the last fused RGB-D frame, so only the changes since apply to them (a
-// global approximation: blocks the RGB-D camera has not seen for a while are older still).
+// The history behind DenseLightingEpochs: which coarse lighting (§4.6) the dense model's frames
+// were fused under. The engine records the coarse model's cumulative change after each fused
+// frame; a new epoch begins where it has moved by more than rounding since the last epoch's
+// (gain 0.5 %, slope 0.005 / m, offset 0.001). Thread-safe: the SLAM worker records while the
+// probe worker renders.
 class DenseLighting {
 public:
-	// p_fused_frames: the dense model's fused frame count; p_cumulative: the coarse model's
-	// cumulative change now (CoarsePipeline::cumulative_lighting). Returns the change to apply.
-	LightingChange update(size_t p_fused_frames, const LightingChange &p_cumulative);
-	// update(), then render_dense_over with that change as p_options' gain and offset.
-	DenseRenderStats render_over(const TsdfVolume &p_volume, size_t p_fused_frames, const LightingChange &p_cumulative,
-			const glm::dvec3 &p_position, DenseRenderOptions p_options, Cubemap *io_cubemap, DenseFaceCache *io_cache = nullptr);
-	// Forgets the refresh (a new dense model).
+	static constexpr size_t MAX_EPOCHS = 1024; // the oldest merge into the next beyond this
+
+	// Colours fused at p_volume_frame (TsdfVolume::frame_count() after the frame) and later are
+	// of the lighting p_cumulative (CoarsePipeline::cumulative_lighting then).
+	void record(uint32_t p_volume_frame, const LightingChange &p_cumulative);
+	// The change each epoch's colours have not seen, the lighting being p_cumulative now.
+	DenseLightingEpochs epochs(const LightingChange &p_cumulative) const;
+	// render_dense_over with epochs(p_cumulative) as p_options.lighting. With nothing recorded,
+	// the colours are taken as of the lighting now.
+	DenseRenderStats render_over(const TsdfVolume &p_volume, const LightingChange &p_cumulative, const glm::dvec3 &p_position, DenseRenderOptions p_options,
+			Cubemap *io_cubemap, DenseFaceCache *io_cache = nullptr) const;
+	// Forgets the history (a new dense model).
 	void reset();
 
 private:
-	// update() may be called by several renderers at once (the live engine's probe worker and a
-	// synchronous render); the render itself needs no lock.
-	std::mutex mutex;
-	size_t fused_seen = 0;
-	LightingChange at_refresh; // identity
+	mutable std::mutex mutex;
+	std::vector<uint32_t> first_frame;
+	std::vector<LightingChange> cumulative; // the coarse model's at each epoch's start
 };
 
 // Paints the dense model seen from p_position over io_cubemap (any size; faces CV_32FC3). With

@@ -113,7 +113,7 @@ Cubemap ProbeRenderer::render_faces(const glm::dvec3 &p_position, int p_size, co
 		options.lut = settings_.rgb_lut_active ? &settings_.rgb_lut : nullptr;
 		options.faces_per_render = settings_.dense_faces_per_render;
 		const auto reading = p_dense.slam->read_lock(); // no frame half-fused
-		*r_dense = p_dense.lighting->render_over(p_dense.slam->volume(), p_dense.slam->integrated_count(), cumulative, p_position, options, &map, io_faces);
+		*r_dense = p_dense.lighting->render_over(p_dense.slam->volume(), cumulative, p_position, options, &map, io_faces);
 	}
 	*r_dense_ms = ms_since(start);
 	r_dense->milliseconds = *r_dense_ms;

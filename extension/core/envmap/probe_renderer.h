@@ -92,7 +92,7 @@ struct CoarseMapInput {
 // The dense model's part: the model and the lighting state of its colours (null slam: none).
 struct DenseMapInput {
 	const DenseSlam *slam = nullptr;
-	DenseLighting *lighting = nullptr;
+	const DenseLighting *lighting = nullptr;
 };
 
 class ProbeRenderer {

@@ -154,6 +154,7 @@ std::string DenseSlam::configure(const PinholeParams &p_camera, const Pose &p_in
 	last_pose = p_initial_world_from_camera;
 	has_previous = false;
 	last_state = TrackingState::Lost;
+	last_colour_held = false;
 	frames = 0;
 	integrated_frames = 0;
 	relocalise_attempts = 0;
@@ -264,6 +265,7 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 	if (!out.tracking.reason.empty()) {
 		out.tracking.world_from_camera = last_pose;
 		last_state = out.tracking.state;
+		last_colour_held = false;
 		frames++;
 		return out;
 	}
@@ -283,7 +285,8 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 	} else {
 		// Constant velocity while trusted; the held pose when re-tracking after a loss.
 		Pose guess = last_pose;
-		if (opts.constant_velocity && has_previous && last_state == TrackingState::Good) {
+		// A frame whose colour slide was held keeps the velocity: its free direction is the guess's.
+		if (opts.constant_velocity && has_previous && (last_state == TrackingState::Good || last_colour_held)) {
 			guess = compose(last_pose, motion_over(compose(inverse(previous_pose), last_pose), p_frame.timestamp_s - last_time_s, last_time_s - previous_time_s));
 		}
 		out.tracking = track(depth, rgb, guess);
@@ -348,6 +351,7 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 		}
 	}
 	last_state = out.tracking.state;
+	last_colour_held = out.tracking.colour_held;
 	frames++;
 	out.timings.frame_ms = ms_since(frame_start);
 	return out;

@@ -224,6 +224,7 @@ private:
 	double last_time_s = 0.0, previous_time_s = 0.0; // their frames' timestamps
 	bool has_previous = false;
 	TrackingState last_state = TrackingState::Lost;
+	bool last_colour_held = false; // the last frame's TrackingResult::colour_held
 	// Atomic: read by other threads (the engine's stats, the dense lighting of probes).
 	std::atomic<size_t> frames = 0;
 	std::atomic<size_t> integrated_frames = 0;

@@ -321,6 +321,41 @@ std::string weakest_direction(const Conditioning &p_conditioning) {
 			format(axis.z, 2) + ")";
 }
 
+// The part of the update p_xi (apply_update's form) that lies along the directions p_geometry
+// leaves free (information share below p_min_constraint), projected in its unit-free space.
+cv::Vec6d free_part(const Conditioning &p_geometry, double p_min_constraint, const cv::Vec6d &p_xi) {
+	cv::Vec6d unit_free;
+	for (int i = 0; i < 6; ++i) {
+		unit_free[i] = p_xi[i] / p_geometry.scale[i];
+	}
+	cv::Vec6d out;
+	for (int k = 0; k < 6; ++k) {
+		if (p_geometry.eigenvalues[k] >= p_min_constraint) {
+			continue;
+		}
+		double along = 0.0;
+		for (int i = 0; i < 6; ++i) {
+			along += p_geometry.eigenvectors(k, i) * unit_free[i];
+		}
+		for (int i = 0; i < 6; ++i) {
+			out[i] += along * p_geometry.eigenvectors(k, i) * p_geometry.scale[i];
+		}
+	}
+	return out;
+}
+
+// The move from p_from to p_to as an update (apply_update's form).
+cv::Vec6d update_between(const Pose &p_from, const Pose &p_to) {
+	glm::dquat turn = glm::normalize(p_to.rotation * glm::inverse(p_from.rotation));
+	if (turn.w < 0.0) {
+		turn = -turn; // the short way round
+	}
+	const double angle = glm::angle(turn);
+	const glm::dvec3 omega = angle > 1e-12 ? glm::axis(turn) * angle : glm::dvec3(0.0);
+	const glm::dvec3 delta = p_to.translation - p_from.translation;
+	return cv::Vec6d(omega.x, omega.y, omega.z, delta.x, delta.y, delta.z);
+}
+
 // x' = exp(omega) (x - c) + c + delta_t, c the camera centre: world_from_camera gets its rotation
 // turned by exp(omega) and its translation moved by delta_t.
 Pose apply_update(const Pose &p_pose, const cv::Vec6d &p_xi) {
@@ -331,6 +366,26 @@ Pose apply_update(const Pose &p_pose, const cv::Vec6d &p_xi) {
 	pose.rotation = glm::normalize(turn * p_pose.rotation);
 	pose.translation = p_pose.translation + glm::dvec3(p_xi[3], p_xi[4], p_xi[5]);
 	return pose;
+}
+
+// The colour slide guard (IcpOptions::max_colour_slide_m; off at 0): the move from p_guess to *io_pose
+// along the directions the finest level's geometry (p_geometry) leaves free, which only colour
+// can have made, is undone when it is larger than a hand's departure from the guess. Returns why
+// ("" when the pose stands).
+std::string hold_colour_slide(const IcpOptions &p_options, const Conditioning &p_geometry, const Pose &p_guess, Pose *io_pose) {
+	if (!(p_options.max_colour_slide_m > 0.0) || !p_geometry.ok) {
+		return std::string();
+	}
+	const cv::Vec6d slide = free_part(p_geometry, p_options.min_constraint, update_between(p_guess, *io_pose));
+	const double slide_m = std::sqrt(slide[3] * slide[3] + slide[4] * slide[4] + slide[5] * slide[5]);
+	const double slide_deg = std::sqrt(slide[0] * slide[0] + slide[1] * slide[1] + slide[2] * slide[2]) * 180.0 / std::numbers::pi;
+	if (slide_m <= p_options.max_colour_slide_m && slide_deg <= p_options.max_colour_slide_deg) {
+		return std::string();
+	}
+	*io_pose = apply_update(*io_pose, -slide);
+	return "the colour term moved the pose " + format(slide_m * 1000.0, 1) + " mm and " + format(slide_deg, 2) + " deg from the guess along " +
+			weakest_direction(p_geometry) + ", which the geometry leaves free (limits " + format(p_options.max_colour_slide_m * 1000.0, 1) + " mm, " +
+			format(p_options.max_colour_slide_deg, 2) + " deg): kept at the guess there";
 }
 
 IcpKernelParams kernel_params(const IcpOptions &p_options, const Pose &p_pose, int p_level, bool p_colour) {
@@ -488,8 +543,9 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 
 	Pose pose = p_initial_world_from_camera;
 	int iterations = 0;
-	bool colour_used = false;
+	bool colour_used = false, colour_any = false;
 	Conditioning finest;
+	Conditioning geometry_finest; // the finest level's geometry alone, at its first iteration
 	// The finest level's last system, when its step was below the thresholds: the pose it was taken
 	// at is the final one to within them, so it stands for the final pose's support.
 	NormalSystem converged_finest;
@@ -499,6 +555,9 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 		for (int i = 0; i < options.iterations[size_t(level)]; ++i) {
 			NormalSystem system = system_at(level, pose, colour_level);
 			Conditioning conditioning = condition(system);
+			if (level == 0 && i == 0) {
+				geometry_finest = colour_level ? condition(system_at(0, pose, false)) : conditioning;
+			}
 			if (i == 0 && colour && !colour_level && conditioning.ok && conditioning.eigenvalues[5] < options.min_constraint) {
 				// The geometry leaves a direction free at this level: the photometric rows constrain it.
 				colour_level = true;
@@ -517,6 +576,7 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 				finest = conditioning;
 				colour_used = colour_level;
 			}
+			colour_any = colour_any || colour_level;
 			pose = apply_update(pose, xi);
 			++iterations;
 			const double step_m = std::sqrt(xi[3] * xi[3] + xi[4] * xi[4] + xi[5] * xi[5]);
@@ -529,6 +589,11 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 				break;
 			}
 		}
+	}
+
+	const std::string held_reason = colour_any ? hold_colour_slide(options, geometry_finest, p_initial_world_from_camera, &pose) : std::string();
+	if (!held_reason.empty()) {
+		converged = false; // the pose moved
 	}
 
 	// The support of the final pose, at the finest level, geometry only.
@@ -564,7 +629,12 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 		held.colour_used = result.colour_used;
 		return held;
 	}
-	if (!(result.constraint >= options.min_constraint)) {
+	if (!held_reason.empty()) {
+		result.state = TrackingState::Poor;
+		result.colour_held = true;
+		result.unconstrained = result.inlier_fraction >= options.good_inlier_fraction && result.rmse_m <= options.max_good_rmse_m;
+		result.reason = held_reason;
+	} else if (!(result.constraint >= options.min_constraint)) {
 		// Nothing fixes this direction: the estimate along it is the guess, not a measurement.
 		result.state = TrackingState::Poor;
 		result.unconstrained = result.inlier_fraction >= options.good_inlier_fraction && result.rmse_m <= options.max_good_rmse_m;

@@ -58,6 +58,16 @@ struct IcpOptions {
 	// geometry is enough, colour only adds that error and costs time. true: at every level.
 	bool colour_always = false;
 	double max_colour_difference = 0.1; // intensity (in [0, 1]) difference beyond which a pixel's colour row is an outlier
+	// The colour slide guard. Along a direction the finest level's geometry leaves free, only the
+	// colour term moves the pose away from the guess, and on a periodic or photo texture it can
+	// lock onto the wrong match: the estimate stops or slides while every frame reads Good (issue
+	// #41: the look-up sweep, level at a photographed wall, 1 -> 37 -> 55 mm in two frames). A
+	// move from the guess along such directions larger than this is not believed: the pose keeps
+	// the guess there, and the frame is Poor (TrackingResult::colour_held). A hand-held camera's
+	// motion departs from constant velocity by a few millimetres a frame at 30 Hz.
+	// 0: no guard.
+	double max_colour_slide_m = 0.015; // metres
+	double max_colour_slide_deg = 1.5; // degrees
 
 	// Tracking state.
 	double min_valid_fraction = 0.05; // valid depth pixels / all, below: Lost

@@ -58,6 +58,9 @@ struct TrackingResult {
 	// Poor only because a direction is unconstrained (kept at the guess, icp_tracker.h), the
 	// support otherwise good (inliers and residual within the Good limits).
 	bool unconstrained = false;
+	// Poor because the colour term moved the pose along a direction the geometry leaves free
+	// farther than IcpOptions::max_colour_slide_m / _deg allow: the pose is the guess along it.
+	bool colour_held = false;
 	bool relocalised = false; // found by the wider search after a loss (dense_slam.h)
 };
 

@@ -204,6 +204,7 @@ int32_t TsdfVolume::allocate_slot(const glm::ivec3 &p_block) {
 		m_slot_block.push_back(p_block);
 		m_slot_used.push_back(0);
 		m_slot_frame.push_back(0);
+		m_slot_surface.push_back(TsdfSurfaceFrames());
 		m_slot_saturated.push_back(0);
 		if (m_gpu) {
 			std::fill_n(pool() + ptrdiff_t(slot) * TSDF_BLOCK_VOXELS, TSDF_BLOCK_VOXELS, TsdfVoxel());
@@ -214,6 +215,8 @@ int32_t TsdfVolume::allocate_slot(const glm::ivec3 &p_block) {
 	m_slot_block[size_t(slot)] = p_block;
 	m_slot_used[size_t(slot)] = 1;
 	m_slot_frame[size_t(slot)] = m_frame;
+	m_slot_surface[size_t(slot)] = TsdfSurfaceFrames();
+	m_slot_surface[size_t(slot)].add(m_frame); // allocated only along a reading's band
 	m_slot_saturated[size_t(slot)] = 0;
 	m_allocated++;
 	return slot;
@@ -277,6 +280,15 @@ const TsdfVoxel *TsdfVolume::find_block(const glm::ivec3 &p_block) const {
 	return slot >= 0 ? pool() + size_t(slot) * TSDF_BLOCK_VOXELS : nullptr;
 }
 
+TsdfSurfaceFrames TsdfVolume::surface_frames(const glm::vec3 &p_world) const {
+	// The nearest voxel (voxel v's centre is at v x voxel_size_m), then its block (v >> 3: floor division).
+	const glm::vec3 g = p_world / m_options.voxel_size_m;
+	const glm::ivec3 voxel(tsdf_floor(g.x + 0.5f), tsdf_floor(g.y + 0.5f), tsdf_floor(g.z + 0.5f));
+	const glm::ivec3 block(voxel.x >> 3, voxel.y >> 3, voxel.z >> 3);
+	const int32_t slot = tsdf_find_slot(view(), block);
+	return slot >= 0 ? m_slot_surface[size_t(slot)] : TsdfSurfaceFrames();
+}
+
 namespace {
 bool ivec3_less(const glm::ivec3 &p_a, const glm::ivec3 &p_b) {
 	if (p_a.x != p_b.x) {
@@ -323,6 +335,7 @@ void TsdfVolume::reset() {
 	m_slot_block.clear();
 	m_slot_used.clear();
 	m_slot_frame.clear();
+	m_slot_surface.clear();
 	m_slot_saturated.clear();
 	m_free_slots.clear();
 	m_allocated = 0;

@@ -58,6 +58,26 @@ struct TsdfOptions {
 	bool simd = true;
 };
 
+// The last frames whose readings' bands crossed a block, newest first, and how many did in all.
+struct TsdfSurfaceFrames {
+	// Twice TsdfOptions::max_color_weight's default: at that cap the frames older than these hold
+	// (8/9)^16, 15 % of a colour, and count as the oldest kept.
+	static constexpr int KEPT = 16;
+	uint32_t frames[KEPT] = {};
+	uint32_t count = 0;
+	int kept() const { return int(count < uint32_t(KEPT) ? count : uint32_t(KEPT)); }
+	void add(uint32_t p_frame) {
+		if (count > 0 && frames[0] == p_frame) {
+			return; // the same frame again
+		}
+		for (int i = KEPT - 1; i > 0; i--) {
+			frames[i] = frames[i - 1];
+		}
+		frames[0] = p_frame;
+		count++;
+	}
+};
+
 // What one integrate() did.
 struct IntegrationStats {
 	int valid_pixels = 0; // depth readings used
@@ -160,6 +180,13 @@ public:
 
 	// The 512 voxels of a block (index tsdf_local_index), or nullptr when it is not allocated.
 	const TsdfVoxel *find_block(const glm::ivec3 &p_block) const;
+	// Frames fused so far (integrate() calls over the volume's life; reset() keeps counting).
+	uint32_t frame_count() const { return m_frame; }
+	// The frames (frame_count() then) whose readings' truncation bands crossed the block at world
+	// point p_world, metres: when its surface colours were fused, the last few of them (empty
+	// when not allocated). The dense colours' lighting is per block by them (envmap/
+	// dense_render.h, issue #42).
+	TsdfSurfaceFrames surface_frames(const glm::vec3 &p_world) const;
 	// Integer coordinates of every allocated block, sorted.
 	std::vector<glm::ivec3> allocated_blocks() const;
 	// Read-only access for kernels; valid until the next integrate() or reset().
@@ -212,6 +239,7 @@ private:
 	std::vector<glm::ivec3> m_slot_block; // the block held by each slot
 	std::vector<uint8_t> m_slot_used;
 	std::vector<uint32_t> m_slot_frame; // the frame that last saw each slot (in view)
+	std::vector<TsdfSurfaceFrames> m_slot_surface; // the frames whose readings' bands crossed each slot
 	std::vector<uint8_t> m_slot_saturated; // every voxel at tsdf +1 with max_weight (free space seen long enough)
 	std::vector<int32_t> m_free_slots;
 	int m_allocated = 0;

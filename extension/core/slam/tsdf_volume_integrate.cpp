@@ -365,6 +365,7 @@ IntegrationStats TsdfVolume::integrate(const cv::Mat &p_depth_m, const cv::Mat &
 			}
 		} else if (*slot >= 0) {
 			m_slot_frame[size_t(*slot)] = m_frame;
+			m_slot_surface[size_t(*slot)].add(m_frame);
 		}
 	}
 	// 2. Allocated blocks in view: updated, and spared by eviction.
