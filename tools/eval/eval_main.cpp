@@ -5,7 +5,7 @@
 //
 // roomprobe_eval --recording DIR [--out DIR [--force]] [--cubemap-size N] [--per-frame] [--texel-size M]
 //                [--max-cubemaps K] [--no-dense] [--quiet] [--budget] [--rgb-texture] [--no-fisheye]
-//                [--dense-range M] [--backend cpu|vulkan|auto] [--lighting-field PRIOR]
+//                [--dense-range M] [--backend cpu|vulkan|auto] [--lighting-field PRIOR] [--dense-scale N]
 // roomprobe_eval --compare A.exr B.exr   (two cubemaps: B against A, e.g. one backend's map against the other's)
 // Maps already in --out are kept, the evaluation refused, unless --force (as every tool's outputs).
 
@@ -107,7 +107,7 @@ int run(int argc, char **argv) {
 				"%s%susage: roomprobe_eval --recording DIR [--out DIR [--force]] [--cubemap-size N] [--per-frame]\n"
 				"                      [--texel-size M] [--max-cubemaps K] [--no-dense] [--quiet] [--budget]\n"
 				"                      [--rgb-texture] [--no-fisheye] [--dense-range M] [--room FILE] [--backend cpu|vulkan|auto]\n"
-				"                      [--lighting-field PRIOR]\n"
+				"                      [--lighting-field PRIOR] [--dense-scale N]\n"
 				"       roomprobe_eval --compare A.exr B.exr\n"
 				"  --out DIR: the last frame's maps of every variant, and the truth's, as NAME.exr and NAME.png;\n"
 				"    maps already there are kept and nothing is evaluated, unless --force replaces them\n"
@@ -115,6 +115,7 @@ int run(int argc, char **argv) {
 				"  --compare A.exr B.exr: B's PSNR against A (tone-mapped and linear), two maps --out wrote\n"
 				"  --budget: the error budget, the live system with one stage at a time replaced by its oracle\n"
 				"  --dense-range M: fuse depth and draw the dense model up to M metres (default 4)\n"
+				"  --dense-scale N: the dense pass raycasts at 1 / N of the face size, then upsamples (default 2)\n"
 				"  --no-fisheye: the rig as its RGB-D camera alone: the coarse model textured from the RGB camera\n"
 				"    (the baseline keeps the fisheye; the same truth, so the runs compare with and without it)\n"
 				"  --lighting-field PRIOR: the gain variants' lighting change as a gain field (issue #42), its slope's\n"
@@ -157,6 +158,11 @@ int run(int argc, char **argv) {
 				return usage("--dense-range needs a distance in metres in (0, 20]");
 			}
 			options.dense_range_m = x;
+		} else if (arg == "--dense-scale") {
+			if (!cursor.integer_in(1, 8, &n)) {
+				return usage("--dense-scale needs a whole number in [1, 8]");
+			}
+			options.dense_scale = int(n);
 		} else if (arg == "--lighting-field") {
 			if (!cursor.positive_number(10.0, &x)) {
 				return usage("--lighting-field needs the slope's prior in log gain per metre, in (0, 10]");

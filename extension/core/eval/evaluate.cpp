@@ -225,6 +225,9 @@ bool RecordingEvaluation::build_base_config() {
 	if (no_fisheye) {
 		base.rig = rgbd_camera_alone(base.rig); // the RGB camera's response stays known (base.photometry)
 	}
+	if (options.dense_scale > 0) {
+		base.dense_render_scale = options.dense_scale;
+	}
 	if (options.dense_range_m > 0.0) {
 		base.slam.tsdf.max_depth_m = float(options.dense_range_m);
 		base.dense_render_far_m = float(options.dense_range_m);

@@ -61,6 +61,9 @@ struct EvaluationOptions {
 	// max_depth_m) and the dense pass drawn this far from the probe (LiveRoomConfig's
 	// dense_render_far_m); 0: their defaults (4 m).
 	double dense_range_m = 0.0;
+	// > 0: the dense pass raycasts at 1 / dense_scale of the face size (LiveRoomConfig::
+	// dense_render_scale; issue #42's silhouettes); 0: the engine's default (2).
+	int dense_scale = 0;
 	// > 0: the gain variants' lighting change is a gain field with this prior on its slope (log
 	// gain per metre; LightingOptions::field_prior_per_m, issue #42); 0: one gain.
 	double lighting_field_prior_per_m = 0.0;

@@ -64,9 +64,11 @@ struct IcpOptions {
 	// #41: the look-up sweep, level at a photographed wall, 1 -> 37 -> 55 mm in two frames). A
 	// move from the guess along such directions larger than this is not believed: the pose keeps
 	// the guess there, and the frame is Poor (TrackingResult::colour_held). A hand-held camera's
-	// motion departs from constant velocity by a few millimetres a frame at 30 Hz.
-	// 0: no guard.
-	double max_colour_slide_m = 0.015; // metres
+	// motion departs from constant velocity by a few millimetres a frame at 30 Hz: 15 mm and 1.5
+	// degrees were measured (docs/FIGURES.md). Off by default (0 metres): on the two rooms' room
+	// sweep it holds the slide by the wardrobe, and the room found from that sweep then has 12
+	// corners, not 8 (issue #41).
+	double max_colour_slide_m = 0.0; // metres; 0: no guard
 	double max_colour_slide_deg = 1.5; // degrees
 
 	// Tracking state.
