@@ -38,36 +38,59 @@ const LightingChange &DenseLightingEpochs::at_frame(uint32_t p_frame) const {
 	return since[after == first_frame.begin() ? 0 : size_t(after - first_frame.begin()) - 1];
 }
 
-LightingChange DenseLightingEpochs::for_block(const TsdfSurfaceFrames &p_frames, const glm::vec3 &p_point, int p_max_color_weight) const {
+DenseLightingEpochs::Mix DenseLightingEpochs::mix(const TsdfSurfaceFrames &p_frames, int p_max_color_weight) const {
+	Mix out;
 	const int kept = p_frames.kept();
-	const LightingChange &newest = at_frame(kept > 0 ? p_frames.frames[0] : 0);
-	bool one_epoch = true;
-	for (int j = 1; j < kept && one_epoch; j++) {
-		one_epoch = &at_frame(p_frames.frames[j]) == &newest;
-	}
-	LightingChange out = newest;
-	out.log_slope = cv::Vec3f(0.0f, 0.0f, 0.0f);
-	out.gain = newest.gain_at(p_point);
-	if (one_epoch) {
+	if (kept == 0) {
+		out.count = 1;
+		out.epoch[0] = int(since.size()) - 1; // no block: the newest
+		out.share[0] = 1.0;
 		return out;
 	}
-	// Each kept frame's share of the running mean, newest first (the TSDF's colour update).
+	// The frames are newest first, so their epochs only go down: one search, then a walk.
+	int epoch = int(std::upper_bound(first_frame.begin(), first_frame.end(), p_frames.frames[0]) - first_frame.begin()) - 1;
 	const uint32_t cap = uint32_t(std::max(1, p_max_color_weight));
 	double remaining = 1.0;
-	cv::Vec3d a(0.0, 0.0, 0.0), b(0.0, 0.0, 0.0); // the mean = now * a - b, per channel
 	for (int j = 0; j < kept; j++) {
+		while (epoch > 0 && first_frame[size_t(epoch)] > p_frames.frames[j]) {
+			epoch--;
+		}
+		// This frame's share of the running mean (the TSDF's colour update); the oldest kept
+		// takes what is left.
 		const uint32_t observation = p_frames.count - uint32_t(j); // 1-based
 		const double share = j + 1 == kept ? 1.0 : 1.0 / double(std::min(observation - 1, cap) + 1);
 		const double weight = remaining * share;
 		remaining -= weight;
-		const LightingChange &since = at_frame(p_frames.frames[j]);
-		const cv::Vec3f gain = since.gain_at(p_point);
+		const int e = std::max(epoch, 0);
+		if (out.count > 0 && out.epoch[out.count - 1] == e) {
+			out.share[out.count - 1] += weight;
+		} else {
+			out.epoch[out.count] = e;
+			out.share[out.count] = weight;
+			out.count++;
+		}
+	}
+	return out;
+}
+
+LightingChange DenseLightingEpochs::for_mix(const Mix &p_mix, const glm::vec3 &p_point) const {
+	const LightingChange &newest = since[size_t(p_mix.epoch[0])];
+	LightingChange out = newest;
+	out.log_slope = cv::Vec3f(0.0f, 0.0f, 0.0f);
+	if (p_mix.count == 1) {
+		out.gain = newest.has_field() ? newest.gain_at(p_point) : newest.gain;
+		return out;
+	}
+	cv::Vec3d a(0.0, 0.0, 0.0), b(0.0, 0.0, 0.0); // the mean = now * a - b, per channel
+	for (int k = 0; k < p_mix.count; k++) {
+		const LightingChange &change = since[size_t(p_mix.epoch[k])];
+		const cv::Vec3f gain = change.has_field() ? change.gain_at(p_point) : change.gain;
 		for (int c = 0; c < 3; c++) {
-			// A gain of 0 cannot be undone: that frame counts as of the lighting now.
+			// A gain of 0 cannot be undone: those colours count as of the lighting now.
 			const double g = gain[c] > 0.0f ? double(gain[c]) : 1.0;
-			const double o = gain[c] > 0.0f ? double(since.offset[c]) : 0.0;
-			a[c] += weight / g;
-			b[c] += weight * o / g;
+			const double o = gain[c] > 0.0f ? double(change.offset[c]) : 0.0;
+			a[c] += p_mix.share[k] / g;
+			b[c] += p_mix.share[k] * o / g;
 		}
 	}
 	for (int c = 0; c < 3; c++) {
@@ -75,6 +98,19 @@ LightingChange DenseLightingEpochs::for_block(const TsdfSurfaceFrames &p_frames,
 		out.offset[c] = float(b[c] / a[c]);
 	}
 	return out;
+}
+
+LightingChange DenseLightingEpochs::for_block(const TsdfSurfaceFrames &p_frames, const glm::vec3 &p_point, int p_max_color_weight) const {
+	return for_mix(mix(p_frames, p_max_color_weight), p_point);
+}
+
+bool DenseLightingEpochs::has_field() const {
+	for (const LightingChange &change : since) {
+		if (change.has_field()) {
+			return true;
+		}
+	}
+	return false;
 }
 
 bool DenseLightingEpochs::per_point() const {
@@ -168,6 +204,13 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 	const DenseLightingEpochs uniform = p_options.lighting.empty() ? DenseLightingEpochs::uniform(LightingChange()) : DenseLightingEpochs();
 	const DenseLightingEpochs &lighting = p_options.lighting.empty() ? uniform : p_options.lighting;
 	const bool per_point = lighting.per_point();
+	const bool field = lighting.has_field();
+	struct {
+		bool valid = false;
+		glm::ivec3 block = glm::ivec3(0);
+		DenseLightingEpochs::Mix mix;
+		LightingChange change;
+	} memo; // the last block a texel's surface lay in
 	const std::array<cv::Mat, 6> *observed_faces = has_distances && p_options.coarse_observed != nullptr &&
 					(*p_options.coarse_observed)[0].rows == size && (*p_options.coarse_observed)[0].type() == CV_32FC1
 			? p_options.coarse_observed
@@ -240,9 +283,17 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 				}
 				const cv::Vec3f value(lut[c[0]], lut[c[1]], lut[c[2]]);
 				if (per_point) {
-					// The surface point: the texel's direction times its distance; its block's epoch.
+					// The surface point: the texel's direction times its distance; its block's mix of
+					// epochs, shared with the texels before it in the same block.
 					const glm::vec3 point(p_position + cubemap_direction(f, double(u), double(v), size) * double(distance));
-					out[u] = lighting.for_block(p_volume.surface_frames(point), point, p_volume.options().max_color_weight).apply(value);
+					const glm::ivec3 block = p_volume.block_at(point);
+					if (block != memo.block || !memo.valid) {
+						memo.block = block;
+						memo.valid = true;
+						memo.mix = lighting.mix(p_volume.surface_frames(block), p_volume.options().max_color_weight);
+						memo.change = lighting.for_mix(memo.mix, point);
+					}
+					out[u] = (field ? lighting.for_mix(memo.mix, point) : memo.change).apply(value);
 				} else {
 					out[u] = lighting.since[0].apply(value);
 				}

@@ -48,6 +48,16 @@ struct DenseLightingEpochs {
 	// observations, then 1 / (p_max_color_weight + 1) for each new one; frames older than those
 	// kept count as the oldest kept), so this takes that mean to the lighting now.
 	LightingChange for_block(const TsdfSurfaceFrames &p_frames, const glm::vec3 &p_point, int p_max_color_weight) const;
+	// for_block in two steps, so that the texels of one block share the first: which epochs the
+	// block's running mean holds and their shares, then the change at a point.
+	struct Mix {
+		int count = 0;
+		int epoch[TsdfSurfaceFrames::KEPT] = {};
+		double share[TsdfSurfaceFrames::KEPT] = {};
+	};
+	Mix mix(const TsdfSurfaceFrames &p_frames, int p_max_color_weight) const;
+	LightingChange for_mix(const Mix &p_mix, const glm::vec3 &p_point) const;
+	bool has_field() const; // some epoch's change varies with position
 	// Whether any epoch's change varies with position or differs from another's: the texel's
 	// point (and block) is needed then.
 	bool per_point() const;

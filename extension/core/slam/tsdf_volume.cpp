@@ -280,12 +280,15 @@ const TsdfVoxel *TsdfVolume::find_block(const glm::ivec3 &p_block) const {
 	return slot >= 0 ? pool() + size_t(slot) * TSDF_BLOCK_VOXELS : nullptr;
 }
 
-TsdfSurfaceFrames TsdfVolume::surface_frames(const glm::vec3 &p_world) const {
+glm::ivec3 TsdfVolume::block_at(const glm::vec3 &p_world) const {
 	// The nearest voxel (voxel v's centre is at v x voxel_size_m), then its block (v >> 3: floor division).
 	const glm::vec3 g = p_world / m_options.voxel_size_m;
 	const glm::ivec3 voxel(tsdf_floor(g.x + 0.5f), tsdf_floor(g.y + 0.5f), tsdf_floor(g.z + 0.5f));
-	const glm::ivec3 block(voxel.x >> 3, voxel.y >> 3, voxel.z >> 3);
-	const int32_t slot = tsdf_find_slot(view(), block);
+	return glm::ivec3(voxel.x >> 3, voxel.y >> 3, voxel.z >> 3);
+}
+
+TsdfSurfaceFrames TsdfVolume::surface_frames(const glm::ivec3 &p_block) const {
+	const int32_t slot = tsdf_find_slot(view(), p_block);
 	return slot >= 0 ? m_slot_surface[size_t(slot)] : TsdfSurfaceFrames();
 }
 

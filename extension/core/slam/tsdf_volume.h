@@ -186,7 +186,10 @@ public:
 	// point p_world, metres: when its surface colours were fused, the last few of them (empty
 	// when not allocated). The dense colours' lighting is per block by them (envmap/
 	// dense_render.h, issue #42).
-	TsdfSurfaceFrames surface_frames(const glm::vec3 &p_world) const;
+	TsdfSurfaceFrames surface_frames(const glm::vec3 &p_world) const { return surface_frames(block_at(p_world)); }
+	TsdfSurfaceFrames surface_frames(const glm::ivec3 &p_block) const;
+	// The block holding the voxel nearest world point p_world, metres.
+	glm::ivec3 block_at(const glm::vec3 &p_world) const;
 	// Integer coordinates of every allocated block, sorted.
 	std::vector<glm::ivec3> allocated_blocks() const;
 	// Read-only access for kernels; valid until the next integrate() or reset().
