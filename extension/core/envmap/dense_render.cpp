@@ -30,12 +30,16 @@ DenseLightingEpochs DenseLightingEpochs::uniform(const LightingChange &p_change)
 	return epochs;
 }
 
-const LightingChange &DenseLightingEpochs::at_frame(uint32_t p_frame) const {
+int DenseLightingEpochs::epoch_of(uint32_t p_frame) const {
 	if (p_frame == 0) {
-		return since.back();
+		return int(since.size()) - 1;
 	}
 	const auto after = std::upper_bound(first_frame.begin(), first_frame.end(), p_frame);
-	return since[after == first_frame.begin() ? 0 : size_t(after - first_frame.begin()) - 1];
+	return after == first_frame.begin() ? 0 : int(after - first_frame.begin()) - 1;
+}
+
+const LightingChange &DenseLightingEpochs::at_frame(uint32_t p_frame) const {
+	return since[size_t(epoch_of(p_frame))];
 }
 
 DenseLightingEpochs::Mix DenseLightingEpochs::mix(const TsdfSurfaceFrames &p_frames, int p_max_color_weight) const {
@@ -43,17 +47,17 @@ DenseLightingEpochs::Mix DenseLightingEpochs::mix(const TsdfSurfaceFrames &p_fra
 	const int kept = p_frames.kept();
 	if (kept == 0) {
 		out.count = 1;
-		out.epoch[0] = int(since.size()) - 1; // no block: the newest
+		out.epoch[0] = epoch_of(0); // no block: the newest
 		out.share[0] = 1.0;
 		return out;
 	}
 	// The frames are newest first, so their epochs only go down: one search, then a walk.
-	int epoch = int(std::upper_bound(first_frame.begin(), first_frame.end(), p_frames.frames[0]) - first_frame.begin()) - 1;
+	int epoch = epoch_of(p_frames.frames[0]);
 	const uint32_t cap = uint32_t(std::max(1, p_max_color_weight));
 	double remaining = 1.0;
 	for (int j = 0; j < kept; j++) {
 		while (epoch > 0 && first_frame[size_t(epoch)] > p_frames.frames[j]) {
-			epoch--;
+			epoch--; // what epoch_of(frames[j]) gives
 		}
 		// This frame's share of the running mean (the TSDF's colour update); the oldest kept
 		// takes what is left.
@@ -61,11 +65,10 @@ DenseLightingEpochs::Mix DenseLightingEpochs::mix(const TsdfSurfaceFrames &p_fra
 		const double share = j + 1 == kept ? 1.0 : 1.0 / double(std::min(observation - 1, cap) + 1);
 		const double weight = remaining * share;
 		remaining -= weight;
-		const int e = std::max(epoch, 0);
-		if (out.count > 0 && out.epoch[out.count - 1] == e) {
+		if (out.count > 0 && out.epoch[out.count - 1] == epoch) {
 			out.share[out.count - 1] += weight;
 		} else {
-			out.epoch[out.count] = e;
+			out.epoch[out.count] = epoch;
 			out.share[out.count] = weight;
 			out.count++;
 		}
@@ -291,7 +294,9 @@ DenseRenderStats render_dense_over(const TsdfVolume &p_volume, const glm::dvec3 
 						memo.block = block;
 						memo.valid = true;
 						memo.mix = lighting.mix(p_volume.surface_frames(block), p_volume.options().max_color_weight);
-						memo.change = lighting.for_mix(memo.mix, point);
+						if (!field) {
+							memo.change = lighting.for_mix(memo.mix, point); // the same at every point of the block
+						}
 					}
 					out[u] = (field ? lighting.for_mix(memo.mix, point) : memo.change).apply(value);
 				} else {

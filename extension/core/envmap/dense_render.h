@@ -41,6 +41,7 @@ struct DenseLightingEpochs {
 	// The change for colours fused at volume frame p_frame: the epoch holding it, the first one
 	// before any. 0 (a block not found) takes the newest: the old single-change rule.
 	const LightingChange &at_frame(uint32_t p_frame) const;
+	int epoch_of(uint32_t p_frame) const; // at_frame's index into since
 	bool empty() const { return since.empty(); }
 	// The change for the colours of a block whose surface was fused at p_frames
 	// (TsdfVolume::surface_frames), at its point p_point: each frame's colour was of its epoch's

@@ -555,7 +555,8 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 		for (int i = 0; i < options.iterations[size_t(level)]; ++i) {
 			NormalSystem system = system_at(level, pose, colour_level);
 			Conditioning conditioning = condition(system);
-			if (level == 0 && i == 0) {
+			if (level == 0 && i == 0 && options.max_colour_slide_m > 0.0) {
+				// For the colour slide guard alone: with colour at every level, one more system.
 				geometry_finest = colour_level ? condition(system_at(0, pose, false)) : conditioning;
 			}
 			if (i == 0 && colour && !colour_level && conditioning.ok && conditioning.eigenvalues[5] < options.min_constraint) {
