@@ -128,8 +128,9 @@ int run_option(cli::Arguments &p_cursor, const std::string &p_arg, Arguments *r_
 	return NOT_MINE;
 }
 
-// DenseSlamOptions: --voxel-size-m, --colour-always, --max-speed, --noise-reference-m,
-// --colour-weight, --icp-depth-range, --tsdf-depth-range, --max-jump, --colour-slide.
+// DenseSlamOptions: --voxel-size-m, --colour-always, --scalar-icp, --max-speed, --noise-reference-m,
+// --colour-weight, --icp-depth-range, --tsdf-depth-range, --max-jump, --colour-slide, --raycast-level,
+// --finest-stride.
 int slam_option(cli::Arguments &p_cursor, const std::string &p_arg, DenseSlamOptions *r_slam) {
 	if (p_arg == "--voxel-size-m") {
 		double v = 0.0;
@@ -139,6 +140,8 @@ int slam_option(cli::Arguments &p_cursor, const std::string &p_arg, DenseSlamOpt
 		r_slam->tsdf.voxel_size_m = float(v);
 	} else if (p_arg == "--colour-always") {
 		r_slam->icp.colour_always = true;
+	} else if (p_arg == "--scalar-icp") {
+		r_slam->icp.simd = false;
 	} else if (p_arg == "--max-speed") {
 		if (!p_cursor.non_negative_number(&r_slam->max_speed_m_s)) {
 			return usage("--max-speed needs a speed in m/s >= 0 (0: no limit)");
@@ -180,6 +183,13 @@ int slam_option(cli::Arguments &p_cursor, const std::string &p_arg, DenseSlamOpt
 		}
 		r_slam->icp.max_colour_slide_m = slide[0];
 		r_slam->icp.max_colour_slide_deg = slide[1];
+	} else if (p_arg == "--raycast-level" || p_arg == "--finest-stride") {
+		double v = 0.0;
+		const bool level = p_arg == "--raycast-level";
+		if (!p_cursor.number_in(level ? 0.0 : 1.0, level ? 3.0 : 4.0, &v) || v != double(int(v))) {
+			return usage(level ? "--raycast-level needs a whole number in [0, 3]" : "--finest-stride needs a whole number in [1, 4]");
+		}
+		(level ? r_slam->raycast_level : r_slam->icp.finest_stride_px) = int(v);
 	} else {
 		return NOT_MINE;
 	}
@@ -282,6 +292,9 @@ void print_usage(std::FILE *p_out) {
 			"  --max-speed M_S       a pose moved faster than this since the last tracked one (+ 2 cm) is Lost; 0: off\n"
 			"                        (default %.1f m/s)\n"
 			"  --colour-always       the photometric term at every level, not only where the geometry leaves a direction free\n"
+			"  --scalar-icp          ICP's point-to-plane rows one pixel at a time, not eight at once with AVX2 (the CPU's)\n"
+			"  --raycast-level L     the tracking reference raycast at 1 / 2^L of the camera's size, 0 to 3 (default 2)\n"
+			"  --finest-stride S     ICP's finest level pairs every S-th pixel of every S-th row, 1 to 4 (default 2)\n"
 			"  --noise-reference-m R ICP weighs a depth reading by its noise relative to one at R metres (nearer ones weigh 1);\n"
 			"                        0: all readings weigh 1 (default %.2f)\n"
 			"Targets are printed only for synthetic recordings (synth.yaml). Each benchmark ends with one line\n"

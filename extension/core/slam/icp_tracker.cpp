@@ -3,6 +3,7 @@
 #include <parallel/parallel_for.h>
 
 #include "depth_pyramid.h"
+#include "icp_accumulate_simd.h"
 #include "icp_kernels.h"
 #include "icp_reduce_gpu.h"
 
@@ -85,6 +86,21 @@ struct RowSums {
 	}
 };
 
+// Adds a row's totals from the AVX2 kernel (icp_accumulate_simd.h: RowSums' order) to r_system.
+void add_totals(const IcpRowTotals &p_totals, NormalSystem *r_system) {
+	int k = 0;
+	for (int a = 0; a < 6; ++a) {
+		for (int b = a; b < 6; ++b) {
+			r_system->h[a][b] += p_totals.sums[k++];
+		}
+		r_system->g[a] += p_totals.sums[21 + a];
+	}
+	r_system->geometry_trace_rotation += p_totals.sums[27];
+	r_system->geometry_trace_translation += p_totals.sums[28];
+	r_system->sum_squared += p_totals.sums[29];
+	r_system->inliers += p_totals.inliers;
+}
+
 // The reference's intensity and its gradient (intensity per pixel), NaN where the model has no
 // point, for the photometric term.
 struct ModelIntensity {
@@ -139,14 +155,20 @@ IcpModelView model_view(const ModelMaps &p_model, const ModelIntensity *p_intens
 
 // The normal equations of one pyramid level at the estimate in p_params, from every p_stride-th
 // pixel of every p_stride-th row: per-stripe partial sums in parallel, then their sum in stripe
-// order (the same result whatever the thread count).
-NormalSystem accumulate(const FramePyramid &p_frame, int p_level, int p_stride, const IcpKernelParams &p_params, const IcpModelView &p_model) {
+// order (the same result whatever the thread count). p_simd: the AVX2 kernel for geometry rows
+// where the CPU has it (IcpOptions::simd).
+NormalSystem accumulate(const FramePyramid &p_frame, int p_level, int p_stride, const IcpKernelParams &p_params, const IcpModelView &p_model,
+		bool p_simd) {
 	const cv::Mat &vertices = p_frame.vertices[size_t(p_level)];
 	const cv::Mat &normals = p_frame.normals[size_t(p_level)];
 	const cv::Mat *intensity = p_frame.intensity.empty() ? nullptr : &p_frame.intensity[size_t(p_level)];
 	const int cols = vertices.cols;
 	const int rows = (vertices.rows + p_stride - 1) / p_stride; // sampled rows
 	const int stripes = (rows + ROWS_PER_STRIPE - 1) / ROWS_PER_STRIPE;
+	// Geometry alone: eight pixels at a time where the CPU has AVX2, the row's remainder scalar.
+	const bool simd = p_simd && icp_simd_available() && (intensity == nullptr || p_model.intensity == nullptr || p_params.colour_weight == 0.0f);
+	const int samples = (cols + p_stride - 1) / p_stride;
+	const int simd_samples = simd ? samples / 8 * 8 : 0;
 	std::vector<NormalSystem> partial(static_cast<size_t>(stripes));
 	parallel_for(cv::Range(0, stripes), [&](const cv::Range &p_range) {
 		for (int s = p_range.start; s < p_range.end; ++s) {
@@ -157,8 +179,13 @@ NormalSystem accumulate(const FramePyramid &p_frame, int p_level, int p_stride, 
 				const cv::Vec3f *v = vertices.ptr<cv::Vec3f>(y);
 				const cv::Vec3f *n = normals.ptr<cv::Vec3f>(y);
 				const float *i = intensity != nullptr ? intensity->ptr<float>(y) : nullptr;
+				if (simd_samples > 0) {
+					IcpRowTotals totals;
+					icp_accumulate_row_simd(&v[0][0], &n[0][0], simd_samples, p_stride, p_params, p_model, &totals);
+					add_totals(totals, &system);
+				}
 				RowSums sums;
-				for (int x = 0; x < cols; x += p_stride) {
+				for (int x = simd_samples * p_stride; x < cols; x += p_stride) {
 					IcpRow rows_out[2];
 					float squared = 0.0f;
 					const int count = icp_correspondence(glm::vec3(v[x][0], v[x][1], v[x][2]), glm::vec3(n[x][0], n[x][1], n[x][2]),
@@ -443,7 +470,7 @@ public:
 			}
 			give_up_gpu();
 		}
-		return accumulate(cpu_frame(), p_level, p_level == 0 ? finest_stride : 1, params, p_colour ? colour_model : geometry_model);
+		return accumulate(cpu_frame(), p_level, p_level == 0 ? finest_stride : 1, params, p_colour ? colour_model : geometry_model, options.simd);
 	}
 
 private:
