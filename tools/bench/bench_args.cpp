@@ -129,8 +129,8 @@ int run_option(cli::Arguments &p_cursor, const std::string &p_arg, Arguments *r_
 }
 
 // DenseSlamOptions: --voxel-size-m, --colour-always, --scalar-icp, --max-speed, --noise-reference-m,
-// --colour-weight, --icp-depth-range, --tsdf-depth-range, --max-jump, --colour-slide, --raycast-level,
-// --finest-stride.
+// --colour-weight, --icp-depth-range, --tsdf-depth-range, --max-jump, --colour-slide, --min-constraint,
+// --raycast-level, --finest-stride.
 int slam_option(cli::Arguments &p_cursor, const std::string &p_arg, DenseSlamOptions *r_slam) {
 	if (p_arg == "--voxel-size-m") {
 		double v = 0.0;
@@ -183,6 +183,10 @@ int slam_option(cli::Arguments &p_cursor, const std::string &p_arg, DenseSlamOpt
 		}
 		r_slam->icp.max_colour_slide_m = slide[0];
 		r_slam->icp.max_colour_slide_deg = slide[1];
+	} else if (p_arg == "--min-constraint") {
+		if (!p_cursor.number_in(0.0, 1.0, &r_slam->icp.min_constraint)) {
+			return usage("--min-constraint needs a share of the information in [0, 1]");
+		}
 	} else if (p_arg == "--raycast-level" || p_arg == "--finest-stride") {
 		double v = 0.0;
 		const bool level = p_arg == "--raycast-level";
@@ -293,6 +297,7 @@ void print_usage(std::FILE *p_out) {
 			"                        (default %.1f m/s)\n"
 			"  --colour-always       the photometric term at every level, not only where the geometry leaves a direction free\n"
 			"  --scalar-icp          ICP's point-to-plane rows one pixel at a time, not eight at once with AVX2 (the CPU's)\n"
+			"  --min-constraint C    a direction with less than this share of the geometry's information is free (default 0.004)\n"
 			"  --raycast-level L     the tracking reference raycast at 1 / 2^L of the camera's size, 0 to 3 (default 2)\n"
 			"  --finest-stride S     ICP's finest level pairs every S-th pixel of every S-th row, 1 to 4 (default 2)\n"
 			"  --noise-reference-m R ICP weighs a depth reading by its noise relative to one at R metres (nearer ones weigh 1);\n"
