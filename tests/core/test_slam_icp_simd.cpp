@@ -21,37 +21,6 @@
 using namespace roomprobe;
 using namespace synth_frames;
 
-namespace {
-
-// The model's intensity and its gradient as the tracker makes them (icp_tracker.cpp's
-// model_intensity): NaN where the model has no point, central differences, NaN next to a hole.
-struct Intensity {
-	cv::Mat intensity, gradient_x, gradient_y;
-};
-
-Intensity model_intensity(const ModelMaps &p_model) {
-	Intensity m;
-	m.intensity = intensity_of(p_model.colors);
-	for (int y = 0; y < m.intensity.rows; y++) {
-		for (int x = 0; x < m.intensity.cols; x++) {
-			if (std::isnan(p_model.points.at<cv::Vec3f>(y, x)[0])) {
-				m.intensity.at<float>(y, x) = std::nanf("");
-			}
-		}
-	}
-	m.gradient_x = cv::Mat(m.intensity.size(), CV_32FC1, cv::Scalar(std::nanf("")));
-	m.gradient_y = m.gradient_x.clone();
-	for (int y = 1; y + 1 < m.intensity.rows; y++) {
-		for (int x = 1; x + 1 < m.intensity.cols; x++) {
-			m.gradient_x.at<float>(y, x) = 0.5f * (m.intensity.at<float>(y, x + 1) - m.intensity.at<float>(y, x - 1));
-			m.gradient_y.at<float>(y, x) = 0.5f * (m.intensity.at<float>(y + 1, x) - m.intensity.at<float>(y - 1, x));
-		}
-	}
-	return m;
-}
-
-} // namespace
-
 TEST_CASE("ICP rows eight pixels at a time (AVX2): the scalar kernel's pairs, and its sums to float rounding") {
 	if (!icp_simd_available()) {
 		MESSAGE("this CPU has no AVX2: only the scalar kernel runs here");
@@ -86,17 +55,7 @@ TEST_CASE("ICP rows eight pixels at a time (AVX2): the scalar kernel's pairs, an
 	params.noise_b_per_m2 = 0.0019f; // far readings weighed down: both branches of the weight
 	params.noise_reference_sigma_m = 0.0012f + 0.0019f * 0.01f;
 
-	const Intensity reference_intensity = model_intensity(model);
-	const cv::Mat frame_intensity = intensity_of(current.rgb);
-	for (const bool colour : { false, true }) {
-	view.intensity = colour ? reference_intensity.intensity.ptr<float>() : nullptr;
-	view.gradient_x = colour ? reference_intensity.gradient_x.ptr<float>() : nullptr;
-	view.gradient_y = colour ? reference_intensity.gradient_y.ptr<float>() : nullptr;
-	view.intensity_stride = reference_intensity.intensity.step1();
-	params.colour_weight = colour ? 0.3f : 0.0f;
-	int colour_rows = 0;
 	for (const int stride : { 1, 2 }) {
-		CAPTURE(colour);
 		CAPTURE(stride);
 		const int count = (vertices.cols / stride) / 8 * 8;
 		IcpRowTotals simd;
@@ -105,18 +64,15 @@ TEST_CASE("ICP rows eight pixels at a time (AVX2): the scalar kernel's pairs, an
 		for (int y = 0; y < vertices.rows; y += stride) {
 			const cv::Vec3f *v = vertices.ptr<cv::Vec3f>(y);
 			const cv::Vec3f *n = normals.ptr<cv::Vec3f>(y);
-			const float *intensity = frame_intensity.ptr<float>(y);
-			icp_accumulate_row_simd(&v[0][0], &n[0][0], colour ? intensity : nullptr, count, stride, params, view, &simd);
+			icp_accumulate_row_simd(&v[0][0], &n[0][0], count, stride, params, view, &simd);
 			for (int k = 0; k < count; k++) {
 				const int x = k * stride;
 				IcpRow rows[2];
 				float squared = 0.0f;
-				const int written = icp_correspondence(glm::vec3(v[x][0], v[x][1], v[x][2]), glm::vec3(n[x][0], n[x][1], n[x][2]),
-						colour ? intensity[x] : std::nanf(""), params, view, rows, &squared);
-				if (written == 0) {
+				if (icp_correspondence(glm::vec3(v[x][0], v[x][1], v[x][2]), glm::vec3(n[x][0], n[x][1], n[x][2]), std::nanf(""), params, view, rows,
+							&squared) == 0) {
 					continue;
 				}
-				colour_rows += written - 1;
 				reference_inliers++;
 				const float *j = rows[0].jacobian;
 				double terms[IcpRowTotals::SUMS];
@@ -128,16 +84,6 @@ TEST_CASE("ICP rows eight pixels at a time (AVX2): the scalar kernel's pairs, an
 				}
 				for (int a = 0; a < 6; a++) {
 					terms[21 + a] = double(j[a] * rows[0].residual);
-				}
-				if (written == 2) { // the photometric row joins h and g, not the traces
-					const float *c = rows[1].jacobian;
-					t = 0;
-					for (int a = 0; a < 6; a++) {
-						for (int b = a; b < 6; b++) {
-							terms[t++] += double(c[a] * c[b]);
-						}
-						terms[21 + a] += double(c[a] * rows[1].residual);
-					}
 				}
 				terms[27] = double(j[0] * j[0] + j[1] * j[1] + j[2] * j[2]);
 				terms[28] = double(j[3] * j[3] + j[4] * j[4] + j[5] * j[5]);
@@ -157,9 +103,5 @@ TEST_CASE("ICP rows eight pixels at a time (AVX2): the scalar kernel's pairs, an
 			// rounding up to about 40 x 6e-8 = 2.4e-6 of the terms' magnitude; 2e-5 allows 8x that.
 			CHECK(std::abs(simd.sums[s] - reference_sums[s]) <= 2e-5 * magnitude[s] + 1e-12);
 		}
-	}
-	if (colour) {
-		CHECK(colour_rows > 1000); // the photometric rows were there to compare
-	}
 	}
 }

@@ -296,7 +296,7 @@ void print_usage(std::FILE *p_out) {
 			"  --max-speed M_S       a pose moved faster than this since the last tracked one (+ 2 cm) is Lost; 0: off\n"
 			"                        (default %.1f m/s)\n"
 			"  --colour-always       the photometric term at every level, not only where the geometry leaves a direction free\n"
-			"  --scalar-icp          ICP's rows one pixel at a time, not eight at once with AVX2 (where the CPU has it)\n"
+			"  --scalar-icp          ICP's point-to-plane rows one pixel at a time, not eight at once with AVX2 (the CPU's)\n"
 			"  --min-constraint C    a direction with less than this share of the geometry's information is free (default 0.004)\n"
 			"  --raycast-level L     the tracking reference raycast at 1 / 2^L of the camera's size, 0 to 3 (default 2)\n"
 			"  --finest-stride S     ICP's finest level pairs every S-th pixel of every S-th row, 1 to 4 (default 2)\n"

@@ -1,7 +1,5 @@
 #include "slam/icp_accumulate_simd.h"
 
-#include <glm/matrix.hpp>
-
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #define RP_ICP_SIMD 1
@@ -78,9 +76,6 @@ struct Rows8 {
 	__m256 j[6];
 	__m256 residual;
 	__m256 squared;
-	// What the photometric row needs of the pair.
-	Lanes3 offset, in_model;
-	__m256 pixel_x, pixel_y, weight;
 };
 
 RP_AVX2 RP_INLINE Rows8 rows8(const Lanes3 &p_vertex, const Lanes3 &p_normal, const IcpKernelParams &p_params, const IcpModelView &p_model) {
@@ -94,10 +89,8 @@ RP_AVX2 RP_INLINE Rows8 rows8(const Lanes3 &p_vertex, const Lanes3 &p_normal, co
 	const Lanes3 in_model = { add(turned.x, all(t.x)), add(turned.y, all(t.y)), add(turned.z, all(t.z)) };
 	mask = _mm256_and_ps(mask, _mm256_cmp_ps(in_model.z, _mm256_setzero_ps(), _CMP_GT_OQ));
 	const PinholeIntrinsics &camera = p_model.camera;
-	out.pixel_x = add(_mm256_div_ps(mul(all(camera.fx), in_model.x), in_model.z), all(camera.cx));
-	out.pixel_y = add(_mm256_div_ps(mul(all(camera.fy), in_model.y), in_model.z), all(camera.cy));
-	const __m256 shifted_x = add(out.pixel_x, all(0.5f));
-	const __m256 shifted_y = add(out.pixel_y, all(0.5f));
+	const __m256 shifted_x = add(add(_mm256_div_ps(mul(all(camera.fx), in_model.x), in_model.z), all(camera.cx)), all(0.5f));
+	const __m256 shifted_y = add(add(_mm256_div_ps(mul(all(camera.fy), in_model.y), in_model.z), all(camera.cy)), all(0.5f));
 	mask = _mm256_and_ps(mask, _mm256_and_ps(_mm256_cmp_ps(shifted_x, _mm256_setzero_ps(), _CMP_GT_OQ), _mm256_cmp_ps(shifted_y, _mm256_setzero_ps(), _CMP_GT_OQ)));
 	mask = _mm256_and_ps(mask, _mm256_and_ps(_mm256_cmp_ps(shifted_x, all(float(camera.width)), _CMP_LT_OQ),
 										   _mm256_cmp_ps(shifted_y, all(float(camera.height)), _CMP_LT_OQ)));
@@ -129,71 +122,11 @@ RP_AVX2 RP_INLINE Rows8 rows8(const Lanes3 &p_vertex, const Lanes3 &p_normal, co
 	out.j[5] = _mm256_and_ps(mul(model_normal.z, weight), mask);
 	out.residual = _mm256_and_ps(mul(residual, weight), mask);
 	out.squared = _mm256_and_ps(mul(residual, residual), mask);
-	out.offset = offset;
-	out.in_model = in_model;
-	out.weight = weight;
 	return out;
 }
 
-// sample_bilinear of one model image at eight pixels, where p_inside (its taps' rows p_index and
-// p_index + p_stride, computed by the caller) holds.
-RP_AVX2 RP_INLINE __m256 bilinear8(const float *p_image, __m256i p_index, __m256i p_stride, __m256 p_inside, __m256 p_ax, __m256 p_ay) {
-	const __m256 zero = _mm256_setzero_ps();
-	const __m256i one = _mm256_set1_epi32(1);
-	const __m256i below = _mm256_add_epi32(p_index, p_stride);
-	const __m256 r00 = _mm256_mask_i32gather_ps(zero, p_image, p_index, p_inside, 4);
-	const __m256 r01 = _mm256_mask_i32gather_ps(zero, p_image, _mm256_add_epi32(p_index, one), p_inside, 4);
-	const __m256 r10 = _mm256_mask_i32gather_ps(zero, p_image, below, p_inside, 4);
-	const __m256 r11 = _mm256_mask_i32gather_ps(zero, p_image, _mm256_add_epi32(below, one), p_inside, 4);
-	const __m256 bx = sub(all(1.0f), p_ax), by = sub(all(1.0f), p_ay);
-	return add(mul(by, add(mul(bx, r00), mul(p_ax, r01))), mul(p_ay, add(mul(bx, r10), mul(p_ax, r11))));
-}
-
-// icp_correspondence's photometric row for the pairs of p_geometry, with the current pixels'
-// intensities p_intensity: zero where the scalar kernel writes none.
-RP_AVX2 RP_INLINE Rows8 colour8(const Rows8 &p_geometry, __m256 p_intensity, const IcpKernelParams &p_params, const IcpModelView &p_model) {
-	Rows8 out;
-	const int w = p_model.camera.width, h = p_model.camera.height;
-	const __m256 x0f = _mm256_floor_ps(p_geometry.pixel_x), y0f = _mm256_floor_ps(p_geometry.pixel_y);
-	__m256 mask = _mm256_and_ps(p_geometry.mask, is_number(p_intensity));
-	// x0 >= 0, y0 >= 0, x0 + 1 < w, y0 + 1 < h, as sample_bilinear's ints (the pair's pixel lies
-	// inside the image, so the floats are small whole numbers).
-	mask = _mm256_and_ps(mask, _mm256_and_ps(_mm256_cmp_ps(x0f, _mm256_setzero_ps(), _CMP_GE_OQ), _mm256_cmp_ps(y0f, _mm256_setzero_ps(), _CMP_GE_OQ)));
-	mask = _mm256_and_ps(mask, _mm256_and_ps(_mm256_cmp_ps(add(x0f, all(1.0f)), all(float(w)), _CMP_LT_OQ),
-										   _mm256_cmp_ps(add(y0f, all(1.0f)), all(float(h)), _CMP_LT_OQ)));
-	const __m256i stride = _mm256_set1_epi32(int(p_model.intensity_stride));
-	const __m256i index = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_cvttps_epi32(_mm256_and_ps(y0f, mask)), stride),
-			_mm256_cvttps_epi32(_mm256_and_ps(x0f, mask)));
-	const __m256 ax = sub(p_geometry.pixel_x, x0f), ay = sub(p_geometry.pixel_y, y0f);
-	const __m256 model_intensity = bilinear8(p_model.intensity, index, stride, mask, ax, ay);
-	const __m256 gx = bilinear8(p_model.gradient_x, index, stride, mask, ax, ay);
-	const __m256 gy = bilinear8(p_model.gradient_y, index, stride, mask, ax, ay);
-	mask = _mm256_and_ps(mask, _mm256_and_ps(is_number(model_intensity), _mm256_and_ps(is_number(gx), is_number(gy))));
-	const __m256 difference = sub(model_intensity, p_intensity);
-	const __m256 magnitude = _mm256_andnot_ps(all(-0.0f), difference);
-	mask = _mm256_and_ps(mask, _mm256_cmp_ps(magnitude, all(p_params.max_colour_difference), _CMP_NGT_UQ));
-	const Lanes3 &q = p_geometry.in_model;
-	const __m256 inv_z = _mm256_div_ps(all(1.0f), q.z);
-	const __m256 fx_gx = mul(all(p_model.camera.fx), gx), fy_gy = mul(all(p_model.camera.fy), gy);
-	const Lanes3 dq = { mul(fx_gx, inv_z), mul(fy_gy, inv_z),
-		mul(mul(_mm256_xor_ps(add(mul(fx_gx, q.x), mul(fy_gy, q.y)), all(-0.0f)), inv_z), inv_z) };
-	const __m256 scale = mul(all(p_params.colour_weight), p_geometry.weight);
-	const Lanes3 turned = transform(glm::transpose(p_model.camera_from_world_rotation), dq);
-	const Lanes3 a = { mul(turned.x, scale), mul(turned.y, scale), mul(turned.z, scale) };
-	const Lanes3 moment = cross(p_geometry.offset, a);
-	out.mask = mask;
-	out.j[0] = _mm256_and_ps(moment.x, mask);
-	out.j[1] = _mm256_and_ps(moment.y, mask);
-	out.j[2] = _mm256_and_ps(moment.z, mask);
-	out.j[3] = _mm256_and_ps(a.x, mask);
-	out.j[4] = _mm256_and_ps(a.y, mask);
-	out.j[5] = _mm256_and_ps(a.z, mask);
-	out.residual = _mm256_and_ps(mul(scale, difference), mask);
-	return out;
-}
-
-// RowSums::add, per lane.
-RP_AVX2 RP_INLINE void add_system(const Rows8 &p_rows, __m256 *r_sums) {
+// RowSums::add and accumulate's traces, per lane.
+RP_AVX2 RP_INLINE void add_rows(const Rows8 &p_rows, __m256 *r_sums) {
 	int k = 0;
 	for (int a = 0; a < 6; ++a) {
 		for (int b = a; b < 6; ++b) {
@@ -204,10 +137,6 @@ RP_AVX2 RP_INLINE void add_system(const Rows8 &p_rows, __m256 *r_sums) {
 	for (int a = 0; a < 6; ++a) {
 		r_sums[21 + a] = add(r_sums[21 + a], mul(p_rows.j[a], p_rows.residual));
 	}
-}
-
-// accumulate's traces and squared residuals of the point-to-plane rows, per lane.
-RP_AVX2 RP_INLINE void add_traces(const Rows8 &p_rows, __m256 *r_sums) {
 	const __m256 *j = p_rows.j;
 	r_sums[27] = add(r_sums[27], add(add(mul(j[0], j[0]), mul(j[1], j[1])), mul(j[2], j[2])));
 	r_sums[28] = add(r_sums[28], add(add(mul(j[3], j[3]), mul(j[4], j[4])), mul(j[5], j[5])));
@@ -216,9 +145,8 @@ RP_AVX2 RP_INLINE void add_traces(const Rows8 &p_rows, __m256 *r_sums) {
 
 } // namespace
 
-RP_AVX2 void icp_accumulate_row_simd(const float *p_vertices, const float *p_normals, const float *p_intensity, int p_count, int p_stride_px,
-		const IcpKernelParams &p_params, const IcpModelView &p_model, IcpRowTotals *r_totals) {
-	const bool colour = p_intensity != nullptr && p_model.intensity != nullptr && p_params.colour_weight != 0.0f;
+RP_AVX2 void icp_accumulate_row_simd(const float *p_vertices, const float *p_normals, int p_count, int p_stride_px, const IcpKernelParams &p_params,
+		const IcpModelView &p_model, IcpRowTotals *r_totals) {
 	__m256 sums[IcpRowTotals::SUMS];
 	for (__m256 &sum : sums) {
 		sum = _mm256_setzero_ps();
@@ -237,16 +165,7 @@ RP_AVX2 void icp_accumulate_row_simd(const float *p_vertices, const float *p_nor
 			continue;
 		}
 		inliers += __builtin_popcount(unsigned(paired));
-		add_system(rows, sums);
-		if (colour) {
-			// The intensities at the same pixels: one float a pixel, so a third of the xyz offsets.
-			const __m256i pixel = _mm256_mullo_epi32(_mm256_add_epi32(_mm256_set1_epi32(k), lane), _mm256_set1_epi32(p_stride_px));
-			const Rows8 photometric = colour8(rows, _mm256_i32gather_ps(p_intensity, pixel, 4), p_params, p_model);
-			if (_mm256_movemask_ps(photometric.mask) != 0) {
-				add_system(photometric, sums);
-			}
-		}
-		add_traces(rows, sums);
+		add_rows(rows, sums);
 	}
 	alignas(32) float lanes[8];
 	for (int s = 0; s < IcpRowTotals::SUMS; ++s) {
@@ -266,7 +185,7 @@ bool icp_simd_available() {
 	return false;
 }
 
-void icp_accumulate_row_simd(const float *, const float *, const float *, int, int, const IcpKernelParams &, const IcpModelView &, IcpRowTotals *) {}
+void icp_accumulate_row_simd(const float *, const float *, int, int, const IcpKernelParams &, const IcpModelView &, IcpRowTotals *) {}
 
 #endif
 

@@ -165,8 +165,8 @@ NormalSystem accumulate(const FramePyramid &p_frame, int p_level, int p_stride, 
 	const int cols = vertices.cols;
 	const int rows = (vertices.rows + p_stride - 1) / p_stride; // sampled rows
 	const int stripes = (rows + ROWS_PER_STRIPE - 1) / ROWS_PER_STRIPE;
-	// Eight pixels at a time where the CPU has AVX2, the row's remainder scalar.
-	const bool simd = p_simd && icp_simd_available();
+	// Geometry alone: eight pixels at a time where the CPU has AVX2, the row's remainder scalar.
+	const bool simd = p_simd && icp_simd_available() && (intensity == nullptr || p_model.intensity == nullptr || p_params.colour_weight == 0.0f);
 	const int samples = (cols + p_stride - 1) / p_stride;
 	const int simd_samples = simd ? samples / 8 * 8 : 0;
 	std::vector<NormalSystem> partial(static_cast<size_t>(stripes));
@@ -181,7 +181,7 @@ NormalSystem accumulate(const FramePyramid &p_frame, int p_level, int p_stride, 
 				const float *i = intensity != nullptr ? intensity->ptr<float>(y) : nullptr;
 				if (simd_samples > 0) {
 					IcpRowTotals totals;
-					icp_accumulate_row_simd(&v[0][0], &n[0][0], i, simd_samples, p_stride, p_params, p_model, &totals);
+					icp_accumulate_row_simd(&v[0][0], &n[0][0], simd_samples, p_stride, p_params, p_model, &totals);
 					add_totals(totals, &system);
 				}
 				RowSums sums;

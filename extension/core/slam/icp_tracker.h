@@ -35,9 +35,9 @@ struct IcpOptions {
 	// quarter of the work at 2; the model a frame is tracked against is coarser still (dense_slam.h
 	// raycast_level).
 	int finest_stride_px = 2;
-	// The rows (point-to-plane and photometric) eight pixels at a time with AVX2 where the CPU
-	// has it (icp_accumulate_simd.h: the same rows, summed in another order). false: the scalar
-	// kernel everywhere, to compare with.
+	// The point-to-plane rows eight pixels at a time with AVX2 where the CPU has it
+	// (icp_accumulate_simd.h: the same rows, summed in another order). false: the scalar kernel
+	// everywhere, to compare with.
 	bool simd = true;
 	// Correspondences: point-to-point distance (metres) and angle between the normals (degrees)
 	// beyond which a pair is an outlier. At the coarser levels the distance is allowed to grow by
