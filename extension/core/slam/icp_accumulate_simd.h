@@ -12,7 +12,8 @@
 
 namespace roomprobe {
 
-// One image row's share of the normal equations, as icp_tracker.cpp's RowSums lays them out.
+// One image row's share of the normal equations, in the layout icp_tracker.cpp's RowSums and the
+// device's rows (icp_reduce.comp) use too.
 // sums: the upper triangle of J^T J row by row (21), J^T r (6), the traces of the rows' rotation
 // and translation parts, and their unweighted squared residuals (metres^2).
 struct IcpRowTotals {

@@ -10,6 +10,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include <algorithm>
+#include <iterator>
 #include <cstdio>
 #include <cmath>
 #include <limits>
@@ -47,59 +48,54 @@ struct NormalSystem {
 		geometry_trace_translation += p_other.geometry_trace_translation;
 		inliers += p_other.inliers;
 	}
+	// Adds one image row's sums, laid out as IcpRowTotals::sums (h's upper triangle row by row,
+	// g, the two traces, the squared residuals): RowSums', the AVX2 kernel's and the device's rows.
+	template <typename T>
+	void add_sums(const T *p_sums) {
+		int k = 0;
+		for (int a = 0; a < 6; ++a) {
+			for (int b = a; b < 6; ++b) {
+				h[a][b] += double(p_sums[k++]);
+			}
+			g[a] += double(p_sums[21 + a]);
+		}
+		geometry_trace_rotation += double(p_sums[27]);
+		geometry_trace_translation += double(p_sums[28]);
+		sum_squared += double(p_sums[29]);
+	}
 };
 
-// One image row's share of a NormalSystem's h and g, summed in float (a row has at most a few
-// hundred rows of the system: float keeps them to about 1e-5 where the double sum over the frame
-// would not), then added to the double system once per image row: the 27 products a row costs
-// are float ones the compiler can pack.
+// One image row's share of a NormalSystem, summed in float (a row has at most a few hundred rows
+// of the system: float keeps them to about 1e-5 where the double sum over the frame would not),
+// then added to the double system once per image row: the 27 products a row costs are float
+// ones the compiler can pack. Laid out as IcpRowTotals::sums.
 struct RowSums {
-	float h[21] = {}; // upper triangle of J^T J, row by row
-	float g[6] = {};
-	float trace_rotation = 0.0f, trace_translation = 0.0f, sum_squared = 0.0f; // NormalSystem's
+	float sums[IcpRowTotals::SUMS] = {};
 
 	void add(const IcpRow &p_row) {
 		const float *j = p_row.jacobian;
 		int k = 0;
 		for (int a = 0; a < 6; ++a) {
 			for (int b = a; b < 6; ++b) {
-				h[k++] += j[a] * j[b];
+				sums[k++] += j[a] * j[b];
 			}
-			g[a] += j[a] * p_row.residual;
+			sums[21 + a] += j[a] * p_row.residual;
 		}
+	}
+	// The traces and the squared residual of a point-to-plane row (the geometry's scale, and the
+	// support of the pose).
+	void add_support(const IcpRow &p_row, float p_squared) {
+		const float *j = p_row.jacobian;
+		sums[27] += j[0] * j[0] + j[1] * j[1] + j[2] * j[2];
+		sums[28] += j[3] * j[3] + j[4] * j[4] + j[5] * j[5];
+		sums[29] += p_squared;
 	}
 	// Adds the sums to r_system and starts again from 0.
 	void flush(NormalSystem *r_system) {
-		int k = 0;
-		for (int a = 0; a < 6; ++a) {
-			for (int b = a; b < 6; ++b) {
-				r_system->h[a][b] += double(h[k]);
-				h[k++] = 0.0f;
-			}
-			r_system->g[a] += double(g[a]);
-			g[a] = 0.0f;
-		}
-		r_system->geometry_trace_rotation += double(trace_rotation);
-		r_system->geometry_trace_translation += double(trace_translation);
-		r_system->sum_squared += double(sum_squared);
-		trace_rotation = trace_translation = sum_squared = 0.0f;
+		r_system->add_sums(sums);
+		std::fill(std::begin(sums), std::end(sums), 0.0f);
 	}
 };
-
-// Adds a row's totals from the AVX2 kernel (icp_accumulate_simd.h: RowSums' order) to r_system.
-void add_totals(const IcpRowTotals &p_totals, NormalSystem *r_system) {
-	int k = 0;
-	for (int a = 0; a < 6; ++a) {
-		for (int b = a; b < 6; ++b) {
-			r_system->h[a][b] += p_totals.sums[k++];
-		}
-		r_system->g[a] += p_totals.sums[21 + a];
-	}
-	r_system->geometry_trace_rotation += p_totals.sums[27];
-	r_system->geometry_trace_translation += p_totals.sums[28];
-	r_system->sum_squared += p_totals.sums[29];
-	r_system->inliers += p_totals.inliers;
-}
 
 // The reference's intensity and its gradient (intensity per pixel), NaN where the model has no
 // point, for the photometric term.
@@ -182,7 +178,8 @@ NormalSystem accumulate(const FramePyramid &p_frame, int p_level, int p_stride, 
 				if (simd_samples > 0) {
 					IcpRowTotals totals;
 					icp_accumulate_row_simd(&v[0][0], &n[0][0], simd_samples, p_stride, p_params, p_model, &totals);
-					add_totals(totals, &system);
+					system.add_sums(totals.sums);
+					system.inliers += totals.inliers;
 				}
 				RowSums sums;
 				for (int x = simd_samples * p_stride; x < cols; x += p_stride) {
@@ -194,10 +191,7 @@ NormalSystem accumulate(const FramePyramid &p_frame, int p_level, int p_stride, 
 						sums.add(rows_out[k]);
 					}
 					if (count > 0) {
-						const float *j = rows_out[0].jacobian;
-						sums.trace_rotation += j[0] * j[0] + j[1] * j[1] + j[2] * j[2];
-						sums.trace_translation += j[3] * j[3] + j[4] * j[4] + j[5] * j[5];
-						sums.sum_squared += squared;
+						sums.add_support(rows_out[0], squared);
 						++system.inliers;
 					}
 				}
@@ -215,19 +209,13 @@ NormalSystem accumulate(const FramePyramid &p_frame, int p_level, int p_stride, 
 // The normal equations from the device's row sums (IcpReducerGpu::ROW_FLOATS each), added in
 // double in row order as accumulate adds its rows: a row's first 30 floats are a RowSums, in its
 // order (icp_reduce.comp's Rows), then the inlier count.
-static_assert(IcpReducerGpu::ROW_FLOATS > 30);
+static_assert(IcpReducerGpu::ROW_FLOATS > IcpRowTotals::SUMS);
 NormalSystem system_from_rows(const float *p_rows, int p_row_count) {
 	NormalSystem system;
 	for (int r = 0; r < p_row_count; r++) {
 		const float *row = p_rows + size_t(r) * IcpReducerGpu::ROW_FLOATS;
-		RowSums sums;
-		std::copy(row, row + 21, sums.h);
-		std::copy(row + 21, row + 27, sums.g);
-		sums.trace_rotation = row[27];
-		sums.trace_translation = row[28];
-		sums.sum_squared = row[29];
-		sums.flush(&system);
-		system.inliers += int(row[30]);
+		system.add_sums(row);
+		system.inliers += int(row[IcpRowTotals::SUMS]);
 	}
 	return system;
 }
