@@ -51,6 +51,13 @@ cp build/bin/roomprobe_bench build/bin/roomprobe_synth calib/synthetic_rig.yaml 
 vulkan=$(ls "$b"/lib/libvulkan.so.1.* | head -1)
 mv "$vulkan" "$b/lib/libvulkan.so.1"
 chmod +x "$b/lib/ld-linux-x86-64.so.2"
+# Debian's glvnd and Vulkan loader packages (MIT-style and Apache-2.0), unpacked there only where the
+# machine has no glvnd: NVIDIA's Vulkan driver needs them (see run.sh). From this host's apt.
+mkdir -p "$b/gl" /tmp/device-bench-apt/partial
+apt_opts=(-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/device-bench-apt)
+if ! { apt-get "${apt_opts[@]}" update >/dev/null 2>&1 && (cd "$b/gl" && apt-get "${apt_opts[@]}" download libvulkan1 libglvnd0 libglx0 libgl1 libegl1 libopengl0 libgles2 >/dev/null 2>&1); }; then
+	echo "bundle: Debian's glvnd packages could not be downloaded; NVIDIA's Vulkan driver may not load there" >&2
+fi
 cp "$sequence/camera-intrinsics.txt" "$b/7scenes/"
 [[ -f $sequence/gravity-direction.txt ]] && cp "$sequence/gravity-direction.txt" "$b/7scenes/"
 for ((i = 0; i < frames; i++)); do

@@ -13,12 +13,26 @@ cores=$(nproc)
 
 # The bundled programs through the bundled loader and libraries (the machine's own are not used;
 # its Vulkan driver is, through the bundled Vulkan loader).
-bundled() { "$here/lib/ld-linux-x86-64.so.2" --library-path "$here/lib" "$@"; }
+# The machine's LD_LIBRARY_PATH comes first, then the bundle's folder: --library-path replaces it,
+# and NVIDIA's container runtime puts the driver's libraries (which the Vulkan loader opens) only there.
+# On the H200 machine (2026-11-28) NVIDIA's Vulkan driver loaded only this way and with Debian's
+# glvnd libraries unpacked on the machine (as root, when it has none); with the bundle's folder
+# first and the toolchain's glvnd alone the loader said "Could not get 'vkCreateInstance'".
+libs=${LD_LIBRARY_PATH:+$LD_LIBRARY_PATH:}$here/lib
+if [[ -d $here/gl && $(id -u) == 0 ]] && ! ldconfig -p 2>/dev/null | grep -q 'libGLdispatch\.so\.0 '; then
+	for deb in "$here"/gl/*.deb; do dpkg -x "$deb" /; done
+	ldconfig
+	echo "glvnd libraries unpacked on this machine: $(cd "$here/gl" && ls | tr '\n' ' ')"
+fi
+bundled() { "$here/lib/ld-linux-x86-64.so.2" --library-path "$libs" "$@"; }
+# Each run is bounded (RUN_LIMIT_S, default 180), so one that hangs on a driver costs only itself.
+limit_s=${RUN_LIMIT_S:-180}
+bounded() { timeout -k 5 "$limit_s" "$here/lib/ld-linux-x86-64.so.2" --library-path "$libs" "$@"; }
 # One run: its whole output to results/NAME.txt, its summary line (and where the kernels ran) here.
 run() {
 	local name=$1
 	shift
-	bundled "$here/roomprobe_bench" "$@" >"$results/$name.txt" 2>&1
+	bounded "$here/roomprobe_bench" "$@" >"$results/$name.txt" 2>&1
 	echo "$name (exit $?): $(grep -m1 'backend (' "$results/$name.txt" | sed 's/^ *//')"
 	grep '^summary:' "$results/$name.txt" | sed "s/^/$name /"
 }
@@ -53,7 +67,7 @@ if [[ $what != scaling ]]; then
 	room=$results/living_room
 	rm -rf "$room"
 	start=$(date +%s)
-	if bundled "$here/roomprobe_synth" --scene living_room --seconds 3 --no-calibration --rig "$here/synthetic_rig.yaml" \
+	if bounded "$here/roomprobe_synth" --scene living_room --seconds 3 --no-calibration --rig "$here/synthetic_rig.yaml" \
 		--hdri "$here/lebombo_1k.hdr" --out "$room" --threads "$cores" >"$results/synth.txt" 2>&1; then
 		echo "living room: 3 s synthesised in $(($(date +%s) - start)) s"
 		for backend in cpu vulkan; do

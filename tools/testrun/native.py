@@ -241,8 +241,8 @@ def suite_soak(opts):
     growth, ratio, lost, unreadable = float(m.group(1)), float(m.group(2)), int(m.group(3)), int(m.group(4))
     print(next(line for line in r.lines if line.startswith("summary: mode=soak")))
     if growth > 5.0 or unreadable > 0:
-        s.fail(f"soak: resident memory {growth:+.2f} % after the warm-up (at most +5 %), {unreadable} frames unreadable")
+        s.fail(f"soak: resident memory {growth:+.2f} % in the last quarter over the highest of the first after the warm-up (at most +5 %), {unreadable} frames unreadable")
     else:
         s.passed += 1
-    s.notes.append(f"memory {growth:+.2f} %, time per frame x{ratio:.3f} last tenth / first, {lost} frames lost")
+    s.notes.append(f"memory {growth:+.2f} % over the early highest, time per frame x{ratio:.3f} last tenth / first, {lost} frames lost")
     return s
