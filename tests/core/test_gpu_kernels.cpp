@@ -170,3 +170,27 @@ TEST_CASE("GPU SH: the projection on a Vulkan device equals project_sh to the fl
 	CHECK_FALSE(wrong->project(test_sky(16), &sh, &error));
 	CHECK(error.find("size") != std::string::npos);
 }
+
+TEST_CASE("GPU profile: each batch is counted by its kernels, and its device time lies within its wall time") {
+	const std::shared_ptr<ComputeDevice> device = gpu_test_device(); // a device of its own: no other test's batches
+	std::string error;
+	const std::unique_ptr<ShProjectorGpu> gpu = ShProjectorGpu::create(16, device, &error);
+	REQUIRE_MESSAGE(gpu, error);
+	device->reset_batch_stats();
+	ShCoefficients sh;
+	for (int run = 0; run < 3; run++) {
+		REQUIRE_MESSAGE(gpu->project(test_sky(16), &sh, &error), error);
+	}
+	const std::vector<GpuBatchStats> stats = device->batch_stats();
+	REQUIRE(stats.size() == 1);
+	CHECK(stats[0].kind == "sh_project");
+	CHECK(stats[0].batches == 3);
+	CHECK(stats[0].wall_ms > 0.0);
+	MESSAGE("3 SH batches: wall " << stats[0].wall_ms << " ms, device " << (stats[0].timed ? std::to_string(stats[0].device_ms) + " ms" : "not timed"));
+	if (stats[0].timed) { // the device's work lies between the recording and the fence's end: its clock may only round
+		CHECK(stats[0].device_ms > 0.0);
+		CHECK(stats[0].device_ms <= stats[0].wall_ms * 1.01 + 0.01);
+	}
+	device->reset_batch_stats();
+	CHECK(device->batch_stats().empty());
+}

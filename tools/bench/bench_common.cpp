@@ -1,6 +1,8 @@
 #include <slam/icp_accumulate_simd.h>
 #include "bench_common.h"
 
+#include <gpu/compute_device.h>
+
 #include <io/opencv.h>
 
 #include <tbb/global_control.h>
@@ -196,6 +198,31 @@ std::string accuracy_summary(const Accuracy &p_accuracy) {
 
 std::string backend_summary(ComputeBackend p_asked, bool p_on_device) {
 	return p_on_device ? "backend=vulkan" : p_asked == ComputeBackend::Cpu ? "backend=cpu" : "backend=cpu_fallback";
+}
+
+void print_device_batches(ComputeBackend p_backend, size_t p_frames) {
+	std::string reason;
+	const std::shared_ptr<ComputeDevice> device = p_backend == ComputeBackend::Cpu ? nullptr : shared_compute_device(p_backend, &reason);
+	if (!device || p_frames == 0) {
+		return;
+	}
+	std::vector<GpuBatchStats> kinds = device->batch_stats();
+	std::sort(kinds.begin(), kinds.end(), [](const GpuBatchStats &p_a, const GpuBatchStats &p_b) { return p_a.wall_ms > p_b.wall_ms; });
+	std::printf("device batches on %s (wall: the calling thread, recording to the fence's end; device: the GPU's timestamps)\n", device->name().c_str());
+	std::printf("  %-44s %9s %12s %14s %12s\n", "kernels", "a frame", "wall ms a fr", "device ms a fr", "host share");
+	const double frames = double(p_frames);
+	double wall = 0.0, on_device = 0.0;
+	for (const GpuBatchStats &k : kinds) {
+		char device_ms[32] = "-", host_share[32] = "-";
+		if (k.timed) {
+			std::snprintf(device_ms, sizeof(device_ms), "%.3f", k.device_ms / frames);
+			std::snprintf(host_share, sizeof(host_share), "%.0f%%", k.wall_ms > 0.0 ? 100.0 * (1.0 - k.device_ms / k.wall_ms) : 0.0);
+		}
+		std::printf("  %-44s %9.2f %12.3f %14s %12s\n", k.kind.c_str(), double(k.batches) / frames, k.wall_ms / frames, device_ms, host_share);
+		wall += k.wall_ms;
+		on_device += k.device_ms;
+	}
+	std::printf("  %-44s %9s %12.3f %14.3f\n", "all", "", wall / frames, on_device / frames);
 }
 
 void print_memory(const TsdfStats &p_stats) {

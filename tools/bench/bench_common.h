@@ -136,6 +136,9 @@ std::string accuracy_summary(const Accuracy &p_accuracy);
 // The summary's backend key: "backend=cpu" or "backend=vulkan" where the kernels ran, or
 // "backend=cpu_fallback" when p_asked was not the CPU and they ran there (the header says why).
 std::string backend_summary(ComputeBackend p_asked, bool p_on_device);
+// Where the device path's time went (#40's profile): each kind of batch the process's device ran,
+// its count a frame, its time on the calling thread and on the device. Nothing for the CPU backend.
+void print_device_batches(ComputeBackend p_backend, size_t p_frames);
 void print_memory(const TsdfStats &p_stats);
 void print_slam_rows(const SlamFigures &p_figures, const char *p_mesh_name);
 void print_slam_target(const SlamFigures &p_figures, int p_width, int p_height);

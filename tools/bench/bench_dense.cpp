@@ -170,6 +170,7 @@ int bench_dense(const Arguments &p_args, const DenseSource &p_source) {
 	if (!problem.empty() && p_args.backend != ComputeBackend::Cpu) {
 		std::printf("  backend: %s\n", problem.c_str());
 	}
+	print_device_batches(p_args.backend, done);
 	print_dense_summary(p_source, figures, accuracy, done, backend_summary(p_args.backend, slam.tracks_on_gpu() && slam.integrates_on_gpu()));
 	return 0;
 }

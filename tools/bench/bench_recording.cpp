@@ -328,6 +328,7 @@ int print_speed(const StepRun &p_run, const FullFrame &p_full, const Accuracy &p
 	speed.full_frame_ms = p_full.median;
 	speed.probe_size = p_run.setup.probe_size;
 	print_speed_targets(speed, ratios);
+	print_device_batches(p_run.setup.config.compute_backend, p_run.rgbd_done);
 	std::printf("summary: mode=slam frames=%zu fisheye_frames=%zu track_ms_p50=%.2f integrate_ms_p50=%.2f slam_ms_p50=%.2f probe_ms_p50=%.2f "
 				"frame_ms_p50=%.2f frame_ms_mean=%.2f %s %s %s good=%d poor=%d lost=%d\n",
 			p_run.rgbd_done, p_run.fisheye_integrated, figures.track.median(), figures.integrate.median(), figures.process.median(),

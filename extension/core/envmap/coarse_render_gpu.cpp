@@ -25,7 +25,7 @@ std::unique_ptr<CoarseGatherGpu> CoarseGatherGpu::create(std::shared_ptr<Compute
 	}
 	std::unique_ptr<CoarseGatherGpu> out(new CoarseGatherGpu());
 	out->compute = std::move(p_device);
-	out->kernel = out->compute->make_kernel(spirv::coarse_gather, sizeof(spirv::coarse_gather) / sizeof(uint32_t), 3, sizeof(GatherPush), r_error);
+	out->kernel = out->compute->make_kernel(spirv::coarse_gather, sizeof(spirv::coarse_gather) / sizeof(uint32_t), 3, sizeof(GatherPush), r_error, "coarse_gather");
 	if (!out->kernel) {
 		return nullptr;
 	}

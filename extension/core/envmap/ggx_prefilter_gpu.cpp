@@ -43,7 +43,7 @@ std::unique_ptr<GgxFilterGpu> GgxFilterGpu::create(std::shared_ptr<const GgxFilt
 			return nullptr;
 		}
 	}
-	out->kernel = device.make_kernel(spirv::ggx_prefilter, sizeof(spirv::ggx_prefilter) / sizeof(uint32_t), 5, sizeof(uint32_t), r_error);
+	out->kernel = device.make_kernel(spirv::ggx_prefilter, sizeof(spirv::ggx_prefilter) / sizeof(uint32_t), 5, sizeof(uint32_t), r_error, "ggx_prefilter");
 	out->pyramid = device.make_buffer(out->filter->pyramid_texels() * 3 * sizeof(float), r_error);
 	if (!out->kernel || !out->pyramid) {
 		return nullptr;

@@ -1,6 +1,7 @@
 #include "compute_device.h"
 
 #include <algorithm>
+#include <chrono>
 #include <map>
 
 namespace roomprobe {
@@ -157,6 +158,7 @@ std::vector<ComputeDevice::Candidate> ComputeDevice::rank_devices(const std::vec
 				candidate.rank = device_rank(properties.deviceType);
 				candidate.properties = properties;
 				candidate.name = properties.deviceName;
+				candidate.timestamp_bits = family_properties[f].timestampValidBits;
 				candidates.push_back(candidate);
 				break;
 			}
@@ -218,6 +220,15 @@ std::string ComputeDevice::open_device(const Candidate &p_candidate) {
 	if ((result = vk_api.CreateDescriptorPool(device, &descriptor_info, nullptr, &descriptors)) != VK_SUCCESS) {
 		return failed("vkCreateDescriptorPool", result);
 	}
+	if (p_candidate.timestamp_bits > 0 && device_limits.timestampPeriod > 0.0f) { // without them, batches are timed on the host alone
+		VkQueryPoolCreateInfo query_info = vk_struct<VkQueryPoolCreateInfo>(VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO);
+		query_info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+		query_info.queryCount = 2;
+		if (vk_api.CreateQueryPool(device, &query_info, nullptr, &timestamps) != VK_SUCCESS) {
+			timestamps = VK_NULL_HANDLE;
+		}
+		timestamp_mask = p_candidate.timestamp_bits >= 64 ? ~uint64_t(0) : (uint64_t(1) << p_candidate.timestamp_bits) - 1;
+	}
 	return std::string();
 }
 
@@ -226,6 +237,9 @@ void ComputeDevice::close_device() {
 	if (device != VK_NULL_HANDLE && vk_api.DestroyDevice != nullptr && vk_api.QueueSubmit != nullptr) {
 		vk_api.DeviceWaitIdle(device);
 		vk_api.DestroyDescriptorPool(device, descriptors, nullptr);
+		if (timestamps != VK_NULL_HANDLE) {
+			vk_api.DestroyQueryPool(device, timestamps, nullptr);
+		}
 		vk_api.DestroyFence(device, fence, nullptr);
 		vk_api.DestroyCommandPool(device, pool, nullptr);
 		vk_api.DestroyDevice(device, nullptr);
@@ -234,6 +248,7 @@ void ComputeDevice::close_device() {
 	}
 	device = VK_NULL_HANDLE;
 	descriptors = VK_NULL_HANDLE;
+	timestamps = VK_NULL_HANDLE;
 	fence = VK_NULL_HANDLE;
 	pool = VK_NULL_HANDLE;
 	commands = VK_NULL_HANDLE;
@@ -312,9 +327,11 @@ bool ComputeDevice::ensure_buffer(std::unique_ptr<GpuBuffer> *r_buffer, size_t p
 	return bool(*r_buffer);
 }
 
-std::unique_ptr<GpuKernel> ComputeDevice::make_kernel(const uint32_t *p_spirv, size_t p_words, int p_buffers, uint32_t p_push_bytes, std::string *r_error) const {
+std::unique_ptr<GpuKernel> ComputeDevice::make_kernel(const uint32_t *p_spirv, size_t p_words, int p_buffers, uint32_t p_push_bytes, std::string *r_error,
+		const char *p_label) const {
 	std::unique_ptr<GpuKernel> out(new GpuKernel());
 	out->device = this;
+	out->name = p_label;
 	out->buffers = p_buffers;
 	out->push_bytes = p_push_bytes;
 	VkShaderModuleCreateInfo module_info = vk_struct<VkShaderModuleCreateInfo>(VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO);
@@ -373,8 +390,13 @@ std::string ComputeDevice::run(const std::vector<GpuDispatch> &p_dispatches) con
 	}
 	VkCommandBufferBeginInfo begin = vk_struct<VkCommandBufferBeginInfo>(VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO);
 	begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+	const auto wall_start = std::chrono::steady_clock::now();
 	if ((reset = vk_api.BeginCommandBuffer(commands, &begin)) != VK_SUCCESS) {
 		return failed("vkBeginCommandBuffer", reset);
+	}
+	if (timestamps != VK_NULL_HANDLE) {
+		vk_api.CmdResetQueryPool(commands, timestamps, 0, 2);
+		vk_api.CmdWriteTimestamp(commands, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, timestamps, 0);
 	}
 	for (size_t d = 0; d < p_dispatches.size(); d++) {
 		const GpuDispatch &dispatch = p_dispatches[d];
@@ -420,6 +442,9 @@ std::string ComputeDevice::run(const std::vector<GpuDispatch> &p_dispatches) con
 	to_host.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
 	to_host.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
 	vk_api.CmdPipelineBarrier(commands, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &to_host, 0, nullptr, 0, nullptr);
+	if (timestamps != VK_NULL_HANDLE) {
+		vk_api.CmdWriteTimestamp(commands, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, timestamps, 1);
+	}
 	if ((reset = vk_api.EndCommandBuffer(commands)) != VK_SUCCESS) {
 		return failed("vkEndCommandBuffer", reset);
 	}
@@ -437,7 +462,42 @@ std::string ComputeDevice::run(const std::vector<GpuDispatch> &p_dispatches) con
 		lost = true; // the batch may still run: nothing it uses may be reset or freed by a next one
 		return failed("vkWaitForFences", result);
 	}
+	record_batch(p_dispatches, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall_start).count());
 	return std::string();
+}
+
+void ComputeDevice::record_batch(const std::vector<GpuDispatch> &p_dispatches, double p_wall_ms) const {
+	std::string kind;
+	for (const GpuDispatch &dispatch : p_dispatches) {
+		const std::string &label = dispatch.kernel->label();
+		if (kind != label && !kind.ends_with("+" + label)) { // a kernel dispatched again in a row is named once
+			kind += (kind.empty() ? "" : "+") + label;
+		}
+	}
+	GpuBatchStats &stats = batches[kind];
+	stats.kind = kind;
+	stats.batches++;
+	stats.wall_ms += p_wall_ms;
+	uint64_t ticks[2] = { 0, 0 };
+	if (timestamps != VK_NULL_HANDLE &&
+			vk_api.GetQueryPoolResults(device, timestamps, 0, 2, sizeof(ticks), ticks, sizeof(uint64_t), VK_QUERY_RESULT_64_BIT) == VK_SUCCESS) {
+		stats.device_ms += double((ticks[1] - ticks[0]) & timestamp_mask) * double(device_limits.timestampPeriod) * 1e-6;
+		stats.timed = true;
+	}
+}
+
+std::vector<GpuBatchStats> ComputeDevice::batch_stats() const {
+	const std::lock_guard<std::mutex> lock(queue_mutex);
+	std::vector<GpuBatchStats> out;
+	for (const auto &[kind, stats] : batches) {
+		out.push_back(stats);
+	}
+	return out;
+}
+
+void ComputeDevice::reset_batch_stats() const {
+	const std::lock_guard<std::mutex> lock(queue_mutex);
+	batches.clear();
 }
 
 std::shared_ptr<ComputeDevice> shared_compute_device(ComputeBackend p_backend, std::string *r_reason) {

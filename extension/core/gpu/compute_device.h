@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -70,10 +71,12 @@ public:
 	GpuKernel(const GpuKernel &) = delete;
 	GpuKernel &operator=(const GpuKernel &) = delete;
 	int buffer_count() const { return buffers; }
+	const std::string &label() const { return name; }
 
 private:
 	friend class ComputeDevice;
 	GpuKernel() = default;
+	std::string name; // the kernel's file name, for the batches' figures
 	const ComputeDevice *device = nullptr;
 	VkShaderModule module = VK_NULL_HANDLE;
 	VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
@@ -108,6 +111,17 @@ struct GpuDispatch {
 	}
 };
 
+// What the device's batches of one kind cost (ComputeDevice::batch_stats): the kind is the batch's
+// kernels' labels joined by '+'. wall: from the recording of the commands to the end of the fence's
+// wait, on the calling thread; device: the device's own timestamps at the batch's start and end
+// (where the queue has them). wall - device is the host's share: recording, submission, wake-up.
+struct GpuBatchStats {
+	std::string kind;
+	size_t batches = 0;
+	double wall_ms = 0.0, device_ms = 0.0; // sums over the batches
+	bool timed = false; // device_ms is measured
+};
+
 class ComputeDevice {
 public:
 	// A device with a compute queue, GPUs before CPU devices, the next tried where one's driver
@@ -128,10 +142,16 @@ public:
 	// *r_buffer made anew, p_bytes + p_slack_bytes large, unless it already holds p_bytes (a
 	// stage's buffers grow with its inputs and are kept between calls). False with r_error.
 	bool ensure_buffer(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error, size_t p_slack_bytes = 0) const;
-	std::unique_ptr<GpuKernel> make_kernel(const uint32_t *p_spirv, size_t p_words, int p_buffers, uint32_t p_push_bytes, std::string *r_error) const;
+	// p_label: the kernel's name in the batches' figures (its file's, "icp_reduce").
+	std::unique_ptr<GpuKernel> make_kernel(const uint32_t *p_spirv, size_t p_words, int p_buffers, uint32_t p_push_bytes, std::string *r_error,
+			const char *p_label = "kernel") const;
 	// Runs the dispatches in order (each sees the writes of those before it) and waits for them.
 	// "" or what failed.
 	std::string run(const std::vector<GpuDispatch> &p_dispatches) const;
+	// The batches run so far, by kind (a profile of the device path: where its time goes), and a
+	// fresh start of it.
+	std::vector<GpuBatchStats> batch_stats() const;
+	void reset_batch_stats() const;
 
 	const vk::Api &api() const { return vk_api; }
 	const VkPhysicalDeviceLimits &limits() const { return device_limits; }
@@ -151,11 +171,14 @@ private:
 		int rank = 0;
 		VkPhysicalDeviceProperties properties{};
 		std::string name;
+		uint32_t timestamp_bits = 0; // the queue family's timestampValidBits (0: none)
 	};
 	std::string open(const ComputeDeviceOptions &p_options);
 	std::vector<Candidate> rank_devices(const std::vector<VkPhysicalDevice> &p_devices, const ComputeDeviceOptions &p_options) const;
 	std::string open_device(const Candidate &p_candidate); // "" or why it cannot be used
 	void close_device(); // what open_device made, so that the next candidate can be tried
+	// Adds a finished batch to batch_stats(), with its device time where the queue has timestamps.
+	void record_batch(const std::vector<GpuDispatch> &p_dispatches, double p_wall_ms) const;
 	int memory_type(uint32_t p_bits, bool p_cached = false) const; // host-visible and coherent (cached first when asked); -1: none
 
 	vk::Api vk_api;
@@ -167,6 +190,9 @@ private:
 	VkCommandBuffer commands = VK_NULL_HANDLE;
 	VkFence fence = VK_NULL_HANDLE;
 	VkDescriptorPool descriptors = VK_NULL_HANDLE;
+	VkQueryPool timestamps = VK_NULL_HANDLE; // two a batch, where the queue has them
+	uint64_t timestamp_mask = 0;
+	mutable std::map<std::string, GpuBatchStats> batches; // by kind, under queue_mutex
 	VkPhysicalDeviceMemoryProperties memory{};
 	VkPhysicalDeviceLimits device_limits{};
 	mutable std::atomic<bool> lost{ false };

@@ -103,6 +103,11 @@ bool load_device(VkDevice p_device, Api *io_api, std::string *r_error) {
 	RP_VK_DEVICE(ResetFences);
 	RP_VK_DEVICE(WaitForFences);
 	RP_VK_DEVICE(QueueSubmit);
+	RP_VK_DEVICE(CreateQueryPool);
+	RP_VK_DEVICE(DestroyQueryPool);
+	RP_VK_DEVICE(CmdResetQueryPool);
+	RP_VK_DEVICE(CmdWriteTimestamp);
+	RP_VK_DEVICE(GetQueryPoolResults);
 	return r_error->empty();
 }
 

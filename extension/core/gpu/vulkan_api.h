@@ -65,6 +65,11 @@ struct Api {
 	PFN_vkResetFences ResetFences = nullptr;
 	PFN_vkWaitForFences WaitForFences = nullptr;
 	PFN_vkQueueSubmit QueueSubmit = nullptr;
+	PFN_vkCreateQueryPool CreateQueryPool = nullptr; // the batches' timestamps (ComputeDevice::batch_stats)
+	PFN_vkDestroyQueryPool DestroyQueryPool = nullptr;
+	PFN_vkCmdResetQueryPool CmdResetQueryPool = nullptr;
+	PFN_vkCmdWriteTimestamp CmdWriteTimestamp = nullptr;
+	PFN_vkGetQueryPoolResults GetQueryPoolResults = nullptr;
 };
 
 // Opens the loader and takes the global functions. False, with r_error naming the library and

@@ -51,7 +51,7 @@ std::unique_ptr<IcpReducerGpu> IcpReducerGpu::create(std::shared_ptr<ComputeDevi
 	}
 	std::unique_ptr<IcpReducerGpu> out(new IcpReducerGpu());
 	out->compute = std::move(p_device);
-	out->kernel = out->compute->make_kernel(spirv::icp_reduce, sizeof(spirv::icp_reduce) / sizeof(uint32_t), 4, 0, r_error);
+	out->kernel = out->compute->make_kernel(spirv::icp_reduce, sizeof(spirv::icp_reduce) / sizeof(uint32_t), 4, 0, r_error, "icp_reduce");
 	if (!out->kernel || !out->ensure(&out->params, sizeof(Params), r_error)) {
 		return nullptr;
 	}

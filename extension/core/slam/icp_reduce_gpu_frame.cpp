@@ -49,9 +49,9 @@ bool IcpReducerGpu::make_pyramid_kernels(std::string *r_error) {
 	if (surface_kernel) {
 		return true;
 	}
-	smooth_kernel = compute->make_kernel(spirv::depth_smooth, sizeof(spirv::depth_smooth) / sizeof(uint32_t), 2, sizeof(SmoothPush), r_error);
-	downsample_kernel = compute->make_kernel(spirv::depth_downsample, sizeof(spirv::depth_downsample) / sizeof(uint32_t), 2, sizeof(DownsamplePush), r_error);
-	surface_kernel = compute->make_kernel(spirv::depth_surface, sizeof(spirv::depth_surface) / sizeof(uint32_t), 3, sizeof(SurfacePush), r_error);
+	smooth_kernel = compute->make_kernel(spirv::depth_smooth, sizeof(spirv::depth_smooth) / sizeof(uint32_t), 2, sizeof(SmoothPush), r_error, "depth_smooth");
+	downsample_kernel = compute->make_kernel(spirv::depth_downsample, sizeof(spirv::depth_downsample) / sizeof(uint32_t), 2, sizeof(DownsamplePush), r_error, "depth_downsample");
+	surface_kernel = compute->make_kernel(spirv::depth_surface, sizeof(spirv::depth_surface) / sizeof(uint32_t), 3, sizeof(SurfacePush), r_error, "depth_surface");
 	return smooth_kernel && downsample_kernel && surface_kernel;
 }
 

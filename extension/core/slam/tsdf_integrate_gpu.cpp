@@ -59,9 +59,9 @@ std::unique_ptr<TsdfIntegratorGpu> TsdfIntegratorGpu::create(std::shared_ptr<Com
 	out->compute = std::move(p_device);
 	out->capacity_blocks = std::max<size_t>(p_pool_blocks, 1);
 	out->window_blocks = std::min(p_window_blocks > 0 ? p_window_blocks : reach, reach);
-	out->kernel = out->compute->make_kernel(spirv::tsdf_integrate, sizeof(spirv::tsdf_integrate) / sizeof(uint32_t), 4, sizeof(Push), r_error);
-	out->smooth_kernel = out->kernel ? out->compute->make_kernel(spirv::depth_smooth, sizeof(spirv::depth_smooth) / sizeof(uint32_t), 2, sizeof(SmoothPush), r_error) : nullptr;
-	out->slope_kernel = out->smooth_kernel ? out->compute->make_kernel(spirv::tsdf_slope, sizeof(spirv::tsdf_slope) / sizeof(uint32_t), 1, sizeof(SlopePush), r_error) : nullptr;
+	out->kernel = out->compute->make_kernel(spirv::tsdf_integrate, sizeof(spirv::tsdf_integrate) / sizeof(uint32_t), 4, sizeof(Push), r_error, "tsdf_integrate");
+	out->smooth_kernel = out->kernel ? out->compute->make_kernel(spirv::depth_smooth, sizeof(spirv::depth_smooth) / sizeof(uint32_t), 2, sizeof(SmoothPush), r_error, "depth_smooth") : nullptr;
+	out->slope_kernel = out->smooth_kernel ? out->compute->make_kernel(spirv::tsdf_slope, sizeof(spirv::tsdf_slope) / sizeof(uint32_t), 1, sizeof(SlopePush), r_error, "tsdf_slope") : nullptr;
 	if (!out->slope_kernel) {
 		return nullptr;
 	}

@@ -45,7 +45,7 @@ std::unique_ptr<TsdfRaycasterGpu> TsdfRaycasterGpu::create(const TsdfIntegratorG
 		return nullptr;
 	}
 	std::unique_ptr<TsdfRaycasterGpu> out(new TsdfRaycasterGpu(p_pool));
-	out->kernel = p_pool.device().make_kernel(spirv::tsdf_raycast, sizeof(spirv::tsdf_raycast) / sizeof(uint32_t), 8, 0, r_error);
+	out->kernel = p_pool.device().make_kernel(spirv::tsdf_raycast, sizeof(spirv::tsdf_raycast) / sizeof(uint32_t), 8, 0, r_error, "tsdf_raycast");
 	if (!out->kernel || !p_pool.device().ensure_buffer(&out->params, sizeof(Params), r_error)) {
 		return nullptr;
 	}
