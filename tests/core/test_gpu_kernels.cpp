@@ -13,8 +13,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <numbers>
+#include <vector>
 
 using namespace roomprobe;
 
@@ -193,4 +195,32 @@ TEST_CASE("GPU profile: each batch is counted by its kernels, and its device tim
 	}
 	device->reset_batch_stats();
 	CHECK(device->batch_stats().empty());
+}
+
+TEST_CASE("GPU memory: buffers are placed by who reads them, counted while they live, and hold what the host wrote") {
+	const std::shared_ptr<ComputeDevice> device = gpu_test_device();
+	const size_t device_before = device->device_memory_bytes(), host_before = device->host_memory_bytes();
+	constexpr size_t BYTES = 1 << 20;
+	std::string error;
+	{
+		const std::unique_ptr<GpuBuffer> input = device->make_buffer(BYTES, GpuAccess::DeviceReads, &error);
+		const std::unique_ptr<GpuBuffer> output = device->make_buffer(BYTES, GpuAccess::HostReads, &error);
+		REQUIRE_MESSAGE(input, error);
+		REQUIRE_MESSAGE(output, error);
+		MESSAGE("device-read buffer in device memory: " << input->in_device_memory() << ", host-read buffer: " << output->in_device_memory());
+		const size_t in_device = (input->in_device_memory() ? BYTES : 0) + (output->in_device_memory() ? BYTES : 0);
+		CHECK(device->device_memory_bytes() - device_before == in_device);
+		CHECK(device->host_memory_bytes() - host_before == 2 * BYTES - in_device);
+		// Both are mapped for the host: what it writes is there to read (the device's reads are the kernels' tests).
+		std::vector<uint8_t> pattern(BYTES);
+		for (size_t i = 0; i < BYTES; i++) {
+			pattern[i] = uint8_t(i * 131 + 7);
+		}
+		std::memcpy(input->data(), pattern.data(), BYTES);
+		std::memcpy(output->data(), pattern.data(), BYTES);
+		CHECK(std::memcmp(input->data(), pattern.data(), BYTES) == 0);
+		CHECK(std::memcmp(output->data(), pattern.data(), BYTES) == 0);
+	}
+	CHECK(device->device_memory_bytes() == device_before);
+	CHECK(device->host_memory_bytes() == host_before);
 }

@@ -208,7 +208,9 @@ void print_device_batches(ComputeBackend p_backend, size_t p_frames) {
 	}
 	std::vector<GpuBatchStats> kinds = device->batch_stats();
 	std::sort(kinds.begin(), kinds.end(), [](const GpuBatchStats &p_a, const GpuBatchStats &p_b) { return p_a.wall_ms > p_b.wall_ms; });
-	std::printf("device batches on %s (wall: the calling thread, recording to the fence's end; device: the GPU's timestamps)\n", device->name().c_str());
+	std::printf("device batches on %s (wall: the calling thread, recording to the fence's end; device: the GPU's timestamps); buffers: "
+				"%.1f MiB in device memory, %.1f MiB in host memory\n",
+			device->name().c_str(), double(device->device_memory_bytes()) / 1048576.0, double(device->host_memory_bytes()) / 1048576.0);
 	std::printf("  %-44s %9s %12s %14s %12s\n", "kernels", "a frame", "wall ms a fr", "device ms a fr", "host share");
 	const double frames = double(p_frames);
 	double wall = 0.0, on_device = 0.0;

@@ -44,8 +44,9 @@ bool CoarseGatherGpu::upload(Slot *io_slot, const std::shared_ptr<const void> &p
 				" of atlas) exceed the Vulkan device's storage buffer range (" + std::to_string(range) + " bytes)";
 		return false;
 	}
-	if (!device.ensure_buffer(&io_slot->taps, taps_bytes, r_error) || !device.ensure_buffer(&io_slot->atlas_buffer, atlas_bytes, r_error) ||
-			!device.ensure_buffer(&io_slot->faces, faces_bytes, r_error)) {
+	if (!device.ensure_buffer(&io_slot->taps, taps_bytes, GpuAccess::DeviceReads, r_error) ||
+			!device.ensure_buffer(&io_slot->atlas_buffer, atlas_bytes, GpuAccess::DeviceReads, r_error) ||
+			!device.ensure_buffer(&io_slot->faces, faces_bytes, GpuAccess::HostReads, r_error)) {
 		io_slot->forget();
 		return false;
 	}

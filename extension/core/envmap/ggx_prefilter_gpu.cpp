@@ -13,7 +13,7 @@ constexpr uint32_t GROUP_SIZE = 64; // ggx_prefilter.comp's local_size_x
 
 template <typename T>
 std::unique_ptr<GpuBuffer> upload(const ComputeDevice &p_device, const std::vector<T> &p_values, std::string *r_error) {
-	std::unique_ptr<GpuBuffer> buffer = p_device.make_buffer(p_values.size() * sizeof(T), r_error);
+	std::unique_ptr<GpuBuffer> buffer = p_device.make_buffer(p_values.size() * sizeof(T), GpuAccess::DeviceReads, r_error);
 	if (buffer && !p_values.empty()) {
 		std::memcpy(buffer->data(), p_values.data(), p_values.size() * sizeof(T));
 	}
@@ -44,7 +44,7 @@ std::unique_ptr<GgxFilterGpu> GgxFilterGpu::create(std::shared_ptr<const GgxFilt
 		}
 	}
 	out->kernel = device.make_kernel(spirv::ggx_prefilter, sizeof(spirv::ggx_prefilter) / sizeof(uint32_t), 5, sizeof(uint32_t), r_error, "ggx_prefilter");
-	out->pyramid = device.make_buffer(out->filter->pyramid_texels() * 3 * sizeof(float), r_error);
+	out->pyramid = device.make_buffer(out->filter->pyramid_texels() * 3 * sizeof(float), GpuAccess::DeviceReads, r_error);
 	if (!out->kernel || !out->pyramid) {
 		return nullptr;
 	}
@@ -62,7 +62,7 @@ std::unique_ptr<GgxFilterGpu> GgxFilterGpu::create(std::shared_ptr<const GgxFilt
 		gpu.first = upload(device, level.first, r_error);
 		gpu.texel = upload(device, level.texel, r_error);
 		gpu.weight = upload(device, level.weight, r_error);
-		gpu.result = device.make_buffer(size_t(gpu.texels) * 3 * sizeof(float), r_error);
+		gpu.result = device.make_buffer(size_t(gpu.texels) * 3 * sizeof(float), GpuAccess::HostReads, r_error);
 		if (!gpu.first || !gpu.texel || !gpu.weight || !gpu.result) {
 			return nullptr;
 		}

@@ -25,9 +25,9 @@ std::unique_ptr<ShProjectorGpu> ShProjectorGpu::create(int p_size, std::shared_p
 	const size_t texels = 6 * size_t(p_size) * size_t(p_size);
 	const std::shared_ptr<const std::vector<float>> table = sh_texel_weights(p_size);
 	out->kernel = device.make_kernel(spirv::sh_project, sizeof(spirv::sh_project) / sizeof(uint32_t), 3, sizeof(uint32_t), r_error, "sh_project");
-	out->faces = device.make_buffer(texels * 3 * sizeof(float), r_error);
-	out->weights = device.make_buffer(table->size() * sizeof(float), r_error);
-	out->rows = device.make_buffer(6 * size_t(p_size) * ROW_FLOATS * sizeof(float), r_error);
+	out->faces = device.make_buffer(texels * 3 * sizeof(float), GpuAccess::DeviceReads, r_error);
+	out->weights = device.make_buffer(table->size() * sizeof(float), GpuAccess::DeviceReads, r_error);
+	out->rows = device.make_buffer(6 * size_t(p_size) * ROW_FLOATS * sizeof(float), GpuAccess::HostReads, r_error);
 	if (!out->kernel || !out->faces || !out->weights || !out->rows) {
 		return nullptr;
 	}

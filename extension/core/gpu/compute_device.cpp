@@ -78,6 +78,7 @@ GpuBuffer::~GpuBuffer() {
 	}
 	if (mapped != nullptr) {
 		api.UnmapMemory(device->handle(), memory);
+		(device_local ? device->device_bytes : device->host_bytes) -= bytes;
 	}
 	api.DestroyBuffer(device->handle(), buffer, nullptr);
 	api.FreeMemory(device->handle(), memory, nullptr);
@@ -263,23 +264,40 @@ ComputeDevice::~ComputeDevice() {
 	}
 }
 
-int ComputeDevice::memory_type(uint32_t p_bits, bool p_cached) const {
+int ComputeDevice::memory_type(uint32_t p_bits, VkMemoryPropertyFlags p_also) const {
 	const VkMemoryPropertyFlags wanted = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-	for (uint32_t i = 0; p_cached && i < memory.memoryTypeCount; i++) {
-		const VkMemoryPropertyFlags cached = wanted | VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
-		if ((p_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & cached) == cached) {
-			return int(i);
-		}
-	}
-	for (uint32_t i = 0; i < memory.memoryTypeCount; i++) {
-		if ((p_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & wanted) == wanted) {
-			return int(i);
+	for (const VkMemoryPropertyFlags flags : { wanted | p_also, wanted }) {
+		for (uint32_t i = 0; i < memory.memoryTypeCount; i++) {
+			if ((p_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & flags) == flags) {
+				return int(i);
+			}
 		}
 	}
 	return -1;
 }
 
-std::unique_ptr<GpuBuffer> ComputeDevice::make_buffer(size_t p_bytes, std::string *r_error, bool p_host_reads) const {
+std::string ComputeDevice::bind_memory(GpuBuffer *r_buffer, VkMemoryRequirements p_needs, int p_type) const {
+	VkMemoryAllocateInfo allocate = vk_struct<VkMemoryAllocateInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO);
+	allocate.allocationSize = p_needs.size;
+	allocate.memoryTypeIndex = uint32_t(p_type);
+	VkResult result = vk_api.AllocateMemory(device, &allocate, nullptr, &r_buffer->memory);
+	if (result != VK_SUCCESS) {
+		r_buffer->memory = VK_NULL_HANDLE;
+		return failed("vkAllocateMemory", result) + " (" + std::to_string(p_needs.size) + " bytes)";
+	}
+	if ((result = vk_api.BindBufferMemory(device, r_buffer->buffer, r_buffer->memory, 0)) != VK_SUCCESS) {
+		return failed("vkBindBufferMemory", result);
+	}
+	if ((result = vk_api.MapMemory(device, r_buffer->memory, 0, VK_WHOLE_SIZE, 0, &r_buffer->mapped)) != VK_SUCCESS) {
+		r_buffer->mapped = nullptr;
+		return failed("vkMapMemory", result);
+	}
+	r_buffer->device_local = (memory.memoryTypes[p_type].propertyFlags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) != 0;
+	(r_buffer->device_local ? device_bytes : host_bytes) += r_buffer->bytes;
+	return std::string();
+}
+
+std::unique_ptr<GpuBuffer> ComputeDevice::make_buffer(size_t p_bytes, GpuAccess p_access, std::string *r_error) const {
 	std::unique_ptr<GpuBuffer> out(new GpuBuffer());
 	out->device = this;
 	out->bytes = p_bytes;
@@ -287,43 +305,44 @@ std::unique_ptr<GpuBuffer> ComputeDevice::make_buffer(size_t p_bytes, std::strin
 	info.size = std::max<size_t>(p_bytes, 4); // a zero-sized buffer is invalid
 	info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
 	info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-	VkResult result = vk_api.CreateBuffer(device, &info, nullptr, &out->buffer);
+	const VkResult result = vk_api.CreateBuffer(device, &info, nullptr, &out->buffer);
 	if (result != VK_SUCCESS) {
 		*r_error = failed("vkCreateBuffer", result);
 		return nullptr;
 	}
 	VkMemoryRequirements needs;
 	vk_api.GetBufferMemoryRequirements(device, out->buffer, &needs);
-	const int type = memory_type(needs.memoryTypeBits, p_host_reads);
+	const bool device_reads = p_access == GpuAccess::DeviceReads;
+	const int type = memory_type(needs.memoryTypeBits, device_reads ? VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT : VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
 	if (type < 0) {
 		*r_error = "the Vulkan device has no host-visible, coherent memory for a storage buffer";
 		return nullptr;
 	}
-	VkMemoryAllocateInfo allocate = vk_struct<VkMemoryAllocateInfo>(VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO);
-	allocate.allocationSize = needs.size;
-	allocate.memoryTypeIndex = uint32_t(type);
-	if ((result = vk_api.AllocateMemory(device, &allocate, nullptr, &out->memory)) != VK_SUCCESS) {
-		*r_error = failed("vkAllocateMemory", result) + " (" + std::to_string(needs.size) + " bytes)";
-		return nullptr;
+	std::string problem = bind_memory(out.get(), needs, type);
+	if (!problem.empty() && out->memory == VK_NULL_HANDLE && device_reads) {
+		// A discrete GPU's mappable device memory may be a small heap (a 256-MiB BAR): host memory then.
+		for (uint32_t i = 0; i < memory.memoryTypeCount; i++) {
+			const VkMemoryPropertyFlags flags = memory.memoryTypes[i].propertyFlags;
+			if (int(i) != type && (needs.memoryTypeBits & (1u << i)) && !(flags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) &&
+					(flags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT) && (flags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)) {
+				problem = bind_memory(out.get(), needs, int(i));
+				break;
+			}
+		}
 	}
-	if ((result = vk_api.BindBufferMemory(device, out->buffer, out->memory, 0)) != VK_SUCCESS) {
-		*r_error = failed("vkBindBufferMemory", result);
-		return nullptr;
-	}
-	if ((result = vk_api.MapMemory(device, out->memory, 0, VK_WHOLE_SIZE, 0, &out->mapped)) != VK_SUCCESS) {
-		out->mapped = nullptr;
-		*r_error = failed("vkMapMemory", result);
+	if (!problem.empty()) {
+		*r_error = problem;
 		return nullptr;
 	}
 	return out;
 }
 
-bool ComputeDevice::ensure_buffer(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error, size_t p_slack_bytes) const {
+bool ComputeDevice::ensure_buffer(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, GpuAccess p_access, std::string *r_error, size_t p_slack_bytes) const {
 	if (*r_buffer && (*r_buffer)->size_bytes() >= p_bytes) {
 		return true;
 	}
 	r_buffer->reset(); // before the new one: the old one's memory may be needed
-	*r_buffer = make_buffer(p_bytes + p_slack_bytes, r_error);
+	*r_buffer = make_buffer(p_bytes + p_slack_bytes, p_access, r_error);
 	return bool(*r_buffer);
 }
 

@@ -5,9 +5,12 @@
 // hold it to. A stage asks for the device through the engine's configuration and falls back to
 // its CPU code, with the reason, when there is none.
 //
-// Buffers are host-visible and coherent (mapped once): simple and right on integrated GPUs and
-// lavapipe; a discrete GPU reads them over PCIe, which the figures say. One lock serialises the
-// queue: a batch of dispatches is recorded, submitted and waited for under it.
+// Buffers are host-visible and coherent (mapped once), placed by who reads them (GpuAccess): what
+// the host writes and the device reads lives in device memory the host can map where the device
+// has it (a discrete GPU's BAR; the H200's profile showed its kernels crawling over host memory),
+// and what the host reads lives in host-cached memory. On integrated GPUs and lavapipe both are
+// the one memory. One lock serialises the queue: a batch of dispatches is recorded, submitted and
+// waited for under it.
 
 #include "vulkan_api.h"
 
@@ -44,6 +47,17 @@ struct ComputeDeviceOptions {
 	bool allow_cpu_device = true; // false: refuse a CPU device (lavapipe), as Auto does
 };
 
+// Who reads a buffer, which decides its memory.
+enum class GpuAccess {
+	// The host only writes it (in order, never reading it back), the device reads it: device memory
+	// the host can map where there is such memory (write-combined: host reads of it crawl), else
+	// host memory.
+	DeviceReads,
+	// The host reads it (the device's results, or a model both work on): host-cached memory where
+	// the device has it, since the host reads write-combined memory a bus transaction at a time.
+	HostReads,
+};
+
 // A storage buffer, mapped for the host.
 class GpuBuffer {
 public:
@@ -52,6 +66,7 @@ public:
 	GpuBuffer &operator=(const GpuBuffer &) = delete;
 	size_t size_bytes() const { return bytes; }
 	void *data() const { return mapped; }
+	bool in_device_memory() const { return device_local; } // device-local memory (a discrete GPU's own)
 
 private:
 	friend class ComputeDevice;
@@ -61,6 +76,7 @@ private:
 	VkDeviceMemory memory = VK_NULL_HANDLE;
 	void *mapped = nullptr;
 	size_t bytes = 0;
+	bool device_local = false;
 };
 
 // A compute pipeline: SPIR-V with p_buffers storage buffers at bindings 0 .. p_buffers - 1 of set
@@ -135,13 +151,15 @@ public:
 	const std::string &name() const { return device_name; } // "llvmpipe (LLVM 19.1.7, 256 bits)", ...
 	bool is_cpu() const { return cpu; }
 
-	// p_host_reads: the host reads the buffer as much as the device does (a model both work on):
-	// host-cached memory where the device has it, since uncached (write-combined) memory, a
-	// discrete GPU's usual host-visible kind, makes every CPU read a bus transaction.
-	std::unique_ptr<GpuBuffer> make_buffer(size_t p_bytes, std::string *r_error, bool p_host_reads = false) const;
+	// A buffer in the memory p_access asks for (GpuAccess), null with r_error where none can be had.
+	std::unique_ptr<GpuBuffer> make_buffer(size_t p_bytes, GpuAccess p_access, std::string *r_error) const;
 	// *r_buffer made anew, p_bytes + p_slack_bytes large, unless it already holds p_bytes (a
 	// stage's buffers grow with its inputs and are kept between calls). False with r_error.
-	bool ensure_buffer(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error, size_t p_slack_bytes = 0) const;
+	bool ensure_buffer(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, GpuAccess p_access, std::string *r_error, size_t p_slack_bytes = 0) const;
+	// The buffers' bytes now in device-local memory and in host memory (the figures say where the
+	// data lives).
+	size_t device_memory_bytes() const { return device_bytes.load(); }
+	size_t host_memory_bytes() const { return host_bytes.load(); }
 	// p_label: the kernel's name in the batches' figures (its file's, "icp_reduce").
 	std::unique_ptr<GpuKernel> make_kernel(const uint32_t *p_spirv, size_t p_words, int p_buffers, uint32_t p_push_bytes, std::string *r_error,
 			const char *p_label = "kernel") const;
@@ -163,6 +181,7 @@ public:
 	VkDevice handle() const { return device; }
 
 private:
+	friend class GpuBuffer; // its memory's bytes, counted here
 	ComputeDevice() = default;
 	// A physical device that can run compute, and its rank (GPUs first).
 	struct Candidate {
@@ -179,7 +198,10 @@ private:
 	void close_device(); // what open_device made, so that the next candidate can be tried
 	// Adds a finished batch to batch_stats(), with its device time where the queue has timestamps.
 	void record_batch(const std::vector<GpuDispatch> &p_dispatches, double p_wall_ms) const;
-	int memory_type(uint32_t p_bits, bool p_cached = false) const; // host-visible and coherent (cached first when asked); -1: none
+	// A host-visible, coherent memory type: with p_also's flags where one has them, else any; -1: none.
+	int memory_type(uint32_t p_bits, VkMemoryPropertyFlags p_also = 0) const;
+	// Memory of type p_type for r_buffer's buffer, bound and mapped; "" or what failed.
+	std::string bind_memory(GpuBuffer *r_buffer, VkMemoryRequirements p_needs, int p_type) const;
 
 	vk::Api vk_api;
 	VkInstance instance = VK_NULL_HANDLE;
@@ -196,6 +218,7 @@ private:
 	VkPhysicalDeviceMemoryProperties memory{};
 	VkPhysicalDeviceLimits device_limits{};
 	mutable std::atomic<bool> lost{ false };
+	mutable std::atomic<size_t> device_bytes{ 0 }, host_bytes{ 0 };
 	std::string device_name;
 	bool cpu = false;
 	mutable std::mutex queue_mutex;

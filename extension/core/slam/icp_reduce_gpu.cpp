@@ -52,7 +52,7 @@ std::unique_ptr<IcpReducerGpu> IcpReducerGpu::create(std::shared_ptr<ComputeDevi
 	std::unique_ptr<IcpReducerGpu> out(new IcpReducerGpu());
 	out->compute = std::move(p_device);
 	out->kernel = out->compute->make_kernel(spirv::icp_reduce, sizeof(spirv::icp_reduce) / sizeof(uint32_t), 4, 0, r_error, "icp_reduce");
-	if (!out->kernel || !out->ensure(&out->params, sizeof(Params), r_error)) {
+	if (!out->kernel || !out->ensure(&out->params, sizeof(Params), GpuAccess::DeviceReads, r_error)) {
 		return nullptr;
 	}
 	return out;
@@ -69,8 +69,8 @@ std::string IcpReducerGpu::failure() const {
 	return failure_reason;
 }
 
-bool IcpReducerGpu::ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error) const {
-	return compute->ensure_buffer(r_buffer, p_bytes, r_error);
+bool IcpReducerGpu::ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, GpuAccess p_access, std::string *r_error) const {
+	return compute->ensure_buffer(r_buffer, p_bytes, p_access, r_error);
 }
 
 size_t IcpReducerGpu::plan_levels(const PinholeIntrinsics &p_camera, int p_levels, int p_finest_stride) {
@@ -90,7 +90,7 @@ size_t IcpReducerGpu::plan_levels(const PinholeIntrinsics &p_camera, int p_level
 
 bool IcpReducerGpu::set_frame(const FramePyramid &p_frame, int p_levels, int p_finest_stride, std::string *r_error) {
 	const size_t floats = plan_levels(p_frame.cameras[0], p_levels, p_finest_stride);
-	if (!ensure(&frame, floats * sizeof(float), r_error)) {
+	if (!ensure(&frame, floats * sizeof(float), GpuAccess::DeviceReads, r_error)) {
 		return false;
 	}
 	float *out = static_cast<float *>(frame->data());
@@ -134,7 +134,7 @@ std::vector<float> IcpReducerGpu::frame_floats() const {
 
 bool IcpReducerGpu::set_model(const IcpModelView &p_model, std::string *r_error) {
 	const int w = p_model.camera.width, h = p_model.camera.height;
-	if (!ensure(&model, size_t(w) * size_t(h) * MODEL_FLOATS * sizeof(float), r_error)) {
+	if (!ensure(&model, size_t(w) * size_t(h) * MODEL_FLOATS * sizeof(float), GpuAccess::DeviceReads, r_error)) {
 		return false;
 	}
 	model_colour = p_model.intensity != nullptr;
@@ -177,7 +177,7 @@ bool IcpReducerGpu::reduce(int p_level, const IcpKernelParams &p_params, const f
 		return false;
 	}
 	const Level &level = levels[size_t(p_level)];
-	if (!ensure(&rows, size_t(level.rows) * ROW_FLOATS * sizeof(float), r_error)) {
+	if (!ensure(&rows, size_t(level.rows) * ROW_FLOATS * sizeof(float), GpuAccess::HostReads, r_error)) {
 		return false;
 	}
 	Params values{};

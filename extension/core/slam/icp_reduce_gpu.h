@@ -64,7 +64,7 @@ public:
 
 private:
 	IcpReducerGpu() = default;
-	bool ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error) const;
+	bool ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, GpuAccess p_access, std::string *r_error) const;
 	// Sizes levels for p_levels levels of p_camera (level 0 sampled every p_finest_stride-th
 	// pixel); the frame's floats.
 	size_t plan_levels(const PinholeIntrinsics &p_camera, int p_levels, int p_finest_stride);

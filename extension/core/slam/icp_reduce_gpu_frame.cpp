@@ -74,9 +74,11 @@ bool IcpReducerGpu::build_frame(const cv::Mat &p_clean_depth_m, const cv::Mat &p
 	}
 	const int radius = std::max(0, p_surface.smoothing_radius_px);
 	const bool colour = !p_rgb.empty();
-	if (!make_pyramid_kernels(r_error) || !ensure(&frame, frame_floats_needed * sizeof(float), r_error) ||
-			!ensure(&depth, depth_floats * sizeof(float), r_error) || !ensure(&intensity, intensity_floats * sizeof(float), r_error) ||
-			!ensure(&weights, size_t(2 * radius + 1) * size_t(2 * radius + 1) * sizeof(float), r_error)) {
+	// All four stay on the device (the host only writes the inputs): the pyramid feeds icp_reduce there.
+	const GpuAccess d = GpuAccess::DeviceReads;
+	if (!make_pyramid_kernels(r_error) || !ensure(&frame, frame_floats_needed * sizeof(float), d, r_error) ||
+			!ensure(&depth, depth_floats * sizeof(float), d, r_error) || !ensure(&intensity, intensity_floats * sizeof(float), d, r_error) ||
+			!ensure(&weights, size_t(2 * radius + 1) * size_t(2 * radius + 1) * sizeof(float), d, r_error)) {
 		return false;
 	}
 	if (weights_radius != radius) {

@@ -66,7 +66,7 @@ std::unique_ptr<TsdfIntegratorGpu> TsdfIntegratorGpu::create(std::shared_ptr<Com
 		return nullptr;
 	}
 	const size_t pool_bytes = out->capacity_blocks * BLOCK_BYTES;
-	out->voxels = out->compute->make_buffer(pool_bytes, r_error, true);
+	out->voxels = out->compute->make_buffer(pool_bytes, GpuAccess::HostReads, r_error); // the CPU allocates, meshes and reads it
 	if (!out->voxels) {
 		*r_error = "the voxel pool (" + std::to_string(pool_bytes >> 20) + " MiB, max_blocks " + std::to_string(p_pool_blocks) + "): " + *r_error;
 		return nullptr;
@@ -80,8 +80,8 @@ GpuWindow TsdfIntegratorGpu::pool_window(size_t p_window) const {
 	return GpuWindow{ first * BLOCK_BYTES, std::min(window_blocks, capacity_blocks - first) * BLOCK_BYTES };
 }
 
-bool TsdfIntegratorGpu::ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error) const {
-	return compute->ensure_buffer(r_buffer, p_bytes, r_error, p_bytes / 4 /* the block list changes length every frame */);
+bool TsdfIntegratorGpu::ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, GpuAccess p_access, std::string *r_error) const {
+	return compute->ensure_buffer(r_buffer, p_bytes, p_access, r_error, p_bytes / 4 /* the block list changes length every frame */);
 }
 
 void TsdfIntegratorGpu::upload_frame(const TsdfFrameView &p_frame, size_t p_rgb_offset) {
@@ -142,14 +142,15 @@ bool TsdfIntegratorGpu::integrate(const TsdfFrameView &p_frame, int p_slope_smoo
 	for (size_t w = 0; w < windows; w++) {
 		first[w + 1] += first[w];
 	}
-	if (!ensure(&blocks, p_blocks.size() * sizeof(TsdfGpuBlock), r_error) || !ensure(&frame, frame_words * sizeof(uint32_t), r_error) ||
-			!ensure(&flags, p_blocks.size() * sizeof(uint32_t), r_error)) {
+	if (!ensure(&blocks, p_blocks.size() * sizeof(TsdfGpuBlock), GpuAccess::DeviceReads, r_error) ||
+			!ensure(&frame, frame_words * sizeof(uint32_t), GpuAccess::DeviceReads, r_error) ||
+			!ensure(&flags, p_blocks.size() * sizeof(uint32_t), GpuAccess::HostReads, r_error)) {
 		return false;
 	}
 	const int radius = std::max(0, p_slope_smoothing_px);
 	if (weights_radius != radius) {
 		const std::vector<float> table = smoothing_weights(std::max(radius, 1));
-		if (!ensure(&weights, table.size() * sizeof(float), r_error)) {
+		if (!ensure(&weights, table.size() * sizeof(float), GpuAccess::DeviceReads, r_error)) {
 			return false;
 		}
 		std::memcpy(weights->data(), table.data(), table.size() * sizeof(float));

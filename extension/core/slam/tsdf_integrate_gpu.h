@@ -67,7 +67,7 @@ public:
 
 private:
 	TsdfIntegratorGpu() = default;
-	bool ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, std::string *r_error) const;
+	bool ensure(std::unique_ptr<GpuBuffer> *r_buffer, size_t p_bytes, GpuAccess p_access, std::string *r_error) const;
 	void upload_frame(const TsdfFrameView &p_frame, size_t p_rgb_offset);
 	// The batch's first dispatches: the smoothing (when p_radius > 0) and the slope factors.
 	void add_slope_dispatches(const TsdfFrameView &p_frame, int p_radius, size_t p_slope_offset, std::vector<GpuDispatch> *r_batch);

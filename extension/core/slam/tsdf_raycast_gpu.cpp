@@ -46,7 +46,7 @@ std::unique_ptr<TsdfRaycasterGpu> TsdfRaycasterGpu::create(const TsdfIntegratorG
 	}
 	std::unique_ptr<TsdfRaycasterGpu> out(new TsdfRaycasterGpu(p_pool));
 	out->kernel = p_pool.device().make_kernel(spirv::tsdf_raycast, sizeof(spirv::tsdf_raycast) / sizeof(uint32_t), 8, 0, r_error, "tsdf_raycast");
-	if (!out->kernel || !p_pool.device().ensure_buffer(&out->params, sizeof(Params), r_error)) {
+	if (!out->kernel || !p_pool.device().ensure_buffer(&out->params, sizeof(Params), GpuAccess::DeviceReads, r_error)) {
 		return nullptr;
 	}
 	return out;
@@ -83,8 +83,9 @@ bool TsdfRaycasterGpu::run(const TsdfRaycastInput &p_input, ModelMaps *r_maps, R
 	const size_t cell_count = size_t(cells.rows) * size_t(cells.cols);
 	const size_t intervals = cell_count + (p_input.search_m != nullptr ? pixels : 0);
 	const size_t hash_entries = size_t(p_input.hash_mask) + 1;
-	if (!device.ensure_buffer(&hash, hash_entries * sizeof(TsdfHashEntry), r_error) || !device.ensure_buffer(&ranges, intervals * sizeof(cv::Vec2f), r_error) ||
-			!device.ensure_buffer(&hits, pixels * HIT_FLOATS * sizeof(float), r_error)) {
+	if (!device.ensure_buffer(&hash, hash_entries * sizeof(TsdfHashEntry), GpuAccess::DeviceReads, r_error) ||
+			!device.ensure_buffer(&ranges, intervals * sizeof(cv::Vec2f), GpuAccess::DeviceReads, r_error) ||
+			!device.ensure_buffer(&hits, pixels * HIT_FLOATS * sizeof(float), GpuAccess::HostReads, r_error)) {
 		return false;
 	}
 	if (uploaded_version != p_input.hash_version) {
