@@ -120,9 +120,11 @@ TEST_CASE("flat walls: with the colour term off, no frame that slid more than 2 
 	MESSAGE("colour off: ATE " << run.ate_m * 1000.0 << " mm, " << slid << " frames more than 2 cm off, " << slid_good << " of them good; good "
 							   << run.good << ", poor " << run.poor << ", lost " << run.lost << "; " << first_reason);
 	CHECK(slid_good == 0);
-	// The sweep does slide (the test means something), and the state says why, naming the direction.
+	// The sweep does slide (the test means something), and the state says why, naming a direction
+	// a wall seen alone leaves free: a translation along it or the rotation about its normal (which
+	// one is the weakest is the noise's choice).
 	CHECK(slid > 0);
-	CHECK(first_reason.find("flat geometry: translation along") != std::string::npos);
+	CHECK((first_reason.find("flat geometry: translation along") != std::string::npos || first_reason.find("flat geometry: rotation about") != std::string::npos));
 	// Only frames that did not slide are Good.
 	CHECK(run.good <= 1 + int(run.frames.size()) - slid);
 }

@@ -130,7 +130,7 @@ int run_option(cli::Arguments &p_cursor, const std::string &p_arg, Arguments *r_
 
 // DenseSlamOptions: --voxel-size-m, --colour-always, --scalar-icp, --max-speed, --noise-reference-m,
 // --colour-weight, --icp-depth-range, --tsdf-depth-range, --max-jump, --colour-slide, --min-constraint,
-// --raycast-level, --finest-stride.
+// --raycast-level, --finest-stride, --points-normals.
 int slam_option(cli::Arguments &p_cursor, const std::string &p_arg, DenseSlamOptions *r_slam) {
 	if (p_arg == "--voxel-size-m") {
 		double v = 0.0;
@@ -140,6 +140,8 @@ int slam_option(cli::Arguments &p_cursor, const std::string &p_arg, DenseSlamOpt
 		r_slam->tsdf.voxel_size_m = float(v);
 	} else if (p_arg == "--colour-always") {
 		r_slam->icp.colour_always = true;
+	} else if (p_arg == "--points-normals") {
+		r_slam->reference_normals_from_points = true;
 	} else if (p_arg == "--scalar-icp") {
 		r_slam->icp.simd = false;
 	} else if (p_arg == "--max-speed") {
@@ -299,6 +301,7 @@ void print_usage(std::FILE *p_out) {
 			"  --scalar-icp          ICP's point-to-plane rows one pixel at a time, not eight at once with AVX2 (the CPU's)\n"
 			"  --min-constraint C    a direction with less than this share of the geometry's information is free (default 0.004)\n"
 			"  --raycast-level L     the tracking reference raycast at 1 / 2^L of the camera's size, 0 to 3 (default 2)\n"
+			"  --points-normals      the reference's normals from its neighbouring points, not the tsdf's gradient at each hit\n"
 			"  --finest-stride S     ICP's finest level pairs every S-th pixel of every S-th row, 1 to 4 (default 2)\n"
 			"  --noise-reference-m R ICP weighs a depth reading by its noise relative to one at R metres (nearer ones weigh 1);\n"
 			"                        0: all readings weigh 1 (default %.2f)\n"

@@ -1,5 +1,7 @@
 #include "dense_slam.h"
 
+#include "depth_pyramid.h"
+
 #include "icp_reduce_gpu.h"
 
 #include <parallel/parallel_for.h>
@@ -237,7 +239,13 @@ TrackingResult DenseSlam::track_against(const IcpTracker &p_tracker, const Model
 
 ModelMaps DenseSlam::reference_at(const Pose &p_pose) const {
 	ModelMaps maps;
-	tsdf.raycast(intrinsics.level(std::clamp(opts.raycast_level, 0, 4)), p_pose, &maps);
+	const PinholeIntrinsics camera = intrinsics.level(std::clamp(opts.raycast_level, 0, 4));
+	if (opts.reference_normals_from_points) {
+		tsdf.raycast(camera, p_pose, tsdf.options().min_depth_m, tsdf.options().max_depth_m, &maps, nullptr, false);
+		model_normals_from_points(&maps, float(opts.icp.surface.max_jump_relative));
+	} else {
+		tsdf.raycast(camera, p_pose, &maps);
+	}
 	return maps;
 }
 
@@ -340,10 +348,14 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 		out.timings.integrate_ms = ms_since(start);
 		start = Clock::now();
 		const int level = std::clamp(opts.raycast_level, 0, 4);
+		const bool gradient_normals = !opts.reference_normals_from_points;
 		if (opts.reference_search_margin_m > 0.0f) {
-			tsdf.raycast(intrinsics.level(level), last_pose, search_intervals(depth, level, opts.reference_search_margin_m), &reference);
+			tsdf.raycast(intrinsics.level(level), last_pose, search_intervals(depth, level, opts.reference_search_margin_m), &reference, nullptr, gradient_normals);
 		} else {
-			tsdf.raycast(intrinsics.level(level), last_pose, &reference);
+			tsdf.raycast(intrinsics.level(level), last_pose, tsdf.options().min_depth_m, tsdf.options().max_depth_m, &reference, nullptr, gradient_normals);
+		}
+		if (!gradient_normals) {
+			model_normals_from_points(&reference, float(opts.icp.surface.max_jump_relative));
 		}
 		out.timings.raycast_ms = ms_since(start);
 		if (out.tracking.state == TrackingState::Good && keyframes.consider(depth, rgb, last_pose)) {

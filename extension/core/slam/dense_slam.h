@@ -72,6 +72,13 @@ struct DenseSlamOptions {
 	// the model there was just made to agree with them, and the rays need not march the empty
 	// room in front. Pixels without readings search the whole range. 0: every pixel the whole range.
 	float reference_search_margin_m = 0.08f;
+	// The reference's normals from its neighbouring points (KinectFusion's model normals, made as
+	// the frame's are: model_normals_from_points), not from the tsdf's gradient at each hit (six
+	// trilinear reads a ray). Measured (docs/FIGURES.md): the two rooms 4.35 -> 4.06 mm ATE, the
+	// 10-s living room 4.53 -> 4.19, the 20-s one 11.51 -> 11.04, 7-Scenes 44.32 -> 44.43, the
+	// reference raycast 8-13 % faster. Not the default yet: the two rooms' room sweep, which loses
+	// the camera either way, then ends elsewhere and its room has 14 corners, not 8 (issue #41).
+	bool reference_normals_from_points = false;
 	// Tracking runs on the frame at 1 / 2^tracking_level of its size (ICP's own pyramid below
 	// that); integration always takes the full frame. 0, the default: full size. Level 1 tracks
 	// 2.5x faster (14 to 18 ms against 37 on the 10-s living room) without the drift once seen,

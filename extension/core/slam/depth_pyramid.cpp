@@ -184,6 +184,31 @@ cv::Mat compute_normal_map(const cv::Mat &p_vertices, float p_max_jump_relative,
 	return normals;
 }
 
+void model_normals_from_points(ModelMaps *io_maps, float p_max_jump_relative) {
+	const Pose camera_from_world = inverse(io_maps->world_from_camera);
+	const glm::dmat3 to_camera = glm::mat3_cast(camera_from_world.rotation), to_world = glm::transpose(to_camera);
+	const glm::dvec3 shift = camera_from_world.translation;
+	cv::Mat vertices(io_maps->points.size(), CV_32FC3);
+	for_rows(vertices.rows, [&](int y) {
+		const cv::Vec3f *world = io_maps->points.ptr<cv::Vec3f>(y);
+		cv::Vec3f *camera = vertices.ptr<cv::Vec3f>(y);
+		for (int x = 0; x < vertices.cols; ++x) {
+			const glm::vec3 v(to_camera * glm::dvec3(world[x][0], world[x][1], world[x][2]) + shift); // NaN stays NaN
+			camera[x] = cv::Vec3f(v.x, v.y, v.z);
+		}
+	});
+	const cv::Mat normals = compute_normal_map(vertices, p_max_jump_relative);
+	io_maps->normals.create(vertices.size(), CV_32FC3);
+	for_rows(vertices.rows, [&](int y) {
+		const cv::Vec3f *camera = normals.ptr<cv::Vec3f>(y);
+		cv::Vec3f *world = io_maps->normals.ptr<cv::Vec3f>(y);
+		for (int x = 0; x < vertices.cols; ++x) {
+			const glm::vec3 n(to_world * glm::dvec3(camera[x][0], camera[x][1], camera[x][2]));
+			world[x] = cv::Vec3f(n.x, n.y, n.z);
+		}
+	});
+}
+
 cv::Mat intensity_of(const cv::Mat &p_rgb) {
 	if (p_rgb.empty()) {
 		return cv::Mat();

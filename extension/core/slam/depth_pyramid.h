@@ -7,6 +7,7 @@
 #include <io/opencv.h>
 
 #include <camera/pinhole_camera.h>
+#include <slam/slam_types.h>
 
 #include <vector>
 
@@ -50,6 +51,10 @@ cv::Mat compute_vertex_map(const cv::Mat &p_depth_m, const PinholeIntrinsics &p_
 // p_sample_stride > 1: only every p_sample_stride-th pixel of every p_sample_stride-th row (from
 // (0, 0)) gets its normal, the others NaN (for ICP's sampled finest level).
 cv::Mat compute_normal_map(const cv::Mat &p_vertices, float p_max_jump_relative, int p_sample_stride = 1);
+// A raycast's normals from its points, as the frame's are from its vertices (compute_normal_map,
+// in the camera's frame, turned back to the world's): KinectFusion's model normals. NaN where a
+// neighbour has no point or lies across a depth edge.
+void model_normals_from_points(ModelMaps *io_maps, float p_max_jump_relative);
 
 // CV_32FC1 intensity in [0, 1] (mean of R, G, B / 255) of a CV_8UC3 image; empty when it is empty.
 cv::Mat intensity_of(const cv::Mat &p_rgb);

@@ -160,7 +160,7 @@ public:
 	// reference, searched around the frame just fused: a surface of the model outside it is not
 	// found), the others as above.
 	void raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, const cv::Mat &p_search_m, ModelMaps *r_maps,
-			RaycastStats *r_stats = nullptr) const;
+			RaycastStats *r_stats = nullptr, bool p_normals = true) const;
 
 	// Trilinear tsdf (normalised, [-1, 1]) and colour (0..255, zero when no voxel around has one)
 	// at a world point (metres); false where a voxel around it is unallocated or unobserved.

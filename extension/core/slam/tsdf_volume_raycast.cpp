@@ -130,9 +130,9 @@ void TsdfVolume::raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_
 }
 
 void TsdfVolume::raycast(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, const cv::Mat &p_search_m, ModelMaps *r_maps,
-		RaycastStats *r_stats) const {
+		RaycastStats *r_stats, bool p_normals) const {
 	CV_Assert(p_search_m.type() == CV_32FC2 && p_search_m.cols == p_camera.width && p_search_m.rows == p_camera.height);
-	raycast_ranged(p_camera, p_world_from_camera, m_options.min_depth_m, m_options.max_depth_m, &p_search_m, true, r_maps, r_stats);
+	raycast_ranged(p_camera, p_world_from_camera, m_options.min_depth_m, m_options.max_depth_m, &p_search_m, p_normals, r_maps, r_stats);
 }
 
 void TsdfVolume::raycast_ranged(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_min_depth_m, float p_max_depth_m,
