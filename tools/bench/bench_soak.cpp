@@ -15,10 +15,10 @@ namespace roomprobe::bench {
 
 namespace {
 
-// The soak's verdict: resident memory in the last quarter of the run within this share of the
-// first quarter after the warm-up, and the time per frame of the last tenth at most this factor of
-// the first tenth after the warm-up (medians both; the time's margin is this machine's noise between two
-// windows of the same work).
+// The soak's verdict: resident memory in the last quarter of the run (median) within this share
+// over the highest sample of the first quarter after the warm-up (judge_memory), and the time per
+// frame of the last tenth at most this factor of the first tenth after the warm-up (medians; the
+// time's margin is this machine's noise between two windows of the same work).
 constexpr double SOAK_MEMORY_GROWTH_MAX = 0.05;
 constexpr double SOAK_TIME_RATIO_MAX = 1.15;
 constexpr double SOAK_WARMUP_SHARE = 0.2; // of the frames: the TSDF and the pools reach their size

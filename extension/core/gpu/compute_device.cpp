@@ -264,11 +264,14 @@ ComputeDevice::~ComputeDevice() {
 	}
 }
 
-int ComputeDevice::memory_type(uint32_t p_bits, VkMemoryPropertyFlags p_also) const {
+int ComputeDevice::memory_type(uint32_t p_bits, VkMemoryPropertyFlags p_also, VkMemoryPropertyFlags p_avoid) const {
 	const VkMemoryPropertyFlags wanted = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-	for (const VkMemoryPropertyFlags flags : { wanted | p_also, wanted }) {
+	// With p_also and without p_avoid first, then with p_also, then without p_avoid, then any.
+	const std::pair<VkMemoryPropertyFlags, VkMemoryPropertyFlags> tries[] = { { wanted | p_also, p_avoid }, { wanted | p_also, 0 }, { wanted, p_avoid }, { wanted, 0 } };
+	for (const auto &[flags, avoid] : tries) {
 		for (uint32_t i = 0; i < memory.memoryTypeCount; i++) {
-			if ((p_bits & (1u << i)) && (memory.memoryTypes[i].propertyFlags & flags) == flags) {
+			const VkMemoryPropertyFlags has = memory.memoryTypes[i].propertyFlags;
+			if ((p_bits & (1u << i)) && (has & flags) == flags && (has & avoid) == 0) {
 				return int(i);
 			}
 		}
@@ -286,6 +289,8 @@ std::string ComputeDevice::bind_memory(GpuBuffer *r_buffer, VkMemoryRequirements
 		return failed("vkAllocateMemory", result) + " (" + std::to_string(p_needs.size) + " bytes)";
 	}
 	if ((result = vk_api.BindBufferMemory(device, r_buffer->buffer, r_buffer->memory, 0)) != VK_SUCCESS) {
+		vk_api.FreeMemory(device, r_buffer->memory, nullptr); // not bound: another type may still be tried
+		r_buffer->memory = VK_NULL_HANDLE;
 		return failed("vkBindBufferMemory", result);
 	}
 	if ((result = vk_api.MapMemory(device, r_buffer->memory, 0, VK_WHOLE_SIZE, 0, &r_buffer->mapped)) != VK_SUCCESS) {
@@ -312,23 +317,22 @@ std::unique_ptr<GpuBuffer> ComputeDevice::make_buffer(size_t p_bytes, GpuAccess 
 	}
 	VkMemoryRequirements needs;
 	vk_api.GetBufferMemoryRequirements(device, out->buffer, &needs);
+	// What the device reads: its own memory where the host can map it. What the host reads: cached,
+	// and not a discrete GPU's write-combined BAR.
 	const bool device_reads = p_access == GpuAccess::DeviceReads;
-	const int type = memory_type(needs.memoryTypeBits, device_reads ? VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT : VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
+	const int type = device_reads ? memory_type(needs.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)
+								  : memory_type(needs.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_CACHED_BIT, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
 	if (type < 0) {
 		*r_error = "the Vulkan device has no host-visible, coherent memory for a storage buffer";
 		return nullptr;
 	}
 	std::string problem = bind_memory(out.get(), needs, type);
-	if (!problem.empty() && out->memory == VK_NULL_HANDLE && device_reads) {
-		// A discrete GPU's mappable device memory may be a small heap (a 256-MiB BAR): host memory then.
-		for (uint32_t i = 0; i < memory.memoryTypeCount; i++) {
-			const VkMemoryPropertyFlags flags = memory.memoryTypes[i].propertyFlags;
-			if (int(i) != type && (needs.memoryTypeBits & (1u << i)) && !(flags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) &&
-					(flags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT) && (flags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)) {
-				problem = bind_memory(out.get(), needs, int(i));
-				break;
-			}
-		}
+	const int host_type = memory_type(needs.memoryTypeBits & ~(1u << uint32_t(type)), 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+	// A discrete GPU's mappable device memory may be a small heap (a 256-MiB BAR): host memory then
+	// (where the memory was not bound: a buffer is bound once).
+	if (!problem.empty() && out->memory == VK_NULL_HANDLE && device_reads && host_type >= 0 &&
+			!(memory.memoryTypes[host_type].propertyFlags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)) {
+		problem = bind_memory(out.get(), needs, host_type);
 	}
 	if (!problem.empty()) {
 		*r_error = problem;

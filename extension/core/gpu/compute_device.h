@@ -198,8 +198,9 @@ private:
 	void close_device(); // what open_device made, so that the next candidate can be tried
 	// Adds a finished batch to batch_stats(), with its device time where the queue has timestamps.
 	void record_batch(const std::vector<GpuDispatch> &p_dispatches, double p_wall_ms) const;
-	// A host-visible, coherent memory type: with p_also's flags where one has them, else any; -1: none.
-	int memory_type(uint32_t p_bits, VkMemoryPropertyFlags p_also = 0) const;
+	// A host-visible, coherent memory type among p_bits: with p_also's flags and none of p_avoid's
+	// where one has them, else the nearest to that; -1: none.
+	int memory_type(uint32_t p_bits, VkMemoryPropertyFlags p_also = 0, VkMemoryPropertyFlags p_avoid = 0) const;
 	// Memory of type p_type for r_buffer's buffer, bound and mapped; "" or what failed.
 	std::string bind_memory(GpuBuffer *r_buffer, VkMemoryRequirements p_needs, int p_type) const;
 
