@@ -327,12 +327,13 @@ std::unique_ptr<GpuBuffer> ComputeDevice::make_buffer(size_t p_bytes, GpuAccess 
 		return nullptr;
 	}
 	std::string problem = bind_memory(out.get(), needs, type);
-	const int host_type = memory_type(needs.memoryTypeBits & ~(1u << uint32_t(type)), 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
 	// A discrete GPU's mappable device memory may be a small heap (a 256-MiB BAR): host memory then
 	// (where the memory was not bound: a buffer is bound once).
-	if (!problem.empty() && out->memory == VK_NULL_HANDLE && device_reads && host_type >= 0 &&
-			!(memory.memoryTypes[host_type].propertyFlags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)) {
-		problem = bind_memory(out.get(), needs, host_type);
+	if (!problem.empty() && out->memory == VK_NULL_HANDLE && device_reads) {
+		const int host_type = memory_type(needs.memoryTypeBits & ~(1u << uint32_t(type)), 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+		if (host_type >= 0 && !(memory.memoryTypes[host_type].propertyFlags & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT)) {
+			problem = bind_memory(out.get(), needs, host_type);
+		}
 	}
 	if (!problem.empty()) {
 		*r_error = problem;

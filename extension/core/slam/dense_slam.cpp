@@ -239,14 +239,21 @@ TrackingResult DenseSlam::track_against(const IcpTracker &p_tracker, const Model
 
 ModelMaps DenseSlam::reference_at(const Pose &p_pose) const {
 	ModelMaps maps;
-	const PinholeIntrinsics camera = intrinsics.level(std::clamp(opts.raycast_level, 0, 4));
-	if (opts.reference_normals_from_points) {
-		tsdf.raycast(camera, p_pose, tsdf.options().min_depth_m, tsdf.options().max_depth_m, &maps, nullptr, false);
-		model_normals_from_points(&maps, float(opts.icp.surface.max_jump_relative));
-	} else {
-		tsdf.raycast(camera, p_pose, &maps);
-	}
+	cast_reference(p_pose, nullptr, &maps);
 	return maps;
+}
+
+void DenseSlam::cast_reference(const Pose &p_pose, const cv::Mat *p_search_m, ModelMaps *r_maps) const {
+	const PinholeIntrinsics camera = intrinsics.level(std::clamp(opts.raycast_level, 0, 4));
+	const bool gradient_normals = !opts.reference_normals_from_points;
+	if (p_search_m != nullptr) {
+		tsdf.raycast(camera, p_pose, *p_search_m, r_maps, nullptr, gradient_normals);
+	} else {
+		tsdf.raycast(camera, p_pose, tsdf.options().min_depth_m, tsdf.options().max_depth_m, r_maps, nullptr, gradient_normals);
+	}
+	if (!gradient_normals) {
+		model_normals_from_points(r_maps, float(opts.icp.surface.max_jump_relative));
+	}
 }
 
 IntegrationStats DenseSlam::integrate(const cv::Mat &p_depth_m, const cv::Mat &p_rgb, const Pose &p_world_from_camera) {
@@ -347,15 +354,11 @@ DenseSlamFrame DenseSlam::process(const RgbdFrame &p_frame) {
 		integrated_frames++;
 		out.timings.integrate_ms = ms_since(start);
 		start = Clock::now();
-		const int level = std::clamp(opts.raycast_level, 0, 4);
-		const bool gradient_normals = !opts.reference_normals_from_points;
 		if (opts.reference_search_margin_m > 0.0f) {
-			tsdf.raycast(intrinsics.level(level), last_pose, search_intervals(depth, level, opts.reference_search_margin_m), &reference, nullptr, gradient_normals);
+			const cv::Mat search = search_intervals(depth, std::clamp(opts.raycast_level, 0, 4), opts.reference_search_margin_m);
+			cast_reference(last_pose, &search, &reference);
 		} else {
-			tsdf.raycast(intrinsics.level(level), last_pose, tsdf.options().min_depth_m, tsdf.options().max_depth_m, &reference, nullptr, gradient_normals);
-		}
-		if (!gradient_normals) {
-			model_normals_from_points(&reference, float(opts.icp.surface.max_jump_relative));
+			cast_reference(last_pose, nullptr, &reference);
 		}
 		out.timings.raycast_ms = ms_since(start);
 		if (out.tracking.state == TrackingState::Good && keyframes.consider(depth, rgb, last_pose)) {

@@ -202,6 +202,9 @@ private:
 			const Pose &p_initial_world_from_camera) const;
 	// The model seen from p_pose as the reference is (raycast_level, no search intervals).
 	ModelMaps reference_at(const Pose &p_pose) const;
+	// The tracking reference from p_pose into r_maps, within p_search_m's intervals when given,
+	// its normals as reference_normals_from_points asks (reference_at and process share it).
+	void cast_reference(const Pose &p_pose, const cv::Mat *p_search_m, ModelMaps *r_maps) const;
 	// Empty when p_frame fits the camera, else why not.
 	std::string check_frame(const RgbdFrame &p_frame) const;
 	// Empty when p_tracking's pose at p_time_s is within max_speed_m_s of the last tracked one, else why not.
