@@ -403,6 +403,71 @@ TEST_CASE("TSDF raycast within per-pixel search intervals finds the same surface
 	CHECK(outside_stats.hit_pixels == 0); // the sphere's back is never a + to - crossing
 }
 
+// Bit for bit: NaN where both missed, else the same float bits.
+bool same_bits(const cv::Mat &p_a, const cv::Mat &p_b) {
+	return p_a.size() == p_b.size() && p_a.type() == p_b.type() && p_a.isContinuous() && p_b.isContinuous() &&
+			std::memcmp(p_a.data, p_b.data, p_a.total() * p_a.elemSize()) == 0;
+}
+
+TEST_CASE("TSDF raycast: rays marched together on a thread, give each ray's own march, bit for bit, with and without normals") {
+	const PinholeIntrinsics camera = rig_camera(1);
+	const Scene scene = sphere_scene();
+	TsdfVolume volume;
+	integrate_orbit(&volume, scene, camera, 1.0, { 25.0, -15.0 }, 8);
+	const Pose pose = orbit_pose(glm::dvec3(0.0), 0.9, 22.5, 10.0);
+	const TsdfOptions &options = volume.options();
+	for (const bool normals : { true, false }) {
+		CAPTURE(normals);
+		ModelMaps maps;
+		RaycastStats stats;
+		volume.raycast(camera, pose, options.min_depth_m, options.max_depth_m, &maps, &stats, normals);
+		// The same pixels one ray at a time, each within its cell's depth range as the volume's raycast limits it.
+		const cv::Mat ranges = volume.depth_ranges(camera, pose, options.min_depth_m, options.max_depth_m);
+		const float nan = std::numeric_limits<float>::quiet_NaN();
+		cv::Mat points(camera.height, camera.width, CV_32FC3, cv::Scalar::all(nan)), normal_map(camera.height, camera.width, CV_32FC3, cv::Scalar::all(nan));
+		cv::Mat depth(camera.height, camera.width, CV_32FC1, cv::Scalar::all(nan));
+		cv::Mat colors(camera.height, camera.width, CV_8UC3, cv::Scalar::all(0));
+		TsdfRayParams ray;
+		ray.origin = glm::vec3(pose.translation);
+		ray.world_from_camera_rotation = glm::mat3(glm::mat3_cast(glm::quat(pose.rotation))); // as the volume makes it, in float
+		ray.bounds_min = volume.stats().bounds_min;
+		ray.bounds_max = volume.stats().bounds_max;
+		ray.normals = normals;
+		long long steps = 0;
+		int hits = 0;
+		for (int v = 0; v < camera.height; v++) {
+			for (int u = 0; u < camera.width; u++) {
+				const cv::Vec2f range = ranges.at<cv::Vec2f>(v / TsdfVolume::DEPTH_RANGE_CELL_PX, u / TsdfVolume::DEPTH_RANGE_CELL_PX);
+				if (!(range[0] <= range[1])) {
+					continue;
+				}
+				TsdfRayParams pixel = ray;
+				pixel.min_depth_m = std::max(options.min_depth_m, range[0]);
+				pixel.max_depth_m = std::min(options.max_depth_m, range[1]);
+				TsdfRayHit hit;
+				int n = 0;
+				const bool found = tsdf_raycast_pixel(volume.view(), pixel, camera, u, v, &hit, &n);
+				steps += n;
+				if (!found) {
+					continue;
+				}
+				hits++;
+				points.at<cv::Vec3f>(v, u) = cv::Vec3f(hit.point.x, hit.point.y, hit.point.z);
+				normal_map.at<cv::Vec3f>(v, u) = cv::Vec3f(hit.normal.x, hit.normal.y, hit.normal.z);
+				depth.at<float>(v, u) = hit.depth;
+				colors.at<cv::Vec3b>(v, u) = cv::Vec3b(cv::saturate_cast<uint8_t>(hit.rgb.x), cv::saturate_cast<uint8_t>(hit.rgb.y), cv::saturate_cast<uint8_t>(hit.rgb.z));
+			}
+		}
+		REQUIRE(hits > 10000);
+		CHECK(stats.hit_pixels == hits);
+		CHECK(stats.steps == steps);
+		CHECK(same_bits(maps.points, points));
+		CHECK(same_bits(maps.normals, normal_map));
+		CHECK(same_bits(maps.depth, depth));
+		CHECK(same_bits(maps.colors, colors));
+	}
+}
+
 TEST_CASE("TSDF integration's skipped blocks and voxels: every voxel as the plain path leaves it, and a removed object is still carved away") {
 	const PinholeIntrinsics camera = rig_camera(1);
 	Scene with_ball;

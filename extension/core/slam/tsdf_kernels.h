@@ -481,88 +481,159 @@ inline float tsdf_refine_crossing(const TsdfView &p_view, const glm::vec3 &p_ori
 	return p_ta + (p_tb - p_ta) * p_fa / (p_fa - p_fb);
 }
 
-// Marches one pixel's ray: a block at a time through unallocated blocks, in steps of a fraction
-// of the truncation band while the tsdf is large, and a half voxel near the surface, until the
-// tsdf changes sign from + to -. r_steps counts the samples taken (for the tests of skipping).
-inline bool tsdf_raycast_pixel(const TsdfView &p_view, const TsdfRayParams &p_ray, const PinholeIntrinsics &p_camera, int p_u, int p_v, TsdfRayHit *r_hit, int *r_steps) {
-	const glm::vec3 dir_camera = glm::normalize(p_camera.unproject(glm::vec2(float(p_u), float(p_v)), 1.0f));
-	const glm::vec3 dir = p_ray.world_from_camera_rotation * dir_camera; // unit
-	const float vs = p_view.voxel_size;
-	const float inv_vs = 1.0f / vs;
-	// Work in voxel units along the ray: t is metres, the grid point is (origin + t dir) / vs.
-	const glm::vec3 origin_grid = p_ray.origin * inv_vs;
-	const glm::vec3 dir_grid = dir * inv_vs;
-	const glm::vec3 inv_dir(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
-	float t = p_ray.min_depth_m / dir_camera.z;
-	float t_end = p_ray.max_depth_m / dir_camera.z;
-	if (!tsdf_clip_to_box(p_ray.origin, inv_dir, p_ray.bounds_min, p_ray.bounds_max, &t, &t_end)) {
-		return false;
-	}
-	const float block_m = vs * float(TSDF_BLOCK_SIDE);
-	const float fine_step = 0.5f * vs;
-	TsdfBlockCache cache;
+// One pixel's march as state that can be resumed a sample at a time, so that a thread can
+// interleave several rays (tsdf_volume_raycast.cpp): the march waits on the voxel pool's memory
+// more than it computes, and independent rays overlap those waits.
+struct TsdfRayMarch {
+	glm::vec3 dir_camera = glm::vec3(0.0f), dir = glm::vec3(0.0f); // unit, camera and world
+	glm::vec3 origin_grid = glm::vec3(0.0f), dir_grid = glm::vec3(0.0f), inv_dir = glm::vec3(0.0f);
+	float t = 0.0f, t_end = 0.0f; // metres along the ray
 	bool have_prev = false;
 	float t_prev = 0.0f, f_prev = 0.0f;
-	while (t <= t_end) {
-		(*r_steps)++;
-		const glm::vec3 g = origin_grid + t * dir_grid;
-		// The nearest voxel decides: its block is looked up once per block the ray enters.
-		const glm::ivec3 voxel(tsdf_floor(g.x + 0.5f), tsdf_floor(g.y + 0.5f), tsdf_floor(g.z + 0.5f));
-		const TsdfVoxel *nearest = tsdf_voxel_at(p_view, voxel, &cache);
-		if (cache.slot < 0) {
-			// Unallocated: nothing was seen here; jump to where the ray leaves the region whose
-			// nearest voxels lie in this block, [8 b - 0.5, 8 b + 7.5) voxels.
-			const glm::vec3 bmin = (glm::vec3(cache.block) * float(TSDF_BLOCK_SIDE) - glm::vec3(0.5f)) * vs;
-			t = tsdf_fmax(tsdf_box_exit(p_ray.origin, inv_dir, bmin, bmin + glm::vec3(block_m)), t) + 1e-3f * vs;
-			have_prev = false;
-			continue;
+	TsdfBlockCache cache;
+	int steps = 0; // samples taken (for the tests of skipping)
+};
+
+enum class TsdfRayStatus { Marching, Hit, Miss };
+
+// Sets up one pixel's march; false when its ray misses the allocated blocks' bounds.
+inline bool tsdf_ray_begin(const TsdfRayParams &p_ray, const PinholeIntrinsics &p_camera, float p_voxel_size, int p_u, int p_v, TsdfRayMarch *r_march) {
+	TsdfRayMarch &m = *r_march;
+	m = TsdfRayMarch();
+	m.dir_camera = glm::normalize(p_camera.unproject(glm::vec2(float(p_u), float(p_v)), 1.0f));
+	m.dir = p_ray.world_from_camera_rotation * m.dir_camera; // unit
+	const float inv_vs = 1.0f / p_voxel_size;
+	// Work in voxel units along the ray: t is metres, the grid point is (origin + t dir) / vs.
+	m.origin_grid = p_ray.origin * inv_vs;
+	m.dir_grid = m.dir * inv_vs;
+	m.inv_dir = glm::vec3(1.0f / m.dir.x, 1.0f / m.dir.y, 1.0f / m.dir.z);
+	m.t = p_ray.min_depth_m / m.dir_camera.z;
+	m.t_end = p_ray.max_depth_m / m.dir_camera.z;
+	return tsdf_clip_to_box(p_ray.origin, m.inv_dir, p_ray.bounds_min, p_ray.bounds_max, &m.t, &m.t_end);
+}
+
+// The surface where the march bracketed it, between (t_prev, f_prev) and (p_t, p_f).
+inline bool tsdf_ray_hit(const TsdfView &p_view, const TsdfRayParams &p_ray, TsdfRayMarch *io_march, float p_t, float p_f, TsdfRayHit *r_hit) {
+	TsdfRayMarch &m = *io_march;
+	const float ts = tsdf_refine_crossing(p_view, m.origin_grid, m.dir_grid, m.t_prev, m.f_prev, p_t, p_f, &m.cache);
+	const glm::vec3 gs = m.origin_grid + ts * m.dir_grid;
+	if (p_ray.normals) {
+		glm::vec3 gradient;
+		if (!tsdf_gradient(p_view, gs, &m.cache, &gradient) || !(glm::dot(gradient, gradient) > 0.0f)) {
+			return false;
 		}
-		// The nearest voxel while far from the surface (one read); trilinear within two voxels
-		// of it, where the crossing is bracketed.
-		if (nearest->weight == 0) {
-			have_prev = false; // unobserved voxels around: creep through them
-			t += fine_step;
-			continue;
+		glm::vec3 n = glm::normalize(gradient);
+		if (glm::dot(n, m.dir) > 0.0f) {
+			n = -n;
 		}
-		float f = nearest->tsdf;
-		if (std::fabs(f) * p_view.truncation < 2.0f * vs) {
-			float fine;
-			if (tsdf_trilinear(p_view, g, &cache, &fine)) {
-				f = fine;
-			}
-		}
-		if (have_prev && f_prev > 0.0f && f <= 0.0f) {
-			const float ts = tsdf_refine_crossing(p_view, origin_grid, dir_grid, t_prev, f_prev, t, f, &cache);
-			const glm::vec3 gs = origin_grid + ts * dir_grid;
-			if (p_ray.normals) {
-				glm::vec3 gradient;
-				if (!tsdf_gradient(p_view, gs, &cache, &gradient) || !(glm::dot(gradient, gradient) > 0.0f)) {
-					return false;
-				}
-				glm::vec3 n = glm::normalize(gradient);
-				if (glm::dot(n, dir) > 0.0f) {
-					n = -n;
-				}
-				r_hit->normal = n;
-			} else {
-				r_hit->normal = glm::vec3(std::numeric_limits<float>::quiet_NaN());
-			}
-			r_hit->point = p_ray.origin + ts * dir;
-			r_hit->depth = ts * dir_camera.z;
-			if (!tsdf_trilinear_color(p_view, gs, &cache, &r_hit->rgb)) {
-				r_hit->rgb = glm::vec3(0.0f);
-			}
-			return true;
-		}
-		have_prev = true;
-		t_prev = t;
-		f_prev = f;
-		// Far from the surface the tsdf is about the distance to it (sphere tracing, with a margin
-		// for where it over-estimates it: concave corners); near it, half-voxel steps keep the
-		// bracket tight.
-		t += f > 0.0f ? std::max(fine_step, 0.8f * f * p_view.truncation) : fine_step;
+		r_hit->normal = n;
+	} else {
+		r_hit->normal = glm::vec3(std::numeric_limits<float>::quiet_NaN());
 	}
-	return false;
+	r_hit->point = p_ray.origin + ts * m.dir;
+	r_hit->depth = ts * m.dir_camera.z;
+	if (!tsdf_trilinear_color(p_view, gs, &m.cache, &r_hit->rgb)) {
+		r_hit->rgb = glm::vec3(0.0f);
+	}
+	return true;
+}
+
+// One sample of the march: a block at a time through unallocated blocks, in steps of a fraction
+// of the truncation band while the tsdf is large, and a half voxel near the surface, until the
+// tsdf changes sign from + to -.
+inline TsdfRayStatus tsdf_ray_step(const TsdfView &p_view, const TsdfRayParams &p_ray, TsdfRayMarch *io_march, TsdfRayHit *r_hit) {
+	TsdfRayMarch &m = *io_march;
+	if (!(m.t <= m.t_end)) {
+		return TsdfRayStatus::Miss;
+	}
+	const float vs = p_view.voxel_size;
+	const float fine_step = 0.5f * vs;
+	m.steps++;
+	const glm::vec3 g = m.origin_grid + m.t * m.dir_grid;
+	// The nearest voxel decides: its block is looked up once per block the ray enters.
+	const glm::ivec3 voxel(tsdf_floor(g.x + 0.5f), tsdf_floor(g.y + 0.5f), tsdf_floor(g.z + 0.5f));
+	const TsdfVoxel *nearest = tsdf_voxel_at(p_view, voxel, &m.cache);
+	if (m.cache.slot < 0) {
+		// Unallocated: nothing was seen here; jump to where the ray leaves the region whose
+		// nearest voxels lie in this block, [8 b - 0.5, 8 b + 7.5) voxels.
+		const glm::vec3 bmin = (glm::vec3(m.cache.block) * float(TSDF_BLOCK_SIDE) - glm::vec3(0.5f)) * vs;
+		m.t = tsdf_fmax(tsdf_box_exit(p_ray.origin, m.inv_dir, bmin, bmin + glm::vec3(vs * float(TSDF_BLOCK_SIDE))), m.t) + 1e-3f * vs;
+		m.have_prev = false;
+		return TsdfRayStatus::Marching;
+	}
+	// The nearest voxel while far from the surface (one read); trilinear within two voxels
+	// of it, where the crossing is bracketed.
+	if (nearest->weight == 0) {
+		m.have_prev = false; // unobserved voxels around: creep through them
+		m.t += fine_step;
+		return TsdfRayStatus::Marching;
+	}
+	float f = nearest->tsdf;
+	if (std::fabs(f) * p_view.truncation < 2.0f * vs) {
+		float fine;
+		if (tsdf_trilinear(p_view, g, &m.cache, &fine)) {
+			f = fine;
+		}
+	}
+	if (m.have_prev && m.f_prev > 0.0f && f <= 0.0f) {
+		return tsdf_ray_hit(p_view, p_ray, &m, m.t, f, r_hit) ? TsdfRayStatus::Hit : TsdfRayStatus::Miss;
+	}
+	m.have_prev = true;
+	m.t_prev = m.t;
+	m.f_prev = f;
+	// Far from the surface the tsdf is about the distance to it (sphere tracing, with a margin
+	// for where it over-estimates it: concave corners); near it, half-voxel steps keep the
+	// bracket tight.
+	m.t += f > 0.0f ? std::max(fine_step, 0.8f * f * p_view.truncation) : fine_step;
+	return TsdfRayStatus::Marching;
+}
+
+// Asks for the memory the march's next sample reads (its nearest voxel and trilinear cell), so
+// that it arrives while other rays step. Looks the block up as that sample would (the same
+// slot: the table does not change during a raycast), so the march is unchanged.
+inline void tsdf_ray_prefetch(const TsdfView &p_view, TsdfRayMarch *io_march) {
+	TsdfRayMarch &m = *io_march;
+	if (!(m.t <= m.t_end)) {
+		return;
+	}
+	const glm::vec3 g = m.origin_grid + m.t * m.dir_grid;
+	const glm::ivec3 voxel(tsdf_floor(g.x + 0.5f), tsdf_floor(g.y + 0.5f), tsdf_floor(g.z + 0.5f));
+	const glm::ivec3 block(voxel.x >> 3, voxel.y >> 3, voxel.z >> 3);
+	if (block != m.cache.block) {
+		m.cache.block = block;
+		m.cache.slot = tsdf_find_slot(p_view, block);
+	}
+	if (m.cache.slot >= 0) {
+		const TsdfVoxel *base = &p_view.voxels[size_t(m.cache.slot) * TSDF_BLOCK_VOXELS];
+		const glm::ivec3 local(voxel.x & 7, voxel.y & 7, voxel.z & 7);
+		__builtin_prefetch(base + tsdf_local_index(local));
+		// A trilinear cell around the sample reaches the rows above and behind (4 lines).
+		const glm::ivec3 cell(tsdf_floor(g.x) & 7, tsdf_floor(g.y) & 7, tsdf_floor(g.z) & 7);
+		const int i = tsdf_local_index(cell);
+		if (cell.y < 7) {
+			__builtin_prefetch(base + i + TSDF_BLOCK_SIDE);
+		}
+		if (cell.z < 7) {
+			__builtin_prefetch(base + i + TSDF_BLOCK_SIDE * TSDF_BLOCK_SIDE);
+			if (cell.y < 7) {
+				__builtin_prefetch(base + i + TSDF_BLOCK_SIDE * TSDF_BLOCK_SIDE + TSDF_BLOCK_SIDE);
+			}
+		}
+	}
+}
+
+// Marches one pixel's ray to its first surface (tsdf_ray_step); r_steps counts the samples.
+inline bool tsdf_raycast_pixel(const TsdfView &p_view, const TsdfRayParams &p_ray, const PinholeIntrinsics &p_camera, int p_u, int p_v, TsdfRayHit *r_hit, int *r_steps) {
+	TsdfRayMarch march;
+	if (!tsdf_ray_begin(p_ray, p_camera, p_view.voxel_size, p_u, p_v, &march)) {
+		return false;
+	}
+	TsdfRayStatus status = TsdfRayStatus::Marching;
+	while (status == TsdfRayStatus::Marching) {
+		status = tsdf_ray_step(p_view, p_ray, &march, r_hit);
+	}
+	*r_steps += march.steps;
+	return status == TsdfRayStatus::Hit;
 }
 
 } // namespace roomprobe

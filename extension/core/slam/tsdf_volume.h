@@ -194,6 +194,11 @@ public:
 	std::vector<glm::ivec3> allocated_blocks() const;
 	// Read-only access for kernels; valid until the next integrate() or reset().
 	TsdfView view() const;
+	// Per cell of DEPTH_RANGE_CELL_PX^2 pixels (CV_32FC2), the [min, max] camera depth of the
+	// allocated blocks that project onto it, within [p_near_m, p_far_m] (+inf, -inf: none):
+	// where a raycast marches each pixel (InfiniTAM's expected depths).
+	static constexpr int DEPTH_RANGE_CELL_PX = 8;
+	cv::Mat depth_ranges(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_near_m, float p_far_m) const;
 
 private:
 	void collect_band_blocks(const cv::Mat &p_depth_m, const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, std::vector<glm::ivec3> *r_blocks, int *r_valid_pixels) const;
@@ -212,7 +217,6 @@ private:
 	// Its update on the device: false (after leave_device, with the reason kept) when it failed.
 	bool update_on_device(const TsdfFrameView &p_frame, const glm::vec3 &p_step_x, const glm::vec3 &p_step_y, const glm::vec3 &p_step_z,
 			const std::vector<int32_t> &p_visible, const std::vector<glm::vec3> &p_origins, std::vector<uint8_t> *r_updated, std::vector<uint8_t> *r_changed);
-	cv::Mat depth_ranges(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_near_m, float p_far_m) const;
 	void raycast_ranged(const PinholeIntrinsics &p_camera, const Pose &p_world_from_camera, float p_min_depth_m, float p_max_depth_m, const cv::Mat *p_search_m,
 			bool p_normals, ModelMaps *r_maps, RaycastStats *r_stats) const;
 
