@@ -9,12 +9,13 @@ namespace roomprobe::bench {
 
 namespace {
 
-// Issue #11's per-stage targets on this project's 2-core machine (medians, ms), and the ratios
-// against the peers run in the same process (the peer's time over ours), which hold on any machine.
+// Issue #36's per-stage targets on this project's 2-core machine (medians, ms; #11's, kept), and the
+// ratios against the peers run in the same process (the peer's time over ours), which hold on any
+// machine: #36 asks for 5 against both peers' integration where #11 asked for 10.
 constexpr double TARGET_TRACKING_MS = 8.0, TARGET_INTEGRATION_MS = 6.0, TARGET_RAYCAST_MS = 4.0;
 constexpr double TARGET_COARSE_MS = 6.0, TARGET_PROBE_MS = 8.0, TARGET_FULL_FRAME_MS = 25.0;
-constexpr double TARGET_INTEGRATION_RATIO = 10.0, TARGET_RAYCAST_RATIO = 3.0, TARGET_ICP_RATIO = 3.0;
-constexpr double TARGET_OPEN3D_INTEGRATION_RATIO = 10.0;
+constexpr double TARGET_INTEGRATION_RATIO = 5.0, TARGET_RAYCAST_RATIO = 3.0, TARGET_ICP_RATIO = 3.0;
+constexpr double TARGET_OPEN3D_INTEGRATION_RATIO = 5.0;
 
 double ratio(const Series &p_peer, double p_ours_ms) {
 	return p_peer.empty() || !(p_ours_ms > 0.0) ? std::numeric_limits<double>::quiet_NaN() : p_peer.median() / p_ours_ms;
@@ -134,7 +135,7 @@ bool read_open3d_peer(const std::string &p_file, const RecordingSetup &p_setup, 
 }
 
 void print_speed_targets(const SpeedFigures &p_speed, const PeerRatios &p_ratios) {
-	std::printf("\nspeed targets (issue #11; medians; the ms targets are for a 256^2 probe on this project's 2-core machine):\n");
+	std::printf("\nspeed targets (issue #36; medians; the ms targets are for a 256^2 probe on this project's 2-core machine):\n");
 	print_speed_target("tracking", p_speed.tracking_ms, TARGET_TRACKING_MS);
 	print_speed_target("integration", p_speed.integration_ms, TARGET_INTEGRATION_MS);
 	print_speed_target("reference raycast", p_speed.raycast_ms, TARGET_RAYCAST_MS);
