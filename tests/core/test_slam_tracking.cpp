@@ -507,3 +507,26 @@ TEST_CASE("slam: the reference's normals from its points are the plane's, toward
 	CHECK(worst_deg < 1e-4 * 180.0 / std::numbers::pi);
 	CHECK(std::isnan(maps.normals.at<cv::Vec3f>(0, 10)[0])); // the border has no central difference
 }
+
+TEST_CASE("slam: a normal map's spread is its noise's (8/3 sigma^2 for independent noise of sigma per component), 0 for a clean plane, and skips holes") {
+	// n = n0 + e, e ~ N(0, sigma) per component: n - mean of its 3x3 has, per component, variance
+	// (8/9)^2 sigma^2 + 8 (1/9)^2 sigma^2 = (8/9) sigma^2, so |n - n3|^2 averages (8/3) sigma^2.
+	const int size = 120;
+	const float sigma = 0.05f;
+	cv::Mat clean(size, size, CV_32FC3, cv::Scalar(0.0f, 0.6f, 0.8f));
+	CHECK(normal_spread(clean) < 1e-10);
+	cv::Mat noise(size, size, CV_32FC3);
+	cv::RNG rng(7);
+	rng.fill(noise, cv::RNG::NORMAL, 0.0, sigma);
+	const cv::Mat noisy = clean + noise;
+	const double expected = 8.0 / 3.0 * double(sigma) * double(sigma);
+	// 118^2 overlapping estimates of a chi-square mean: a few per cent of it.
+	CHECK(normal_spread(noisy) == doctest::Approx(expected).epsilon(0.05));
+	// A hole takes out the nine neighbourhoods it lies in; a map of holes has no spread.
+	cv::Mat holed = noisy.clone();
+	const float nan = std::numeric_limits<float>::quiet_NaN();
+	holed(cv::Rect(0, 0, size, size / 2)).setTo(cv::Scalar::all(nan));
+	CHECK(normal_spread(holed) == doctest::Approx(expected).epsilon(0.08));
+	CHECK(normal_spread(cv::Mat(size, size, CV_32FC3, cv::Scalar::all(nan))) == 0.0);
+	CHECK(normal_spread(cv::Mat()) == 0.0);
+}

@@ -140,6 +140,13 @@ int slam_option(cli::Arguments &p_cursor, const std::string &p_arg, DenseSlamOpt
 		r_slam->tsdf.voxel_size_m = float(v);
 	} else if (p_arg == "--colour-always") {
 		r_slam->icp.colour_always = true;
+	} else if (p_arg == "--young-model") {
+		double young[2];
+		if (!p_cursor.number_list(2, young) || !(young[0] >= 0.0 && young[0] <= 1e6) || young[0] != double(int(young[0])) || !(young[1] >= 0.0)) {
+			return usage("--young-model needs FRAMES,FACTOR: a whole number of fused frames and a factor, both >= 0 (0,0: off)");
+		}
+		r_slam->young_model_frames = int(young[0]);
+		r_slam->young_model_noise_factor = young[1];
 	} else if (p_arg == "--points-normals") {
 		r_slam->reference_normals_from_points = true;
 	} else if (p_arg == "--scalar-icp") {
@@ -302,6 +309,8 @@ void print_usage(std::FILE *p_out) {
 			"  --min-constraint C    a direction with less than this share of the geometry's information is free (default 0.004)\n"
 			"  --raycast-level L     the tracking reference raycast at 1 / 2^L of the camera's size, 0 to 3 (default 2)\n"
 			"  --points-normals      the reference's normals from its neighbouring points, not the tsdf's gradient at each hit\n"
+			"  --young-model N,K     while fewer than N frames are fused, a free direction needs K x the reference normals' spread\n"
+			"                        of the information (default 0,0.25: off; measured at 15,0.25)\n"
 			"  --finest-stride S     ICP's finest level pairs every S-th pixel of every S-th row, 1 to 4 (default 2)\n"
 			"  --noise-reference-m R ICP weighs a depth reading by its noise relative to one at R metres (nearer ones weigh 1);\n"
 			"                        0: all readings weigh 1 (default %.2f)\n"

@@ -258,10 +258,11 @@ void print_settings(const DenseSlamOptions &p_slam) {
 	const TsdfOptions &tsdf = p_slam.tsdf;
 	const IcpOptions &icp = p_slam.icp;
 	std::printf("  SLAM settings: voxel %.1f mm, truncation %.0f mm, TSDF depth %.2f..%.2f m; ICP depth %.2f..%.2f m, colour weight %.3f, "
-				"colour %s, colour slide %.3f m / %.2f deg, max jump %.3f m / %.1f deg, max speed %.1f m/s, noise reference %.2f m, %d levels, finest stride %d, point-to-plane rows %s; raycast level %d (normals from %s), tracking level %d, fuse poor frames %s\n",
+				"colour %s, colour slide %.3f m / %.2f deg, max jump %.3f m / %.1f deg, max speed %.1f m/s, noise reference %.2f m, %d levels, finest stride %d, point-to-plane rows %s; raycast level %d (normals from %s), tracking level %d, fuse poor frames %s, young model %d frames x %.2f\n",
 			1000.0 * tsdf.voxel_size_m, 1000.0 * tsdf.truncation_m, double(tsdf.min_depth_m), double(tsdf.max_depth_m), icp.min_depth_m, icp.max_depth_m,
 			icp.colour_weight, icp.colour_always ? "at every level" : "where the geometry is weak", icp.max_colour_slide_m, icp.max_colour_slide_deg, icp.max_jump_m, icp.max_jump_deg, p_slam.max_speed_m_s, icp.depth_noise.b_per_m2 > 0.0 ? icp.depth_noise.reference_m : 0.0, icp.levels, icp.finest_stride_px,
-			icp.simd && icp_simd_available() ? "AVX2" : "scalar", p_slam.raycast_level, p_slam.reference_normals_from_points ? "points" : "the gradient", p_slam.tracking_level, p_slam.integrate_poor ? "yes" : "no");
+			icp.simd && icp_simd_available() ? "AVX2" : "scalar", p_slam.raycast_level, p_slam.reference_normals_from_points ? "points" : "the gradient", p_slam.tracking_level, p_slam.integrate_poor ? "yes" : "no",
+			p_slam.young_model_frames, p_slam.young_model_noise_factor);
 }
 
 void print_issues(FILE *p_out, const RecordingReader &p_reader) {

@@ -234,6 +234,13 @@ TrackingResult DenseSlam::track_against(const IcpTracker &p_tracker, const Model
 		}
 		camera = camera.level(1);
 	}
+	if (integrated_frames < size_t(std::max(0, opts.young_model_frames)) && opts.young_model_noise_factor > 0.0) {
+		IcpTracker young = p_tracker; // its device too
+		IcpOptions held = p_tracker.get_options();
+		held.hold_constraint = std::max(held.hold_constraint, opts.young_model_noise_factor * normal_spread(p_model.normals));
+		young.set_options(held);
+		return young.track(depth, rgb, camera, p_model, p_initial_world_from_camera);
+	}
 	return p_tracker.track(depth, rgb, camera, p_model, p_initial_world_from_camera);
 }
 

@@ -79,6 +79,19 @@ struct DenseSlamOptions {
 	// reference raycast 8-13 % faster. Not the default yet: the two rooms' room sweep, which loses
 	// the camera either way, then ends elsewhere and its room has 14 corners, not 8 (issue #41).
 	bool reference_normals_from_points = false;
+	// A young model holds its free directions harder (opt-in). While fewer than
+	// young_model_frames frames are fused, a direction needs young_model_noise_factor times the
+	// reference's normal spread (normal_spread, depth_pyramid.h) of the information before a solve
+	// moves it (IcpOptions::hold_constraint; the tracking state still judges by min_constraint):
+	// a model of one or two noisy frames gives a free direction a share of the information from its
+	// normals' noise alone (0.17 on the panorama room's first frame, seen from 2.5 m), and the
+	// first solves slid the camera 0.7 m along a bare wall. Measured at 15 frames and 0.25
+	// (docs/FIGURES.md, issue #41): the panorama room 680 -> 46 mm ATE, the living room 4.53 ->
+	// 4.01 mm, the two rooms 4.35 -> 4.14, the 20-s living room 11.51 -> 11.68, 7-Scenes 44.32 ->
+	// 46.33; but the evaluation's short living-room sweep (core test `eval: on living_room ...`)
+	// then drifts to 123 mm, so it is off. 0 frames or a factor of 0: off.
+	int young_model_frames = 0;
+	double young_model_noise_factor = 0.25;
 	// Tracking runs on the frame at 1 / 2^tracking_level of its size (ICP's own pyramid below
 	// that); integration always takes the full frame. 0, the default: full size. Level 1 tracks
 	// 2.5x faster (14 to 18 ms against 37 on the 10-s living room) without the drift once seen,

@@ -249,4 +249,31 @@ FramePyramid build_frame_pyramid(const cv::Mat &p_clean_depth_m, const cv::Mat &
 	return pyramid;
 }
 
+double normal_spread(const cv::Mat &p_normals) {
+	CV_Assert(p_normals.empty() || p_normals.type() == CV_32FC3);
+	double sum = 0.0;
+	long long count = 0;
+	for (int y = 1; y + 1 < p_normals.rows; y++) {
+		for (int x = 1; x + 1 < p_normals.cols; x++) {
+			cv::Vec3f mean(0.0f, 0.0f, 0.0f);
+			bool whole = true;
+			for (int dy = -1; dy <= 1 && whole; dy++) {
+				const cv::Vec3f *row = p_normals.ptr<cv::Vec3f>(y + dy);
+				for (int dx = -1; dx <= 1; dx++) {
+					const cv::Vec3f &m = row[x + dx];
+					whole = whole && m[0] == m[0]; // false for NaN
+					mean += m;
+				}
+			}
+			if (!whole) {
+				continue;
+			}
+			const cv::Vec3f d = p_normals.at<cv::Vec3f>(y, x) - mean * (1.0f / 9.0f);
+			sum += double(d.dot(d));
+			count++;
+		}
+	}
+	return count > 0 ? sum / double(count) : 0.0;
+}
+
 } // namespace roomprobe

@@ -56,6 +56,12 @@ cv::Mat compute_normal_map(const cv::Mat &p_vertices, float p_max_jump_relative,
 // neighbour has no point or lies across a depth edge.
 void model_normals_from_points(ModelMaps *io_maps, float p_max_jump_relative);
 
+// The local spread of a normal map (CV_32FC3, NaN where none): the mean, over the pixels whose
+// 3x3 neighbourhood is whole, of |n - n3|^2, n3 the mean of those nine normals. A surface's shape
+// changes little over three pixels and its noise does not, so on a young model it is mostly noise
+// (DenseSlamOptions::young_model_noise_factor). 0 when no pixel qualifies.
+double normal_spread(const cv::Mat &p_normals);
+
 // CV_32FC1 intensity in [0, 1] (mean of R, G, B / 255) of a CV_8UC3 image; empty when it is empty.
 cv::Mat intensity_of(const cv::Mat &p_rgb);
 

@@ -548,6 +548,7 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 		return lost(p_initial_world_from_camera,
 				"too few valid depth pixels: " + std::to_string(valid) + " of " + std::to_string(total), 0);
 	}
+	const double hold = std::max(options.min_constraint, options.hold_constraint);
 	const int levels = std::clamp(options.levels, 1, IcpOptions::MAX_LEVELS);
 	// The finest level pairs a sample of its pixels (IcpOptions::finest_stride_px); the inlier
 	// fraction is of the valid pixels sampled.
@@ -574,7 +575,7 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 				// For the colour slide guard alone: with colour at every level, one more system.
 				geometry_finest = colour_level ? condition(system_at(0, pose, false)) : conditioning;
 			}
-			if (i == 0 && colour && !colour_level && conditioning.ok && conditioning.eigenvalues[5] < options.min_constraint) {
+			if (i == 0 && colour && !colour_level && conditioning.ok && conditioning.eigenvalues[5] < hold) {
 				// The geometry leaves a direction free at this level: the photometric rows constrain it.
 				colour_level = true;
 				system = system_at(level, pose, true);
@@ -585,7 +586,7 @@ TrackingResult IcpTracker::track(const cv::Mat &p_depth_m, const cv::Mat &p_rgb,
 						"too few correspondences at level " + std::to_string(level) + ": " + std::to_string(system.inliers), iterations);
 			}
 			cv::Vec6d xi;
-			if (!solve(conditioning, options.min_constraint, &xi)) {
+			if (!solve(conditioning, hold, &xi)) {
 				return lost(p_initial_world_from_camera, "degenerate: no direction constrained at level " + std::to_string(level), iterations);
 			}
 			if (level == 0) {

@@ -85,6 +85,10 @@ struct IcpOptions {
 	// (their estimate stays at the initial guess), and a final pose with such a direction is Poor,
 	// with a reason naming it ("flat geometry: translation along ... unconstrained").
 	double min_constraint = 0.004;
+	// Solves move only directions with at least this share (when above min_constraint; the state
+	// still judges by min_constraint): DenseSlam raises it while its model is young
+	// (DenseSlamOptions::young_model_noise_factor). 0: min_constraint.
+	double hold_constraint = 0.0;
 	double lost_inlier_fraction = 0.2; // inliers / valid depth pixels at the finest level, below: Lost
 	double good_inlier_fraction = 0.5; // below (and not Lost): Poor
 	double max_good_rmse_m = 0.02; // point-to-plane RMS of the inliers above which the pose is Poor, metres
