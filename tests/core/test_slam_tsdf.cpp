@@ -409,7 +409,7 @@ bool same_bits(const cv::Mat &p_a, const cv::Mat &p_b) {
 			std::memcmp(p_a.data, p_b.data, p_a.total() * p_a.elemSize()) == 0;
 }
 
-TEST_CASE("TSDF raycast: rays marched together on a thread, give each ray's own march, bit for bit, with and without normals") {
+TEST_CASE("TSDF raycast: rays marched together on a thread give each ray's own march, bit for bit, with and without normals") {
 	const PinholeIntrinsics camera = rig_camera(1);
 	const Scene scene = sphere_scene();
 	TsdfVolume volume;

@@ -589,8 +589,8 @@ inline TsdfRayStatus tsdf_ray_step(const TsdfView &p_view, const TsdfRayParams &
 }
 
 // Asks for the memory the march's next sample reads (its nearest voxel and trilinear cell), so
-// that it arrives while other rays step. Looks the block up as that sample would (the same
-// slot: the table does not change during a raycast), so the march is unchanged.
+// that it arrives while other rays step. Looks the block up as that sample would, into its cache
+// (the same slot: the table does not change during a raycast), so the march is unchanged.
 inline void tsdf_ray_prefetch(const TsdfView &p_view, TsdfRayMarch *io_march) {
 	TsdfRayMarch &m = *io_march;
 	if (!(m.t <= m.t_end)) {
@@ -598,6 +598,7 @@ inline void tsdf_ray_prefetch(const TsdfView &p_view, TsdfRayMarch *io_march) {
 	}
 	const glm::vec3 g = m.origin_grid + m.t * m.dir_grid;
 	const glm::ivec3 voxel(tsdf_floor(g.x + 0.5f), tsdf_floor(g.y + 0.5f), tsdf_floor(g.z + 0.5f));
+	// tsdf_voxel_at's lookup written out: through the call, the whole raycast took 8 % longer.
 	const glm::ivec3 block(voxel.x >> 3, voxel.y >> 3, voxel.z >> 3);
 	if (block != m.cache.block) {
 		m.cache.block = block;
@@ -607,7 +608,9 @@ inline void tsdf_ray_prefetch(const TsdfView &p_view, TsdfRayMarch *io_march) {
 		const TsdfVoxel *base = &p_view.voxels[size_t(m.cache.slot) * TSDF_BLOCK_VOXELS];
 		const glm::ivec3 local(voxel.x & 7, voxel.y & 7, voxel.z & 7);
 		__builtin_prefetch(base + tsdf_local_index(local));
-		// A trilinear cell around the sample reaches the rows above and behind (4 lines).
+		// A trilinear cell around the sample reaches the rows above and behind (4 lines), indexed in
+		// this block: a hint only, so a cell that starts in the block before asks for rows it will
+		// not read.
 		const glm::ivec3 cell(tsdf_floor(g.x) & 7, tsdf_floor(g.y) & 7, tsdf_floor(g.z) & 7);
 		const int i = tsdf_local_index(cell);
 		if (cell.y < 7) {
